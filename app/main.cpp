@@ -1,0 +1,143 @@
+// The `gabion` command line: run or check a case, print the version.
+// Exit codes: 0 ok, 1 internal error, 2 bad input, 3 numerical failure.
+#include <CLI/CLI.hpp>
+#include <unistd.h>
+
+#include <chrono>
+#include <cstdio>
+#include <filesystem>
+#include <iostream>
+
+#include "app/registry.hpp"
+#include "bridge/errors.hpp"
+#include "bridge/output.hpp"
+#include "gabion_version.hpp"
+
+namespace fs = std::filesystem;
+using gabion::bridge::InputError;
+using gabion::bridge::JsonDocument;
+
+namespace {
+
+constexpr int kExitOk = 0;
+constexpr int kExitInternal = 1;
+constexpr int kExitBadInput = 2;
+constexpr int kExitNumerical = 3;
+
+struct Options {
+  std::string case_file;
+  std::string outdir;
+  std::string law_file;
+  std::vector<std::string> sets;
+  int threads = 1;
+  bool quiet = false;
+};
+
+// Loads the case, applies --set, finds its kind and validates every key.
+// Throws InputError; writes nothing.
+std::pair<JsonDocument, const gabion::bridge::CaseKind*> loadAndCheck(const Options& o) {
+  JsonDocument doc = JsonDocument::load(o.case_file);
+  for (const auto& s : o.sets) doc.applySet(s);
+  const auto root = doc.root();
+  const std::string format = root.string("format");
+  if (format != "gabion.case/1") root.fail("format", "expected 'gabion.case/1', got '" + format + "'");
+  const std::string kind = root.string("kind");
+  const auto* k = gabion::app::findKind(kind);
+  if (k == nullptr) root.fail("kind", "unknown case kind '" + kind + "' (known: " + gabion::app::kindList() + ")");
+  k->check(doc);
+  if (root.has("description")) root.string("description");
+  doc.finish();
+  return {std::move(doc), k};
+}
+
+int commandCheck(const Options& o) {
+  loadAndCheck(o);
+  std::cout << o.case_file << ": ok\n";
+  return kExitOk;
+}
+
+int commandRun(const Options& o) {
+  auto [doc, kind] = loadAndCheck(o);
+  const fs::path outdir = o.outdir.empty() ? fs::path("results") / fs::path(o.case_file).stem() : fs::path(o.outdir);
+  fs::create_directories(outdir);
+
+  gabion::bridge::RunContext ctx;
+  ctx.outdir = outdir;
+  ctx.threads = o.threads;
+  ctx.case_file = o.case_file;
+  ctx.progress = !o.quiet && isatty(STDOUT_FILENO) != 0;
+  if (!o.law_file.empty()) ctx.law_file = o.law_file;
+
+  const auto t0 = std::chrono::steady_clock::now();
+  gabion::bridge::RunOutcome outcome;
+  try {
+    outcome = kind->run(doc, ctx);
+  } catch (const gabion::bridge::NumericalError& e) {
+    outcome.status = gabion::bridge::RunOutcome::Status::NumericalFailure;
+    outcome.message = e.what();
+  }
+  const double wall = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+
+  nlohmann::json summary;
+  summary["format"] = "gabion.summary/1";
+  summary["kind"] = kind->kind;
+  const bool ok = outcome.status == gabion::bridge::RunOutcome::Status::Ok;
+  summary["status"] = ok ? "ok" : "numerical_failure";
+  if (!outcome.message.empty()) summary["message"] = outcome.message;
+  summary["version"] = gabion::kVersion;
+  summary["wall_time_s"] = wall;
+  summary["threads"] = o.threads;
+  summary["case_file"] = o.case_file;
+  summary["case"] = doc.json();
+  for (auto it = outcome.results.begin(); it != outcome.results.end(); ++it) summary[it.key()] = it.value();
+  gabion::bridge::writeJsonAtomic(outdir / "summary.json", summary);
+
+  if (!ok) {
+    std::cerr << "gabion: numerical failure: " << outcome.message << "\n"
+              << "gabion: what was written so far is in " << outdir.string() << "\n";
+    return kExitNumerical;
+  }
+  std::cout << "results: " << fs::absolute(outdir).string() << "\n";
+  for (const auto& entry : fs::directory_iterator(outdir))
+    if (entry.is_regular_file()) std::cout << "  " << entry.path().filename().string() << "\n";
+  return kExitOk;
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  CLI::App app{"gabion: two-scale DEM for cellular rockfall protection structures"};
+  app.set_version_flag("--version", std::string("gabion ") + gabion::kVersion);
+  app.require_subcommand(1);
+  Options o;
+
+  auto* run = app.add_subcommand("run", "Run a case and write results into OUTDIR");
+  run->add_option("case", o.case_file, "case file (JSON)")->required();
+  run->add_option("-o,--output", o.outdir, "output folder (default: results/<case name>)");
+  run->add_option("--law", o.law_file, "law file (gabion.law/1) overriding the case's laws");
+  run->add_option("--set", o.sets, "override a case value: path.to.key=value (repeatable)");
+  run->add_option("--threads", o.threads, "worker threads")->check(CLI::Range(1, 256));
+  run->add_flag("-q,--quiet", o.quiet, "no progress line");
+
+  auto* check = app.add_subcommand("check", "Validate a case without running it");
+  check->add_option("case", o.case_file, "case file (JSON)")->required();
+  check->add_option("--set", o.sets, "override a case value: path.to.key=value (repeatable)");
+
+  auto* kinds = app.add_subcommand("kinds", "List the case kinds this build runs");
+
+  CLI11_PARSE(app, argc, argv);
+  try {
+    if (kinds->parsed()) {
+      for (const auto& k : gabion::app::allKinds()) std::cout << k.kind << "\t" << k.description << "\n";
+      return kExitOk;
+    }
+    if (check->parsed()) return commandCheck(o);
+    return commandRun(o);
+  } catch (const InputError& e) {
+    std::cerr << e.what() << "\n";
+    return kExitBadInput;
+  } catch (const std::exception& e) {
+    std::cerr << "gabion: internal error: " << e.what() << "\n";
+    return kExitInternal;
+  }
+}

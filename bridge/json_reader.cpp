@@ -1,0 +1,332 @@
+#include "bridge/json_reader.hpp"
+
+#include <cmath>
+#include <fstream>
+#include <sstream>
+
+#include "bridge/errors.hpp"
+
+namespace gabion::bridge {
+
+using Json = nlohmann::json;
+
+std::string escapePointerToken(const std::string& key) {
+  std::string out;
+  out.reserve(key.size());
+  for (char c : key) {
+    if (c == '~') {
+      out += "~0";
+    } else if (c == '/') {
+      out += "~1";
+    } else {
+      out += c;
+    }
+  }
+  return out;
+}
+
+namespace {
+
+std::string typeName(const Json& v) {
+  if (v.is_number()) return "a number";
+  if (v.is_string()) return "a string";
+  if (v.is_boolean()) return "a boolean";
+  if (v.is_array()) return "an array";
+  if (v.is_object()) return "an object";
+  return "null";
+}
+
+const char* checkText(Check check) {
+  switch (check) {
+    case Check::Finite: return "must be a finite number";
+    case Check::Positive: return "must be > 0";
+    case Check::NonNegative: return "must be >= 0";
+    case Check::Fraction: return "must be in [0, 1]";
+    case Check::UnitOpen: return "must be in [0, 1)";
+  }
+  return "invalid";
+}
+
+bool satisfies(double x, Check check) {
+  if (!std::isfinite(x)) return false;
+  switch (check) {
+    case Check::Finite: return true;
+    case Check::Positive: return x > 0.0;
+    case Check::NonNegative: return x >= 0.0;
+    case Check::Fraction: return x >= 0.0 && x <= 1.0;
+    case Check::UnitOpen: return x >= 0.0 && x < 1.0;
+  }
+  return false;
+}
+
+void findUnknown(const Json& v, const std::string& ptr, const std::set<std::string>& used, const std::string& file) {
+  if (v.is_object()) {
+    for (auto it = v.begin(); it != v.end(); ++it) {
+      const std::string child = ptr + "/" + escapePointerToken(it.key());
+      if (used.count(child) == 0) throw InputError(file, child, "unknown key '" + it.key() + "'");
+      findUnknown(it.value(), child, used, file);
+    }
+  } else if (v.is_array()) {
+    for (std::size_t i = 0; i < v.size(); ++i) findUnknown(v[i], ptr + "/" + std::to_string(i), used, file);
+  }
+}
+
+void markSubtree(const Json& v, const std::string& ptr, std::set<std::string>& used) {
+  used.insert(ptr);
+  if (v.is_object()) {
+    for (auto it = v.begin(); it != v.end(); ++it) markSubtree(it.value(), ptr + "/" + escapePointerToken(it.key()), used);
+  } else if (v.is_array()) {
+    for (std::size_t i = 0; i < v.size(); ++i) markSubtree(v[i], ptr + "/" + std::to_string(i), used);
+  }
+}
+
+}  // namespace
+
+// ---------------------------------------------------------------- JsonDocument
+
+JsonDocument JsonDocument::load(const std::filesystem::path& path) {
+  const std::string file = path.string();
+  std::error_code ec;
+  if (!std::filesystem::exists(path, ec)) throw InputError(file, "", "file does not exist");
+  if (std::filesystem::is_directory(path, ec)) throw InputError(file, "", "is a directory, not a JSON file");
+  std::ifstream in(path, std::ios::binary);
+  if (!in) throw InputError(file, "", "cannot open file for reading");
+  std::ostringstream buffer;
+  buffer << in.rdbuf();
+  if (in.bad()) throw InputError(file, "", "read error");
+  Json value;
+  try {
+    value = Json::parse(buffer.str());
+  } catch (const Json::parse_error& e) {
+    std::string what = e.what();
+    const auto pos = what.find("parse error");
+    throw InputError(file, "", "invalid JSON: " + (pos == std::string::npos ? what : what.substr(pos)));
+  }
+  if (!value.is_object()) throw InputError(file, "", "top level must be a JSON object");
+  return JsonDocument(std::move(value), file);
+}
+
+JsonDocument::JsonDocument(Json value, std::string file) : state_(std::make_shared<State>()) {
+  state_->value = std::move(value);
+  state_->file = std::move(file);
+}
+
+JsonReader JsonDocument::root() const { return JsonReader(&state_->value, "", state_); }
+
+void JsonDocument::applySet(const std::string& assignment) {
+  const auto eq = assignment.find('=');
+  if (eq == std::string::npos || eq == 0)
+    throw InputError(state_->file, "", "--set '" + assignment + "': expected path.to.key=value");
+  const std::string path = assignment.substr(0, eq);
+  const std::string text = assignment.substr(eq + 1);
+  Json value;
+  try {
+    value = Json::parse(text);
+  } catch (const Json::parse_error&) {
+    value = text;  // a bare word is a string
+  }
+  std::vector<std::string> parts;
+  std::stringstream ss(path);
+  for (std::string part; std::getline(ss, part, '.');) {
+    if (part.empty()) throw InputError(state_->file, "", "--set '" + assignment + "': empty path segment");
+    parts.push_back(part);
+  }
+  Json* node = &state_->value;
+  std::string ptr;
+  for (std::size_t i = 0; i < parts.size(); ++i) {
+    const std::string& part = parts[i];
+    const bool last = i + 1 == parts.size();
+    if (node->is_object()) {
+      ptr += "/" + escapePointerToken(part);
+      if (!last && !node->contains(part))
+        throw InputError(state_->file, ptr, "--set: no such object in the case");
+      node = &(*node)[part];
+    } else if (node->is_array()) {
+      std::size_t idx = 0;
+      try {
+        std::size_t used_chars = 0;
+        idx = std::stoul(part, &used_chars);
+        if (used_chars != part.size()) throw std::invalid_argument(part);
+      } catch (const std::exception&) {
+        throw InputError(state_->file, ptr, "--set: '" + part + "' is not an array index");
+      }
+      ptr += "/" + part;
+      if (idx >= node->size()) throw InputError(state_->file, ptr, "--set: array index out of range");
+      node = &(*node)[idx];
+    } else {
+      throw InputError(state_->file, ptr, "--set: not an object or array, cannot descend into it");
+    }
+  }
+  *node = std::move(value);
+}
+
+void JsonDocument::finish() const { findUnknown(state_->value, "", state_->used, state_->file); }
+
+// ---------------------------------------------------------------- JsonReader
+
+JsonReader::JsonReader(const Json* node, std::string pointer, std::shared_ptr<JsonDocument::State> state)
+    : node_(node), pointer_(std::move(pointer)), state_(std::move(state)) {}
+
+std::string JsonReader::pointer(const std::string& key) const { return pointer_ + "/" + escapePointerToken(key); }
+
+void JsonReader::fail(const std::string& key, const std::string& message) const {
+  throw InputError(state_->file, pointer(key), message);
+}
+
+void JsonReader::failHere(const std::string& message) const {
+  throw InputError(state_->file, pointer_.empty() ? "/" : pointer_, message);
+}
+
+bool JsonReader::has(const std::string& key) const { return node_->is_object() && node_->contains(key); }
+
+const Json* JsonReader::find(const std::string& key) const {
+  if (!node_->is_object()) failHere("expected an object, got " + typeName(*node_));
+  auto it = node_->find(key);
+  if (it == node_->end()) return nullptr;
+  state_->used.insert(pointer(key));
+  return &*it;
+}
+
+const Json& JsonReader::required(const std::string& key) const {
+  const Json* v = find(key);
+  if (v == nullptr) fail(key, "missing required key");
+  return *v;
+}
+
+double JsonReader::checkedNumber(const std::string& key, const Json& v, Check check) const {
+  if (!v.is_number()) fail(key, "expected a number, got " + typeName(v));
+  const double x = v.get<double>();
+  if (!satisfies(x, check)) {
+    std::ostringstream os;
+    os << checkText(check) << " (got " << x << ")";
+    fail(key, os.str());
+  }
+  return x;
+}
+
+double JsonReader::number(const std::string& key, Check check) const {
+  return checkedNumber(key, required(key), check);
+}
+
+double JsonReader::number(const std::string& key, double fallback, Check check) const {
+  const Json* v = find(key);
+  return v == nullptr ? fallback : checkedNumber(key, *v, check);
+}
+
+long long JsonReader::integer(const std::string& key, long long minimum) const {
+  const Json& v = required(key);
+  if (!v.is_number_integer()) fail(key, "expected an integer, got " + typeName(v));
+  const long long x = v.get<long long>();
+  if (x < minimum) fail(key, "must be >= " + std::to_string(minimum) + " (got " + std::to_string(x) + ")");
+  return x;
+}
+
+long long JsonReader::integer(const std::string& key, long long fallback, long long minimum) const {
+  return has(key) ? integer(key, minimum) : fallback;
+}
+
+std::string JsonReader::string(const std::string& key) const {
+  const Json& v = required(key);
+  if (!v.is_string()) fail(key, "expected a string, got " + typeName(v));
+  return v.get<std::string>();
+}
+
+std::string JsonReader::string(const std::string& key, const std::string& fallback) const {
+  return has(key) ? string(key) : fallback;
+}
+
+std::string JsonReader::choice(const std::string& key, const std::vector<std::string>& options) const {
+  const std::string s = string(key);
+  for (const auto& o : options)
+    if (o == s) return s;
+  std::string list;
+  for (const auto& o : options) list += (list.empty() ? "" : ", ") + ("'" + o + "'");
+  fail(key, "'" + s + "' is not one of " + list);
+}
+
+std::string JsonReader::choice(const std::string& key, const std::vector<std::string>& options,
+                               const std::string& fallback) const {
+  return has(key) ? choice(key, options) : fallback;
+}
+
+bool JsonReader::boolean(const std::string& key) const {
+  const Json& v = required(key);
+  if (!v.is_boolean()) fail(key, "expected true or false, got " + typeName(v));
+  return v.get<bool>();
+}
+
+bool JsonReader::boolean(const std::string& key, bool fallback) const { return has(key) ? boolean(key) : fallback; }
+
+Vec3 JsonReader::vec3(const std::string& key) const {
+  const Json& v = required(key);
+  if (!v.is_array() || v.size() != 3) fail(key, "expected an array of 3 numbers");
+  Vec3 out;
+  for (int i = 0; i < 3; ++i) {
+    if (!v[i].is_number()) fail(key, "element " + std::to_string(i) + ": expected a number, got " + typeName(v[i]));
+    out[i] = v[i].get<double>();
+    if (!std::isfinite(out[i])) fail(key, "element " + std::to_string(i) + ": must be finite");
+  }
+  return out;
+}
+
+Vec3 JsonReader::vec3(const std::string& key, const Vec3& fallback) const { return has(key) ? vec3(key) : fallback; }
+
+std::vector<double> JsonReader::numbers(const std::string& key, Check check, std::size_t min_size) const {
+  const Json& v = required(key);
+  if (!v.is_array()) fail(key, "expected an array of numbers, got " + typeName(v));
+  if (v.size() < min_size) fail(key, "expected at least " + std::to_string(min_size) + " values");
+  std::vector<double> out;
+  out.reserve(v.size());
+  for (std::size_t i = 0; i < v.size(); ++i) {
+    if (!v[i].is_number()) fail(key, "element " + std::to_string(i) + ": expected a number, got " + typeName(v[i]));
+    const double x = v[i].get<double>();
+    if (!satisfies(x, check)) throw InputError(state_->file, pointer(key) + "/" + std::to_string(i), checkText(check));
+    out.push_back(x);
+  }
+  return out;
+}
+
+JsonReader JsonReader::object(const std::string& key) const {
+  const Json& v = required(key);
+  if (!v.is_object()) fail(key, "expected an object, got " + typeName(v));
+  return JsonReader(&v, pointer(key), state_);
+}
+
+std::optional<JsonReader> JsonReader::optionalObject(const std::string& key) const {
+  if (!has(key)) return std::nullopt;
+  return object(key);
+}
+
+std::vector<JsonReader> JsonReader::objects(const std::string& key, bool required_key) const {
+  std::vector<JsonReader> out;
+  const Json* v = required_key ? &required(key) : find(key);
+  if (v == nullptr) return out;
+  if (!v->is_array()) fail(key, "expected an array of objects, got " + typeName(*v));
+  const std::string base = pointer(key);
+  for (std::size_t i = 0; i < v->size(); ++i) {
+    const std::string p = base + "/" + std::to_string(i);
+    if (!(*v)[i].is_object()) throw InputError(state_->file, p, "expected an object, got " + typeName((*v)[i]));
+    out.push_back(JsonReader(&(*v)[i], p, state_));
+  }
+  return out;
+}
+
+std::vector<std::pair<std::string, JsonReader>> JsonReader::members() const {
+  if (!node_->is_object()) failHere("expected an object, got " + typeName(*node_));
+  std::vector<std::pair<std::string, JsonReader>> out;
+  for (auto it = node_->begin(); it != node_->end(); ++it) {
+    const std::string p = pointer(it.key());
+    state_->used.insert(p);
+    if (!it.value().is_object()) throw InputError(state_->file, p, "expected an object, got " + typeName(it.value()));
+    out.emplace_back(it.key(), JsonReader(&it.value(), p, state_));
+  }
+  return out;
+}
+
+const Json& JsonReader::raw(const std::string& key) const {
+  const Json& v = required(key);
+  markSubtree(v, pointer(key), state_->used);
+  return v;
+}
+
+}  // namespace gabion::bridge

@@ -1,0 +1,265 @@
+#include "bridge/output.hpp"
+
+#include <H5Cpp.h>
+
+#include <fstream>
+#include <numeric>
+#include <sstream>
+#include <stdexcept>
+
+#include "bridge/errors.hpp"
+
+namespace gabion::bridge {
+
+namespace fs = std::filesystem;
+
+namespace {
+
+fs::path partPath(const fs::path& p) { return fs::path(p.string() + ".part"); }
+
+void renameInto(const fs::path& part, const fs::path& final_path) {
+  std::error_code ec;
+  fs::rename(part, final_path, ec);
+  if (ec) throw std::runtime_error("cannot rename " + part.string() + " to " + final_path.string() + ": " + ec.message());
+}
+
+// Creates every missing group of "/a/b/dataset" and returns the parent path.
+void ensureGroups(H5::H5File& file, const std::string& dataset) {
+  std::size_t pos = 1;
+  while ((pos = dataset.find('/', pos)) != std::string::npos) {
+    const std::string group = dataset.substr(0, pos);
+    if (!file.nameExists(group)) file.createGroup(group);
+    ++pos;
+  }
+}
+
+struct QuietHdf5 {
+  QuietHdf5() { H5::Exception::dontPrint(); }
+};
+const QuietHdf5 kQuiet;
+
+}  // namespace
+
+void writeTextAtomic(const fs::path& path, const std::string& text) {
+  const fs::path part = partPath(path);
+  {
+    std::ofstream out(part, std::ios::binary | std::ios::trunc);
+    if (!out) throw std::runtime_error("cannot write " + part.string());
+    out << text;
+    out.flush();
+    if (!out) throw std::runtime_error("write failed: " + part.string());
+  }
+  renameInto(part, path);
+}
+
+void writeJsonAtomic(const fs::path& path, const nlohmann::json& value) { writeTextAtomic(path, value.dump(2) + "\n"); }
+
+// ---------------------------------------------------------------- H5Writer
+
+struct H5Writer::Impl {
+  H5::H5File file;
+};
+
+H5Writer::H5Writer(fs::path final_path) : final_(std::move(final_path)), part_(partPath(final_)) {
+  try {
+    impl_ = std::make_unique<Impl>(Impl{H5::H5File(part_.string(), H5F_ACC_TRUNC)});
+  } catch (const H5::Exception& e) {
+    throw std::runtime_error("cannot create HDF5 file " + part_.string() + ": " + e.getDetailMsg());
+  }
+}
+
+H5Writer::~H5Writer() {
+  if (!committed_) {
+    impl_.reset();
+    std::error_code ec;
+    fs::remove(part_, ec);
+  }
+}
+
+void H5Writer::write(const std::string& dataset, const std::vector<double>& values, const std::string& unit) {
+  write(dataset, values, {values.size()}, unit);
+}
+
+void H5Writer::write(const std::string& dataset, const std::vector<double>& data, const std::vector<std::size_t>& dims,
+                     const std::string& unit) {
+  const std::size_t n = std::accumulate(dims.begin(), dims.end(), std::size_t{1}, std::multiplies<>());
+  if (n != data.size()) throw std::logic_error("H5Writer: " + dataset + ": data size does not match dims");
+  try {
+    ensureGroups(impl_->file, dataset);
+    std::vector<hsize_t> hd(dims.begin(), dims.end());
+    H5::DataSpace space(static_cast<int>(hd.size()), hd.data());
+    H5::DataSet ds = impl_->file.createDataSet(dataset, H5::PredType::NATIVE_DOUBLE, space);
+    if (n > 0) ds.write(data.data(), H5::PredType::NATIVE_DOUBLE);
+    if (!unit.empty()) {
+      H5::StrType st(H5::PredType::C_S1, unit.size());
+      H5::Attribute a = ds.createAttribute("unit", st, H5::DataSpace(H5S_SCALAR));
+      a.write(st, unit);
+    }
+  } catch (const H5::Exception& e) {
+    throw std::runtime_error("HDF5 write " + part_.string() + ":" + dataset + ": " + e.getDetailMsg());
+  }
+}
+
+void H5Writer::writeInts(const std::string& dataset, const std::vector<long long>& values) {
+  try {
+    ensureGroups(impl_->file, dataset);
+    hsize_t d = values.size();
+    H5::DataSpace space(1, &d);
+    H5::DataSet ds = impl_->file.createDataSet(dataset, H5::PredType::NATIVE_LLONG, space);
+    if (!values.empty()) ds.write(values.data(), H5::PredType::NATIVE_LLONG);
+  } catch (const H5::Exception& e) {
+    throw std::runtime_error("HDF5 write " + part_.string() + ":" + dataset + ": " + e.getDetailMsg());
+  }
+}
+
+void H5Writer::attribute(const std::string& object, const std::string& name, const std::string& value) {
+  try {
+    H5::StrType st(H5::PredType::C_S1, std::max<std::size_t>(1, value.size()));
+    if (object.empty() || object == "/") {
+      H5::Group g = impl_->file.openGroup("/");
+      g.createAttribute(name, st, H5::DataSpace(H5S_SCALAR)).write(st, value);
+    } else {
+      if (impl_->file.childObjType(object) == H5O_TYPE_GROUP) {
+        impl_->file.openGroup(object).createAttribute(name, st, H5::DataSpace(H5S_SCALAR)).write(st, value);
+      } else {
+        impl_->file.openDataSet(object).createAttribute(name, st, H5::DataSpace(H5S_SCALAR)).write(st, value);
+      }
+    }
+  } catch (const H5::Exception& e) {
+    throw std::runtime_error("HDF5 attribute " + part_.string() + ":" + object + "@" + name + ": " + e.getDetailMsg());
+  }
+}
+
+void H5Writer::commit() {
+  if (committed_) return;
+  try {
+    impl_->file.close();
+  } catch (const H5::Exception& e) {
+    throw std::runtime_error("HDF5 close " + part_.string() + ": " + e.getDetailMsg());
+  }
+  renameInto(part_, final_);
+  committed_ = true;
+}
+
+// ---------------------------------------------------------------- H5Reader
+
+struct H5Reader::Impl {
+  H5::H5File file;
+};
+
+H5Reader::H5Reader(const fs::path& path) : file_(path.string()) {
+  std::error_code ec;
+  if (!fs::exists(path, ec)) throw InputError(file_, "", "file does not exist");
+  try {
+    if (!H5::H5File::isHdf5(file_)) throw InputError(file_, "", "not an HDF5 file (corrupt or wrong format)");
+    impl_ = std::make_unique<Impl>(Impl{H5::H5File(file_, H5F_ACC_RDONLY)});
+  } catch (const H5::Exception& e) {
+    throw InputError(file_, "", "cannot open HDF5 file: " + e.getDetailMsg());
+  }
+}
+
+H5Reader::~H5Reader() = default;
+
+bool H5Reader::has(const std::string& dataset) const {
+  try {
+    // nameExists fails on intermediate groups that do not exist: walk them.
+    std::size_t pos = 1;
+    while ((pos = dataset.find('/', pos)) != std::string::npos) {
+      if (!impl_->file.nameExists(dataset.substr(0, pos))) return false;
+      ++pos;
+    }
+    return impl_->file.nameExists(dataset);
+  } catch (const H5::Exception&) {
+    return false;
+  }
+}
+
+std::vector<std::size_t> H5Reader::dims(const std::string& dataset) const {
+  if (!has(dataset)) throw InputError(file_, dataset, "no such dataset");
+  try {
+    H5::DataSpace space = impl_->file.openDataSet(dataset).getSpace();
+    std::vector<hsize_t> d(static_cast<std::size_t>(space.getSimpleExtentNdims()));
+    space.getSimpleExtentDims(d.data());
+    return {d.begin(), d.end()};
+  } catch (const H5::Exception& e) {
+    throw InputError(file_, dataset, "cannot read dataset: " + e.getDetailMsg());
+  }
+}
+
+std::vector<double> H5Reader::read(const std::string& dataset) const {
+  const auto d = dims(dataset);
+  const std::size_t n = std::accumulate(d.begin(), d.end(), std::size_t{1}, std::multiplies<>());
+  std::vector<double> out(n);
+  try {
+    if (n > 0) impl_->file.openDataSet(dataset).read(out.data(), H5::PredType::NATIVE_DOUBLE);
+  } catch (const H5::Exception& e) {
+    throw InputError(file_, dataset, "cannot read dataset (corrupt or not numeric): " + e.getDetailMsg());
+  }
+  return out;
+}
+
+std::string H5Reader::attribute(const std::string& object, const std::string& name) const {
+  try {
+    H5::Attribute a;
+    if (object.empty() || object == "/") {
+      H5::Group g = impl_->file.openGroup("/");
+      if (!g.attrExists(name)) return "";
+      a = g.openAttribute(name);
+    } else {
+      if (!has(object)) return "";
+      H5::DataSet ds = impl_->file.openDataSet(object);
+      if (!ds.attrExists(name)) return "";
+      a = ds.openAttribute(name);
+    }
+    std::string value;
+    a.read(a.getStrType(), value);
+    return value;
+  } catch (const H5::Exception& e) {
+    throw InputError(file_, object + "@" + name, "cannot read attribute: " + e.getDetailMsg());
+  }
+}
+
+// ---------------------------------------------------------------- XDMF
+
+void writeXdmfPoints(const fs::path& xdmf_path, const std::string& h5_name, const std::vector<double>& times,
+                     std::size_t points, const std::string& positions, const std::vector<XdmfField>& fields) {
+  std::ostringstream x;
+  x.precision(17);
+  const std::size_t nt = times.size();
+  x << "<?xml version=\"1.0\" ?>\n<!DOCTYPE Xdmf SYSTEM \"Xdmf.dtd\" []>\n<Xdmf Version=\"2.0\">\n <Domain>\n"
+    << "  <Grid Name=\"bodies\" GridType=\"Collection\" CollectionType=\"Temporal\">\n";
+  auto slab = [&](std::size_t t, int comps, const std::string& ds) {
+    std::ostringstream s;
+    s << "     <DataItem ItemType=\"HyperSlab\" Dimensions=\"" << points << " " << comps << "\">\n"
+      << "      <DataItem Dimensions=\"3 3\" Format=\"XML\">" << t << " 0 0 1 1 1 1 " << points << " " << comps
+      << "</DataItem>\n"
+      << "      <DataItem Dimensions=\"" << nt << " " << points << " " << comps
+      << "\" NumberType=\"Float\" Precision=\"8\" Format=\"HDF\">" << h5_name << ":" << ds << "</DataItem>\n"
+      << "     </DataItem>\n";
+    return s.str();
+  };
+  for (std::size_t t = 0; t < nt; ++t) {
+    x << "   <Grid Name=\"t" << t << "\" GridType=\"Uniform\">\n"
+      << "    <Time Value=\"" << times[t] << "\"/>\n"
+      << "    <Topology TopologyType=\"Polyvertex\" NumberOfElements=\"" << points << "\"/>\n"
+      << "    <Geometry GeometryType=\"XYZ\">\n"
+      << slab(t, 3, positions) << "    </Geometry>\n";
+    for (const auto& f : fields) {
+      x << "    <Attribute Name=\"" << f.name << "\" AttributeType=\"" << (f.components == 3 ? "Vector" : "Scalar")
+        << "\" Center=\"Node\">\n";
+      if (f.per_time) {
+        // A (times, points) scalar dataset is addressed as (times, points, 1).
+        x << slab(t, f.components, f.dataset);
+      } else {
+        x << "     <DataItem Dimensions=\"" << points << (f.components == 3 ? " 3" : "")
+          << "\" NumberType=\"Float\" Precision=\"8\" Format=\"HDF\">" << h5_name << ":" << f.dataset << "</DataItem>\n";
+      }
+      x << "    </Attribute>\n";
+    }
+    x << "   </Grid>\n";
+  }
+  x << "  </Grid>\n </Domain>\n</Xdmf>\n";
+  writeTextAtomic(xdmf_path, x.str());
+}
+
+}  // namespace gabion::bridge

@@ -1,0 +1,15 @@
+#!/usr/bin/env bash
+# Installs the Debian packages Gabion needs to build and test, if missing.
+set -euo pipefail
+pkgs=(g++ cmake make ccache libeigen3-dev libnlopt-cxx-dev libhdf5-dev nlohmann-json3-dev libcli11-dev libgtest-dev)
+missing=()
+for p in "${pkgs[@]}"; do
+  dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q "install ok installed" || missing+=("$p")
+done
+if ((${#missing[@]})); then
+  echo "installing: ${missing[*]}"
+  SUDO=""
+  [ "$(id -u)" -eq 0 ] || SUDO="sudo"
+  $SUDO apt-get update -qq
+  DEBIAN_FRONTEND=noninteractive $SUDO apt-get install -y -qq --no-install-recommends "${missing[@]}"
+fi

@@ -1,0 +1,7 @@
+#!/usr/bin/env bash
+# README command 2: install what is missing, build, run the whole test suite.
+set -euo pipefail
+cd "$(dirname "$0")/.."
+./scripts/deps.sh
+dir=$(./scripts/build.sh | tail -n 1)
+ctest --test-dir "$dir" --output-on-failure -j "$(nproc)"

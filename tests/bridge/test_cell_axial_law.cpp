@@ -1,0 +1,40 @@
+// The macro axial law against its closed form: elastic branch, yield plateau,
+// elastic unloading from the plastic state, no tension, bilinear hardening.
+#include <gtest/gtest.h>
+
+#include "bridge/laws/cell_axial_law.hpp"
+
+using namespace gabion::bridge;
+
+TEST(CellAxialLaw, ElasticPerfectlyPlasticCycle) {
+  const AxialLawParams p{AxialModel::ElasticPerfectlyPlastic, 1e6, 1e4, 0.0};
+  double up = 0.0;
+  auto r = axialResponse(p, 0.005, up);  // elastic
+  EXPECT_DOUBLE_EQ(r.force_N, 5e3);
+  r = axialResponse(p, 0.03, r.plastic_m);  // plateau: u_p = 0.03 - 0.01
+  EXPECT_DOUBLE_EQ(r.force_N, 1e4);
+  EXPECT_DOUBLE_EQ(r.plastic_m, 0.02);
+  up = r.plastic_m;
+  r = axialResponse(p, 0.025, up);  // unloading with k from u_p
+  EXPECT_DOUBLE_EQ(r.force_N, 5e3);
+  r = axialResponse(p, 0.015, up);  // below u_p: separated, no tension
+  EXPECT_DOUBLE_EQ(r.force_N, 0.0);
+  EXPECT_DOUBLE_EQ(r.plastic_m, 0.02);
+}
+
+TEST(CellAxialLaw, BilinearTangentAfterYield) {
+  const AxialLawParams p{AxialModel::Bilinear, 1e6, 1e4, 2e5};
+  // Monotonic loading in small steps must follow F = F_y + k_h (u - u_y).
+  double up = 0.0;
+  AxialResponse r;
+  for (int i = 1; i <= 400; ++i) {
+    r = axialResponse(p, 1e-4 * i, up);
+    up = r.plastic_m;
+  }
+  const double u = 0.04, uy = 0.01;
+  EXPECT_NEAR(r.force_N, 1e4 + 2e5 * (u - uy), 1e-6);
+  // One big step gives the same state (return mapping is exact).
+  const auto big = axialResponse(p, u, 0.0);
+  EXPECT_NEAR(big.force_N, r.force_N, 1e-6);
+  EXPECT_NEAR(big.plastic_m, r.plastic_m, 1e-12);
+}

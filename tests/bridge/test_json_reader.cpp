@@ -1,0 +1,87 @@
+// JSON reading: every error names the file and the JSON pointer; unknown keys
+// are rejected; --set overrides reach nested values.
+#include <gtest/gtest.h>
+
+#include "bridge/errors.hpp"
+#include "bridge/json_reader.hpp"
+
+using gabion::bridge::Check;
+using gabion::bridge::InputError;
+using gabion::bridge::JsonDocument;
+using nlohmann::json;
+
+namespace {
+
+JsonDocument doc(const char* text) { return JsonDocument(json::parse(text), "case.json"); }
+
+std::string errorOf(const std::function<void()>& f) {
+  try {
+    f();
+  } catch (const InputError& e) {
+    return e.what();
+  }
+  return "no error";
+}
+
+}  // namespace
+
+TEST(JsonReader, ReadsValuesAndNamesPointerOnError) {
+  auto d = doc(R"({"spheres":[{"radius_m":0.1},{"radius_m":-2}]})");
+  const auto spheres = d.root().objects("spheres", true);
+  EXPECT_DOUBLE_EQ(spheres[0].number("radius_m", Check::Positive), 0.1);
+  EXPECT_EQ(errorOf([&] { spheres[1].number("radius_m", Check::Positive); }),
+            "case.json: /spheres/1/radius_m: must be > 0 (got -2)");
+}
+
+TEST(JsonReader, MissingAndWrongType) {
+  auto d = doc(R"({"a":{"b":"x"}})");
+  const auto a = d.root().object("a");
+  EXPECT_EQ(errorOf([&] { a.number("c"); }), "case.json: /a/c: missing required key");
+  EXPECT_EQ(errorOf([&] { a.number("b"); }), "case.json: /a/b: expected a number, got a string");
+  EXPECT_EQ(errorOf([&] { a.vec3("b"); }), "case.json: /a/b: expected an array of 3 numbers");
+}
+
+TEST(JsonReader, UnknownKeyIsRejectedAfterReading) {
+  auto d = doc(R"({"known":1,"nested":{"ok":true,"typo_m":3}})");
+  d.root().number("known");
+  d.root().object("nested").boolean("ok");
+  EXPECT_EQ(errorOf([&] { d.finish(); }), "case.json: /nested/typo_m: unknown key 'typo_m'");
+}
+
+TEST(JsonReader, DefaultsDoNotMarkAbsentKeys) {
+  auto d = doc(R"({"x":2})");
+  EXPECT_DOUBLE_EQ(d.root().number("y", 5.0), 5.0);
+  EXPECT_DOUBLE_EQ(d.root().number("x", 5.0), 2.0);
+  EXPECT_NO_THROW(d.finish());
+}
+
+TEST(JsonReader, ChoiceListsOptions) {
+  auto d = doc(R"({"model":"quadratic"})");
+  EXPECT_EQ(errorOf([&] { d.root().choice("model", {"linear", "bilinear"}); }),
+            "case.json: /model: 'quadratic' is not one of 'linear', 'bilinear'");
+}
+
+TEST(JsonReader, SetOverridesNestedValueAndArrayElement) {
+  auto d = doc(R"({"boulder":{"velocity_m_s":10},"list":[{"v":1},{"v":2}]})");
+  d.applySet("boulder.velocity_m_s=25");
+  d.applySet("list.1.v=7.5");
+  d.applySet("boulder.name=rock");
+  EXPECT_DOUBLE_EQ(d.root().object("boulder").number("velocity_m_s"), 25.0);
+  EXPECT_DOUBLE_EQ(d.root().objects("list")[1].number("v"), 7.5);
+  EXPECT_EQ(d.root().object("boulder").string("name"), "rock");
+  EXPECT_THROW(d.applySet("missing.key=1"), InputError);
+  EXPECT_THROW(d.applySet("list.5.v=1"), InputError);
+  EXPECT_THROW(d.applySet("novalue"), InputError);
+}
+
+TEST(JsonReader, UnreadableAndInvalidFiles) {
+  EXPECT_NE(errorOf([] { JsonDocument::load("/nonexistent/case.json"); }).find("/nonexistent/case.json: file does not exist"),
+            std::string::npos);
+  const std::string bad = ::testing::TempDir() + "bad.json";
+  FILE* f = std::fopen(bad.c_str(), "w");
+  std::fputs("{\"a\": 1,\n \"b\": }", f);
+  std::fclose(f);
+  const std::string msg = errorOf([&] { JsonDocument::load(bad); });
+  EXPECT_NE(msg.find("invalid JSON"), std::string::npos) << msg;
+  EXPECT_NE(msg.find("line 2"), std::string::npos) << msg;
+}

@@ -1,0 +1,50 @@
+// Result files: HDF5 round trip, atomic replacement, corrupt files reported.
+#include <gtest/gtest.h>
+
+#include <filesystem>
+#include <fstream>
+
+#include "bridge/errors.hpp"
+#include "bridge/output.hpp"
+
+using namespace gabion::bridge;
+namespace fs = std::filesystem;
+
+TEST(Output, Hdf5RoundTripAndAtomicRename) {
+  const fs::path path = fs::path(::testing::TempDir()) / "roundtrip.h5";
+  fs::remove(path);
+  {
+    H5Writer w(path);
+    w.write("/series/time_s", {0.0, 0.5, 1.0}, "s");
+    w.write("/bodies/position_m", {1, 2, 3, 4, 5, 6, 7, 8, 9, 10, 11, 12}, {2, 2, 3}, "m");
+    EXPECT_FALSE(fs::exists(path));  // only the .part file exists until commit
+    w.commit();
+  }
+  ASSERT_TRUE(fs::exists(path));
+  H5Reader r(path);
+  EXPECT_EQ(r.read("/series/time_s"), (std::vector<double>{0.0, 0.5, 1.0}));
+  EXPECT_EQ(r.dims("/bodies/position_m"), (std::vector<std::size_t>{2, 2, 3}));
+  EXPECT_EQ(r.attribute("/series/time_s", "unit"), "s");
+  EXPECT_FALSE(r.has("/nothing/here"));
+  EXPECT_THROW(r.read("/nothing/here"), InputError);
+}
+
+TEST(Output, UncommittedWriterLeavesNoFile) {
+  const fs::path path = fs::path(::testing::TempDir()) / "abandoned.h5";
+  fs::remove(path);
+  { H5Writer w(path); w.write("/a", {1.0}); }
+  EXPECT_FALSE(fs::exists(path));
+  EXPECT_FALSE(fs::exists(path.string() + ".part"));
+}
+
+TEST(Output, CorruptHdf5IsInputError) {
+  const fs::path path = fs::path(::testing::TempDir()) / "corrupt.h5";
+  std::ofstream(path) << "this is not hdf5";
+  try {
+    H5Reader r(path);
+    FAIL() << "no error";
+  } catch (const InputError& e) {
+    EXPECT_EQ(e.file(), path.string());
+    EXPECT_NE(std::string(e.what()).find("not an HDF5 file"), std::string::npos);
+  }
+}

@@ -1,0 +1,44 @@
+#pragma once
+// Runs the `gabion` binary of this build (GABION_BINARY) and captures its exit
+// code and output, for tests of the command line's contract.
+#include <sys/wait.h>
+
+#include <array>
+#include <cstdio>
+#include <filesystem>
+#include <fstream>
+#include <string>
+
+namespace gabion::testing {
+
+struct CliResult {
+  int exit_code = -1;
+  std::string output;  // stdout and stderr together
+};
+
+inline CliResult runGabion(const std::string& args) {
+  const std::string cmd = std::string(GABION_BINARY) + " " + args + " 2>&1";
+  CliResult r;
+  FILE* p = popen(cmd.c_str(), "r");
+  if (p == nullptr) return r;
+  std::array<char, 4096> buf{};
+  while (std::fgets(buf.data(), buf.size(), p) != nullptr) r.output += buf.data();
+  const int status = pclose(p);
+  r.exit_code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
+  return r;
+}
+
+/// A fresh scratch folder under the test temp dir.
+inline std::filesystem::path scratchDir(const std::string& name) {
+  const auto dir = std::filesystem::path(::testing::TempDir()) / ("gabion_" + name);
+  std::filesystem::remove_all(dir);
+  std::filesystem::create_directories(dir);
+  return dir;
+}
+
+inline void writeFile(const std::filesystem::path& path, const std::string& text) {
+  std::ofstream out(path);
+  out << text;
+}
+
+}  // namespace gabion::testing
