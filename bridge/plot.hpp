@@ -1,0 +1,34 @@
+#pragma once
+/// \file
+/// Charts as PNG files (line and marker plots with axes, ticks, labels and a
+/// legend), rendered by our own small rasteriser and written with zlib, so
+/// that every run can leave a plot a person can look at without extra tools.
+#include <filesystem>
+#include <string>
+#include <vector>
+
+namespace gabion::bridge {
+
+/// One data series of a chart.
+struct PlotSeries {
+  enum class Style { Line, Markers, LineMarkers };
+  std::string label;           ///< legend text (empty: not in the legend)
+  std::vector<double> x, y;    ///< same length; non-finite points are skipped
+  Style style = Style::Line;
+};
+
+/// A 2-D chart.
+struct PlotSpec {
+  std::string title;
+  std::string x_label;         ///< with unit, e.g. "displacement (m)"
+  std::string y_label;
+  std::vector<PlotSeries> series;
+  int width_px = 900;
+  int height_px = 600;
+};
+
+/// Renders `spec` to a PNG file at `path` (written atomically).
+/// Throws std::runtime_error when the file cannot be written.
+void writePlotPng(const std::filesystem::path& path, const PlotSpec& spec);
+
+}  // namespace gabion::bridge
