@@ -15,6 +15,7 @@ struct PlotSeries {
   std::string label;           ///< legend text (empty: not in the legend)
   std::vector<double> x, y;    ///< same length; non-finite points are skipped
   Style style = Style::Line;
+  int color_rgb = -1;          ///< 0xRRGGBB, or -1: the palette colour of the series' index
 };
 
 /// A 2-D chart.
