@@ -1,7 +1,184 @@
 #include "micro/cases.hpp"
 
-namespace gabion::micro {
+#include <chrono>
+#include <cmath>
+#include <sstream>
 
-std::vector<bridge::CaseKind> caseKinds() { return {}; }
+#include "bridge/errors.hpp"
+#include "bridge/output.hpp"
+#include "micro/engine.hpp"
+#include "micro/scene.hpp"
+
+namespace gabion::micro {
+namespace {
+
+// The step to use: dt_s if given (refused above the critical step unless
+// run.allow_dt_above_critical), else dt_safety x critical.
+double chooseDt(const Scene& scene, double critical, const bridge::JsonReader& root) {
+  const RunSpec& rs = scene.run;
+  if (rs.dt_s > 0.0) {
+    if (rs.dt_s > critical && !rs.allow_dt_above_critical) {
+      std::ostringstream m;
+      m << "dt_s = " << rs.dt_s << " s is above the critical time step " << critical
+        << " s (set run.allow_dt_above_critical = true to run anyway)";
+      root.object("run").fail("dt_s", m.str());
+    }
+    return rs.dt_s;
+  }
+  if (std::isfinite(critical)) return rs.dt_safety * critical;
+  return rs.series_interval_s;  // nothing moves: any step is stable
+}
+
+void checkScene(const bridge::JsonDocument& doc) {
+  const Scene scene = parseScene(doc.root());
+  const Engine engine(scene, 1);
+  chooseDt(scene, engine.criticalDt(), doc.root());
+}
+
+struct Series {
+  std::vector<double> time;
+  std::vector<std::vector<double>> energy;  // per term
+  std::vector<double> contacts;
+  std::vector<std::vector<double>> wall_force, wall_position;  // per wall, (n, 3) flat
+};
+
+const std::vector<std::pair<std::string, double EnergyTotals::*>>& energyTerms() {
+  static const std::vector<std::pair<std::string, double EnergyTotals::*>> terms = {
+      {"kinetic_translational_J", &EnergyTotals::kinetic_translational_J},
+      {"kinetic_rotational_J", &EnergyTotals::kinetic_rotational_J},
+      {"gravity_potential_J", &EnergyTotals::gravity_potential_J},
+      {"elastic_contact_J", &EnergyTotals::elastic_contact_J},
+      {"friction_dissipation_J", &EnergyTotals::friction_dissipation_J},
+      {"plastic_dissipation_J", &EnergyTotals::plastic_dissipation_J},
+      {"local_damping_dissipation_J", &EnergyTotals::local_damping_dissipation_J},
+      {"viscous_damping_dissipation_J", &EnergyTotals::viscous_damping_dissipation_J},
+      {"wall_work_J", &EnergyTotals::wall_work_J},
+      {"total_J", &EnergyTotals::total_J},
+      {"balance_rel_error", &EnergyTotals::balance_rel_error}};
+  return terms;
+}
+
+bridge::RunOutcome runScene(const bridge::JsonDocument& doc, const bridge::RunContext& ctx) {
+  const Scene scene = parseScene(doc.root());
+  Engine engine(scene, ctx.threads);
+  const double dt = chooseDt(scene, engine.criticalDt(), doc.root());
+  engine.setDt(dt);
+  const auto steps = static_cast<long long>(std::ceil(scene.run.duration_s / dt - 1e-9));
+  const long long series_every = std::max(1LL, std::llround(scene.run.series_interval_s / dt));
+  const long long output_every = std::max(1LL, std::llround(scene.run.output_interval_s / dt));
+
+  const std::size_t nb = engine.bodyCount(), nw = engine.wallCount(), nblk = engine.blockCount();
+  Series series;
+  series.energy.resize(energyTerms().size());
+  series.wall_force.resize(nw);
+  series.wall_position.resize(nw);
+  std::vector<double> snap_t, snap_x, snap_v, snap_w, snap_q;
+  const auto snapshot = [&](double t) {
+    snap_t.push_back(t);
+    for (std::size_t b = 0; b < nb; ++b) {
+      const BodyState s = engine.body(b);
+      for (int c = 0; c < 3; ++c) {
+        snap_x.push_back(s.position_m[c]);
+        snap_v.push_back(s.velocity_m_s[c]);
+        snap_w.push_back(s.angular_velocity_rad_s[c]);
+      }
+    }
+    for (std::size_t k = 0; k < nblk; ++k) {
+      const Eigen::Quaterniond q = engine.blockOrientation(k);
+      snap_q.insert(snap_q.end(), {q.w(), q.x(), q.y(), q.z()});
+    }
+  };
+  const auto record = [&](double t) {
+    series.time.push_back(t);
+    const EnergyTotals& e = engine.energy();
+    for (std::size_t k = 0; k < energyTerms().size(); ++k) series.energy[k].push_back(e.*(energyTerms()[k].second));
+    series.contacts.push_back(static_cast<double>(engine.contactCount()));
+    for (std::size_t w = 0; w < nw; ++w) {
+      const Vec3 f = engine.wallForce(w), p = engine.wallPosition(w);
+      for (int c = 0; c < 3; ++c) {
+        series.wall_force[w].push_back(f[c]);
+        series.wall_position[w].push_back(p[c]);
+      }
+    }
+  };
+
+  bridge::Progress progress(ctx.progress, "micro.scene");
+  snapshot(0.0);
+  bool ok = true;
+  const auto t0 = std::chrono::steady_clock::now();
+  for (long long n = 0; n < steps; ++n) {
+    const bool measure = n % series_every == 0 || n + 1 == steps;
+    ok = engine.step(measure);
+    if (!ok) break;
+    if (measure) record(static_cast<double>(n) * dt);
+    if ((n + 1) % output_every == 0 || n + 1 == steps) snapshot(static_cast<double>(n + 1) * dt);
+    progress.update(static_cast<double>(n + 1) * dt, scene.run.duration_s, n + 1);
+  }
+  const double loop_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  progress.finish();
+  if (!ok) snapshot(engine.time());
+
+  // Result files.
+  {
+    bridge::H5Writer h5(ctx.outdir / "result.h5");
+    h5.write("/series/time_s", series.time, "s");
+    for (std::size_t k = 0; k < energyTerms().size(); ++k) {
+      const std::string& name = energyTerms()[k].first;
+      h5.write("/series/" + name, series.energy[k], name == "balance_rel_error" ? "1" : "J");
+    }
+    h5.write("/series/contacts", series.contacts, "1");
+    const std::size_t ns = series.time.size();
+    for (std::size_t w = 0; w < nw; ++w) {
+      h5.write("/series/wall_" + std::to_string(w) + "_force_N", series.wall_force[w], {ns, 3}, "N");
+      h5.write("/series/wall_" + std::to_string(w) + "_position_m", series.wall_position[w], {ns, 3}, "m");
+    }
+    const std::size_t nt = snap_t.size();
+    std::vector<double> radius(nb);
+    for (std::size_t b = 0; b < nb; ++b) radius[b] = engine.bodyRadius(b);
+    h5.write("/bodies/time_s", snap_t, "s");
+    h5.write("/bodies/position_m", snap_x, {nt, nb, 3}, "m");
+    h5.write("/bodies/velocity_m_s", snap_v, {nt, nb, 3}, "m/s");
+    h5.write("/bodies/angular_velocity_rad_s", snap_w, {nt, nb, 3}, "rad/s");
+    h5.write("/bodies/radius_m", radius, "m");
+    if (nblk > 0) h5.write("/blocks/orientation", snap_q, {nt, nblk, 4}, "1");
+    h5.attribute("/", "format", "gabion.micro.scene/1");
+    h5.commit();
+    bridge::writeXdmfPoints(ctx.outdir / "result.xdmf", "result.h5", snap_t, nb, "/bodies/position_m",
+                            {{"velocity_m_s", "/bodies/velocity_m_s", 3, true},
+                             {"angular_velocity_rad_s", "/bodies/angular_velocity_rad_s", 3, true},
+                             {"radius_m", "/bodies/radius_m", 1, false}});
+  }
+
+  bridge::RunOutcome out;
+  const EnergyTotals& e = engine.energy();
+  nlohmann::json energy;
+  for (const auto& [name, member] : energyTerms()) energy[name] = e.*member;
+  out.results["steps"] = engine.steps();
+  out.results["dt_s"] = dt;
+  out.results["dt_critical_s"] = engine.criticalDt();
+  out.results["bodies"] = nb;
+  out.results["spheres"] = scene.spheres.size();
+  out.results["blocks"] = nblk;
+  out.results["walls"] = nw;
+  out.results["energy"] = energy;
+  out.results["contacts"] = engine.contactCount();
+  out.results["neighbour_rebuilds"] = engine.neighbourRebuilds();
+  out.results["step_loop_wall_time_s"] = loop_s;
+  out.results["body_steps_per_s"] =
+      loop_s > 0.0 ? static_cast<double>(nb) * static_cast<double>(engine.steps()) / loop_s : 0.0;
+  if (!ok) {
+    out.status = bridge::RunOutcome::Status::NumericalFailure;
+    out.message = engine.failure();
+  }
+  return out;
+}
+
+}  // namespace
+
+std::vector<bridge::CaseKind> caseKinds() {
+  return {{"micro.scene",
+           "fine DEM of explicit spheres, rigid multi-sphere blocks and planar walls (docs/micro.md)", checkScene,
+           runScene}};
+}
 
 }  // namespace gabion::micro

@@ -1,0 +1,901 @@
+#include "micro/engine.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <numeric>
+#include <sstream>
+#include <stdexcept>
+
+#include "bridge/laws/contact_local_damping.hpp"
+#include "micro/rigid_body.hpp"
+
+namespace gabion::micro {
+
+namespace {
+constexpr double kPi = 3.14159265358979323846;
+// Spheres larger than this many times the median radius stay out of the cell
+// grid (a boulder among grains would otherwise set the cell size for all).
+constexpr double kBigRadiusFactor = 2.0;
+
+template <class T>
+void permute(std::vector<T>& v, const std::vector<std::uint32_t>& order, std::vector<T>& tmp) {
+  tmp.resize(v.size());
+  for (std::size_t k = 0; k < order.size(); ++k) tmp[k] = v[order[k]];
+  v.swap(tmp);
+}
+}  // namespace
+
+/// A rigid multi-sphere block: state of the centre of mass, orientation of
+/// the principal frame, angular momentum (world), member offsets.
+struct Engine::Block {
+  double mass = 0.0, inv_mass = 0.0, volume = 0.0, alpha = 0.0;
+  Vec3 inertia = Vec3::Ones();  // principal moments (kg m^2)
+  Vec3 x = Vec3::Zero(), v = Vec3::Zero(), L = Vec3::Zero(), omega = Vec3::Zero();
+  Eigen::Quaterniond q = Eigen::Quaterniond::Identity();          // principal -> world
+  Eigen::Quaterniond principal_axes = Eigen::Quaterniond::Identity();  // principal -> input body frame
+  std::vector<Vec3> offsets;  // member centres in the principal frame (m)
+  std::vector<std::uint32_t> pids;
+  bool fixed = false;
+};
+
+/// A planar wall with its candidate list (particles within reach) and the
+/// contact history aligned to it.
+struct Engine::Wall {
+  Vec3 p0 = Vec3::Zero(), n = Vec3::UnitZ(), v = Vec3::Zero();
+  int mat = 0;
+  Vec3 force_N = Vec3::Zero();
+  Vec3 position = Vec3::Zero();  // point at the last force evaluation
+  std::vector<std::uint32_t> cand;
+  History hist;
+  double t_ref = 0.0;  // time of the last rebuild
+};
+
+/// Per-worker scratch: force buffers (worker 0 writes the global arrays),
+/// the list of touching pairs, energy sums and the first failure seen.
+struct Engine::WorkerScratch {
+  std::vector<double> fx, fy, fz, tx, ty, tz;
+  std::vector<std::uint32_t> touch_i, touch_k;
+  std::uint32_t lo = 0, hi = 0;
+  ContactEnergy energy;
+  std::size_t contacts = 0;
+  bool failed = false;
+  std::uint32_t fail_i = 0, fail_j = 0;
+  double fail_ratio = 0.0;
+};
+
+void Engine::History::resize(std::size_t m) {
+  ux.assign(m, 0.0);
+  uy.assign(m, 0.0);
+  uz.assign(m, 0.0);
+  plastic.assign(m, 0.0);
+  viscous.assign(m, 0.0);
+  stamp.assign(m, std::numeric_limits<std::int64_t>::min() / 2);
+}
+
+Engine::Engine(const Scene& scene, int threads) {
+  materials_ = scene.materials;
+  nmat_ = materials_.size();
+  laws_.resize(nmat_ * nmat_);
+  for (std::size_t a = 0; a < nmat_; ++a)
+    for (std::size_t b = 0; b < nmat_; ++b) laws_[a * nmat_ + b] = mixMaterials(materials_[a], materials_[b]);
+  gravity_ = scene.gravity_m_s2;
+  max_overlap_ratio_ = scene.run.max_overlap_ratio;
+  runaway_factor_ = scene.run.energy_runaway_factor;
+
+  sphere_count_ = scene.spheres.size();
+  std::size_t members = 0;
+  for (const auto& b : scene.blocks) members += b.member_radii_m.size();
+  n_ = sphere_count_ + members;
+  for (auto* v : {&x_, &y_, &z_, &vx_, &vy_, &vz_, &wx_, &wy_, &wz_, &fx_, &fy_, &fz_, &tx_, &ty_, &tz_, &r_,
+                  &inv_body_mass_, &mass_, &inv_mass_, &inv_inertia_, &alpha_, &x0_, &y0_, &z0_})
+    v->assign(n_, 0.0);
+  block_.assign(n_, -1);
+  mat_.assign(n_, 0);
+  pid_.resize(n_);
+  slot_.resize(n_);
+  std::iota(pid_.begin(), pid_.end(), 0u);
+  std::iota(slot_.begin(), slot_.end(), 0u);
+
+  const auto setParticle = [&](std::size_t i, const Vec3& x, const Vec3& v, const Vec3& w) {
+    x_[i] = x.x(), y_[i] = x.y(), z_[i] = x.z();
+    vx_[i] = v.x(), vy_[i] = v.y(), vz_[i] = v.z();
+    wx_[i] = w.x(), wy_[i] = w.y(), wz_[i] = w.z();
+  };
+  for (std::size_t s = 0; s < sphere_count_; ++s) {
+    const SphereSpec& sp = scene.spheres[s];
+    const Material& m = materials_[sp.material];
+    const double mass = m.density_kg_m3 * 4.0 / 3.0 * kPi * sp.radius_m * sp.radius_m * sp.radius_m;
+    r_[s] = sp.radius_m;
+    mat_[s] = static_cast<std::uint16_t>(sp.material);
+    if (sp.fixed) {
+      setParticle(s, sp.center_m, Vec3::Zero(), Vec3::Zero());
+    } else {
+      setParticle(s, sp.center_m, sp.velocity_m_s, sp.angular_velocity_rad_s);
+      mass_[s] = mass;
+      inv_mass_[s] = 1.0 / mass;
+      inv_inertia_[s] = 1.0 / (0.4 * mass * sp.radius_m * sp.radius_m);
+      inv_body_mass_[s] = 1.0 / mass;
+      alpha_[s] = m.local_damping;
+    }
+  }
+  std::size_t next = sphere_count_;
+  for (std::size_t bi = 0; bi < scene.blocks.size(); ++bi) {
+    const BlockSpec& spec = scene.blocks[bi];
+    const Material& m = materials_[spec.material];
+    const MassProperties props = clusterMassProperties(spec.member_centers_m, spec.member_radii_m, m.density_kg_m3);
+    Block b;
+    b.mass = props.mass_kg;
+    b.volume = props.volume_m3;
+    b.inertia = props.principal_moments_kg_m2;
+    b.principal_axes = props.principal_axes;
+    b.offsets = principalFrameOffsets(props, spec.member_centers_m);
+    b.q = (spec.orientation * props.principal_axes).normalized();
+    b.x = spec.position_m + spec.orientation * props.center_m;
+    b.fixed = spec.fixed;
+    b.alpha = m.local_damping;
+    if (!b.fixed) {
+      b.inv_mass = 1.0 / b.mass;
+      b.v = spec.velocity_m_s;
+      const Eigen::Matrix3d R = b.q.toRotationMatrix();
+      b.L = R * b.inertia.asDiagonal() * R.transpose() * spec.angular_velocity_rad_s;
+      b.omega = angularVelocityWorld(b.q, b.L, b.inertia);
+    }
+    for (std::size_t k = 0; k < b.offsets.size(); ++k, ++next) {
+      const Vec3 arm = b.q * b.offsets[k];
+      setParticle(next, b.x + arm, b.v + b.omega.cross(arm), b.omega);
+      r_[next] = spec.member_radii_m[k];
+      mat_[next] = static_cast<std::uint16_t>(spec.material);
+      block_[next] = static_cast<std::int32_t>(bi);
+      inv_body_mass_[next] = b.inv_mass;
+      b.pids.push_back(static_cast<std::uint32_t>(next));
+    }
+    blocks_.push_back(std::move(b));
+  }
+
+  for (const auto& ws : scene.walls) {
+    Wall w;
+    w.p0 = ws.point_m;
+    w.n = ws.normal;
+    w.v = ws.velocity_m_s;
+    w.mat = ws.material;
+    w.position = ws.point_m;
+    walls_.push_back(std::move(w));
+  }
+
+  // Grid spheres vs oversized ones; the skin is a fraction of the mean grid radius.
+  std::vector<double> sorted_r = r_;
+  std::nth_element(sorted_r.begin(), sorted_r.begin() + static_cast<long>(n_ / 2), sorted_r.end());
+  big_radius_m_ = kBigRadiusFactor * sorted_r[n_ / 2];
+  is_big_.assign(n_, 0);
+  double sum_r = 0.0;
+  std::size_t small = 0;
+  for (std::size_t i = 0; i < n_; ++i) {
+    is_big_[i] = r_[i] > big_radius_m_ ? 1 : 0;
+    if (!is_big_[i]) sum_r += r_[i], ++small;
+  }
+  skin_m_ = scene.run.verlet_skin_ratio * sum_r / static_cast<double>(std::max<std::size_t>(small, 1));
+
+  // Critical step: each body against the stiffest contact it can meet.
+  std::vector<double> kn_max(nmat_, 0.0), k_max(nmat_, 0.0);
+  std::vector<bool> present(nmat_, false);
+  for (std::size_t i = 0; i < n_; ++i) present[mat_[i]] = true;
+  for (const auto& w : walls_) present[w.mat] = true;
+  for (std::size_t a = 0; a < nmat_; ++a)
+    for (std::size_t b = 0; b < nmat_; ++b)
+      if (present[b]) {
+        const PairLaw& l = laws_[a * nmat_ + b];
+        kn_max[a] = std::max(kn_max[a], l.normal.stiffness_N_m);
+        k_max[a] = std::max({k_max[a], l.normal.stiffness_N_m, l.tangential.stiffness_N_m});
+      }
+  dt_critical_ = std::numeric_limits<double>::infinity();
+  for (std::size_t s = 0; s < sphere_count_; ++s) {
+    if (mass_[s] == 0.0) continue;
+    double ks_max = 0.0;
+    for (std::size_t b = 0; b < nmat_; ++b)
+      if (present[b]) ks_max = std::max(ks_max, laws_[mat_[s] * nmat_ + b].tangential.stiffness_N_m);
+    dt_critical_ = std::min({dt_critical_, std::sqrt(mass_[s] / kn_max[mat_[s]]),
+                             std::sqrt(0.4 * mass_[s] / ks_max)});
+  }
+  for (std::size_t bi = 0; bi < blocks_.size(); ++bi) {
+    const Block& b = blocks_[bi];
+    if (b.fixed) continue;
+    const int m = scene.blocks[bi].material;
+    double lever = 0.0;
+    for (std::size_t k = 0; k < b.offsets.size(); ++k)
+      lever = std::max(lever, b.offsets[k].norm() + scene.blocks[bi].member_radii_m[k]);
+    dt_critical_ = std::min({dt_critical_, std::sqrt(b.mass / kn_max[m]),
+                             std::sqrt(b.inertia.minCoeff() / (k_max[m] * lever * lever))});
+  }
+
+  pool_ = std::make_unique<WorkerPool>(threads);
+  scratch_.resize(static_cast<std::size_t>(pool_->size()));
+  for (std::size_t t = 1; t < scratch_.size(); ++t)
+    for (auto* v : {&scratch_[t].fx, &scratch_[t].fy, &scratch_[t].fz, &scratch_[t].tx, &scratch_[t].ty,
+                    &scratch_[t].tz})
+      v->assign(n_, 0.0);
+}
+
+Engine::~Engine() = default;
+
+// ---------------------------------------------------------------------------
+// The step.
+
+bool Engine::step(bool measure) {
+  failure_.clear();
+  updateNeighbours();
+  computeContactForces(measure);
+  // (The netting stage, wire links between node particles, goes here.)
+  applyWallsAndLoads(measure);
+  if (!failure_.empty()) return false;
+  integrate(measure);
+  if (!failure_.empty()) return false;
+  if (measure) measureEnergy();
+  ++step_;
+  return failure_.empty();
+}
+
+// ---------------------------------------------------------------------------
+// updateNeighbours: rebuilds the Verlet list when a particle (or wall) has
+// moved more than half the skin since the last build.
+
+void Engine::updateNeighbours() {
+  if (!need_rebuild_) return;
+  rebuildNeighbourList();
+  need_rebuild_ = false;
+  ++rebuilds_;
+}
+
+void Engine::rebuildNeighbourList() {
+  const double t_now = time();
+  // 1. Save the contacts that touched at the last step, by stable ids.
+  struct Saved {
+    std::uint32_t a, b;
+    double ux, uy, uz, plastic, viscous;
+  };
+  std::vector<Saved> saved;
+  const std::int64_t last = step_ - 1;
+  for (std::size_t i = 0; i + 1 < row_begin_.size(); ++i)
+    for (std::uint32_t k = row_begin_[i]; k < row_begin_[i + 1]; ++k)
+      if (hist_.stamp[k] == last)
+        saved.push_back({pid_[i], pid_[nbr_[k]], hist_.ux[k], hist_.uy[k], hist_.uz[k], hist_.plastic[k], hist_.viscous[k]});
+  for (std::size_t q = 0; q < big_i_.size(); ++q)
+    if (big_hist_.stamp[q] == last)
+      saved.push_back({pid_[big_i_[q]], pid_[big_j_[q]], big_hist_.ux[q], big_hist_.uy[q], big_hist_.uz[q],
+                       big_hist_.plastic[q], big_hist_.viscous[q]});
+  std::vector<std::vector<Saved>> saved_wall(walls_.size());
+  for (std::size_t w = 0; w < walls_.size(); ++w) {
+    const Wall& wall = walls_[w];
+    for (std::size_t k = 0; k < wall.cand.size(); ++k)
+      if (wall.hist.stamp[k] == last)
+        saved_wall[w].push_back(
+            {pid_[wall.cand[k]], 0, wall.hist.ux[k], wall.hist.uy[k], wall.hist.uz[k], wall.hist.plastic[k],
+             wall.hist.viscous[k]});
+  }
+
+  // 2. Cell grid over the grid spheres; sort particles into cell order
+  // (oversized spheres last) so that neighbours are close in memory.
+  Vec3 lo = Vec3::Constant(std::numeric_limits<double>::infinity()), hi = -lo;
+  double rmax = 0.0;
+  for (std::size_t i = 0; i < n_; ++i) {
+    if (is_big_[i]) continue;
+    lo = lo.cwiseMin(Vec3(x_[i], y_[i], z_[i]));
+    hi = hi.cwiseMax(Vec3(x_[i], y_[i], z_[i]));
+    rmax = std::max(rmax, r_[i]);
+  }
+  double h = 2.0 * rmax + skin_m_;
+  std::size_t nx = 1, ny = 1, nz = 1, ncell = 1;
+  if (rmax > 0.0) {
+    const Vec3 ext = hi - lo;
+    for (;;) {  // keep the grid at most a few cells per particle (scattered clouds)
+      nx = static_cast<std::size_t>(ext.x() / h) + 1;
+      ny = static_cast<std::size_t>(ext.y() / h) + 1;
+      nz = static_cast<std::size_t>(ext.z() / h) + 1;
+      ncell = nx * ny * nz;
+      if (ncell <= 4 * n_ + 64) break;
+      h *= 1.26;
+    }
+  }
+  const double inv_h = 1.0 / h;
+  std::vector<std::uint32_t> cell(n_);
+  const auto cellOf = [&](std::size_t i) {
+    const auto cx = std::min(nx - 1, static_cast<std::size_t>((x_[i] - lo.x()) * inv_h));
+    const auto cy = std::min(ny - 1, static_cast<std::size_t>((y_[i] - lo.y()) * inv_h));
+    const auto cz = std::min(nz - 1, static_cast<std::size_t>((z_[i] - lo.z()) * inv_h));
+    return static_cast<std::uint32_t>((cz * ny + cy) * nx + cx);
+  };
+  for (std::size_t i = 0; i < n_; ++i) cell[i] = is_big_[i] ? static_cast<std::uint32_t>(ncell) : cellOf(i);
+  std::vector<std::uint32_t> cell_start(ncell + 2, 0);
+  for (std::size_t i = 0; i < n_; ++i) ++cell_start[cell[i] + 1];
+  for (std::size_t c = 0; c + 1 < cell_start.size(); ++c) cell_start[c + 1] += cell_start[c];
+  std::vector<std::uint32_t> order(n_);
+  {
+    std::vector<std::uint32_t> fill(cell_start.begin(), cell_start.end() - 1);
+    for (std::size_t i = 0; i < n_; ++i) order[fill[cell[i]]++] = static_cast<std::uint32_t>(i);
+  }
+  reorderParticles(order);
+  std::vector<std::uint32_t> new_cell(n_);
+  for (std::size_t k = 0; k < n_; ++k) new_cell[k] = cell[order[k]];
+
+  const auto pairAllowed = [&](std::size_t i, std::size_t j) {
+    if (block_[i] >= 0 && block_[i] == block_[j]) return false;
+    return inv_body_mass_[i] > 0.0 || inv_body_mass_[j] > 0.0;
+  };
+
+  // 3. Half neighbour list, CSR by row; rows come out sorted by j because
+  // cells are visited in increasing index order.
+  row_begin_.assign(n_ + 1, 0);
+  nbr_.clear();
+  nbr_.reserve(8 * n_);
+  for (std::size_t i = 0; i < n_; ++i) {
+    row_begin_[i] = static_cast<std::uint32_t>(nbr_.size());
+    if (is_big_[i]) continue;
+    const std::size_t c = new_cell[i];
+    const std::size_t cx = c % nx, cy = (c / nx) % ny, cz = c / (nx * ny);
+    for (int dz = -1; dz <= 1; ++dz) {
+      if ((dz < 0 && cz == 0) || (dz > 0 && cz + 1 >= nz)) continue;
+      for (int dy = -1; dy <= 1; ++dy) {
+        if ((dy < 0 && cy == 0) || (dy > 0 && cy + 1 >= ny)) continue;
+        for (int dx = -1; dx <= 1; ++dx) {
+          if ((dx < 0 && cx == 0) || (dx > 0 && cx + 1 >= nx)) continue;
+          const std::size_t cc = ((cz + dz) * ny + (cy + dy)) * nx + (cx + dx);
+          for (std::uint32_t j = std::max<std::uint32_t>(cell_start[cc], static_cast<std::uint32_t>(i + 1));
+               j < cell_start[cc + 1]; ++j) {
+            const double ex = x_[j] - x_[i], ey = y_[j] - y_[i], ez = z_[j] - z_[i];
+            const double reach = r_[i] + r_[j] + skin_m_;
+            if (ex * ex + ey * ey + ez * ez < reach * reach && pairAllowed(i, j)) nbr_.push_back(j);
+          }
+        }
+      }
+    }
+  }
+  row_begin_[n_] = static_cast<std::uint32_t>(nbr_.size());
+  hist_.resize(nbr_.size());
+
+  // Oversized spheres: tested against every particle by bounding box.
+  std::vector<std::pair<std::uint32_t, std::uint32_t>> big;
+  for (std::size_t b = 0; b < n_; ++b) {
+    if (!is_big_[b]) continue;
+    for (std::size_t j = 0; j < n_; ++j) {
+      if (j == b || (is_big_[j] && j < b)) continue;
+      const double reach = r_[b] + r_[j] + skin_m_;
+      const double ex = x_[j] - x_[b], ey = y_[j] - y_[b], ez = z_[j] - z_[b];
+      if (std::fabs(ex) >= reach || std::fabs(ey) >= reach || std::fabs(ez) >= reach) continue;
+      if (ex * ex + ey * ey + ez * ez < reach * reach && pairAllowed(b, j))
+        big.emplace_back(static_cast<std::uint32_t>(std::min(b, j)), static_cast<std::uint32_t>(std::max(b, j)));
+    }
+  }
+  std::sort(big.begin(), big.end());
+  big_i_.resize(big.size());
+  big_j_.resize(big.size());
+  for (std::size_t q = 0; q < big.size(); ++q) big_i_[q] = big[q].first, big_j_[q] = big[q].second;
+  big_hist_.resize(big.size());
+
+  // Walls: candidates within reach of the plane (the wall may move half a skin).
+  for (auto& w : walls_) {
+    const Vec3 p = w.p0 + w.v * t_now;
+    w.cand.clear();
+    for (std::size_t i = 0; i < n_; ++i) {
+      if (inv_body_mass_[i] == 0.0) continue;
+      const double d = (x_[i] - p.x()) * w.n.x() + (y_[i] - p.y()) * w.n.y() + (z_[i] - p.z()) * w.n.z();
+      if (d < r_[i] + skin_m_) w.cand.push_back(static_cast<std::uint32_t>(i));
+    }
+    w.hist.resize(w.cand.size());
+    w.t_ref = t_now;
+  }
+
+  // 4. Carry the history of touching contacts over to the new lists.
+  for (const Saved& s : saved) {
+    const std::uint32_t a = slot_[s.a], b = slot_[s.b];
+    const std::uint32_t i = std::min(a, b), j = std::max(a, b);
+    History* H = nullptr;
+    std::size_t k = 0;
+    const auto first = nbr_.begin() + row_begin_[i], end = nbr_.begin() + row_begin_[i + 1];
+    const auto it = std::lower_bound(first, end, j);
+    if (it != end && *it == j) {
+      H = &hist_;
+      k = static_cast<std::size_t>(it - nbr_.begin());
+    } else {
+      const auto pair = std::make_pair(i, j);
+      const auto bt = std::lower_bound(big.begin(), big.end(), pair);
+      if (bt != big.end() && *bt == pair) {
+        H = &big_hist_;
+        k = static_cast<std::size_t>(bt - big.begin());
+      }
+    }
+    if (H == nullptr) continue;  // cannot happen for a pair that touched (it is within reach)
+    H->ux[k] = s.ux, H->uy[k] = s.uy, H->uz[k] = s.uz, H->plastic[k] = s.plastic, H->viscous[k] = s.viscous;
+    H->stamp[k] = last;
+  }
+  for (std::size_t w = 0; w < walls_.size(); ++w) {
+    Wall& wall = walls_[w];
+    for (const Saved& s : saved_wall[w]) {
+      const std::uint32_t i = slot_[s.a];
+      const auto it = std::lower_bound(wall.cand.begin(), wall.cand.end(), i);
+      if (it == wall.cand.end() || *it != i) continue;
+      const auto k = static_cast<std::size_t>(it - wall.cand.begin());
+      wall.hist.ux[k] = s.ux, wall.hist.uy[k] = s.uy, wall.hist.uz[k] = s.uz, wall.hist.plastic[k] = s.plastic;
+      wall.hist.viscous[k] = s.viscous;
+      wall.hist.stamp[k] = last;
+    }
+  }
+
+  // 5. Reference positions for the displacement test; row partitions with
+  // equal pair counts for the workers (fixed for a given thread count).
+  x0_ = x_, y0_ = y_, z0_ = z_;
+  const std::size_t T = scratch_.size();
+  part_begin_.assign(T + 1, static_cast<std::uint32_t>(n_));
+  part_begin_[0] = 0;
+  std::size_t t = 1;
+  for (std::size_t i = 0; i < n_ && t < T; ++i)
+    if (row_begin_[i] >= nbr_.size() * t / T) part_begin_[t++] = static_cast<std::uint32_t>(i);
+  for (auto& s : scratch_) {
+    s.touch_i.resize(nbr_.size() + 1);
+    s.touch_k.resize(nbr_.size() + 1);
+  }
+}
+
+void Engine::reorderParticles(const std::vector<std::uint32_t>& order) {
+  std::vector<double> tmp;
+  for (auto* v : {&x_, &y_, &z_, &vx_, &vy_, &vz_, &wx_, &wy_, &wz_, &r_, &inv_body_mass_, &mass_, &inv_mass_,
+                  &inv_inertia_, &alpha_})
+    permute(*v, order, tmp);
+  std::vector<std::int32_t> ti;
+  permute(block_, order, ti);
+  std::vector<std::uint16_t> tm;
+  permute(mat_, order, tm);
+  std::vector<std::uint8_t> tb;
+  permute(is_big_, order, tb);
+  std::vector<std::uint32_t> tp;
+  permute(pid_, order, tp);
+  for (std::size_t k = 0; k < n_; ++k) slot_[pid_[k]] = static_cast<std::uint32_t>(k);
+}
+
+// ---------------------------------------------------------------------------
+// computeContactForces: particle-particle contacts. Each worker takes a fixed
+// range of rows (and of the oversized-sphere pairs), writes into its own
+// force buffer, and the buffers are added in worker order: the result does
+// not depend on timing.
+
+void Engine::computeContactForces(bool measure) {
+  std::fill(fx_.begin(), fx_.end(), 0.0);
+  std::fill(fy_.begin(), fy_.end(), 0.0);
+  std::fill(fz_.begin(), fz_.end(), 0.0);
+  std::fill(tx_.begin(), tx_.end(), 0.0);
+  std::fill(ty_.begin(), ty_.end(), 0.0);
+  std::fill(tz_.begin(), tz_.end(), 0.0);
+  pool_->run([this, measure](int t) { contactKernel(t, measure); });
+  contacts_ = 0;
+  for (std::size_t t = 0; t < scratch_.size(); ++t) {
+    WorkerScratch& s = scratch_[t];
+    friction_ += s.energy.friction_J;
+    plastic_ += s.energy.plastic_J;
+    viscous_ += s.energy.viscous_J;
+    if (measure) elastic_ += s.energy.elastic_J;
+    contacts_ += s.contacts;
+    if (t > 0 && s.lo <= s.hi) {
+      for (std::uint32_t i = s.lo; i <= s.hi; ++i) {
+        fx_[i] += s.fx[i], fy_[i] += s.fy[i], fz_[i] += s.fz[i];
+        tx_[i] += s.tx[i], ty_[i] += s.ty[i], tz_[i] += s.tz[i];
+        s.fx[i] = s.fy[i] = s.fz[i] = s.tx[i] = s.ty[i] = s.tz[i] = 0.0;
+      }
+    }
+  }
+  for (const WorkerScratch& s : scratch_)
+    if (s.failed) {
+      std::ostringstream m;
+      m << "overlap " << s.fail_ratio << " of the smaller radius (limit " << max_overlap_ratio_ << ") between "
+        << bodyName(pid_[s.fail_i]) << " and " << bodyName(pid_[s.fail_j]);
+      fail(m.str());
+      break;
+    }
+}
+
+void Engine::contactKernel(int t, bool measure) {
+  WorkerScratch& s = scratch_[static_cast<std::size_t>(t)];
+  const auto T = scratch_.size();
+  s.energy = ContactEnergy{};
+  s.contacts = 0;
+  s.failed = false;
+  s.lo = static_cast<std::uint32_t>(n_);
+  s.hi = 0;
+  double* const FX = t == 0 ? fx_.data() : s.fx.data();
+  double* const FY = t == 0 ? fy_.data() : s.fy.data();
+  double* const FZ = t == 0 ? fz_.data() : s.fz.data();
+  double* const TX = t == 0 ? tx_.data() : s.tx.data();
+  double* const TY = t == 0 ? ty_.data() : s.ty.data();
+  double* const TZ = t == 0 ? tz_.data() : s.tz.data();
+  const double* __restrict const X = x_.data();
+  const double* __restrict const Y = y_.data();
+  const double* __restrict const Z = z_.data();
+  const double* __restrict const R = r_.data();
+  const double* __restrict const VX = vx_.data();
+  const double* __restrict const VY = vy_.data();
+  const double* __restrict const VZ = vz_.data();
+  const double* __restrict const WX = wx_.data();
+  const double* __restrict const WY = wy_.data();
+  const double* __restrict const WZ = wz_.data();
+  const double* __restrict const IM = inv_body_mass_.data();
+  const std::uint16_t* __restrict const MAT = mat_.data();
+  const PairLaw* __restrict const LAWS = laws_.data();
+  const std::size_t nmat = nmat_;
+  const std::int64_t now = step_;
+  const double dt = dt_;
+  const std::int64_t last = step_ - 1;
+  const double ratio = max_overlap_ratio_;
+
+  // Pass 1 (branch-free, cache friendly): which list entries touch.
+  const std::uint32_t r0 = part_begin_[static_cast<std::size_t>(t)], r1 = part_begin_[static_cast<std::size_t>(t) + 1];
+  std::uint32_t* const ti = s.touch_i.data();
+  std::uint32_t* const tk = s.touch_k.data();
+  std::size_t m = 0;
+  for (std::uint32_t i = r0; i < r1; ++i) {
+    const double xi = X[i], yi = Y[i], zi = Z[i], ri = R[i];
+    const std::uint32_t kb = row_begin_[i], ke = row_begin_[i + 1];
+    for (std::uint32_t k = kb; k < ke; ++k) {
+      const std::uint32_t j = nbr_[k];
+      const double ex = X[j] - xi, ey = Y[j] - yi, ez = Z[j] - zi, rs = ri + R[j];
+      ti[m] = i;
+      tk[m] = k;
+      m += (ex * ex + ey * ey + ez * ez < rs * rs) ? 1 : 0;
+    }
+  }
+
+  // Pass 2: the contact law on touching pairs.
+  const auto contact = [&](std::uint32_t i, std::uint32_t j, History& H, std::size_t k) {
+    const double ex = X[j] - X[i], ey = Y[j] - Y[i], ez = Z[j] - Z[i];
+    const double d = std::sqrt(ex * ex + ey * ey + ez * ez);
+    const double ri = R[i], rj = R[j];
+    const double overlap = ri + rj - d;
+    if (overlap <= 0.0) return;
+    double n[3] = {0.0, 0.0, 1.0};
+    if (d > 0.0) {
+      const double inv = 1.0 / d;
+      n[0] = ex * inv, n[1] = ey * inv, n[2] = ez * inv;
+    }
+    if (overlap > ratio * std::min(ri, rj) && !s.failed) {
+      s.failed = true, s.fail_i = i, s.fail_j = j, s.fail_ratio = overlap / std::min(ri, rj);
+    }
+    const double li = ri - 0.5 * overlap, lj = rj - 0.5 * overlap;
+    // velocity of the contact point on j relative to the one on i
+    // the angular velocities enter as lj w_j + li w_i: one cross product with n
+    const double ax = lj * WX[j] + li * WX[i], ay = lj * WY[j] + li * WY[i], az = lj * WZ[j] + li * WZ[i];
+    const double vrel[3] = {VX[j] - VX[i] - (ay * n[2] - az * n[1]), VY[j] - VY[i] - (az * n[0] - ax * n[2]),
+                            VZ[j] - VZ[i] - (ax * n[1] - ay * n[0])};
+    double u[3] = {0.0, 0.0, 0.0};
+    double plastic = 0.0, viscous = 0.0;
+    if (H.stamp[k] == last)
+      u[0] = H.ux[k], u[1] = H.uy[k], u[2] = H.uz[k], plastic = H.plastic[k], viscous = H.viscous[k];
+    double f[3];
+    evaluateContact(LAWS[MAT[i] * nmat + MAT[j]], IM[i] + IM[j], n, overlap, vrel, dt, u, plastic, viscous, f,
+                    s.energy, measure);
+    H.ux[k] = u[0], H.uy[k] = u[1], H.uz[k] = u[2], H.plastic[k] = plastic, H.stamp[k] = now;
+    if (viscous != 0.0) H.viscous[k] = viscous;
+    FX[i] += f[0], FY[i] += f[1], FZ[i] += f[2];
+    FX[j] -= f[0], FY[j] -= f[1], FZ[j] -= f[2];
+    const double c[3] = {n[1] * f[2] - n[2] * f[1], n[2] * f[0] - n[0] * f[2], n[0] * f[1] - n[1] * f[0]};
+    TX[i] += li * c[0], TY[i] += li * c[1], TZ[i] += li * c[2];
+    TX[j] += lj * c[0], TY[j] += lj * c[1], TZ[j] += lj * c[2];
+    s.lo = std::min(s.lo, i);
+    s.hi = std::max(s.hi, j);
+    ++s.contacts;
+  };
+  for (std::size_t q = 0; q < m; ++q) contact(ti[q], nbr_[tk[q]], hist_, tk[q]);
+  const std::size_t nb = big_i_.size();
+  for (std::size_t q = nb * static_cast<std::size_t>(t) / T; q < nb * (static_cast<std::size_t>(t) + 1) / T; ++q)
+    contact(big_i_[q], big_j_[q], big_hist_, q);
+}
+
+// ---------------------------------------------------------------------------
+// applyWallsAndLoads: particle-wall contacts (same law), the force on each
+// wall and the work of moving walls. Gravity is applied in integrate().
+
+void Engine::applyWallsAndLoads(bool measure) {
+  const double t_now = time();
+  const std::int64_t last = step_ - 1;
+  ContactEnergy e;
+  for (auto& w : walls_) {
+    w.force_N.setZero();
+    const Vec3 p = w.p0 + w.v * t_now;
+    w.position = p;
+    const double nc[3] = {-w.n.x(), -w.n.y(), -w.n.z()};  // from the particle to the wall
+    for (std::size_t k = 0; k < w.cand.size(); ++k) {
+      const std::uint32_t i = w.cand[k];
+      const double dist = (x_[i] - p.x()) * w.n.x() + (y_[i] - p.y()) * w.n.y() + (z_[i] - p.z()) * w.n.z();
+      const double overlap = r_[i] - dist;
+      if (overlap <= 0.0) continue;
+      if (overlap > max_overlap_ratio_ * r_[i] && failure_.empty()) {
+        std::ostringstream m;
+        m << "overlap " << overlap / r_[i] << " of the radius (limit " << max_overlap_ratio_ << ") between "
+          << bodyName(pid_[i]) << " and wall " << (&w - walls_.data());
+        fail(m.str());
+      }
+      const double li = dist;
+      const double vrel[3] = {w.v.x() - vx_[i] - li * (wy_[i] * nc[2] - wz_[i] * nc[1]),
+                              w.v.y() - vy_[i] - li * (wz_[i] * nc[0] - wx_[i] * nc[2]),
+                              w.v.z() - vz_[i] - li * (wx_[i] * nc[1] - wy_[i] * nc[0])};
+      double u[3] = {0.0, 0.0, 0.0};
+      double plastic = 0.0, viscous = 0.0;
+      History& H = w.hist;
+      if (H.stamp[k] == last)
+        u[0] = H.ux[k], u[1] = H.uy[k], u[2] = H.uz[k], plastic = H.plastic[k], viscous = H.viscous[k];
+      double f[3];
+      evaluateContact(laws_[mat_[i] * nmat_ + static_cast<std::size_t>(w.mat)], inv_body_mass_[i], nc, overlap,
+                      vrel, dt_, u, plastic, viscous, f, e, measure);
+      H.ux[k] = u[0], H.uy[k] = u[1], H.uz[k] = u[2], H.plastic[k] = plastic, H.viscous[k] = viscous;
+      H.stamp[k] = step_;
+      fx_[i] += f[0], fy_[i] += f[1], fz_[i] += f[2];
+      tx_[i] += li * (nc[1] * f[2] - nc[2] * f[1]);
+      ty_[i] += li * (nc[2] * f[0] - nc[0] * f[2]);
+      tz_[i] += li * (nc[0] * f[1] - nc[1] * f[0]);
+      w.force_N -= Vec3(f[0], f[1], f[2]);
+      wall_work_ += (f[0] * w.v.x() + f[1] * w.v.y() + f[2] * w.v.z()) * dt_;
+      ++contacts_;
+    }
+  }
+  friction_ += e.friction_J;
+  plastic_ += e.plastic_J;
+  viscous_ += e.viscous_J;
+  if (measure) elastic_ += e.elastic_J;
+}
+
+// ---------------------------------------------------------------------------
+// integrate: leapfrog (velocities at half steps). Free spheres in one SoA
+// loop; blocks by kick (v, L) and drift (x, free rotation of q), members then
+// placed rigidly. Local damping on each force/torque component. Also tracks
+// the displacement since the last list build and NaN.
+
+namespace {
+// One Cartesian component of the free-sphere update, branch-free so that the
+// loop vectorises (SoA arrays, no aliasing between them).
+struct ComponentSums {
+  double local = 0.0, ke = 0.0, pe = 0.0, finite = 0.0;
+};
+template <bool kMeasure>
+ComponentSums integrateComponent(std::size_t n, double dt, double g, const double* __restrict m,
+                                 const double* __restrict im, const double* __restrict alpha,
+                                 const double* __restrict f, double* __restrict v, double* __restrict x) {
+  double local = 0.0, ke = 0.0, pe = 0.0, finite = 0.0;
+#pragma omp simd reduction(+ : local, ke, pe, finite)
+  for (std::size_t i = 0; i < n; ++i) {
+    const double F = f[i] + m[i] * g;
+    const double v0 = v[i];
+    const double sgn = static_cast<double>(v0 > 0.0) - static_cast<double>(v0 < 0.0);
+    // Cundall local damping, bridge/laws/contact_local_damping.hpp, written out branch-free
+    const double Fd = -alpha[i] * std::fabs(F) * sgn;
+    const double v1 = v0 + dt * im[i] * (F + Fd);
+    local -= Fd * (v0 + v1) * 0.5 * dt;
+    const double x0 = x[i], x1 = x0 + dt * v1;
+    if (kMeasure) {
+      ke += 0.5 * m[i] * v1 * v1;
+      pe -= m[i] * g * 0.5 * (x0 + x1);
+    }
+    v[i] = v1;
+    x[i] = x1;
+    finite += x1 + v1;
+  }
+  return {local, ke, pe, finite};
+}
+// Rotation of one component (torque t, inverse inertia ii, angular velocity w).
+template <bool kMeasure>
+ComponentSums rotateComponent(std::size_t n, double dt, const double* __restrict ii,
+                              const double* __restrict alpha, const double* __restrict t, double* __restrict w) {
+  double local = 0.0, ke = 0.0, finite = 0.0;
+#pragma omp simd reduction(+ : local, ke, finite)
+  for (std::size_t i = 0; i < n; ++i) {
+    const double T = t[i], w0 = w[i];
+    const double sgn = static_cast<double>(w0 > 0.0) - static_cast<double>(w0 < 0.0);
+    const double Td = -alpha[i] * std::fabs(T) * sgn;
+    const double w1 = w0 + dt * ii[i] * (T + Td);
+    local -= Td * (w0 + w1) * 0.5 * dt;
+    if (kMeasure) ke += ii[i] > 0.0 ? 0.5 * w1 * w1 / ii[i] : 0.0;
+    w[i] = w1;
+    finite += w1;
+  }
+  return {local, ke, 0.0, finite};
+}
+}  // namespace
+
+void Engine::integrate(bool measure) {
+  const double dt = dt_;
+  double local = 0.0, ke_t = 0.0, ke_r = 0.0, pe = 0.0, max_d2 = 0.0, finite = 0.0;
+  double* const X[3] = {x_.data(), y_.data(), z_.data()};
+  double* const V[3] = {vx_.data(), vy_.data(), vz_.data()};
+  double* const W[3] = {wx_.data(), wy_.data(), wz_.data()};
+  const double* const Fc[3] = {fx_.data(), fy_.data(), fz_.data()};
+  const double* const Tq[3] = {tx_.data(), ty_.data(), tz_.data()};
+  // Free spheres: fixed contiguous chunks per worker, partial sums added in
+  // worker order (deterministic for a given thread count).
+  const std::size_t workers = scratch_.size();
+  std::vector<ComponentSums> part(workers * 2);
+  pool_->run([&](int t) {
+    const std::size_t b = n_ * static_cast<std::size_t>(t) / workers;
+    const std::size_t e = n_ * (static_cast<std::size_t>(t) + 1) / workers;
+    ComponentSums& lin = part[2 * static_cast<std::size_t>(t)];
+    ComponentSums& rot = part[2 * static_cast<std::size_t>(t) + 1];
+    for (int c = 0; c < 3; ++c) {
+      const ComponentSums a =
+          measure ? integrateComponent<true>(e - b, dt, gravity_[c], mass_.data() + b, inv_mass_.data() + b,
+                                             alpha_.data() + b, Fc[c] + b, V[c] + b, X[c] + b)
+                  : integrateComponent<false>(e - b, dt, gravity_[c], mass_.data() + b, inv_mass_.data() + b,
+                                              alpha_.data() + b, Fc[c] + b, V[c] + b, X[c] + b);
+      const ComponentSums r =
+          measure ? rotateComponent<true>(e - b, dt, inv_inertia_.data() + b, alpha_.data() + b, Tq[c] + b, W[c] + b)
+                  : rotateComponent<false>(e - b, dt, inv_inertia_.data() + b, alpha_.data() + b, Tq[c] + b,
+                                           W[c] + b);
+      lin.local += a.local, lin.ke += a.ke, lin.pe += a.pe, lin.finite += a.finite;
+      rot.local += r.local, rot.ke += r.ke, rot.finite += r.finite;
+    }
+  });
+  for (std::size_t t = 0; t < workers; ++t) {
+    local += part[2 * t].local + part[2 * t + 1].local;
+    ke_t += part[2 * t].ke;
+    ke_r += part[2 * t + 1].ke;
+    pe += part[2 * t].pe;
+    finite += part[2 * t].finite + part[2 * t + 1].finite;
+  }
+  for (auto& b : blocks_) {
+    if (b.fixed) continue;
+    Vec3 F = b.mass * gravity_, T = Vec3::Zero();
+    for (const std::uint32_t pid : b.pids) {
+      const std::uint32_t i = slot_[pid];
+      const Vec3 f(fx_[i], fy_[i], fz_[i]);
+      F += f;
+      T += Vec3(x_[i] - b.x.x(), y_[i] - b.x.y(), z_[i] - b.x.z()).cross(f) + Vec3(tx_[i], ty_[i], tz_[i]);
+    }
+    const bridge::LocalDampingParams ld{b.alpha};
+    Vec3 Fd, Td;
+    for (int c = 0; c < 3; ++c) {
+      Fd[c] = bridge::locallyDampedForce(ld, F[c], b.v[c]) - F[c];
+      Td[c] = bridge::locallyDampedForce(ld, T[c], b.omega[c]) - T[c];
+    }
+    const Vec3 v0 = b.v, w0 = b.omega, x0 = b.x;
+    b.v += dt * b.inv_mass * (F + Fd);
+    b.L += dt * (T + Td);
+    b.x += dt * b.v;
+    freeRotate(b.q, b.L, b.inertia, dt);
+    b.omega = angularVelocityWorld(b.q, b.L, b.inertia);
+    local -= (Fd.dot(v0 + b.v) + Td.dot(w0 + b.omega)) * 0.5 * dt;
+    if (measure) {
+      ke_t += 0.5 * b.mass * b.v.squaredNorm();
+      ke_r += 0.5 * b.L.dot(b.omega);
+      pe -= b.mass * gravity_.dot(0.5 * (x0 + b.x));
+    }
+    finite += b.x.sum() + b.v.sum() + b.L.sum();
+    for (std::size_t k = 0; k < b.pids.size(); ++k) {
+      const std::uint32_t i = slot_[b.pids[k]];
+      const Vec3 arm = b.q * b.offsets[k];
+      const Vec3 vm = b.v + b.omega.cross(arm);
+      x_[i] = b.x.x() + arm.x(), y_[i] = b.x.y() + arm.y(), z_[i] = b.x.z() + arm.z();
+      vx_[i] = vm.x(), vy_[i] = vm.y(), vz_[i] = vm.z();
+      wx_[i] = b.omega.x(), wy_[i] = b.omega.y(), wz_[i] = b.omega.z();
+    }
+  }
+  {
+    const double *__restrict px = x_.data(), *__restrict py = y_.data(), *__restrict pz = z_.data();
+    const double *__restrict qx = x0_.data(), *__restrict qy = y0_.data(), *__restrict qz = z0_.data();
+#pragma omp simd reduction(max : max_d2)
+    for (std::size_t i = 0; i < n_; ++i) {
+      const double ex = px[i] - qx[i], ey = py[i] - qy[i], ez = pz[i] - qz[i];
+      max_d2 = std::max(max_d2, ex * ex + ey * ey + ez * ez);
+    }
+  }
+  local_work_ += local;
+  if (measure) ke_t_ = ke_t, ke_r_ = ke_r, pe_ = pe;
+
+  if (!std::isfinite(finite)) {
+    for (std::size_t i = 0; i < n_; ++i)
+      if (!std::isfinite(x_[i] + y_[i] + z_[i] + vx_[i] + vy_[i] + vz_[i] + wx_[i] + wy_[i] + wz_[i])) {
+        fail("non-finite position or velocity of " + bodyName(pid_[i]));
+        return;
+      }
+    for (std::size_t b = 0; b < blocks_.size(); ++b)
+      if (!std::isfinite(blocks_[b].x.sum() + blocks_[b].v.sum() + blocks_[b].L.sum())) {
+        fail("non-finite state of block " + std::to_string(b));
+        return;
+      }
+    fail("non-finite state");
+    return;
+  }
+  const double half = 0.5 * skin_m_;
+  double wall_move = 0.0;
+  const double t_next = time() + dt;
+  for (const auto& w : walls_) wall_move = std::max(wall_move, w.v.norm() * (t_next - w.t_ref));
+  if (max_d2 > half * half || wall_move > half) need_rebuild_ = true;
+}
+
+// ---------------------------------------------------------------------------
+// Energy: stored terms come from this (measuring) step; dissipations and wall
+// work are running sums since the start.
+
+void Engine::measureEnergy() {
+  EnergyTotals& e = energy_;
+  e.kinetic_translational_J = ke_t_;
+  e.kinetic_rotational_J = ke_r_;
+  e.gravity_potential_J = pe_;
+  e.elastic_contact_J = elastic_;
+  elastic_ = 0.0;
+  e.friction_dissipation_J = friction_;
+  e.plastic_dissipation_J = plastic_;
+  e.local_damping_dissipation_J = local_work_;
+  e.viscous_damping_dissipation_J = viscous_;
+  e.wall_work_J = wall_work_;
+  const double stored = e.kinetic_translational_J + e.kinetic_rotational_J + e.elastic_contact_J;
+  const double dissipated =
+      e.friction_dissipation_J + e.plastic_dissipation_J + e.local_damping_dissipation_J + e.viscous_damping_dissipation_J;
+  e.total_J = stored + e.gravity_potential_J + dissipated - e.wall_work_J;
+  if (!have_e0_) {
+    have_e0_ = true;
+    e0_ = e.total_J;
+    pe0_ = e.gravity_potential_J;
+    scale_ke_el0_ = stored;
+  }
+  // Scale of the balance: all the energy that has been moved around.
+  const double scale =
+      std::max(scale_ke_el0_, stored + std::fabs(e.gravity_potential_J - pe0_) + dissipated + std::fabs(e.wall_work_J));
+  e.balance_rel_error = scale > 0.0 ? (e.total_J - e0_) / scale : 0.0;
+  const double supply = scale_ke_el0_ + std::fabs(e.gravity_potential_J - pe0_) + std::fabs(e.wall_work_J);
+  if (stored > runaway_factor_ * supply && stored > 0.0) {
+    std::ostringstream m;
+    m << "energy runaway: kinetic + elastic energy " << stored << " J exceeds " << runaway_factor_
+      << " x the energy supplied (" << supply << " J)";
+    double worst = -1.0;
+    std::string who;
+    for (std::size_t i = 0; i < n_; ++i) {
+      const double ke = mass_[i] * (vx_[i] * vx_[i] + vy_[i] * vy_[i] + vz_[i] * vz_[i]);
+      if (ke > worst) worst = ke, who = bodyName(pid_[i]);
+    }
+    for (std::size_t b = 0; b < blocks_.size(); ++b)
+      if (blocks_[b].mass * blocks_[b].v.squaredNorm() > worst)
+        worst = blocks_[b].mass * blocks_[b].v.squaredNorm(), who = "block " + std::to_string(b);
+    m << "; fastest body: " << who;
+    fail(m.str());
+  }
+}
+
+// ---------------------------------------------------------------------------
+
+void Engine::fail(const std::string& what) {
+  if (!failure_.empty()) return;
+  std::ostringstream m;
+  m << "step " << step_ << ", t = " << time() << " s: " << what;
+  failure_ = m.str();
+}
+
+std::string Engine::bodyName(std::uint32_t pid) const {
+  if (pid < sphere_count_) return "sphere " + std::to_string(pid);
+  const std::int32_t b = block_[slot_[pid]];
+  const auto& pids = blocks_[static_cast<std::size_t>(b)].pids;
+  const auto k = std::find(pids.begin(), pids.end(), pid) - pids.begin();
+  return "block " + std::to_string(b) + " (member sphere " + std::to_string(k) + ")";
+}
+
+BodyState Engine::body(std::size_t b) const {
+  if (b < sphere_count_) {
+    const std::uint32_t i = slot_[b];
+    return {Vec3(x_[i], y_[i], z_[i]), Vec3(vx_[i], vy_[i], vz_[i]), Vec3(wx_[i], wy_[i], wz_[i])};
+  }
+  const Block& k = blocks_[b - sphere_count_];
+  return {k.x, k.v, k.omega};
+}
+
+Eigen::Quaterniond Engine::blockOrientation(std::size_t b) const {
+  const Block& k = blocks_[b];
+  return (k.q * k.principal_axes.conjugate()).normalized();
+}
+
+double Engine::bodyRadius(std::size_t b) const {
+  if (b < sphere_count_) return r_[slot_[b]];
+  return std::cbrt(3.0 * blocks_[b - sphere_count_].volume / (4.0 * kPi));
+}
+
+std::size_t Engine::oversizedCount() const {
+  return static_cast<std::size_t>(std::count(is_big_.begin(), is_big_.end(), std::uint8_t{1}));
+}
+std::size_t Engine::bodyCount() const { return sphere_count_ + blocks_.size(); }
+std::size_t Engine::blockCount() const { return blocks_.size(); }
+std::size_t Engine::wallCount() const { return walls_.size(); }
+Vec3 Engine::wallForce(std::size_t w) const { return walls_[w].force_N; }
+Vec3 Engine::wallPosition(std::size_t w) const { return walls_[w].position; }
+
+}  // namespace gabion::micro

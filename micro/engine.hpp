@@ -1,0 +1,164 @@
+#pragma once
+/// \file
+/// The fine-scale DEM engine: spheres, rigid multi-sphere blocks and rigid
+/// planar walls under gravity, linear spring / Coulomb contacts with an
+/// optional normal force cap, local and viscous damping, O(N) neighbour
+/// search (cell grid + Verlet list), full energy bookkeeping.
+/// One step() = updateNeighbours -> computeContactForces -> applyWallsAndLoads
+/// -> integrate -> (measure); docs/micro.md says what each stage reads and writes.
+#include <Eigen/Core>
+#include <Eigen/Geometry>
+#include <cstdint>
+#include <memory>
+#include <string>
+#include <vector>
+
+#include "micro/contact.hpp"
+#include "micro/scene.hpp"
+#include "micro/worker_pool.hpp"
+
+namespace gabion::micro {
+
+/// Energy terms of the whole system (J). balance_rel_error is
+/// (E(t) - E(0)) / scale with E = kinetic + gravity + elastic + dissipated - wall work.
+struct EnergyTotals {
+  double kinetic_translational_J = 0.0;
+  double kinetic_rotational_J = 0.0;
+  double gravity_potential_J = 0.0;   ///< -sum m g.x (zero at the origin)
+  double elastic_contact_J = 0.0;     ///< normal + shear springs of all contacts
+  double friction_dissipation_J = 0.0;
+  double plastic_dissipation_J = 0.0; ///< F_lim normal cap
+  double local_damping_dissipation_J = 0.0;
+  double viscous_damping_dissipation_J = 0.0;
+  double wall_work_J = 0.0;           ///< work done by moving walls on the bodies
+  double total_J = 0.0;               ///< E above
+  double balance_rel_error = 0.0;
+};
+
+/// One body's state (centre of mass for blocks).
+struct BodyState {
+  Vec3 position_m, velocity_m_s, angular_velocity_rad_s;
+};
+
+class Engine {
+ public:
+  /// Builds the state from a parsed scene with `threads` workers (>= 1) for
+  /// the parallel stages. The scene is valid by construction (parseScene).
+  Engine(const Scene& scene, int threads);
+  ~Engine();
+
+  /// Critical time step estimate (s): min over bodies of sqrt(m / k_n) and
+  /// sqrt(I_min / (k l^2)) (docs/micro.md).
+  double criticalDt() const { return dt_critical_; }
+  double dt() const { return dt_; }
+  /// Sets the step (s); the caller checks it against criticalDt().
+  void setDt(double dt_s) { dt_ = dt_s; }
+
+  /// Advances one step. `measure`: also compute the stored energies (elastic,
+  /// kinetic, potential) for energy(). Returns false on numerical trouble
+  /// (failure() says what, when and which bodies); the state is then the one
+  /// reached.
+  bool step(bool measure);
+
+  long long steps() const { return step_; }
+  double time() const { return static_cast<double>(step_) * dt_; }
+  const std::string& failure() const { return failure_; }
+
+  /// Energy terms as of the last measuring step.
+  const EnergyTotals& energy() const { return energy_; }
+  /// Number of bodies: spheres (input order) then blocks.
+  std::size_t bodyCount() const;
+  std::size_t blockCount() const;
+  BodyState body(std::size_t b) const;
+  /// Orientation of block b (body input frame -> world).
+  Eigen::Quaterniond blockOrientation(std::size_t b) const;
+  /// Sphere radius, or for a block the radius of the sphere of equal volume (m).
+  double bodyRadius(std::size_t b) const;
+  std::size_t wallCount() const;
+  /// Force exerted by the bodies on wall w at the last step (N).
+  Vec3 wallForce(std::size_t w) const;
+  /// Position of wall w's point at the time of the last force evaluation (m).
+  Vec3 wallPosition(std::size_t w) const;
+  std::size_t contactCount() const { return contacts_; }
+  std::size_t neighbourRebuilds() const { return rebuilds_; }
+  /// Spheres kept out of the cell grid (radius > 2 x median radius).
+  std::size_t oversizedCount() const;
+
+ private:
+  struct Block;
+  struct Wall;
+  struct WorkerScratch;
+
+  void updateNeighbours();
+  void computeContactForces(bool measure);
+  void applyWallsAndLoads(bool measure);
+  void integrate(bool measure);
+  void measureEnergy();
+
+  void rebuildNeighbourList();
+  void reorderParticles(const std::vector<std::uint32_t>& order);
+  void contactKernel(int t, bool measure);
+  void checkFailures();
+  std::string bodyName(std::uint32_t pid) const;
+  void fail(const std::string& what);
+
+  // --- particles (every sphere in contact detection: free spheres and block
+  // members), SoA, kept in cell order (re-sorted at every list rebuild).
+  std::size_t n_ = 0;
+  std::vector<double> x_, y_, z_, vx_, vy_, vz_, wx_, wy_, wz_;
+  std::vector<double> fx_, fy_, fz_, tx_, ty_, tz_;
+  std::vector<double> r_;
+  std::vector<double> inv_body_mass_;  // 1/m of the owning body (0: fixed), for contact damping
+  std::vector<double> mass_, inv_mass_, inv_inertia_;  // integrated free spheres only (else 0)
+  std::vector<double> alpha_;          // local damping of free spheres
+  std::vector<double> x0_, y0_, z0_;   // positions at the last rebuild
+  std::vector<std::int32_t> block_;    // owning block, -1 for a free sphere
+  std::vector<std::uint16_t> mat_;
+  std::vector<std::uint32_t> pid_;     // stable particle id (input order)
+  std::vector<std::uint32_t> slot_;    // pid -> current index
+  std::size_t sphere_count_ = 0;
+
+  // --- neighbour list (half list, CSR by row i, j > i) with the contact
+  // history aligned to it; oversized spheres in a separate pair list.
+  std::vector<std::uint32_t> row_begin_, nbr_;
+  std::vector<std::uint32_t> big_i_, big_j_;
+  struct History {
+    std::vector<double> ux, uy, uz, plastic, viscous;
+    std::vector<std::int64_t> stamp;  // last step the pair touched
+    void resize(std::size_t m);
+  };
+  History hist_, big_hist_;
+  std::vector<std::uint8_t> is_big_;
+  double skin_m_ = 0.0;
+  double big_radius_m_ = 0.0;  // spheres above this are kept out of the grid
+  bool need_rebuild_ = true;
+  std::size_t rebuilds_ = 0;
+
+  // --- materials
+  std::size_t nmat_ = 0;
+  std::vector<Material> materials_;
+  std::vector<PairLaw> laws_;  // nmat x nmat
+
+  std::vector<Block> blocks_;
+  std::vector<Wall> walls_;
+  Vec3 gravity_;
+  double dt_ = 0.0, dt_critical_ = 0.0;
+  double max_overlap_ratio_ = 0.5, runaway_factor_ = 10.0;
+  long long step_ = 0;
+  std::size_t contacts_ = 0;
+
+  // energy: dissipations accumulate every step; stored terms on measuring steps
+  EnergyTotals energy_;
+  double e0_ = 0.0, scale_ke_el0_ = 0.0, pe0_ = 0.0;
+  bool have_e0_ = false;
+  double local_work_ = 0.0, wall_work_ = 0.0;
+  double friction_ = 0.0, plastic_ = 0.0, viscous_ = 0.0, elastic_ = 0.0;
+  double ke_t_ = 0.0, ke_r_ = 0.0, pe_ = 0.0;
+
+  std::unique_ptr<WorkerPool> pool_;
+  std::vector<WorkerScratch> scratch_;
+  std::vector<std::uint32_t> part_begin_;  // row partitions per worker
+  std::string failure_;
+};
+
+}  // namespace gabion::micro
