@@ -1,0 +1,57 @@
+#pragma once
+/// \file
+/// Reading the macro case kinds (`macro.impact`, `macro.sweep`) from a
+/// validated JSON document: laws (embedded or a law file), structure,
+/// boulder, impacts, run settings. Formats in docs/macro.md.
+#include <array>
+#include <filesystem>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "bridge/json_reader.hpp"
+#include "bridge/law_file.hpp"
+#include "macro/impact.hpp"
+#include "macro/structure.hpp"
+
+namespace gabion::macro {
+
+/// A macro.impact case, read and validated.
+struct ImpactCase {
+  bridge::LawFile laws;
+  std::string law_source;               ///< "embedded" or the law file's path
+  StructureSpec structure;
+  std::vector<BoulderSpec> impacts;     ///< at least one
+  std::vector<bool> aim_given;          ///< per impact: aim point from the case (else the default aim)
+  RunSettings run;
+};
+
+/// One sweep axis: values in the order given.
+struct SweepSpec {
+  std::vector<double> velocity_m_s;     ///< speeds along the boulder's direction; empty: the case's
+  std::vector<double> mass_kg;          ///< boulder masses at the case's diameter; empty: the case's
+  std::vector<std::pair<double, double>> aim_point_m;  ///< (y, z); empty: the case's aim
+  std::vector<std::array<int, 3>> cells;              ///< structure sizes (x, y, z); empty: the case's
+  bool chart = true;                    ///< write the design charts
+};
+
+/// Reads the laws, structure, boulder and run of a macro case. `law_override`
+/// (from --law) replaces the case's laws. With `sweep` the case may not list
+/// impacts and does not relax after the impact. Throws InputError.
+ImpactCase readImpactCase(const bridge::JsonDocument& doc, const std::optional<std::filesystem::path>& law_override,
+                          bool sweep);
+/// Reads the "sweep" object of a macro.sweep case.
+SweepSpec readSweep(const bridge::JsonReader& sweep);
+/// Builds the structure of a case; an inconsistency (unknown material, mixed
+/// cell sizes, wrong list length) is an InputError on /structure.
+Structure buildCaseStructure(const bridge::JsonDocument& doc, const ImpactCase& c);
+
+/// Fills the default aim points and checks the given ones lie on the front
+/// face (InputError on their key otherwise).
+void resolveAims(const bridge::JsonDocument& doc, ImpactCase& c, const Structure& s);
+
+/// The default aim point: the centre of the front face of the middle cell of
+/// the front face (cell ny/2, nz/2, integer division) (m).
+std::pair<double, double> defaultAim(const StructureSpec& s, double edge_m);
+
+}  // namespace gabion::macro

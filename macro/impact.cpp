@@ -1,0 +1,203 @@
+#include "macro/impact.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <sstream>
+#include <stdexcept>
+
+namespace gabion::macro {
+
+namespace {
+
+double maxOver(const std::vector<int>& nodes, const std::vector<double>& u) {
+  double m = -INFINITY;
+  for (int n : nodes) m = std::max(m, u[static_cast<std::size_t>(n)]);
+  return nodes.empty() ? 0.0 : m;
+}
+
+std::string fmt(double v) {
+  std::ostringstream s;
+  s.precision(4);
+  s << v;
+  return s.str();
+}
+
+}  // namespace
+
+long long relax(Model& model, double dt, long long max_steps, double tolerance_J, bool& converged) {
+  // Damping rate a tenth of the highest frequency: strong for the slow modes
+  // that hold the residual motion, harmless for the stability of the fast ones.
+  const double omega_max = 2.0 / model.criticalTimeStep();
+  const double rate = 0.1 * omega_max;
+  converged = false;
+  long long n = 0;
+  while (n < max_steps) {
+    if (model.step(dt, rate) != StepStatus::Ok) return n;
+    ++n;
+    if (n % 64 == 0 && model.energy().kinetic_J < tolerance_J) {
+      converged = true;
+      break;
+    }
+  }
+  return n;
+}
+
+ImpactResult runImpact(Model& model, const BoulderSpec& boulder, const RunSettings& run, int impact_index,
+                       Recording* rec) {
+  ImpactResult res;
+  const Structure& s = model.structure();
+  model.placeBoulder(boulder);
+  const double dt_crit = model.criticalTimeStep();
+  const double dt = run.time_step_s > 0.0 ? run.time_step_s : run.time_step_fraction * dt_crit;
+  res.time_step_s = dt;
+  res.critical_time_step_s = dt_crit;
+  res.input_energy_J = 0.5 * boulder.mass_kg * boulder.velocity_m_s.squaredNorm();
+  if (dt > dt_crit) {
+    res.ok = false;
+    res.message = "time step " + fmt(dt) + " s is above the critical time step " + fmt(dt_crit) + " s";
+    model.removeBoulder();
+    return res;
+  }
+  const Vec3 dir = boulder.velocity_m_s.normalized();
+  const auto nsteps = static_cast<long long>(std::ceil(run.duration_s / dt - 1e-9));
+  const Energy e_before = model.energy();
+  const double t0 = model.time_s();
+  const std::size_t n = s.nodeCount();
+  std::vector<double> peak_axial(n, 0.0);
+
+  // Contact bookkeeping: the force of the previous two samples serves the
+  // linear interpolation of the contact's start and end between samples.
+  bool touched = false, in_contact = false;
+  double f_prev = 0.0, f_prev2 = 0.0, t_first = 0.0, f_first = 0.0, t_start = 0.0, t_end = 0.0, touch_proj = 0.0;
+  long long first_contact_step = -1;
+  double e_ref = 0.0;
+  const long long snap_count = std::max(2, run.snapshots);
+  long long next_snap = 0;
+
+  long long k = 0;
+  for (; k < nsteps; ++k) {
+    const StepStatus st = model.step(dt);
+    if (st != StepStatus::Ok) {
+      res.ok = false;
+      res.message = model.failure();
+      break;
+    }
+    // The step evaluated forces at x(n), t(n) = time - dt.
+    const double t = model.time_s() - dt - t0;
+    const Energy& e = model.energy();
+    const double e_now = e.kinetic_J + e.elastic_J + (e.plastic_J - e_before.plastic_J) +
+                         (e.friction_J - e_before.friction_J);
+    if (k == 0) e_ref = e_now;
+    const double bal = std::abs(e_now - e_ref) / e_ref;
+    res.balance_rel_error = std::max(res.balance_rel_error, bal);
+    if (bal > run.max_balance_error) {
+      res.ok = false;
+      res.message = "energy balance error " + fmt(bal) + " above " + fmt(run.max_balance_error) + " at t = " + fmt(t) +
+                    " s: time step too large for the contact stiffness?";
+      break;
+    }
+    const double force = model.boulderForce().norm();
+    const bool contact = model.contacts() > 0;
+    const double proj = model.boulderPositionAtForces().dot(dir);
+    if (contact) {
+      if (!touched) {
+        touched = true;
+        first_contact_step = k;
+        t_first = t_start = t;
+        f_first = force;
+        touch_proj = proj - model.indentation();  // back off the first indentation to the touching position
+      } else if (k == first_contact_step + 1 && force > f_first) {
+        // Force ~ linear in time near the onset.
+        t_start = t_first - std::min(1.0, f_first / (force - f_first)) * dt;
+      }
+      if (!in_contact) ++res.contact_episodes;
+      in_contact = true;
+      if (res.contact_episodes == 1) t_end = t;
+      if (force > res.peak_force_N) {
+        res.peak_force_N = force;
+        res.time_of_peak_s = t;
+      }
+      res.max_indentation_m = std::max(res.max_indentation_m, model.indentation());
+    } else if (in_contact) {
+      in_contact = false;
+      // Separation after the last contact sample (t - dt), extrapolating its force decay.
+      double t_sep = t - dt;
+      if (f_prev2 > f_prev) t_sep += std::min(1.0, f_prev / (f_prev2 - f_prev)) * dt;
+      if (res.contact_episodes == 1) t_end = t_sep;
+      res.last_separation_s = t_sep;
+    }
+    if (touched) res.max_penetration_m = std::max(res.max_penetration_m, proj - touch_proj);
+    f_prev2 = f_prev;
+    f_prev = force;
+    const auto& ux = model.ux();
+    res.max_back_face_displacement_m = std::max(res.max_back_face_displacement_m, maxOver(s.back_nodes, ux));
+    res.max_front_face_displacement_m = std::max(res.max_front_face_displacement_m, maxOver(s.front.node, ux));
+    const auto& ax = model.cellAxialForce();
+    for (std::size_t i = 0; i < n; ++i) peak_axial[i] = std::max(peak_axial[i], ax[i]);
+
+    if (rec != nullptr) {
+      if (k % run.series_every_steps == 0) {
+        rec->time_s.push_back(rec->time_offset_s + t);
+        rec->impact.push_back(impact_index);
+        rec->force_N.push_back(force);
+        rec->force_x_N.push_back(-model.boulderForce().x());
+        rec->velocity_x_m_s.push_back(model.boulderVelocity().x());
+        rec->speed_m_s.push_back(model.boulderVelocity().norm());
+        rec->penetration_m.push_back(touched ? proj - touch_proj : 0.0);
+        rec->indentation_m.push_back(model.indentation());
+        rec->contacts.push_back(model.contacts());
+        rec->kinetic_J.push_back(e.kinetic_J);
+        rec->elastic_J.push_back(e.elastic_J);
+        rec->plastic_J.push_back(e.plastic_J - e_before.plastic_J);
+        rec->friction_J.push_back(e.friction_J - e_before.friction_J);
+        rec->back_displacement_m.push_back(maxOver(s.back_nodes, ux));
+      }
+      // Evenly spaced; the last one at the last step (t = duration - dt).
+      if (next_snap < snap_count &&
+          (t + 0.5 * dt >= run.duration_s * static_cast<double>(next_snap) / static_cast<double>(snap_count - 1) ||
+           k == nsteps - 1)) {
+        rec->snap_time_s.push_back(rec->time_offset_s + t);
+        for (std::size_t i = 0; i < n; ++i) {
+          rec->snap_displacement_m.push_back(ux[i]);
+          rec->snap_displacement_m.push_back(model.uy()[i]);
+          rec->snap_displacement_m.push_back(model.uz()[i]);
+          rec->snap_axial_force_N.push_back(ax[i]);
+        }
+        ++next_snap;
+      }
+    }
+  }
+  res.steps = k;  // steps of this impact (up to a failure)
+  if (!res.ok) {
+    model.removeBoulder();
+    return res;
+  }
+  // Contact end interpolated from the force's linear decay over the last two contact samples.
+  if (touched) {
+    res.contact_at_end = in_contact;
+    res.contact_duration_s = t_end - t_start;
+    res.time_of_peak_s -= t_start;
+    res.last_separation_s = in_contact ? run.duration_s : res.last_separation_s - t_start;
+  } else {
+    res.ok = false;
+    res.message = "the boulder never touched the structure within duration_s = " + fmt(run.duration_s) + " s";
+  }
+  const Energy& e = model.energy();
+  res.kinetic_J = e.kinetic_J;
+  res.elastic_J = e.elastic_J;
+  res.plastic_J = e.plastic_J - e_before.plastic_J;
+  res.friction_J = e.friction_J - e_before.friction_J;
+  res.rebound_velocity_m_s = -model.boulderVelocity().dot(dir);
+  for (std::size_t i = 0; i < n; ++i)
+    if (peak_axial[i] > 0.1 * res.peak_force_N) ++res.loaded_cells;
+  model.removeBoulder();
+  if (run.relax && res.ok) {
+    res.relaxed = true;
+    res.relax_steps = relax(model, dt, run.relax_max_steps, run.relax_tolerance * res.input_energy_J, res.relax_converged);
+    res.residual_back_face_displacement_m = maxOver(s.back_nodes, model.ux());
+    res.residual_front_face_displacement_m = maxOver(s.front.node, model.ux());
+  }
+  return res;
+}
+
+}  // namespace gabion::macro

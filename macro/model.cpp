@@ -1,0 +1,399 @@
+#include "macro/model.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <stdexcept>
+
+namespace gabion::macro {
+
+namespace {
+
+// bridge::axialResponse with the law's coefficients precomputed (the same
+// return mapping, no division in the loop). Returns the force (N); updates
+// the plastic shortening `up` (m).
+inline double lawForce(const Structure::AxialCoeffs& c, double u, double& up) {
+  const double trial = c.k * (u - up);
+  if (trial <= 0.0) return 0.0;  // separated: no tension
+  const double yield = c.fy + c.H * up;
+  if (trial <= yield) return trial;
+  up = (c.k * u - c.fy) * c.inv_k_H;
+  return c.k * (u - up);
+}
+
+}  // namespace
+
+using bridge::frictionUpdate1d;
+using bridge::frictionUpdate2d;
+
+Model::Model(Structure structure, Kinematics kinematics)
+    : s_(std::move(structure)), kin_(kinematics), three_d_(kinematics == Kinematics::ThreeD) {
+  const std::size_t n = s_.nodeCount();
+  for (auto* v : {&ux_, &uy_, &uz_, &vx_, &vy_, &vz_, &fx_, &fy_, &fz_, &cell_axial_}) v->assign(n, 0.0);
+  const std::size_t na = s_.axial.a.size(), nl = s_.lateral.a.size(), ng = s_.ground.node.size();
+  for (auto* v : {&axial_plastic_, &axial_force_, &axial_ft1_, &axial_ft2_}) v->assign(na, 0.0);
+  for (auto* v : {&lat_ftx_, &lat_fto_, &lat_plastic_, &lat_force_}) v->assign(nl, 0.0);
+  for (auto* v : {&gnd_ftx_, &gnd_fty_, &gnd_plastic_, &gnd_force_}) v->assign(ng, 0.0);
+  front_plastic_.assign(s_.front.node.size(), 0.0);
+}
+
+double Model::criticalTimeStep() const {
+  // Sum of the tangent stiffnesses acting on each degree of freedom.
+  const std::size_t n = s_.nodeCount();
+  std::vector<double> kx(n, 0.0), ky(n, 0.0), kz(n, 0.0);
+  auto add = [](std::vector<double>& v, int node, double k) {
+    if (node >= 0) v[static_cast<std::size_t>(node)] += k;
+  };
+  for (std::size_t l = 0; l < s_.axial.a.size(); ++l) {
+    const double k = s_.axial_laws[static_cast<std::size_t>(s_.axial.law[l])].stiffness_N_m;
+    const double kt = s_.friction_laws[static_cast<std::size_t>(s_.axial.friction[l])].tangential_stiffness_N_m;
+    for (int node : {s_.axial.a[l], s_.axial.b[l]}) {
+      add(kx, node, k);
+      add(ky, node, kt);
+      add(kz, node, kt);
+    }
+  }
+  for (std::size_t l = 0; l < s_.lateral.a.size(); ++l) {
+    const double k = s_.axial_laws[static_cast<std::size_t>(s_.lateral.law[l])].stiffness_N_m;
+    const double kt = s_.friction_laws[static_cast<std::size_t>(s_.lateral.friction[l])].tangential_stiffness_N_m;
+    const bool y = s_.lateral.dir[l] == 1;
+    for (int node : {s_.lateral.a[l], s_.lateral.b[l]}) {
+      add(kx, node, kt);
+      add(ky, node, y ? k : kt);
+      add(kz, node, y ? kt : k);
+    }
+  }
+  for (std::size_t l = 0; l < s_.ground.node.size(); ++l) {
+    const double kt = s_.friction_laws[static_cast<std::size_t>(s_.ground.friction[l])].tangential_stiffness_N_m;
+    const double k = s_.axial_laws[static_cast<std::size_t>(s_.ground.law[l])].stiffness_N_m;
+    add(kx, s_.ground.node[l], kt);
+    add(ky, s_.ground.node[l], kt);
+    add(kz, s_.ground.node[l], k);
+  }
+  double kimp_max = 0.0;
+  for (std::size_t e = 0; e < s_.front.node.size(); ++e) {
+    const double k = s_.axial_laws[static_cast<std::size_t>(s_.front.law[e])].stiffness_N_m;
+    kimp_max = std::max(kimp_max, k);
+    if (boulder_.present) {
+      add(kx, s_.front.node[e], k);
+      add(ky, s_.front.node[e], k);
+      add(kz, s_.front.node[e], k);
+    }
+  }
+  double w2 = 0.0;
+  for (std::size_t i = 0; i < n; ++i) {
+    double k = kx[i];
+    if (three_d_) k = std::max({k, ky[i], kz[i]});
+    w2 = std::max(w2, 2.0 * k * s_.inv_mass[i]);
+  }
+  if (boulder_.present) {
+    // The boulder can touch at most the front elements within its diameter.
+    const double per_axis = std::ceil(2.0 * boulder_.radius_m / s_.edge_m) + 1.0;
+    const double touching = std::min(static_cast<double>(s_.front.node.size()), per_axis * per_axis);
+    w2 = std::max(w2, 2.0 * touching * kimp_max / boulder_.mass_kg);
+  }
+  return w2 > 0.0 ? 2.0 / std::sqrt(w2) : INFINITY;
+}
+
+void Model::placeBoulder(const BoulderSpec& b) {
+  if (!(b.diameter_m > 0.0) || !(b.mass_kg > 0.0)) throw std::invalid_argument("boulder diameter and mass must be > 0");
+  const double speed = b.velocity_m_s.norm();
+  if (!(b.velocity_m_s.x() > 0.0))
+    throw std::invalid_argument("the boulder must move towards the front face (velocity x component > 0)");
+  if (!three_d_ && (b.velocity_m_s.y() != 0.0 || b.velocity_m_s.z() != 0.0))
+    throw std::invalid_argument("x-only kinematics needs a normal impact (velocity along x); use kinematics '3d'");
+  const Vec3 dir = b.velocity_m_s / speed;
+  int min_offset = s_.nx;
+  for (int off : s_.front_offset_cells) min_offset = std::min(min_offset, off);
+  const double r = 0.5 * b.diameter_m;
+  const Vec3 aim(min_offset * s_.edge_m, b.aim_y_m, b.aim_z_m);
+  boulder_ = {true, r, b.mass_kg};
+  bpos_ = aim - dir * ((r + b.initial_gap_m) / dir.x());
+  bpos_force_ = bpos_;
+  bvel_ = b.velocity_m_s;
+  bvel_full_ = bvel_;
+  bforce_.setZero();
+  max_indent_ = 0.0;
+  n_contacts_ = 0;
+  perforated_ = false;
+}
+
+void Model::removeBoulder() {
+  boulder_.present = false;
+  bvel_.setZero();
+  bvel_full_.setZero();
+  bforce_.setZero();
+  n_contacts_ = 0;
+  max_indent_ = 0.0;
+}
+
+StepStatus Model::step(double dt, double damping_rate_1_s) {
+  clearForces();
+  computeAxialForces(dt);
+  computeBoulderContacts();
+  computeLateralForces(dt);
+  computeGroundForces(dt);
+  integrate(dt, damping_rate_1_s);
+  return checkState();
+}
+
+void Model::clearForces() {
+  std::fill(fx_.begin(), fx_.end(), 0.0);
+  std::fill(cell_axial_.begin(), cell_axial_.end(), 0.0);
+  if (three_d_) {
+    std::fill(fy_.begin(), fy_.end(), 0.0);
+    std::fill(fz_.begin(), fz_.end(), 0.0);
+  }
+  bforce_.setZero();
+  elastic_acc_ = 0.0;
+}
+
+double Model::plasticWork(int law, double before_m, double after_m) const {
+  // Exact plastic work of the return mapping: the force follows the yield
+  // force F_y + H u_p while u_p grows from `before` to `after`.
+  const auto& c = s_.axial_coeffs[static_cast<std::size_t>(law)];
+  return (c.fy + 0.5 * c.H * (before_m + after_m)) * (after_m - before_m);
+}
+
+// x-neighbours and the back wall: the cell law in compression, no tension.
+void Model::computeAxialForces(double dt) {
+  // Local sums: the loop's stores to the force arrays cannot alias them.
+  double elastic = 0.0, friction = 0.0, plastic = 0.0;
+  const auto& L = s_.axial;
+  const std::size_t nl = L.a.size();
+  for (std::size_t l = 0; l < nl; ++l) {
+    const auto a = static_cast<std::size_t>(L.a[l]);
+    const int bi = L.b[l];
+    const auto b = static_cast<std::size_t>(bi);
+    const double shortening = ux_[a] - (bi >= 0 ? ux_[b] : 0.0);
+    const auto& law = s_.axial_coeffs[static_cast<std::size_t>(L.law[l])];
+    const double up = axial_plastic_[l];
+    double up_new = up;
+    const double F = lawForce(law, shortening, up_new);
+    if (up_new != up) {
+      plastic += plasticWork(L.law[l], up, up_new);
+      axial_plastic_[l] = up_new;
+    }
+    axial_force_[l] = F;
+    elastic += F * F * law.half_inv_k;
+    fx_[a] -= F;
+    cell_axial_[a] += 0.5 * F;
+    if (bi >= 0) {
+      fx_[b] += F;
+      cell_axial_[b] += 0.5 * F;
+    }
+    if (three_d_) {
+      // Friction on the face, its normal force the axial force.
+      const auto& fp = s_.friction_laws[static_cast<std::size_t>(L.friction[l])];
+      const double du1 = dt * (vy_[a] - (bi >= 0 ? vy_[b] : 0.0));
+      const double du2 = dt * (vz_[a] - (bi >= 0 ? vz_[b] : 0.0));
+      friction += frictionUpdate2d(fp, F, du1, du2, axial_ft1_[l], axial_ft2_[l]);
+      elastic += 0.5 * (axial_ft1_[l] * axial_ft1_[l] + axial_ft2_[l] * axial_ft2_[l]) / fp.tangential_stiffness_N_m;
+      fy_[a] -= axial_ft1_[l];
+      fz_[a] -= axial_ft2_[l];
+      if (bi >= 0) {
+        fy_[b] += axial_ft1_[l];
+        fz_[b] += axial_ft2_[l];
+      }
+    }
+  }
+  elastic_acc_ += elastic;
+  energy_.friction_J += friction;
+  energy_.plastic_J += plastic;
+}
+
+// The boulder against the front cubes through the impact law: the indentation
+// is the sphere's overlap with the cube (radius minus the distance from the
+// centre to the nearest point of the cube), the force acts along that line.
+void Model::computeBoulderContacts() {
+  // Local sums: the loop's stores to the force arrays cannot alias them.
+  double elastic = 0.0, friction = 0.0, plastic = 0.0;
+  max_indent_ = 0.0;
+  n_contacts_ = 0;
+  if (!boulder_.present) return;
+  const double R = boulder_.radius_m, e = s_.edge_m;
+  const auto& F = s_.front;
+  for (std::size_t el = 0; el < F.node.size(); ++el) {
+    const auto node = static_cast<std::size_t>(F.node[el]);
+    const double x0 = F.x_min[el] + ux_[node];
+    if (bpos_.x() + R <= x0) continue;  // in front of the face: no contact possible
+    const double y0 = F.y_min[el] + (three_d_ ? uy_[node] : 0.0);
+    const double z0 = F.z_min[el] + (three_d_ ? uz_[node] : 0.0);
+    const double dy = bpos_.y() - std::clamp(bpos_.y(), y0, y0 + e);
+    const double dz = bpos_.z() - std::clamp(bpos_.z(), z0, z0 + e);
+    const double dyz2 = dy * dy + dz * dz;
+    if (dyz2 >= R * R) continue;  // beside the cube
+    const double dx = bpos_.x() - std::clamp(bpos_.x(), x0, x0 + e);
+    const double d2 = dx * dx + dyz2;
+    if (d2 >= R * R) continue;
+    const double d = std::sqrt(d2);
+    if (d <= 1e-9 * R) {  // the centre is inside a cell: the model no longer applies
+      perforated_ = true;
+      continue;
+    }
+    const double indent = R - d;
+    const double up = front_plastic_[el];
+    if (indent <= up) continue;  // inside the dent left by an earlier impact: no force
+    const auto& law = s_.axial_coeffs[static_cast<std::size_t>(F.law[el])];
+    double up_new = up;
+    const double f = lawForce(law, indent, up_new);
+    if (up_new != up) {
+      plastic += plasticWork(F.law[el], up, up_new);
+      front_plastic_[el] = up_new;
+    }
+    elastic += f * f * law.half_inv_k;
+    const double nx = dx / d, ny = dy / d, nz = dz / d;  // from the cube to the centre
+    bforce_ += f * Vec3(nx, ny, nz);
+    fx_[node] -= f * nx;
+    cell_axial_[node] -= 0.5 * f * nx;
+    if (three_d_) {
+      fy_[node] -= f * ny;
+      fz_[node] -= f * nz;
+    }
+    max_indent_ = std::max(max_indent_, indent);
+    ++n_contacts_;
+  }
+  if (!three_d_) bforce_.y() = bforce_.z() = 0.0;  // x-only: the boulder is guided along x
+  elastic_acc_ += elastic;
+  energy_.friction_J += friction;
+  energy_.plastic_J += plastic;
+}
+
+// Lateral neighbours: normal reaction = reaction coefficient x axial force of
+// the cells (the larger of the two: the cell that expands more pushes, the
+// other only reacts), Coulomb friction with a tangential spring on the face.
+void Model::computeLateralForces(double dt) {
+  // Local sums: the loop's stores to the force arrays cannot alias them.
+  double elastic = 0.0, friction = 0.0, plastic = 0.0;
+  const auto& L = s_.lateral;
+  const std::size_t nl = L.a.size();
+  for (std::size_t l = 0; l < nl; ++l) {
+    const auto a = static_cast<std::size_t>(L.a[l]);
+    const auto b = static_cast<std::size_t>(L.b[l]);
+    double normal = std::max(s_.reaction_coefficient[a] * cell_axial_[a], s_.reaction_coefficient[b] * cell_axial_[b]);
+    const auto& fp = s_.friction_laws[static_cast<std::size_t>(L.friction[l])];
+    if (!three_d_) {
+      double ft = lat_ftx_[l];  // a local copy: the force arrays' stores could alias the member
+      friction += frictionUpdate1d(fp, normal, dt * (vx_[a] - vx_[b]), ft);
+      lat_ftx_[l] = ft;
+      elastic += ft * ft * s_.friction_half_inv_k[static_cast<std::size_t>(L.friction[l])];
+      fx_[a] -= ft;
+      fx_[b] += ft;
+      continue;
+    }
+    // 3-D: the cell law across the face resists lateral approach.
+    const bool y = L.dir[l] == 1;
+    auto& un = y ? uy_ : uz_;
+    auto& fn = y ? fy_ : fz_;
+    auto& vo = y ? vz_ : vy_;
+    auto& fo = y ? fz_ : fy_;
+    const auto& law = s_.axial_coeffs[static_cast<std::size_t>(L.law[l])];
+    const double up = lat_plastic_[l];
+    double up_new = up;
+    const double fnorm = lawForce(law, un[a] - un[b], up_new);
+    if (up_new != up) {
+      plastic += plasticWork(L.law[l], up, up_new);
+      lat_plastic_[l] = up_new;
+    }
+    lat_force_[l] = fnorm;
+    elastic += fnorm * fnorm * law.half_inv_k;
+    fn[a] -= fnorm;
+    fn[b] += fnorm;
+    normal += fnorm;
+    friction +=
+        frictionUpdate2d(fp, normal, dt * (vx_[a] - vx_[b]), dt * (vo[a] - vo[b]), lat_ftx_[l], lat_fto_[l]);
+    elastic += 0.5 * (lat_ftx_[l] * lat_ftx_[l] + lat_fto_[l] * lat_fto_[l]) / fp.tangential_stiffness_N_m;
+    fx_[a] -= lat_ftx_[l];
+    fx_[b] += lat_ftx_[l];
+    fo[a] -= lat_fto_[l];
+    fo[b] += lat_fto_[l];
+  }
+  elastic_acc_ += elastic;
+  energy_.friction_J += friction;
+  energy_.plastic_J += plastic;
+}
+
+// Base cells on the ground: Coulomb friction under the column's weight (and,
+// in 3-D, the half-cell law against sinking into the ground).
+void Model::computeGroundForces(double dt) {
+  // Local sums: the loop's stores to the force arrays cannot alias them.
+  double elastic = 0.0, friction = 0.0, plastic = 0.0;
+  const auto& G = s_.ground;
+  for (std::size_t l = 0; l < G.node.size(); ++l) {
+    const auto i = static_cast<std::size_t>(G.node[l]);
+    const auto& fp = s_.friction_laws[static_cast<std::size_t>(G.friction[l])];
+    double normal = G.weight_N[l];
+    if (!three_d_) {
+      friction += frictionUpdate1d(fp, normal, dt * vx_[i], gnd_ftx_[l]);  // few links: no local copy needed
+      elastic += 0.5 * gnd_ftx_[l] * gnd_ftx_[l] / fp.tangential_stiffness_N_m;
+      fx_[i] -= gnd_ftx_[l];
+      continue;
+    }
+    const auto& law = s_.axial_coeffs[static_cast<std::size_t>(G.law[l])];
+    const double up = gnd_plastic_[l];
+    double up_new = up;
+    const double fz = lawForce(law, -uz_[i], up_new);
+    if (up_new != up) {
+      plastic += plasticWork(G.law[l], up, up_new);
+      gnd_plastic_[l] = up_new;
+    }
+    gnd_force_[l] = fz;
+    elastic += fz * fz * law.half_inv_k;
+    fz_[i] += fz;
+    normal += fz;
+    friction += frictionUpdate2d(fp, normal, dt * vx_[i], dt * vy_[i], gnd_ftx_[l], gnd_fty_[l]);
+    elastic += 0.5 * (gnd_ftx_[l] * gnd_ftx_[l] + gnd_fty_[l] * gnd_fty_[l]) / fp.tangential_stiffness_N_m;
+    fx_[i] -= gnd_ftx_[l];
+    fy_[i] -= gnd_fty_[l];
+  }
+  elastic_acc_ += elastic;
+  energy_.friction_J += friction;
+  energy_.plastic_J += plastic;
+}
+
+// Leapfrog: v(n+1/2) = v(n-1/2) + dt F(n)/m, x(n+1) = x(n) + dt v(n+1/2).
+void Model::integrate(double dt, double damping_rate_1_s) {
+  const std::size_t n = s_.nodeCount();
+  double kinetic = 0.0;
+  const double h = 0.5 * damping_rate_1_s * dt;
+  const double keep = (1.0 - h) / (1.0 + h), gain = dt / (1.0 + h);
+  auto advance = [&](std::vector<double>& v, std::vector<double>& u, const std::vector<double>& f) {
+    for (std::size_t i = 0; i < n; ++i) {
+      const double vnew = keep * v[i] + gain * f[i] * s_.inv_mass[i];
+      kinetic += 0.5 * s_.mass_kg[i] * v[i] * vnew;
+      v[i] = vnew;
+      u[i] += dt * vnew;
+    }
+  };
+  advance(vx_, ux_, fx_);
+  if (three_d_) {
+    advance(vy_, uy_, fy_);
+    advance(vz_, uz_, fz_);
+  }
+  if (boulder_.present) {
+    const Vec3 vnew = bvel_ + dt * bforce_ / boulder_.mass_kg;
+    kinetic += 0.5 * boulder_.mass_kg * bvel_.dot(vnew);
+    bvel_full_ = 0.5 * (bvel_ + vnew);
+    bpos_force_ = bpos_;
+    bvel_ = vnew;
+    bpos_ += dt * bvel_;
+  }
+  energy_.kinetic_J = kinetic;
+  energy_.elastic_J = elastic_acc_;
+  time_ += dt;
+  ++steps_;
+}
+
+StepStatus Model::checkState() {
+  if (!std::isfinite(energy_.total()) || !bpos_.allFinite()) {
+    failure_ = "non-finite state (energy or boulder position) at step " + std::to_string(steps_);
+    return StepStatus::NonFinite;
+  }
+  if (perforated_) {
+    failure_ = "the boulder's centre entered a front cell at step " + std::to_string(steps_) +
+               ": the one-node-per-cell model does not describe a perforation";
+    return StepStatus::Perforation;
+  }
+  return StepStatus::Ok;
+}
+
+}  // namespace gabion::macro

@@ -1,0 +1,147 @@
+#pragma once
+/// \file
+/// The macro model in motion: the state of the nodes and interactions of a
+/// Structure, an optional boulder, and one readable step():
+///
+///   clearForces -> computeAxialForces -> computeBoulderContacts
+///     -> computeLateralForces -> computeGroundForces -> integrate -> checkState
+///
+/// Integration is the leapfrog (velocity at half steps, positions at full
+/// steps). Energy is accounted per step: kinetic energy as 1/2 m v(n-1/2).v(n+1/2)
+/// (a quantity the leapfrog conserves exactly for a linear system), elastic
+/// energy from the current forces, plastic and friction dissipation from the
+/// laws' own history variables. Their sum stays equal to the initial energy
+/// up to the integrator's error at contact kinks, which is what
+/// balance_rel_error measures.
+#include <Eigen/Core>
+#include <string>
+#include <vector>
+
+#include "macro/structure.hpp"
+
+namespace gabion::macro {
+
+using Vec3 = Eigen::Vector3d;
+
+/// A spherical boulder about to strike the front face.
+struct BoulderSpec {
+  double diameter_m = 0.5;        ///< (m)
+  double mass_kg = 170.0;         ///< (kg)
+  Vec3 velocity_m_s{20.0, 0, 0};  ///< velocity vector (m/s); its x component must be > 0
+  double aim_y_m = 0.0;           ///< where the centre's path meets the front plane (m)
+  double aim_z_m = 0.0;           ///< (m)
+  double initial_gap_m = 1e-3;    ///< gap between the sphere and the front plane at t = 0 (m)
+};
+
+/// What step() found.
+enum class StepStatus { Ok, NonFinite, Perforation };
+
+/// Energy of the model (J). Plastic and friction are accumulated since the
+/// model was built; kinetic includes the boulder.
+struct Energy {
+  double kinetic_J = 0.0;
+  double elastic_J = 0.0;
+  double plastic_J = 0.0;
+  double friction_J = 0.0;
+  double total() const { return kinetic_J + elastic_J + plastic_J + friction_J; }
+};
+
+class Model {
+ public:
+  Model(Structure structure, Kinematics kinematics);
+
+  const Structure& structure() const { return s_; }
+  Kinematics kinematics() const { return kin_; }
+
+  /// Upper bound of the leapfrog's stability limit dt_crit = 2 / omega_max,
+  /// with omega_max^2 bounded by Gershgorin's theorem: max over degrees of
+  /// freedom of 2 (sum of the tangent stiffnesses acting on it) / mass (s).
+  /// Includes the boulder's contacts when a boulder is placed.
+  double criticalTimeStep() const;
+
+  /// Puts a boulder in front of the structure on the line through the aim
+  /// point (on the foremost front plane) along its velocity, `initial_gap_m`
+  /// from that plane. Throws std::invalid_argument for an impossible boulder.
+  void placeBoulder(const BoulderSpec& b);
+  void removeBoulder();
+  bool hasBoulder() const { return boulder_.present; }
+
+  /// Advances by dt (s). `damping_rate_1_s` > 0 adds mass-proportional viscous
+  /// damping (used only to bring the structure to rest between impacts; the
+  /// energy it removes is not part of the balance).
+  StepStatus step(double dt, double damping_rate_1_s = 0.0);
+
+  // Read access to the state (SI units).
+  double time_s() const { return time_; }
+  long long steps() const { return steps_; }
+  const Energy& energy() const { return energy_; }
+  const std::vector<double>& ux() const { return ux_; }
+  const std::vector<double>& uy() const { return uy_; }
+  const std::vector<double>& uz() const { return uz_; }
+  const std::vector<double>& vx() const { return vx_; }
+  /// Axial (x) compressive force of each cell: mean of its front and back loads (N).
+  const std::vector<double>& cellAxialForce() const { return cell_axial_; }
+  /// Force of each axial link (x-neighbours and back supports, Structure::axial order) (N).
+  const std::vector<double>& axialForce() const { return axial_force_; }
+  /// Plastic shortening of each axial link (m).
+  const std::vector<double>& axialPlastic() const { return axial_plastic_; }
+  /// Plastic indentation of each front element (m).
+  const std::vector<double>& frontPlastic() const { return front_plastic_; }
+
+  const Vec3& boulderPosition() const { return bpos_; }
+  /// Boulder centre where the last step evaluated the forces, x(n) (m).
+  const Vec3& boulderPositionAtForces() const { return bpos_force_; }
+  /// Boulder velocity at the last full step, mean of the two half steps (m/s).
+  const Vec3& boulderVelocity() const { return bvel_full_; }
+  /// Total contact force on the boulder at the last step (N).
+  const Vec3& boulderForce() const { return bforce_; }
+  /// Deepest indentation of the boulder into a front element at the last step (m).
+  double indentation() const { return max_indent_; }
+  /// Number of front elements in contact at the last step.
+  int contacts() const { return n_contacts_; }
+  const std::string& failure() const { return failure_; }
+
+ private:
+  void clearForces();
+  void computeAxialForces(double dt);
+  void computeBoulderContacts();
+  void computeLateralForces(double dt);
+  void computeGroundForces(double dt);
+  void integrate(double dt, double damping_rate_1_s);
+  StepStatus checkState();
+
+  double plasticWork(int law, double before_m, double after_m) const;
+
+  Structure s_;
+  Kinematics kin_;
+  bool three_d_;
+
+  // Nodes.
+  std::vector<double> ux_, uy_, uz_, vx_, vy_, vz_, fx_, fy_, fz_, cell_axial_;
+  // Axial links: plastic shortening, force, tangential face forces (3-D).
+  std::vector<double> axial_plastic_, axial_force_, axial_ft1_, axial_ft2_;
+  // Lateral links: tangential force along x and along the other lateral axis
+  // (3-D), normal spring plastic shortening and force (3-D).
+  std::vector<double> lat_ftx_, lat_fto_, lat_plastic_, lat_force_;
+  // Ground links.
+  std::vector<double> gnd_ftx_, gnd_fty_, gnd_plastic_, gnd_force_;
+  // Front elements.
+  std::vector<double> front_plastic_;
+
+  struct Boulder {
+    bool present = false;
+    double radius_m = 0.0, mass_kg = 0.0;
+  } boulder_;
+  Vec3 bpos_ = Vec3::Zero(), bpos_force_ = Vec3::Zero(), bvel_ = Vec3::Zero(), bvel_full_ = Vec3::Zero(), bforce_ = Vec3::Zero();
+  double max_indent_ = 0.0;
+  int n_contacts_ = 0;
+  bool perforated_ = false;
+
+  double time_ = 0.0;
+  long long steps_ = 0;
+  Energy energy_;
+  double elastic_acc_ = 0.0;  // elastic energy summed during the force stages
+  std::string failure_;
+};
+
+}  // namespace gabion::macro

@@ -1,0 +1,212 @@
+#include "macro/structure.hpp"
+
+#include <cmath>
+#include <map>
+#include <stdexcept>
+
+namespace gabion::macro {
+
+using bridge::AxialLawParams;
+using bridge::AxialModel;
+
+double hardeningModulus(const AxialLawParams& p) {
+  if (p.model != AxialModel::Bilinear) return 0.0;
+  return p.stiffness_N_m * p.hardening_stiffness_N_m / (p.stiffness_N_m - p.hardening_stiffness_N_m);
+}
+
+AxialLawParams seriesAxialLaw(const AxialLawParams& a, const AxialLawParams& b) {
+  auto series = [](double x, double y) { return x + y > 0.0 ? 2.0 * x * y / (x + y) : 0.0; };
+  AxialLawParams p;
+  p.stiffness_N_m = series(a.stiffness_N_m, b.stiffness_N_m);
+  p.yield_force_N = std::min(a.yield_force_N, b.yield_force_N);
+  if (a.model == AxialModel::Bilinear && b.model == AxialModel::Bilinear) {
+    p.model = AxialModel::Bilinear;
+    p.hardening_stiffness_N_m = series(a.hardening_stiffness_N_m, b.hardening_stiffness_N_m);
+  }
+  return p;
+}
+
+AxialLawParams halfCellLaw(const AxialLawParams& a) {
+  AxialLawParams p = a;
+  p.stiffness_N_m *= 2.0;
+  p.hardening_stiffness_N_m *= 2.0;
+  return p;
+}
+
+int Structure::nodeAt(int i, int j, int k) const {
+  if (i < 0 || j < 0 || k < 0 || i >= nx || j >= ny || k >= nz) return -1;
+  return node_of[static_cast<std::size_t>(i + nx * (j + ny * k))];
+}
+
+namespace {
+
+// Deduplicating tables of laws: equal parameters share one entry.
+int internAxial(Structure& s, const AxialLawParams& p) {
+  for (std::size_t i = 0; i < s.axial_laws.size(); ++i) {
+    const auto& q = s.axial_laws[i];
+    if (q.model == p.model && q.stiffness_N_m == p.stiffness_N_m && q.yield_force_N == p.yield_force_N &&
+        q.hardening_stiffness_N_m == p.hardening_stiffness_N_m)
+      return static_cast<int>(i);
+  }
+  s.axial_laws.push_back(p);
+  const double H = hardeningModulus(p);
+  s.axial_hardening_N_m.push_back(H);
+  s.axial_coeffs.push_back({p.stiffness_N_m, p.yield_force_N, H, 1.0 / (p.stiffness_N_m + H), 0.5 / p.stiffness_N_m});
+  return static_cast<int>(s.axial_laws.size() - 1);
+}
+
+int internFriction(Structure& s, const bridge::FrictionParams& p) {
+  for (std::size_t i = 0; i < s.friction_laws.size(); ++i)
+    if (s.friction_laws[i].friction == p.friction &&
+        s.friction_laws[i].tangential_stiffness_N_m == p.tangential_stiffness_N_m)
+      return static_cast<int>(i);
+  s.friction_laws.push_back(p);
+  s.friction_half_inv_k.push_back(0.5 / p.tangential_stiffness_N_m);
+  return static_cast<int>(s.friction_laws.size() - 1);
+}
+
+// The interface of two materials: the smaller friction, tangential springs in series.
+bridge::FrictionParams pairFriction(const bridge::CellMaterial& a, const bridge::CellMaterial& b) {
+  const double ka = a.interface.tangential_stiffness_N_m, kb = b.interface.tangential_stiffness_N_m;
+  return {std::min(a.interface.friction, b.interface.friction), 2.0 * ka * kb / (ka + kb)};
+}
+
+}  // namespace
+
+Structure buildStructure(const StructureSpec& spec, const bridge::LawFile& laws) {
+  if (spec.nx < 1 || spec.ny < 1 || spec.nz < 1) throw std::invalid_argument("cell counts must be >= 1");
+  Structure s;
+  s.nx = spec.nx;
+  s.ny = spec.ny;
+  s.nz = spec.nz;
+  s.front_offset_cells = spec.front_offset_cells.empty() ? std::vector<int>(static_cast<std::size_t>(spec.nz), 0)
+                                                         : spec.front_offset_cells;
+  if (static_cast<int>(s.front_offset_cells.size()) != spec.nz)
+    throw std::invalid_argument("front_offset_cells needs one entry per z layer (" + std::to_string(spec.nz) + ")");
+  for (int off : s.front_offset_cells)
+    if (off < 0 || off >= spec.nx)
+      throw std::invalid_argument("front_offset_cells entries must be in [0, " + std::to_string(spec.nx - 1) + "]");
+
+  // Materials: index by name, in the order of first use.
+  std::map<std::string, int> index;
+  auto materialIndex = [&](const std::string& name) {
+    std::string n = name;
+    if (n.empty()) {
+      if (laws.materials.size() != 1)
+        throw std::invalid_argument("the law file has several materials: name the cells' materials");
+      n = laws.materials.begin()->first;
+    }
+    auto it = index.find(n);
+    if (it != index.end()) return it->second;
+    auto m = laws.materials.find(n);
+    if (m == laws.materials.end()) throw std::invalid_argument("material '" + n + "' is not in the law file");
+    const int id = static_cast<int>(s.materials.size());
+    s.materials.push_back(m->second);
+    s.material_names.push_back(n);
+    index.emplace(n, id);
+    return id;
+  };
+
+  // Nodes.
+  s.node_of.assign(static_cast<std::size_t>(s.nx) * s.ny * s.nz, -1);
+  std::size_t explicit_next = 0;
+  for (int k = 0; k < s.nz; ++k)
+    for (int j = 0; j < s.ny; ++j)
+      for (int i = s.front_offset_cells[static_cast<std::size_t>(k)]; i < s.nx; ++i) {
+        std::string name;
+        if (!spec.material.cells.empty()) {
+          if (explicit_next >= spec.material.cells.size())
+            throw std::invalid_argument("the material list is shorter than the number of cells");
+          name = spec.material.cells[explicit_next++];
+        } else {
+          const int depth = i - s.front_offset_cells[static_cast<std::size_t>(k)];
+          name = depth < spec.material.front_depth_cells ? spec.material.front : spec.material.core;
+        }
+        const int node = static_cast<int>(s.gi.size());
+        s.node_of[static_cast<std::size_t>(i + s.nx * (j + s.ny * k))] = node;
+        s.gi.push_back(i);
+        s.gj.push_back(j);
+        s.gk.push_back(k);
+        s.material.push_back(materialIndex(name));
+      }
+  if (!spec.material.cells.empty() && explicit_next != spec.material.cells.size())
+    throw std::invalid_argument("the material list has " + std::to_string(spec.material.cells.size()) +
+                                " names for " + std::to_string(explicit_next) + " cells");
+
+  s.edge_m = s.materials.front().edge_m;
+  for (std::size_t m = 0; m < s.materials.size(); ++m)
+    if (std::abs(s.materials[m].edge_m - s.edge_m) > 1e-12 * s.edge_m)
+      throw std::invalid_argument("material '" + s.material_names[m] + "' has edge_m " +
+                                  std::to_string(s.materials[m].edge_m) + " but '" + s.material_names[0] +
+                                  "' has " + std::to_string(s.edge_m) + ": the grid needs one cell size");
+  const double e = s.edge_m;
+  const std::size_t n = s.gi.size();
+  for (std::size_t q = 0; q < n; ++q) {
+    const auto& mat = s.materials[static_cast<std::size_t>(s.material[q])];
+    s.x0.push_back((s.gi[q] + 0.5) * e);
+    s.y0.push_back((s.gj[q] + 0.5) * e);
+    s.z0.push_back((s.gk[q] + 0.5) * e);
+    s.mass_kg.push_back(mat.mass_kg);
+    s.inv_mass.push_back(1.0 / mat.mass_kg);
+    s.reaction_coefficient.push_back(mat.lateral.reaction_coefficient);
+  }
+
+  // Interactions.
+  for (std::size_t q = 0; q < n; ++q) {
+    const int i = s.gi[q], j = s.gj[q], k = s.gk[q];
+    const auto& ma = s.materials[static_cast<std::size_t>(s.material[q])];
+    const int a = static_cast<int>(q);
+    if (const int b = s.nodeAt(i + 1, j, k); b >= 0) {
+      const auto& mb = s.materials[static_cast<std::size_t>(s.material[static_cast<std::size_t>(b)])];
+      s.axial.a.push_back(a);
+      s.axial.b.push_back(b);
+      s.axial.law.push_back(internAxial(s, seriesAxialLaw(ma.axial, mb.axial)));
+      s.axial.friction.push_back(internFriction(s, pairFriction(ma, mb)));
+    } else {
+      s.back_nodes.push_back(a);
+      if (spec.support.fixed_back) {
+        s.axial.a.push_back(a);
+        s.axial.b.push_back(kWall);
+        s.axial.law.push_back(internAxial(s, halfCellLaw(ma.axial)));
+        s.axial.friction.push_back(internFriction(s, {ma.interface.friction, ma.interface.tangential_stiffness_N_m}));
+      }
+    }
+    for (int dir = 1; dir <= 2; ++dir) {
+      const int b = dir == 1 ? s.nodeAt(i, j + 1, k) : s.nodeAt(i, j, k + 1);
+      if (b < 0) continue;
+      const auto& mb = s.materials[static_cast<std::size_t>(s.material[static_cast<std::size_t>(b)])];
+      s.lateral.a.push_back(a);
+      s.lateral.b.push_back(b);
+      s.lateral.dir.push_back(dir);
+      s.lateral.law.push_back(internAxial(s, seriesAxialLaw(ma.axial, mb.axial)));
+      s.lateral.friction.push_back(internFriction(s, pairFriction(ma, mb)));
+    }
+    if (k == 0 && spec.support.ground_friction) {
+      double column = 0.0;
+      for (int kk = 0; kk < s.nz; ++kk)
+        if (const int c = s.nodeAt(i, j, kk); c >= 0) column += s.mass_kg[static_cast<std::size_t>(c)];
+      const double mu = spec.support.ground_friction_coefficient >= 0.0 ? spec.support.ground_friction_coefficient
+                                                                      : ma.interface.friction;
+      const double kt = spec.support.ground_tangential_stiffness_N_m > 0.0 ? spec.support.ground_tangential_stiffness_N_m
+                                                                          : ma.interface.tangential_stiffness_N_m;
+      s.ground.node.push_back(a);
+      s.ground.law.push_back(internAxial(s, halfCellLaw(ma.axial)));
+      s.ground.friction.push_back(internFriction(s, {mu, kt}));
+      s.ground.weight_N.push_back(column * spec.support.gravity_m_s2);
+    }
+  }
+  for (int k = 0; k < s.nz; ++k)
+    for (int j = 0; j < s.ny; ++j) {
+      const int i = s.front_offset_cells[static_cast<std::size_t>(k)];
+      const int node = s.nodeAt(i, j, k);
+      s.front.node.push_back(node);
+      s.front.law.push_back(
+          internAxial(s, s.materials[static_cast<std::size_t>(s.material[static_cast<std::size_t>(node)])].impact));
+      s.front.x_min.push_back(i * e);
+      s.front.y_min.push_back(j * e);
+      s.front.z_min.push_back(k * e);
+    }
+  return s;
+}
+
+}  // namespace gabion::macro

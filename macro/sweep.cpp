@@ -1,0 +1,260 @@
+// The macro.sweep case kind: a grid of impacts over boulder velocity, mass,
+// aim point and structure size, run in parallel on ctx.threads worker threads
+// (each point on its own fresh model; results stored by point index, so the
+// output order does not depend on the threads). Failed points are recorded.
+#include <algorithm>
+#include <atomic>
+#include <chrono>
+#include <cmath>
+#include <fstream>
+#include <iomanip>
+#include <sstream>
+#include <stdexcept>
+#include <thread>
+
+#include "bridge/errors.hpp"
+#include "bridge/output.hpp"
+#include "bridge/plot.hpp"
+#include "macro/case_reader.hpp"
+#include "macro/runs.hpp"
+
+namespace gabion::macro {
+
+using bridge::InputError;
+using bridge::JsonDocument;
+using nlohmann::json;
+
+namespace {
+
+struct Point {
+  double velocity_m_s = 0.0, mass_kg = 0.0, aim_y_m = 0.0, aim_z_m = 0.0;
+  int size = 0;  // index into the structure sizes
+  double energy_J = 0.0;
+};
+
+struct Plan {
+  ImpactCase c;
+  SweepSpec sweep;
+  std::vector<std::array<int, 3>> sizes;
+  std::vector<Structure> structures;
+  std::vector<Point> points;
+};
+
+Plan plan(const JsonDocument& doc, const std::optional<std::filesystem::path>& law) {
+  Plan p;
+  p.c = readImpactCase(doc, law, true);
+  p.sweep = readSweep(doc.root().object("sweep"));
+  p.sizes = p.sweep.cells;
+  if (p.sizes.empty()) p.sizes.push_back({p.c.structure.nx, p.c.structure.ny, p.c.structure.nz});
+  for (std::size_t i = 0; i < p.sizes.size(); ++i) {
+    ImpactCase sized = p.c;
+    sized.structure.nx = p.sizes[i][0];
+    sized.structure.ny = p.sizes[i][1];
+    sized.structure.nz = p.sizes[i][2];
+    if (!p.sweep.cells.empty() && !sized.structure.front_offset_cells.empty() &&
+        static_cast<int>(sized.structure.front_offset_cells.size()) != sized.structure.nz)
+      throw InputError(doc.file(), "/sweep/cells/" + std::to_string(i),
+                       "the structure's front_offset_cells needs one entry per z layer of this size");
+    try {
+      p.structures.push_back(buildStructure(sized.structure, p.c.laws));
+    } catch (const std::invalid_argument& e) {
+      throw InputError(doc.file(), p.sweep.cells.empty() ? "/structure" : "/sweep/cells/" + std::to_string(i),
+                       e.what());
+    }
+  }
+  const BoulderSpec& b = p.c.impacts.front();
+  const std::vector<double> speeds =
+      p.sweep.velocity_m_s.empty() ? std::vector<double>{b.velocity_m_s.norm()} : p.sweep.velocity_m_s;
+  const std::vector<double> masses = p.sweep.mass_kg.empty() ? std::vector<double>{b.mass_kg} : p.sweep.mass_kg;
+  for (std::size_t si = 0; si < p.sizes.size(); ++si) {
+    std::vector<std::pair<double, double>> aims = p.sweep.aim_point_m;
+    if (aims.empty()) {
+      StructureSpec sized = p.c.structure;
+      sized.nx = p.sizes[si][0];
+      sized.ny = p.sizes[si][1];
+      sized.nz = p.sizes[si][2];
+      aims.push_back(p.c.aim_given.front() ? std::make_pair(b.aim_y_m, b.aim_z_m)
+                                           : defaultAim(sized, p.structures[si].edge_m));
+    }
+    for (const auto& aim : aims)
+      for (double m : masses)
+        for (double v : speeds) {
+          Point pt;
+          pt.velocity_m_s = v;
+          pt.mass_kg = m;
+          pt.aim_y_m = aim.first;
+          pt.aim_z_m = aim.second;
+          pt.size = static_cast<int>(si);
+          pt.energy_J = 0.5 * m * v * v;
+          p.points.push_back(pt);
+        }
+  }
+  return p;
+}
+
+ImpactResult runPoint(const Plan& p, const Point& pt) {
+  const Structure& s = p.structures[static_cast<std::size_t>(pt.size)];
+  ImpactResult r;
+  if (pt.aim_y_m < 0.0 || pt.aim_y_m > s.ny * s.edge_m || pt.aim_z_m < 0.0 || pt.aim_z_m > s.nz * s.edge_m) {
+    r.ok = false;
+    r.message = "aim point outside the front face of this structure";
+    return r;
+  }
+  BoulderSpec b = p.c.impacts.front();
+  b.velocity_m_s = b.velocity_m_s.normalized() * pt.velocity_m_s;
+  b.mass_kg = pt.mass_kg;
+  b.aim_y_m = pt.aim_y_m;
+  b.aim_z_m = pt.aim_z_m;
+  try {
+    Model model(s, p.c.run.kinematics);
+    return runImpact(model, b, p.c.run, 0, nullptr);
+  } catch (const std::exception& e) {
+    r.ok = false;
+    r.message = e.what();
+    return r;
+  }
+}
+
+std::string csvQuote(const std::string& s) {
+  std::string out = "\"";
+  for (char ch : s) out += ch == '"' ? std::string("\"\"") : std::string(1, ch);
+  return out + "\"";
+}
+
+}  // namespace
+
+void checkSweepCase(const JsonDocument& doc) { plan(doc, std::nullopt); }
+
+bridge::RunOutcome runSweepCase(const JsonDocument& doc, const bridge::RunContext& ctx) {
+  const Plan p = plan(doc, ctx.law_file);
+  const std::size_t np = p.points.size();
+  std::vector<ImpactResult> results(np);
+  std::atomic<std::size_t> next{0}, done{0};
+  const auto t0 = std::chrono::steady_clock::now();
+  auto worker = [&] {
+    for (std::size_t i = next++; i < np; i = next++) {
+      results[i] = runPoint(p, p.points[i]);
+      ++done;
+    }
+  };
+  const int nthreads = std::max(1, std::min<int>(ctx.threads, static_cast<int>(np)));
+  std::vector<std::thread> pool;
+  for (int t = 1; t < nthreads; ++t) pool.emplace_back(worker);
+  {
+    // The main thread works too and reports progress between its points.
+    bridge::Progress progress(ctx.progress, "macro.sweep");
+    for (std::size_t i = next++; i < np; i = next++) {
+      results[i] = runPoint(p, p.points[i]);
+      ++done;
+      progress.update(static_cast<double>(done.load()), static_cast<double>(np), static_cast<long long>(done.load()));
+    }
+    for (auto& th : pool) th.join();
+    progress.finish();
+  }
+  const double wall = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+
+  // Table: CSV and HDF5, one row per point in grid order.
+  std::ostringstream csv;
+  csv << std::setprecision(10);
+  csv << "index,velocity_m_s,mass_kg,aim_y_m,aim_z_m,cells_x,cells_y,cells_z,impact_energy_J,status,peak_force_N,"
+         "max_penetration_m,contact_duration_s,rebound_velocity_m_s,max_back_face_displacement_m,plastic_energy_J,"
+         "friction_energy_J,balance_rel_error,message\n";
+  std::vector<std::vector<double>> cols(17);
+  std::size_t failed = 0;
+  double worst_balance = 0.0;
+  std::vector<double> ok_energy, ok_peak, ok_pen, ok_mass;
+  for (std::size_t i = 0; i < np; ++i) {
+    const Point& pt = p.points[i];
+    const ImpactResult& r = results[i];
+    const auto& size = p.sizes[static_cast<std::size_t>(pt.size)];
+    if (!r.ok) ++failed;
+    const double nan = std::nan("");
+    auto val = [&](double v) { return r.ok ? v : nan; };
+    const double row[17] = {static_cast<double>(i), pt.velocity_m_s, pt.mass_kg, pt.aim_y_m, pt.aim_z_m,
+                            static_cast<double>(size[0]), static_cast<double>(size[1]), static_cast<double>(size[2]),
+                            pt.energy_J, r.ok ? 0.0 : 1.0, val(r.peak_force_N), val(r.max_penetration_m),
+                            val(r.contact_duration_s), val(r.rebound_velocity_m_s), val(r.max_back_face_displacement_m),
+                            val(r.plastic_J), val(r.friction_J)};
+    for (std::size_t c = 0; c < 17; ++c) cols[c].push_back(row[c]);
+    csv << i << ',' << pt.velocity_m_s << ',' << pt.mass_kg << ',' << pt.aim_y_m << ',' << pt.aim_z_m << ','
+        << size[0] << ',' << size[1] << ',' << size[2] << ',' << pt.energy_J << ',' << (r.ok ? "ok" : "failed");
+    if (r.ok) {
+      csv << ',' << r.peak_force_N << ',' << r.max_penetration_m << ',' << r.contact_duration_s << ','
+          << r.rebound_velocity_m_s << ',' << r.max_back_face_displacement_m << ',' << r.plastic_J << ','
+          << r.friction_J << ',' << r.balance_rel_error << ",\n";
+      worst_balance = std::max(worst_balance, r.balance_rel_error);
+      ok_energy.push_back(pt.energy_J);
+      ok_peak.push_back(r.peak_force_N);
+      ok_pen.push_back(r.max_penetration_m);
+      ok_mass.push_back(pt.mass_kg);
+    } else {
+      csv << ",,,,,,,," << csvQuote(r.message) << "\n";
+    }
+  }
+  bridge::writeTextAtomic(ctx.outdir / "sweep.csv", csv.str());
+  {
+    static const char* names[17] = {"index", "velocity_m_s", "mass_kg", "aim_y_m", "aim_z_m", "cells_x", "cells_y",
+                                    "cells_z", "impact_energy_J", "failed", "peak_force_N", "max_penetration_m",
+                                    "contact_duration_s", "rebound_velocity_m_s", "max_back_face_displacement_m",
+                                    "plastic_energy_J", "friction_energy_J"};
+    static const char* units[17] = {"", "m/s", "kg", "m", "m", "", "", "", "J", "", "N", "m", "s", "m/s", "m", "J", "J"};
+    bridge::H5Writer h5(ctx.outdir / "result.h5");
+    h5.attribute("/", "format", "gabion.macro.sweep/1");
+    for (std::size_t c = 0; c < 17; ++c) h5.write(std::string("/table/") + names[c], cols[c], units[c]);
+    h5.commit();
+  }
+  json files = json::array({"sweep.csv", "result.h5"});
+  if (p.sweep.chart && !ok_energy.empty()) {
+    bridge::PlotSpec force;
+    force.title = "Peak contact force against impact energy";
+    force.x_label = "impact energy (kJ)";
+    force.y_label = "peak force (kN)";
+    bridge::PlotSpec pen;
+    pen.title = "Boulder penetration against impact energy";
+    pen.x_label = "impact energy (kJ)";
+    pen.y_label = "max penetration (mm)";
+    // One series per boulder mass (up to 8 masses; beyond, one series).
+    std::vector<double> masses;
+    for (std::size_t i = 0; i < ok_mass.size(); ++i)
+      if (std::find(masses.begin(), masses.end(), ok_mass[i]) == masses.end()) masses.push_back(ok_mass[i]);
+    const bool by_mass = masses.size() <= 8;
+    if (!by_mass) masses = {0.0};
+    for (double m : masses) {
+      std::ostringstream label;
+      label << "m = " << m << " kg";
+      bridge::PlotSeries sf{by_mass ? label.str() : "sweep points", {}, {}, bridge::PlotSeries::Style::Markers};
+      bridge::PlotSeries sp = sf;
+      for (std::size_t i = 0; i < ok_energy.size(); ++i) {
+        if (by_mass && ok_mass[i] != m) continue;
+        sf.x.push_back(ok_energy[i] / 1e3);
+        sf.y.push_back(ok_peak[i] / 1e3);
+        sp.x.push_back(ok_energy[i] / 1e3);
+        sp.y.push_back(ok_pen[i] * 1e3);
+      }
+      force.series.push_back(sf);
+      pen.series.push_back(sp);
+    }
+    bridge::writePlotPng(ctx.outdir / "chart_peak_force.png", force);
+    bridge::writePlotPng(ctx.outdir / "chart_penetration.png", pen);
+    files.push_back("chart_peak_force.png");
+    files.push_back("chart_penetration.png");
+  }
+
+  bridge::RunOutcome out;
+  out.results["points"] = np;
+  out.results["failed_points"] = failed;
+  out.results["balance_rel_error"] = worst_balance;
+  out.results["sweep_wall_time_s"] = wall;
+  out.results["points_per_second"] = wall > 0.0 ? static_cast<double>(np) / wall : 0.0;
+  out.results["threads_used"] = nthreads;
+  out.results["files"] = files;
+  out.results["laws_source"] = p.c.law_source;
+  // A sweep in which every point failed has produced nothing usable.
+  if (np > 0 && failed == np) {
+    out.status = bridge::RunOutcome::Status::NumericalFailure;
+    out.message = "all " + std::to_string(np) + " points failed; first: " + results.front().message;
+  }
+  return out;
+}
+
+}  // namespace gabion::macro

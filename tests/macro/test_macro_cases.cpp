@@ -1,0 +1,262 @@
+// The macro case kinds through the library and the `gabion` binary: the
+// default wall (convergence, the paper's Fig. 13 trend, repeated impacts),
+// the energy balance of every macro case in cases/, sweeps, and bad input.
+#include <gtest/gtest.h>
+
+#include <fstream>
+#include <functional>
+#include <nlohmann/json.hpp>
+
+#include "bridge/json_reader.hpp"
+#include "bridge/output.hpp"
+#include "macro/case_reader.hpp"
+#include "macro/impact.hpp"
+#include "tests/support/run_gabion.hpp"
+
+using namespace gabion::macro;
+using gabion::bridge::JsonDocument;
+using gabion::testing::runGabion;
+using gabion::testing::scratchDir;
+using gabion::testing::writeFile;
+using nlohmann::json;
+
+namespace {
+
+const std::string kSource = GABION_SOURCE_DIR;
+const std::string kWallCase = kSource + "/cases/wall_impact.json";
+
+struct DefaultWall {
+  ImpactCase c;
+  Structure s;
+  DefaultWall() {
+    const JsonDocument doc = JsonDocument::load(kWallCase);
+    c = readImpactCase(doc, std::nullopt, false);
+    s = buildCaseStructure(doc, c);
+    resolveAims(doc, c, s);
+    c.run.relax = false;
+  }
+  ImpactResult run(double speed, double fraction = 0.1, double duration = 0.05) const {
+    Model model(s, c.run.kinematics);
+    BoulderSpec b = c.impacts.front();
+    b.velocity_m_s = b.velocity_m_s.normalized() * speed;
+    RunSettings r = c.run;
+    r.time_step_fraction = fraction;
+    r.duration_s = duration;
+    return runImpact(model, b, r, 0, nullptr);
+  }
+};
+
+json readJson(const std::filesystem::path& p) {
+  std::ifstream in(p);
+  return json::parse(in);
+}
+
+}  // namespace
+
+// Results converge as dt decreases: the change halves (or better) with each
+// halving of dt, and the two finest agree within 0.5 %.
+TEST(MacroDefaultWall, ConvergesAsTimeStepDecreases) {
+  const DefaultWall wall;
+  std::vector<ImpactResult> r;
+  for (double f : {0.2, 0.1, 0.05, 0.025}) {
+    r.push_back(wall.run(20.0, f));
+    ASSERT_TRUE(r.back().ok) << r.back().message;
+  }
+  auto check = [&](const char* name, auto get) {
+    const double d1 = std::abs(get(r[1]) - get(r[0])), d3 = std::abs(get(r[3]) - get(r[2]));
+    EXPECT_LT(d3, 0.6 * d1 + 1e-12 * std::abs(get(r[3]))) << name;
+    EXPECT_NEAR(get(r[2]), get(r[3]), 0.005 * std::abs(get(r[3]))) << name;
+  };
+  check("peak force", [](const ImpactResult& x) { return x.peak_force_N; });
+  check("penetration", [](const ImpactResult& x) { return x.max_penetration_m; });
+  check("duration", [](const ImpactResult& x) { return x.contact_duration_s; });
+  check("plastic energy", [](const ImpactResult& x) { return x.plastic_J; });
+  EXPECT_LT(r[3].balance_rel_error, r[0].balance_rel_error);
+}
+
+// The paper's Fig. 13: the same boulder at several energies; the peak force
+// rises strongly with the velocity, the duration of the impact barely changes.
+TEST(MacroDefaultWall, Fig13PeakForceRisesDurationStays) {
+  const DefaultWall wall;
+  std::vector<ImpactResult> r;
+  for (double v : {8.0, 15.0, 20.0, 30.0}) {
+    r.push_back(wall.run(v));
+    ASSERT_TRUE(r.back().ok) << r.back().message;
+  }
+  for (std::size_t i = 1; i < r.size(); ++i) EXPECT_GT(r[i].peak_force_N, r[i - 1].peak_force_N);
+  const double force_ratio = r.back().peak_force_N / r.front().peak_force_N;
+  const double duration_ratio = r.back().contact_duration_s / r.front().contact_duration_s;
+  EXPECT_GT(force_ratio, 2.0);                     // 8 -> 30 m/s: peak force more than doubles
+  EXPECT_LT(std::abs(duration_ratio - 1.0), 0.35);  // duration within 35 %
+  EXPECT_GT(force_ratio - 1.0, 3.0 * std::abs(duration_ratio - 1.0));
+}
+
+// Repeated impacts on the damaged wall: the plastic state grows with every
+// impact, and the hardened face answers the same boulder with a higher peak force.
+TEST(MacroDefaultWall, RepeatedImpactsAccumulateDamage) {
+  DefaultWall wall;
+  Model model(wall.s, wall.c.run.kinematics);
+  RunSettings run = wall.c.run;
+  run.duration_s = 0.05;
+  run.relax = true;
+  auto plastic_state = [&] {
+    double sum = 0.0;
+    for (double u : model.axialPlastic()) sum += u;
+    for (double u : model.frontPlastic()) sum += u;
+    return sum;
+  };
+  std::vector<ImpactResult> r;
+  std::vector<double> state{plastic_state()};
+  for (int i = 0; i < 3; ++i) {
+    r.push_back(runImpact(model, wall.c.impacts.front(), run, i, nullptr));
+    ASSERT_TRUE(r.back().ok) << r.back().message;
+    EXPECT_TRUE(r.back().relax_converged);
+    state.push_back(plastic_state());
+    EXPECT_GT(state[static_cast<std::size_t>(i) + 1], state[static_cast<std::size_t>(i)]);
+    EXPECT_LT(r.back().balance_rel_error, 0.005);
+  }
+  EXPECT_GT(r[1].peak_force_N, r[0].peak_force_N);
+  EXPECT_LT(r[1].plastic_J, r[0].plastic_J);  // less left to yield: more of the energy is given back
+}
+
+// Every macro case in cases/ runs and balances its energy within 0.5 %.
+TEST(MacroCases, EveryCaseBalancesEnergy) {
+  const auto dir = scratchDir("macro_cases");
+  int n = 0;
+  for (const auto& entry : std::filesystem::directory_iterator(kSource + "/cases")) {
+    if (entry.path().extension() != ".json") continue;
+    const json c = readJson(entry.path());
+    const std::string kind = c.value("kind", "");
+    if (kind.rfind("macro.", 0) != 0) continue;
+    const auto out = dir / entry.path().stem();
+    const auto r = runGabion("run " + entry.path().string() + " -q --threads 2 -o " + out.string());
+    ASSERT_EQ(r.exit_code, 0) << entry.path() << ": " << r.output;
+    const json s = readJson(out / "summary.json");
+    EXPECT_EQ(s.at("status"), "ok") << entry.path();
+    EXPECT_LT(s.at("balance_rel_error").get<double>(), 0.005) << entry.path();
+    ++n;
+  }
+  EXPECT_GE(n, 2);
+}
+
+// The summary and the result files of an impact; --set and --law.
+TEST(MacroCli, ImpactOutputsSetAndLawOverride) {
+  const auto dir = scratchDir("macro_cli");
+  auto r = runGabion("run " + kWallCase + " -q -o " + (dir / "a").string() + " --set boulder.velocity_m_s=25");
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  const json s = readJson(dir / "a" / "summary.json");
+  const double mass = 2600.0 * 4.0 / 3.0 * M_PI * 0.25 * 0.25 * 0.25;
+  EXPECT_NEAR(s.at("input_energy_J").get<double>(), 0.5 * mass * 25.0 * 25.0, 1e-6);
+  for (const char* key : {"peak_force_N", "max_penetration_m", "contact_duration_s", "rebound_velocity_m_s",
+                          "max_back_face_displacement_m", "kinetic_energy_J", "elastic_energy_J", "plastic_energy_J",
+                          "friction_energy_J", "balance_rel_error"})
+    EXPECT_TRUE(s.contains(key)) << key;
+  gabion::bridge::H5Reader h5(dir / "a" / "result.h5");
+  const auto t = h5.read("/series/time_s");
+  EXPECT_EQ(h5.read("/series/boulder_force_N").size(), t.size());
+  EXPECT_EQ(h5.dims("/snapshots/displacement_m").size(), 3u);
+  EXPECT_TRUE(std::filesystem::exists(dir / "a" / "result.xdmf"));
+
+  // A law file with twice the impact stiffness through --law: a different, stiffer answer.
+  json law = readJson(kSource + "/cases/laws/illustrative.json");
+  for (auto& [name, m] : law["materials"].items()) m["impact"]["stiffness_N_m"] = 2 * m["impact"]["stiffness_N_m"].get<double>();
+  writeFile(dir / "stiff.json", law.dump());
+  r = runGabion("run " + kWallCase + " -q -o " + (dir / "b").string() + " --set boulder.velocity_m_s=25 --law " +
+                (dir / "stiff.json").string());
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  const json s2 = readJson(dir / "b" / "summary.json");
+  EXPECT_GT(s2.at("peak_force_N").get<double>(), s.at("peak_force_N").get<double>());
+}
+
+// Repeated impacts through a case: per-impact results in the summary.
+TEST(MacroCli, RepeatedImpactsInSummary) {
+  const auto dir = scratchDir("macro_repeat");
+  json c = readJson(kWallCase);
+  c["law_file"] = kSource + "/cases/laws/illustrative.json";
+  c["impacts"] = json::array({json::object(), {{"velocity_m_s", 25}}, {{"aim_point_m", {1.75, 1.75}}}});
+  c["run"]["duration_s"] = 0.05;
+  writeFile(dir / "repeat.json", c.dump());
+  const auto r = runGabion("run " + (dir / "repeat.json").string() + " -q -o " + (dir / "out").string());
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  const json s = readJson(dir / "out" / "summary.json");
+  ASSERT_EQ(s.at("impacts").size(), 3u);
+  ASSERT_EQ(s.at("per_impact_peak_force_N").size(), 3u);
+  ASSERT_EQ(s.at("per_impact_max_penetration_m").size(), 3u);
+  EXPECT_LT(s.at("balance_rel_error").get<double>(), 0.005);
+}
+
+// A sweep: rows in grid order whatever the thread count; failed points are
+// rows with a message, not a failed run.
+TEST(MacroCli, SweepIsDeterministicAndRecordsFailures) {
+  const auto dir = scratchDir("macro_sweep");
+  json c = readJson(kSource + "/cases/macro_sweep.json");
+  c["law_file"] = kSource + "/cases/laws/illustrative.json";
+  c["sweep"] = {{"velocity_m_s", {8, 20}}, {"mass_kg", {170, 400}}, {"aim_point_m", {{2.75, 1.75}, {99.0, 1.0}}},
+                {"cells", {{4, 11, 7}, {3, 7, 5}}}, {"chart", false}};
+  writeFile(dir / "sweep.json", c.dump());
+  std::string csv[2];
+  for (int t = 0; t < 2; ++t) {
+    const auto out = dir / ("out" + std::to_string(t));
+    const auto r = runGabion("run " + (dir / "sweep.json").string() + " -q --threads " + std::to_string(t + 1) +
+                             " -o " + out.string());
+    ASSERT_EQ(r.exit_code, 0) << r.output;
+    std::ifstream in(out / "sweep.csv");
+    csv[t].assign(std::istreambuf_iterator<char>(in), {});
+    const json s = readJson(out / "summary.json");
+    EXPECT_EQ(s.at("points"), 16);
+    EXPECT_EQ(s.at("failed_points"), 8);  // the aim (99, 1) misses both walls
+    gabion::bridge::H5Reader h5(out / "result.h5");
+    EXPECT_EQ(h5.read("/table/peak_force_N").size(), 16u);
+  }
+  EXPECT_EQ(csv[0], csv[1]);
+  EXPECT_NE(csv[0].find("aim point outside the front face"), std::string::npos);
+}
+
+// Bad input exits with 2 and names the file and the field.
+TEST(MacroCli, BadInputNamesTheField) {
+  const auto dir = scratchDir("macro_bad");
+  const json base = readJson(kWallCase);
+  struct Bad {
+    const char* name;
+    std::function<void(json&)> edit;
+    const char* pointer;
+  };
+  const std::vector<Bad> bad = {
+      {"unknown_key", [](json& c) { c["structure"]["cellz"] = 3; }, "/structure/cellz"},
+      {"negative_mass", [](json& c) { c["boulder"].erase("density_kg_m3"); c["boulder"]["mass_kg"] = -1; },
+       "/boulder/mass_kg"},
+      {"bad_cells", [](json& c) { c["structure"]["cells"] = {4, 0, 7}; }, "/structure/cells"},
+      {"oblique_x_only", [](json& c) { c["boulder"]["velocity_m_s"] = {20, 5, 0}; }, "/boulder/velocity_m_s"},
+      {"aim_outside", [](json& c) { c["boulder"]["aim_point_m"] = {20, 1}; }, "/boulder/aim_point_m"},
+      {"unknown_material", [](json& c) { c["structure"]["material"]["core"] = "granite"; }, "/structure"},
+      {"no_laws", [](json& c) { c.erase("law_file"); }, "/law_file"},
+      {"bad_kinematics", [](json& c) { c["run"]["kinematics"] = "2d"; }, "/run/kinematics"},
+  };
+  for (const auto& b : bad) {
+    json c = base;
+    c["law_file"] = kSource + "/cases/laws/illustrative.json";
+    b.edit(c);
+    const auto path = dir / (std::string(b.name) + ".json");
+    writeFile(path, c.dump());
+    const auto r = runGabion("check " + path.string());
+    EXPECT_EQ(r.exit_code, 2) << b.name << ": " << r.output;
+    EXPECT_NE(r.output.find(path.string()), std::string::npos) << b.name << ": " << r.output;
+    EXPECT_NE(r.output.find(b.pointer), std::string::npos) << b.name << ": " << r.output;
+  }
+  // A bad law file: the law file and its field are named.
+  json law = readJson(kSource + "/cases/laws/illustrative.json");
+  law["materials"]["front"]["axial"]["stiffness_N_m"] = -5;
+  writeFile(dir / "bad_law.json", law.dump());
+  const auto r = runGabion("run " + kWallCase + " -q -o " + (dir / "x").string() + " --law " + (dir / "bad_law.json").string());
+  EXPECT_EQ(r.exit_code, 2) << r.output;
+  EXPECT_NE(r.output.find("bad_law.json"), std::string::npos) << r.output;
+  EXPECT_NE(r.output.find("/materials/front/axial/stiffness_N_m"), std::string::npos) << r.output;
+}
+
+// A time step above the critical one is a numerical failure: exit 3.
+TEST(MacroCli, TimeStepAboveCriticalExitsThree) {
+  const auto dir = scratchDir("macro_dt");
+  const auto r = runGabion("run " + kWallCase + " -q -o " + (dir / "o").string() + " --set run.time_step_s=0.05");
+  EXPECT_EQ(r.exit_code, 3) << r.output;
+  EXPECT_NE(r.output.find("critical time step"), std::string::npos) << r.output;
+}

@@ -1,0 +1,240 @@
+// The macro model against closed-form solutions and conservation laws.
+#include <gtest/gtest.h>
+
+#include <Eigen/Core>
+#include <cmath>
+#include <numeric>
+
+#include "macro/impact.hpp"
+#include "macro/model.hpp"
+#include "macro_test_util.hpp"
+
+using namespace gabion::macro;
+using namespace gabion::macro::testing;
+
+namespace {
+
+// Two masses, boulder M and cell m, the contact spring k1 between them and
+// the cell's half-cell spring k2 to the wall: x(t) by modal superposition,
+// x(0) = 0, v(0) = (v0, 0). The contact force is k1 (x_b - x_c).
+struct TwoMass {
+  double M, m, k1, k2, v0;
+  Eigen::Vector2d omega;
+  Eigen::Matrix2d modes;  // mass-normalised
+  TwoMass(double M_, double m_, double k1_, double k2_, double v0_) : M(M_), m(m_), k1(k1_), k2(k2_), v0(v0_) {
+    // A = M^-1/2 K M^-1/2 is symmetric; its eigenvectors w give the modes M^-1/2 w.
+    const double a = k1 / M, b = -k1 / std::sqrt(M * m), c = (k1 + k2) / m;
+    const double mean = 0.5 * (a + c), rad = std::sqrt(0.25 * (a - c) * (a - c) + b * b);
+    const double lam[2] = {mean - rad, mean + rad};
+    for (int i = 0; i < 2; ++i) {
+      Eigen::Vector2d w(b, lam[i] - a);  // (A - lam I) w = 0, first row
+      w.normalize();
+      omega[i] = std::sqrt(lam[i]);
+      modes.col(i) = Eigen::Vector2d(w[0] / std::sqrt(M), w[1] / std::sqrt(m));
+    }
+  }
+  Eigen::Vector2d x(double t) const {
+    const Eigen::Vector2d Mv(M * v0, 0.0);
+    Eigen::Vector2d out = Eigen::Vector2d::Zero();
+    for (int i = 0; i < 2; ++i) out += modes.col(i) * (modes.col(i).dot(Mv) / omega[i] * std::sin(omega[i] * t));
+    return out;
+  }
+  double force(double t) const {
+    const auto p = x(t);
+    return k1 * (p[0] - p[1]);
+  }
+};
+
+}  // namespace
+
+// One elastic cell between the boulder and a fixed support: peak force and
+// contact duration against the closed-form two-mass solution within 0.5 %.
+TEST(MacroAnalytic, ElasticCellTwoMassSolution) {
+  const double M = 170.0, m = 183.0, k_axial = 1e7, k_imp = 2e7, v0 = 10.0;
+  Structure s = buildStructure(grid(1, 1, 1), oneMaterial(epp(k_axial, 1e12), epp(k_imp, 1e12), m));
+  Model model(s, Kinematics::XOnly);
+  const ImpactResult r = runImpact(model, boulderAt(s, 0, 0, M, v0), quickRun(0.03, 0.02), 0, nullptr);
+  ASSERT_TRUE(r.ok) << r.message;
+
+  // The model's wall link is half a cell: stiffness 2 k.
+  const TwoMass exact(M, m, k_imp, 2.0 * k_axial, v0);
+  double peak = 0.0, t_end = 0.0;
+  const double h = 1e-7;
+  for (double t = h; t < 0.05; t += h) {
+    const double f = exact.force(t);
+    ASSERT_GE(exact.x(t)[1], 0.0) << "the wall spring must stay in compression for this comparison";
+    if (f <= 0.0) {  // bisection of the separation
+      double a = t - h, b = t;
+      for (int i = 0; i < 60; ++i) (exact.force(0.5 * (a + b)) > 0.0 ? a : b) = 0.5 * (a + b);
+      t_end = 0.5 * (a + b);
+      break;
+    }
+    peak = std::max(peak, f);
+  }
+  ASSERT_GT(t_end, 0.0);
+  EXPECT_NEAR(r.peak_force_N, peak, 0.005 * peak);
+  EXPECT_NEAR(r.contact_duration_s, t_end, 0.005 * t_end);
+  EXPECT_LT(r.balance_rel_error, 1e-3);
+}
+
+// The boulder against an elastic-perfectly-plastic (and a bilinear) face on a
+// rigid support: dissipated energy and rebound speed from the law alone.
+// EPP: D = 1/2 M v^2 - F_y^2 / (2k); rebound speed F_y / sqrt(k M).
+// Bilinear: F_max^2 = F_y^2 + k_h (M v^2 - F_y^2 / k); D = 1/2 M v^2 - F_max^2 / (2k).
+class MacroPlastic : public ::testing::TestWithParam<bool> {};
+
+TEST_P(MacroPlastic, DissipatedEnergyAndRebound) {
+  const bool bilinear = GetParam();
+  const double M = 170.0, v0 = 10.0, k = 2e7, fy = 1e5, kh = 4e6;
+  gabion::bridge::AxialLawParams imp = epp(k, fy);
+  if (bilinear) {
+    imp.model = gabion::bridge::AxialModel::Bilinear;
+    imp.hardening_stiffness_N_m = kh;
+  }
+  // A very heavy cell on a very stiff support: the face does not move.
+  Structure s = buildStructure(grid(1, 1, 1), oneMaterial(epp(1e13, 1e15), imp, 1e9));
+  Model model(s, Kinematics::XOnly);
+  const ImpactResult r = runImpact(model, boulderAt(s, 0, 0, M, v0), quickRun(0.05, 0.02), 0, nullptr);
+  ASSERT_TRUE(r.ok) << r.message;
+  const double e0 = 0.5 * M * v0 * v0;
+  const double fmax = bilinear ? std::sqrt(fy * fy + kh * (M * v0 * v0 - fy * fy / k)) : fy;
+  const double dissipated = e0 - fmax * fmax / (2.0 * k);
+  EXPECT_NEAR(r.plastic_J, dissipated, 0.005 * dissipated);
+  EXPECT_NEAR(r.rebound_velocity_m_s, fmax / std::sqrt(k * M), 0.005 * fmax / std::sqrt(k * M));
+  EXPECT_NEAR(r.peak_force_N, fmax, 0.005 * fmax);
+  EXPECT_EQ(r.contact_episodes, 1);
+}
+INSTANTIATE_TEST_SUITE_P(Laws, MacroPlastic, ::testing::Values(false, true),
+                         [](const ::testing::TestParamInfo<bool>& p) { return p.param ? "Bilinear" : "ElasticPerfectlyPlastic"; });
+
+// A 1-D chain pushed at its front at constant speed: the compression front
+// reaches the fixed back face after N e / c with c = e sqrt(k/m) (the long-wave
+// speed of the lattice). The discrete lattice smears the step over an Airy
+// front about n^(1/3) cells wide whose half-amplitude point lags the ray by a
+// fraction of that width; with n = 200 the lag is below 1 % of the travel time.
+TEST(MacroAnalytic, ChainWaveArrivalTime) {
+  const int n = 200;
+  const double m = 183.0, k = 1e7, v0 = 1.0;
+  // Impact spring 2k: the face-to-node half cell, so the front is uniform too.
+  Structure s = buildStructure(grid(n, 1, 1), oneMaterial(epp(k, 1e12), epp(2 * k, 1e12), m));
+  Model model(s, Kinematics::XOnly);
+  model.placeBoulder(boulderAt(s, 0, 0, 1e7, v0));  // a piston: its speed barely changes
+  const double dt = 0.05 * model.criticalTimeStep();
+  const std::size_t wall = s.axial.a.size() - 1;
+  ASSERT_EQ(s.axial.b[wall], kWall);
+  const double f_incident = v0 * std::sqrt(k * m);  // lattice impedance sqrt(k m) times speed
+  const double expected = n * std::sqrt(m / k);
+  double arrival = -1.0;
+  while (model.time_s() < 2.0 * expected) {
+    ASSERT_EQ(model.step(dt), StepStatus::Ok);
+    // The reflected step doubles the force: its midpoint is the incident force.
+    if (model.axialForce()[wall] >= f_incident) {
+      arrival = model.time_s() - dt;
+      break;
+    }
+  }
+  EXPECT_NEAR(arrival, expected, 0.01 * expected);
+}
+
+// A centred impact on a symmetric wall gives a symmetric displacement field.
+TEST(MacroSymmetry, CentredImpactIsSymmetric) {
+  for (auto kin : {Kinematics::XOnly, Kinematics::ThreeD}) {
+    Structure s = buildStructure(grid(3, 5, 5), oneMaterial(epp(1e7, 5e4), epp(2e7, 2e5), 183.0));
+    Model model(s, kin);
+    model.placeBoulder(boulderAt(s, 2, 2, 170.0, 20.0));
+    const double dt = 0.1 * model.criticalTimeStep();
+    double umax = 0.0;
+    for (int step = 0; step < 200; ++step) ASSERT_EQ(model.step(dt), StepStatus::Ok);
+    for (double u : model.ux()) umax = std::max(umax, std::abs(u));
+    ASSERT_GT(umax, 1e-4);
+    for (int k = 0; k < 5; ++k)
+      for (int j = 0; j < 5; ++j)
+        for (int i = 0; i < 3; ++i) {
+          const auto a = static_cast<std::size_t>(s.nodeAt(i, j, k));
+          const auto by = static_cast<std::size_t>(s.nodeAt(i, 4 - j, k));
+          const auto bz = static_cast<std::size_t>(s.nodeAt(i, j, 4 - k));
+          EXPECT_NEAR(model.ux()[a], model.ux()[by], 1e-9 * umax);
+          EXPECT_NEAR(model.ux()[a], model.ux()[bz], 1e-9 * umax);
+          if (kin == Kinematics::ThreeD) {
+            EXPECT_NEAR(model.uy()[a], -model.uy()[by], 1e-9 * umax);
+            EXPECT_NEAR(model.uz()[a], -model.uz()[bz], 1e-9 * umax);
+          }
+        }
+  }
+}
+
+// More friction between cells spreads the load over more cells.
+TEST(MacroFriction, MoreFrictionLoadsMoreCells) {
+  auto run = [](double mu) {
+    Structure s =
+        buildStructure(grid(3, 9, 9), oneMaterial(epp(1e7, 5e4), epp(2e7, 2e5), 183.0, 0.4, mu, 3e6));
+    Model model(s, Kinematics::XOnly);
+    return runImpact(model, boulderAt(s, 4, 4, 170.0, 20.0), quickRun(0.03, 0.1), 0, nullptr);
+  };
+  const ImpactResult low = run(0.05), high = run(1.0);
+  ASSERT_TRUE(low.ok && high.ok);
+  EXPECT_GT(high.loaded_cells, low.loaded_cells);
+  EXPECT_GT(high.friction_J, low.friction_J);
+  EXPECT_LT(high.max_penetration_m, low.max_penetration_m);
+}
+
+// x-only and 3-D kinematics agree for a normal, centred impact (same dt).
+TEST(MacroKinematics, XOnlyEquals3dForNormalImpact) {
+  ImpactResult r[2];
+  for (int i = 0; i < 2; ++i) {
+    Structure s = buildStructure(grid(3, 5, 5), oneMaterial(epp(1e7, 5e4), epp(2e7, 2e5), 183.0));
+    Model model(s, i == 0 ? Kinematics::XOnly : Kinematics::ThreeD);
+    RunSettings run = quickRun(0.05);
+    run.time_step_s = 5e-5;
+    r[i] = runImpact(model, boulderAt(s, 2, 2, 170.0, 20.0), run, 0, nullptr);
+    ASSERT_TRUE(r[i].ok) << r[i].message;
+  }
+  EXPECT_NEAR(r[0].peak_force_N, r[1].peak_force_N, 1e-9 * r[0].peak_force_N);
+  EXPECT_NEAR(r[0].max_penetration_m, r[1].max_penetration_m, 1e-9 * r[0].max_penetration_m);
+  EXPECT_NEAR(r[0].contact_duration_s, r[1].contact_duration_s, 1e-9);
+  EXPECT_NEAR(r[0].plastic_J, r[1].plastic_J, 1e-9 * r[0].plastic_J);
+  EXPECT_NEAR(r[0].friction_J, r[1].friction_J, 1e-6 * r[0].friction_J + 1e-9);
+}
+
+// An oblique impact in 3-D: energy still balances and the boulder is deflected sideways.
+TEST(MacroKinematics, ObliqueImpact3dBalances) {
+  Structure s = buildStructure(grid(3, 7, 5), oneMaterial(epp(1e7, 5e4), epp(2e7, 2e5), 183.0));
+  Model model(s, Kinematics::ThreeD);
+  BoulderSpec b = boulderAt(s, 3, 2, 170.0, 20.0);
+  b.velocity_m_s = Eigen::Vector3d(20.0 * std::cos(0.5), 20.0 * std::sin(0.5), 0.0);
+  b.aim_y_m += 0.1;
+  const ImpactResult r = runImpact(model, b, quickRun(0.05, 0.1), 0, nullptr);
+  ASSERT_TRUE(r.ok) << r.message;
+  EXPECT_GT(r.peak_force_N, 0.0);
+  EXPECT_LT(r.balance_rel_error, 0.005);
+  double uy = 0.0;
+  for (double u : model.uy()) uy = std::max(uy, std::abs(u));
+  EXPECT_GT(uy, 0.0);
+}
+
+// The critical time step: a run above it is refused; the leapfrog is stable below it.
+TEST(MacroStability, TimeStepAboveCriticalFails) {
+  Structure s = buildStructure(grid(2, 3, 3), oneMaterial(epp(1e7, 5e4), epp(2e7, 2e5), 183.0));
+  Model model(s, Kinematics::XOnly);
+  model.placeBoulder(boulderAt(s, 1, 1, 170.0, 20.0));
+  const double dt_crit = model.criticalTimeStep();
+  model.removeBoulder();
+  RunSettings run = quickRun(0.02);
+  run.time_step_s = 1.5 * dt_crit;
+  const ImpactResult r = runImpact(model, boulderAt(s, 1, 1, 170.0, 20.0), run, 0, nullptr);
+  EXPECT_FALSE(r.ok);
+  EXPECT_NE(r.message.find("critical"), std::string::npos) << r.message;
+}
+
+// Round-off aside, the same case gives the same result (determinism).
+TEST(MacroDeterminism, SameInputSameResult) {
+  auto run = [] {
+    Structure s = buildStructure(grid(3, 5, 5), oneMaterial(epp(1e7, 5e4), epp(2e7, 2e5), 183.0));
+    Model model(s, Kinematics::ThreeD);
+    return runImpact(model, boulderAt(s, 2, 2, 170.0, 20.0), quickRun(0.02, 0.1), 0, nullptr);
+  };
+  const auto a = run(), b = run();
+  EXPECT_EQ(a.peak_force_N, b.peak_force_N);
+  EXPECT_EQ(a.plastic_J, b.plastic_J);
+  EXPECT_EQ(a.max_penetration_m, b.max_penetration_m);
+}
