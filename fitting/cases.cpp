@@ -1,7 +1,12 @@
 #include "fitting/cases.hpp"
 
+#include "fitting/fit_case.hpp"
+#include "fitting/micro_case.hpp"
+
 namespace gabion::fitting {
 
-std::vector<bridge::CaseKind> caseKinds() { return {}; }
+std::vector<bridge::CaseKind> caseKinds() {
+  return {fitCaseKind(), fitMicroCaseKind()};
+}
 
 }  // namespace gabion::fitting

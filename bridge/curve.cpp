@@ -1,0 +1,234 @@
+#include "bridge/curve.hpp"
+
+#include <cerrno>
+#include <cmath>
+#include <cstdlib>
+#include <fstream>
+#include <iomanip>
+#include <limits>
+#include <sstream>
+
+#include "bridge/errors.hpp"
+#include "bridge/output.hpp"
+
+namespace gabion::bridge {
+
+namespace fs = std::filesystem;
+
+namespace {
+
+std::string trim(const std::string& s) {
+  const auto b = s.find_first_not_of(" \t\r\n");
+  if (b == std::string::npos) return "";
+  const auto e = s.find_last_not_of(" \t\r\n");
+  return s.substr(b, e - b + 1);
+}
+
+std::vector<std::string> splitCells(const std::string& line) {
+  std::vector<std::string> cells;
+  std::string cell;
+  std::istringstream in(line);
+  while (std::getline(in, cell, ',')) cells.push_back(trim(cell));
+  if (!line.empty() && line.back() == ',') cells.emplace_back();
+  return cells;
+}
+
+// "displacement_m" -> {"displacement", "m"}: the unit is the part after the last '_'.
+std::pair<std::string, std::string> stemAndUnit(const std::string& name) {
+  const auto pos = name.rfind('_');
+  if (pos == std::string::npos) return {name, ""};
+  return {name.substr(0, pos), name.substr(pos + 1)};
+}
+
+std::string location(std::size_t line, std::size_t column, const std::string& name) {
+  std::string s = "line " + std::to_string(line);
+  if (column > 0) s += ", column " + std::to_string(column) + (name.empty() ? "" : " (" + name + ")");
+  return s;
+}
+
+// Finds `wanted` in the header; a column with the same stem but another unit
+// (displacement_mm for displacement_m, "displacement (mm)") is a unit error.
+std::size_t findColumn(const std::string& file, const std::vector<std::string>& header, const std::string& wanted,
+                       std::size_t header_line) {
+  for (std::size_t i = 0; i < header.size(); ++i)
+    if (header[i] == wanted) return i;
+  const auto [stem, unit] = stemAndUnit(wanted);
+  for (std::size_t i = 0; i < header.size(); ++i) {
+    const std::string& h = header[i];
+    if (h.rfind(stem, 0) == 0 && h.size() > stem.size()) {
+      const char sep = h[stem.size()];
+      if (sep == '_' || sep == ' ' || sep == '(' || sep == '[')
+        throw InputError(file, location(header_line, i + 1, h),
+                         "column '" + h + "' has the wrong unit: expected '" + wanted + "' (SI unit '" + unit +
+                             "' as the name's suffix)");
+    }
+  }
+  std::string have;
+  for (const auto& h : header) have += (have.empty() ? "" : ", ") + h;
+  throw InputError(file, location(header_line, 0, ""), "missing column '" + wanted + "' (header has: " + have + ")");
+}
+
+bool parseNumber(const std::string& cell, double& value) {
+  if (cell.empty()) return false;
+  errno = 0;
+  char* end = nullptr;
+  value = std::strtod(cell.c_str(), &end);
+  return end == cell.c_str() + cell.size() && errno != ERANGE;
+}
+
+}  // namespace
+
+void validateCurve(const Curve& c, const CurveRequest& request, const std::vector<std::size_t>& lines,
+                   std::size_t x_column, std::size_t y_column) {
+  const auto lineOf = [&](std::size_t i) { return lines.empty() ? i + 1 : lines[i]; };
+  if (c.x.size() != c.y.size())
+    throw InputError(
+        c.source, "",
+        "x and y have different lengths (" + std::to_string(c.x.size()) + " and " + std::to_string(c.y.size()) + ")");
+  if (c.x.size() < request.min_points)
+    throw InputError(c.source, c.x.empty() ? "" : location(lineOf(c.x.size() - 1), 0, ""),
+                     "curve too short: " + std::to_string(c.x.size()) + " points, at least " +
+                         std::to_string(request.min_points) + " required");
+  for (std::size_t i = 0; i < c.x.size(); ++i) {
+    if (!std::isfinite(c.x[i]))
+      throw InputError(c.source, location(lineOf(i), x_column, c.x_name), "value is not finite (NaN or infinite)");
+    if (!std::isfinite(c.y[i]))
+      throw InputError(c.source, location(lineOf(i), y_column, c.y_name), "value is not finite (NaN or infinite)");
+    if (request.path == CurvePath::Monotonic && i > 0 && c.x[i] < c.x[i - 1])
+      throw InputError(c.source, location(lineOf(i), x_column, c.x_name),
+                       "unsorted: " + c.x_name +
+                           " decreases from the previous row (a monotonic loading curve is "
+                           "required; declare \"path\": \"cyclic\" for loading/unloading curves)");
+  }
+  double lo = c.x[0], hi = c.x[0];
+  for (double v : c.x) lo = std::min(lo, v), hi = std::max(hi, v);
+  if (!(hi > lo))
+    throw InputError(c.source, location(lineOf(0), x_column, c.x_name), "column has no spread (all values equal)");
+}
+
+Curve readCurveCsv(const fs::path& file, const CurveRequest& request) {
+  const std::string name = file.string();
+  std::error_code ec;
+  if (!fs::exists(file, ec)) throw InputError(name, "", "file does not exist");
+  std::ifstream in(file);
+  if (!in) throw InputError(name, "", "cannot open file");
+
+  std::string line;
+  std::size_t line_no = 0, header_line = 0;
+  std::vector<std::string> header;
+  while (std::getline(in, line)) {
+    ++line_no;
+    const std::string t = trim(line);
+    if (t.empty() || t[0] == '#') continue;
+    header = splitCells(t);
+    header_line = line_no;
+    break;
+  }
+  if (header.empty())
+    throw InputError(name, location(std::max<std::size_t>(line_no, 1), 0, ""), "empty file: no header line");
+
+  const std::size_t ix = findColumn(name, header, request.x_name, header_line);
+  const std::size_t iy = findColumn(name, header, request.y_name, header_line);
+  std::size_t it = header.size();
+  for (std::size_t i = 0; i < header.size(); ++i)
+    if (header[i] == "time_s") it = i;
+
+  Curve c;
+  c.source = name;
+  c.x_name = request.x_name;
+  c.y_name = request.y_name;
+  std::vector<std::size_t> lines;
+  double last_time = -std::numeric_limits<double>::infinity();
+  while (std::getline(in, line)) {
+    ++line_no;
+    const std::string t = trim(line);
+    if (t.empty() || t[0] == '#') continue;
+    const auto cells = splitCells(t);
+    if (cells.size() != header.size())
+      throw InputError(
+          name, location(line_no, std::min(cells.size(), header.size()) + 1, ""),
+          "row has " + std::to_string(cells.size()) + " cells, the header has " + std::to_string(header.size()));
+    double v = 0.0;
+    for (std::size_t col = 0; col < cells.size(); ++col) {
+      if (col != ix && col != iy && col != it) continue;
+      if (!parseNumber(cells[col], v))
+        throw InputError(name, location(line_no, col + 1, header[col]), "not a number: '" + cells[col] + "'");
+      if (!std::isfinite(v))
+        throw InputError(name, location(line_no, col + 1, header[col]), "value is not finite (" + cells[col] + ")");
+    }
+    parseNumber(cells[ix], v);
+    c.x.push_back(v);
+    parseNumber(cells[iy], v);
+    c.y.push_back(v);
+    if (it < cells.size()) {
+      parseNumber(cells[it], v);
+      if (!(v > last_time))
+        throw InputError(name, location(line_no, it + 1, "time_s"), "unsorted: time_s must increase strictly");
+      last_time = v;
+    }
+    lines.push_back(line_no);
+  }
+  if (c.x.empty()) throw InputError(name, location(line_no, 0, ""), "empty file: a header but no data rows");
+  validateCurve(c, request, lines, ix + 1, iy + 1);
+  return c;
+}
+
+Curve readCurveH5(const fs::path& file, const std::string& x_dataset, const std::string& y_dataset,
+                  const CurveRequest& request) {
+  H5Reader h5(file);
+  Curve c;
+  c.source = file.string() + ":" + x_dataset + "," + y_dataset;
+  c.x_name = request.x_name;
+  c.y_name = request.y_name;
+  for (const auto& ds : {x_dataset, y_dataset}) {
+    if (!h5.has(ds)) throw InputError(file.string(), ds, "no such dataset (see docs/fitting.md for the curve names)");
+    if (h5.dims(ds).size() != 1) throw InputError(file.string(), ds, "must be a 1-D dataset");
+    const std::string unit = h5.attribute(ds, "unit");
+    const std::string want = stemAndUnit(ds == x_dataset ? request.x_name : request.y_name).second;
+    if (!unit.empty() && unit != want)
+      throw InputError(file.string(), ds, "dataset has unit '" + unit + "', expected '" + want + "'");
+  }
+  c.x = h5.read(x_dataset);
+  c.y = h5.read(y_dataset);
+  validateCurve(c, request, {});
+  return c;
+}
+
+Curve readWallCurveH5(const fs::path& file, int wall, const Vec3& direction, const CurveRequest& request) {
+  H5Reader h5(file);
+  const std::string pos = "/series/wall_" + std::to_string(wall) + "_position_m";
+  const std::string force = "/series/wall_" + std::to_string(wall) + "_force_N";
+  for (const auto& ds : {pos, force}) {
+    if (!h5.has(ds)) throw InputError(file.string(), ds, "no such dataset (wall " + std::to_string(wall) + ")");
+    const auto d = h5.dims(ds);
+    if (d.size() != 2 || d[1] != 3) throw InputError(file.string(), ds, "must be an (n, 3) dataset");
+  }
+  const double norm = direction.norm();
+  if (!(norm > 0.0)) throw InputError(file.string(), pos, "wall direction must be a non-zero vector");
+  const Vec3 d = direction / norm;
+  const auto p = h5.read(pos), f = h5.read(force);
+  if (p.size() != f.size()) throw InputError(file.string(), force, "position and force have different lengths");
+  Curve c;
+  c.source = file.string() + ":" + pos + "," + force;
+  c.x_name = request.x_name;
+  c.y_name = request.y_name;
+  const std::size_t n = p.size() / 3;
+  for (std::size_t i = 0; i < n; ++i) {
+    const Vec3 pi(p[3 * i], p[3 * i + 1], p[3 * i + 2]);
+    const Vec3 p0(p[0], p[1], p[2]);
+    const Vec3 fi(f[3 * i], f[3 * i + 1], f[3 * i + 2]);
+    c.x.push_back((pi - p0).dot(d));
+    c.y.push_back(-fi.dot(d));
+  }
+  validateCurve(c, request, {});
+  return c;
+}
+
+void writeCurveCsv(const fs::path& file, const Curve& c) {
+  std::ostringstream out;
+  out << c.x_name << "," << c.y_name << "\n" << std::setprecision(17);
+  for (std::size_t i = 0; i < c.x.size(); ++i) out << c.x[i] << "," << c.y[i] << "\n";
+  writeTextAtomic(file, out.str());
+}
+
+}  // namespace gabion::bridge

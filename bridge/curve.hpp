@@ -1,0 +1,72 @@
+#pragma once
+/// \file
+/// Test curves (force against displacement and the like) read from lab CSV
+/// files or from HDF5 result files, with validation that names the file, the
+/// line and the column of the first bad value. Formats: docs/fitting.md.
+#include <cstddef>
+#include <filesystem>
+#include <string>
+#include <vector>
+
+#include "bridge/json_reader.hpp"
+
+namespace gabion::bridge {
+
+/// One measured or simulated curve y(x), in the order it was recorded (the
+/// loading path: x may reverse for loading/unloading curves).
+struct Curve {
+  std::string source;        ///< file (and dataset or columns) it came from
+  std::string x_name;        ///< column/dataset name with its SI unit suffix, e.g. "displacement_m"
+  std::string y_name;        ///< e.g. "force_N"
+  std::vector<double> x, y;  ///< same length, finite
+  std::size_t size() const { return x.size(); }
+};
+
+/// How the rows of a curve must be ordered.
+enum class CurvePath {
+  Monotonic,  ///< x non-decreasing (a loading curve); anything else is "unsorted"
+  Cyclic      ///< x may reverse (loading/unloading); the row order is the path
+};
+
+/// What a reader expects of a curve file.
+struct CurveRequest {
+  std::string x_name = "displacement_m";  ///< required column / dataset name (its suffix is the unit)
+  std::string y_name = "force_N";
+  CurvePath path = CurvePath::Monotonic;
+  std::size_t min_points = 5;  ///< fewer rows than this is an error
+};
+
+/// Reads a CSV curve: a header line with the column names (each ending in its SI
+/// unit, e.g. `displacement_m,force_N`; other columns are allowed and ignored,
+/// except `time_s`, which must then increase strictly), then one row of numbers
+/// per line. Blank lines and lines starting with '#' are skipped.
+/// Throws InputError (file, "line L, column C (name)", message) for: a missing or
+/// empty file, a missing column, a column with the right name but another unit
+/// (`displacement_mm`), a row with the wrong number of cells, a non-numeric or
+/// non-finite cell, an unsorted x column (Monotonic) or time_s, fewer than
+/// `min_points` rows, or an x column without any spread.
+Curve readCurveCsv(const std::filesystem::path& file, const CurveRequest& request);
+
+/// Reads a curve from two 1-D datasets of an HDF5 file (e.g. `/curves/axial/displacement_m`
+/// and `/curves/axial/force_N`), with the same checks as readCurveCsv (the "line"
+/// named in errors is the 1-based index in the dataset).
+Curve readCurveH5(const std::filesystem::path& file, const std::string& x_dataset, const std::string& y_dataset,
+                  const CurveRequest& request);
+
+/// Reads the force-displacement curve of wall `wall` from today's micro.scene layout:
+/// `/series/wall_<i>_position_m` and `/series/wall_<i>_force_N`, both (n, 3).
+/// displacement_m = (p(t) - p(0)) . d and force_N = -F(t) . d, with `direction` the
+/// unit vector d along which the wall is driven and F the force the bodies exert on
+/// the wall, so that a wall pressing into a packing gives a positive curve.
+Curve readWallCurveH5(const std::filesystem::path& file, int wall, const Vec3& direction, const CurveRequest& request);
+
+/// Validates x/y of a curve (finite, order, length, spread); errors name c.source and
+/// the line of the bad point, taken from `lines` (one per point; empty: 1-based index),
+/// and the column numbers of x and y. Used by the readers and for curves built in memory.
+void validateCurve(const Curve& c, const CurveRequest& request, const std::vector<std::size_t>& lines = {},
+                   std::size_t x_column = 1, std::size_t y_column = 2);
+
+/// Writes a curve as CSV with the header `x_name,y_name` (atomically), full precision.
+void writeCurveCsv(const std::filesystem::path& file, const Curve& c);
+
+}  // namespace gabion::bridge

@@ -1,0 +1,128 @@
+#include "fitting/case_input.hpp"
+
+#include <cmath>
+
+#include "bridge/errors.hpp"
+#include "bridge/output.hpp"
+
+namespace gabion::fitting {
+
+namespace fs = std::filesystem;
+using bridge::Check;
+using bridge::JsonReader;
+
+fs::path caseDirectory(const bridge::JsonDocument& doc) {
+  return fs::path(doc.file()).parent_path();
+}
+
+CurveSource readCurveSource(const JsonReader& r, const CurveDefaults& d, std::size_t index, const fs::path& base_dir) {
+  CurveSource s;
+  s.pointer = r.pointer();
+  s.file = base_dir / r.string("file");
+  const std::string ext = s.file.extension().string();
+  const bool h5 = ext == ".h5" || ext == ".hdf5";
+  if (!h5 && ext != ".csv") r.fail("file", "must end in .csv, .h5 or .hdf5");
+  s.request.x_name = r.string("x_column", d.x_name);
+  s.request.y_name = r.string("y_column", d.y_name);
+  s.request.path = r.choice("path", {"monotonic", "cyclic"}, "monotonic") == "cyclic" ? bridge::CurvePath::Cyclic
+                                                                                      : bridge::CurvePath::Monotonic;
+  s.request.min_points = static_cast<std::size_t>(r.integer("min_points", 5, 3));
+  s.replicate = r.string("replicate", d.replicate_per_curve ? std::to_string(index) : "all");
+  if (!d.condition_key.empty() && r.has(d.condition_key)) s.condition = r.number(d.condition_key, Check::Positive);
+  if (!h5) {
+    for (const char* k : {"x_dataset", "y_dataset", "wall"})
+      if (r.has(k)) r.fail(k, "only for HDF5 curve files");
+    if (!d.condition_key.empty() && !s.condition) r.fail(d.condition_key, "required for a CSV curve of this test");
+    s.kind = CurveSource::Kind::Csv;
+    return s;
+  }
+  if (auto w = r.optionalObject("wall")) {
+    if (r.has("x_dataset") || r.has("y_dataset")) r.fail("wall", "give either \"wall\" or datasets, not both");
+    s.kind = CurveSource::Kind::H5Wall;
+    s.wall = static_cast<int>(w->integer("index", 0));
+    s.direction = w->vec3("direction");
+    if (!(s.direction.norm() > 0.0)) w->fail("direction", "must be a non-zero vector");
+    if (!d.condition_key.empty() && !s.condition) r.fail(d.condition_key, "required for a wall curve");
+    return s;
+  }
+  s.kind = CurveSource::Kind::H5Datasets;
+  s.x_dataset = r.string("x_dataset", d.h5_group + "/" + s.request.x_name);
+  s.y_dataset = r.string("y_dataset", d.h5_group + "/" + s.request.y_name);
+  if (!d.condition_key.empty()) s.condition_dataset = d.h5_group + "/" + d.condition_key;
+  return s;
+}
+
+bridge::Curve loadCurve(const CurveSource& s) {
+  switch (s.kind) {
+    case CurveSource::Kind::Csv:
+      return bridge::readCurveCsv(s.file, s.request);
+    case CurveSource::Kind::H5Datasets:
+      return bridge::readCurveH5(s.file, s.x_dataset, s.y_dataset, s.request);
+    case CurveSource::Kind::H5Wall:
+      return bridge::readWallCurveH5(s.file, s.wall, s.direction, s.request);
+  }
+  return {};
+}
+
+double curveCondition(const CurveSource& s) {
+  if (s.condition) return *s.condition;
+  if (s.condition_dataset.empty()) return 0.0;
+  bridge::H5Reader h5(s.file);
+  if (!h5.has(s.condition_dataset))
+    throw bridge::InputError(s.file.string(), s.condition_dataset,
+                             "no such dataset: give the value in the case (" + s.pointer + ")");
+  const auto v = h5.read(s.condition_dataset);
+  double mean = 0.0;
+  for (double x : v) mean += x / static_cast<double>(v.size());
+  if (v.empty() || !std::isfinite(mean) || !(mean > 0.0))
+    throw bridge::InputError(s.file.string(), s.condition_dataset, "must hold finite positive values");
+  return mean;
+}
+
+OptimizerSettings readOptimizer(const std::optional<JsonReader>& r, unsigned long seed,
+                                const OptimizerSettings& defaults) {
+  OptimizerSettings s = defaults;
+  s.seed = seed;
+  if (!r) return s;
+  s.global_algorithm = r->string("global", s.global_algorithm);
+  if (s.global_algorithm != "none" && !isNloptAlgorithm(s.global_algorithm, true))
+    r->fail("global", "unknown global algorithm '" + s.global_algorithm +
+                          "' (GN_DIRECT, GN_DIRECT_L, GN_DIRECT_L_RAND, GN_CRS2_LM, GN_ISRES, GN_ESCH or none)");
+  s.local_algorithm = r->string("local", s.local_algorithm);
+  if (s.local_algorithm != "none" && !isNloptAlgorithm(s.local_algorithm, false))
+    r->fail("local", "unknown local algorithm '" + s.local_algorithm +
+                         "' (LN_SBPLX, LN_BOBYQA, LN_NELDERMEAD, LN_COBYLA, LN_NEWUOA_BOUND or none)");
+  if (s.global_algorithm == "none" && s.local_algorithm == "none")
+    r->fail("local", "global and local cannot both be 'none'");
+  s.global_max_evaluations = static_cast<int>(r->integer("global_max_evaluations", s.global_max_evaluations, 1));
+  s.local_max_evaluations = static_cast<int>(r->integer("local_max_evaluations", s.local_max_evaluations, 1));
+  s.xtol_rel = r->number("xtol_rel", s.xtol_rel, Check::Positive);
+  s.ftol_rel = r->number("ftol_rel", s.ftol_rel, Check::Positive);
+  s.penalty = r->number("penalty", s.penalty, Check::Positive);
+  return s;
+}
+
+LossSettings readLoss(const std::optional<JsonReader>& r, std::size_t& grid_points) {
+  LossSettings l;
+  if (!r) return l;
+  const std::string kind = r->choice("loss", {"soft_l1", "huber", "l2"}, "soft_l1");
+  l.kind = kind == "l2"      ? LossSettings::Kind::L2
+           : kind == "huber" ? LossSettings::Kind::Huber
+                             : LossSettings::Kind::SoftL1;
+  l.scale = r->number("loss_scale", l.scale, Check::Positive);
+  grid_points = static_cast<std::size_t>(r->integer("grid_points", static_cast<long long>(grid_points), 10));
+  return l;
+}
+
+Bounds readBounds(const JsonReader& r, const std::vector<std::string>& names) {
+  Bounds b;
+  for (const auto& name : names) {
+    const auto v = r.numbers(name, Check::Finite, 2);
+    if (v.size() != 2) r.fail(name, "must be [lower, upper]");
+    if (!(v[1] > v[0])) r.fail(name, "upper bound must exceed lower bound");
+    b[name] = {v[0], v[1]};
+  }
+  return b;
+}
+
+}  // namespace gabion::fitting

@@ -1,0 +1,62 @@
+#pragma once
+/// \file
+/// Reading the parts shared by the fitting cases (`fit`, `fit.micro`): curve
+/// sources, optimizer and objective settings. Every key is read through a
+/// JsonReader, so a typo or a bad value names the case file and JSON pointer.
+#include <filesystem>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "bridge/curve.hpp"
+#include "bridge/json_reader.hpp"
+#include "fitting/curve_model.hpp"
+#include "fitting/law_fit.hpp"
+#include "fitting/optimizer.hpp"
+
+namespace gabion::fitting {
+
+/// Where one curve comes from (a case's "curves" entry).
+struct CurveSource {
+  std::filesystem::path file;  ///< resolved against the case file's folder
+  enum class Kind { Csv, H5Datasets, H5Wall } kind = Kind::Csv;
+  std::string x_dataset, y_dataset;  ///< H5Datasets
+  int wall = 0;                      ///< H5Wall: wall index i of /series/wall_<i>_...
+  bridge::Vec3 direction{0, 0, 1};   ///< H5Wall: driving direction
+  bridge::CurveRequest request;
+  std::string replicate;            ///< replicate label
+  std::optional<double> condition;  ///< normal force (N) or velocity (m/s) when given in the case
+  std::string condition_dataset;    ///< H5: dataset holding the condition when not given
+  std::string pointer;              ///< JSON pointer of the entry (for messages)
+};
+
+/// Defaults of a curve entry for one test (column and dataset names).
+struct CurveDefaults {
+  std::string x_name, y_name;       ///< CSV columns (name_unit)
+  std::string h5_group;             ///< "/curves/axial" etc.
+  std::string condition_key;        ///< "normal_force_N", "velocity_m_s" or ""
+  bool replicate_per_curve = true;  ///< default label: each curve its own replicate
+};
+
+/// Reads one "curves" entry: {"file", "path", "replicate", "x_column", "y_column",
+/// "x_dataset", "y_dataset", "wall": {"index", "direction"}, <condition key>, "min_points"}.
+CurveSource readCurveSource(const bridge::JsonReader& r, const CurveDefaults& d, std::size_t index,
+                            const std::filesystem::path& base_dir);
+/// Reads the curve (throws InputError naming file, line and column).
+bridge::Curve loadCurve(const CurveSource& s);
+/// The condition of a curve: the case value, else the mean of the H5 dataset.
+double curveCondition(const CurveSource& s);
+
+/// Reads "optimizer": {"global", "local", "global_max_evaluations",
+/// "local_max_evaluations", "xtol_rel", "ftol_rel", "penalty"} and the case "seed".
+OptimizerSettings readOptimizer(const std::optional<bridge::JsonReader>& r, unsigned long seed,
+                                const OptimizerSettings& defaults);
+/// Reads "objective": {"loss": "soft_l1"|"huber"|"l2", "loss_scale", "grid_points"}.
+LossSettings readLoss(const std::optional<bridge::JsonReader>& r, std::size_t& grid_points);
+/// Reads {"name": [lower, upper], ...} for the given names (all required).
+Bounds readBounds(const bridge::JsonReader& r, const std::vector<std::string>& names);
+
+/// The folder relative paths in a case are resolved against.
+std::filesystem::path caseDirectory(const bridge::JsonDocument& doc);
+
+}  // namespace gabion::fitting

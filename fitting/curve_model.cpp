@@ -1,0 +1,208 @@
+#include "fitting/curve_model.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+
+#include "bridge/errors.hpp"
+#include "bridge/laws/cell_axial_law.hpp"
+#include "fitting/optimizer.hpp"
+
+namespace gabion::fitting {
+
+double PathGrid::effectivePoints() const {
+  return static_cast<double>(std::min(raw_points, x.size()));
+}
+
+PathGrid resampleOnPath(const bridge::Curve& c, std::size_t points) {
+  PathGrid g;
+  g.source = c.source;
+  g.raw_points = c.size();
+  g.raw_x = c.x;
+  g.raw_y = c.y;
+  g.scale = 0.0;
+  for (double v : c.y) g.scale = std::max(g.scale, std::abs(v));
+  if (!(g.scale > 0.0)) throw bridge::InputError(c.source, "", "the curve's " + c.y_name + " is zero everywhere");
+
+  const std::size_t n = c.size();
+  std::vector<double> s(n, 0.0);
+  for (std::size_t i = 1; i < n; ++i) s[i] = s[i - 1] + std::abs(c.x[i] - c.x[i - 1]);
+  const double length = s.back();
+  // Sample positions: a uniform grid in s plus the turning points of x.
+  std::vector<double> at;
+  for (std::size_t k = 0; k < points; ++k)
+    at.push_back(length * static_cast<double>(k) / static_cast<double>(points - 1));
+  for (std::size_t i = 1; i + 1 < n; ++i)
+    if ((c.x[i] - c.x[i - 1]) * (c.x[i + 1] - c.x[i]) < 0.0) at.push_back(s[i]);
+  std::sort(at.begin(), at.end());
+  at.erase(std::unique(at.begin(), at.end()), at.end());
+
+  std::size_t j = 0;
+  for (double sk : at) {
+    while (j + 2 < n && s[j + 1] < sk) ++j;
+    // Among points at the same s (a pause in x), take the last one: the force it settled to.
+    while (j + 2 < n && s[j + 1] == sk && s[j + 2] == sk) ++j;
+    const double ds = s[j + 1] - s[j];
+    const double t = ds > 0.0 ? std::min(1.0, std::max(0.0, (sk - s[j]) / ds)) : 1.0;
+    g.x.push_back(c.x[j] + t * (c.x[j + 1] - c.x[j]));
+    g.y.push_back(c.y[j] + t * (c.y[j + 1] - c.y[j]));
+  }
+  return g;
+}
+
+std::vector<std::string> parameterNames(LawModel m) {
+  switch (m) {
+    case LawModel::ElasticPerfectlyPlastic:
+      return {"stiffness_N_m", "yield_force_N"};
+    case LawModel::Bilinear:
+      return {"stiffness_N_m", "yield_force_N", "hardening_stiffness_N_m"};
+    case LawModel::LateralLinear:
+      return {"reaction_coefficient"};
+    case LawModel::InterfaceSlider:
+      return {"friction", "tangential_stiffness_N_m"};
+  }
+  return {};
+}
+
+std::string modelName(LawModel m) {
+  switch (m) {
+    case LawModel::ElasticPerfectlyPlastic:
+      return "elastic_perfectly_plastic";
+    case LawModel::Bilinear:
+      return "bilinear";
+    case LawModel::LateralLinear:
+      return "lateral_linear";
+    case LawModel::InterfaceSlider:
+      return "interface_slider";
+  }
+  return "";
+}
+
+namespace {
+
+// Coulomb slider with a tangential spring and plastic slip memory, both
+// directions (cyclic shear): T = k_t (s - s_p), |T| <= mu N.
+void evaluateSlider(double mu, double kt, const PathGrid& g, std::vector<double>& out) {
+  const double cap = mu * std::abs(g.condition);
+  double slip = 0.0;
+  for (std::size_t i = 0; i < g.x.size(); ++i) {
+    const double trial = kt * (g.x[i] - slip);
+    if (std::abs(trial) > cap) {
+      const double sign = trial > 0.0 ? 1.0 : -1.0;
+      slip = g.x[i] - sign * cap / kt;
+      out[i] = sign * cap;
+    } else {
+      out[i] = trial;
+    }
+  }
+}
+
+}  // namespace
+
+void evaluateModel(LawModel m, const std::vector<double>& theta, const PathGrid& g, std::vector<double>& out) {
+  out.resize(g.x.size());
+  switch (m) {
+    case LawModel::ElasticPerfectlyPlastic:
+    case LawModel::Bilinear: {
+      bridge::AxialLawParams p;
+      p.model = m == LawModel::Bilinear ? bridge::AxialModel::Bilinear : bridge::AxialModel::ElasticPerfectlyPlastic;
+      p.stiffness_N_m = theta[0];
+      p.yield_force_N = theta[1];
+      if (m == LawModel::Bilinear) {
+        p.hardening_stiffness_N_m = theta[2];
+        if (!(theta[2] < theta[0])) throw Infeasible("hardening_stiffness_N_m must be below stiffness_N_m");
+      }
+      double plastic = 0.0;
+      for (std::size_t i = 0; i < g.x.size(); ++i) {
+        const auto r = bridge::axialResponse(p, g.x[i], plastic);
+        out[i] = r.force_N;
+        plastic = r.plastic_m;
+      }
+      return;
+    }
+    case LawModel::LateralLinear:
+      for (std::size_t i = 0; i < g.x.size(); ++i) out[i] = theta[0] * g.x[i];
+      return;
+    case LawModel::InterfaceSlider:
+      evaluateSlider(theta[0], theta[1], g, out);
+      return;
+  }
+}
+
+double lossValue(double r, const LossSettings& loss) {
+  const double c = loss.scale;
+  switch (loss.kind) {
+    case LossSettings::Kind::L2:
+      return r * r;
+    case LossSettings::Kind::SoftL1:
+      return 2.0 * c * c * (std::sqrt(1.0 + (r / c) * (r / c)) - 1.0);
+    case LossSettings::Kind::Huber:
+      return std::abs(r) <= c ? r * r : 2.0 * c * std::abs(r) - c * c;
+  }
+  return r * r;
+}
+
+double lossWeight(double r, const LossSettings& loss) {
+  const double c = loss.scale;
+  switch (loss.kind) {
+    case LossSettings::Kind::L2:
+      return 1.0;
+    case LossSettings::Kind::SoftL1:
+      return 1.0 / std::sqrt(1.0 + (r / c) * (r / c));
+    case LossSettings::Kind::Huber:
+      return std::abs(r) <= c ? 1.0 : c / std::abs(r);
+  }
+  return 1.0;
+}
+
+std::vector<double> residuals(const CurveSet& set, const std::vector<double>& theta) {
+  std::vector<double> r, model;
+  for (const auto& g : set.grids) {
+    evaluateModel(set.model, theta, g, model);
+    for (std::size_t i = 0; i < g.x.size(); ++i) r.push_back((model[i] - g.y[i]) / g.scale);
+  }
+  return r;
+}
+
+double misfit(const CurveSet& set, const std::vector<double>& theta) {
+  double total = 0.0;
+  std::vector<double> model;
+  for (const auto& g : set.grids) {
+    evaluateModel(set.model, theta, g, model);
+    const double a = g.effectivePoints() / static_cast<double>(g.x.size());
+    double sum = 0.0;
+    for (std::size_t i = 0; i < g.x.size(); ++i) sum += lossValue((model[i] - g.y[i]) / g.scale, set.loss);
+    total += a * sum;
+  }
+  return total;
+}
+
+double effectiveObservations(const CurveSet& set) {
+  double n = 0.0;
+  for (const auto& g : set.grids) n += g.effectivePoints();
+  return n;
+}
+
+double residualVariance(const CurveSet& set, const std::vector<double>& theta) {
+  double sum = 0.0, n = 0.0;
+  std::vector<double> model;
+  for (const auto& g : set.grids) {
+    PathGrid raw = g;
+    raw.x = g.raw_x;
+    raw.y = g.raw_y;
+    evaluateModel(set.model, theta, raw, model);
+    for (std::size_t i = 0; i < model.size(); ++i) sum += lossValue((model[i] - raw.y[i]) / g.scale, set.loss);
+    n += static_cast<double>(model.size());
+  }
+  const double dof = n - static_cast<double>(theta.size());
+  return dof > 0.0 ? sum / dof : std::numeric_limits<double>::infinity();
+}
+
+double normalisedRms(const CurveSet& set, const std::vector<double>& theta) {
+  const auto r = residuals(set, theta);
+  double sum = 0.0;
+  for (double v : r) sum += v * v;
+  return std::sqrt(sum / static_cast<double>(r.size()));
+}
+
+}  // namespace gabion::fitting

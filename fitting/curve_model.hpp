@@ -1,0 +1,85 @@
+#pragma once
+/// \file
+/// Curves on a common grid, the macro-law models evaluated along a loading
+/// path, and the robust misfit between them (docs/fitting.md, "Objective").
+#include <cstddef>
+#include <string>
+#include <vector>
+
+#include "bridge/curve.hpp"
+
+namespace gabion::fitting {
+
+/// A curve resampled on its loading path: `points` equal steps of the path
+/// length s = sum |dx| (which keeps increasing when x reverses, so loading and
+/// unloading branches are both sampled), plus every turning point of x, so the
+/// peak of a loading/unloading cycle is never cut off.
+struct PathGrid {
+  std::string source;                ///< where the curve came from
+  std::vector<double> x, y;          ///< resampled, in path order
+  double scale = 1.0;                ///< normalisation: max |y| of the data (residual = error / scale)
+  std::size_t raw_points = 0;        ///< points of the original curve
+  std::vector<double> raw_x, raw_y;  ///< the original curve (for the noise estimate)
+  double condition = 0.0;            ///< normal force (interface, N) or impact velocity (m/s); 0 otherwise
+  std::string replicate;             ///< replicate label (curves with the same label are fitted together)
+  /// Independent observations this grid stands for: min(raw points, grid points).
+  double effectivePoints() const;
+};
+
+/// Resamples `c` on its path (see PathGrid). Throws bridge::InputError when the
+/// curve has no force range (max |y| = 0).
+PathGrid resampleOnPath(const bridge::Curve& c, std::size_t points);
+
+/// The closed set of laws the fitting identifies (each a pure function of a path).
+enum class LawModel {
+  ElasticPerfectlyPlastic,  ///< axial/impact: stiffness_N_m, yield_force_N
+  Bilinear,                 ///< axial/impact: + hardening_stiffness_N_m
+  LateralLinear,            ///< lateral force = reaction_coefficient * axial force
+  InterfaceSlider           ///< shear force: spring tangential_stiffness_N_m capped at friction * normal force
+};
+
+/// Parameter names of a model, in the order of the parameter vector.
+std::vector<std::string> parameterNames(LawModel m);
+/// "elastic_perfectly_plastic", "bilinear", "lateral_linear", "interface_slider".
+std::string modelName(LawModel m);
+
+/// Model values along the path of `g` (same length as g.x). Axial and impact laws
+/// are evaluated by bridge::axialResponse with plastic memory. Throws Infeasible
+/// for a bilinear hardening tangent not below the stiffness.
+void evaluateModel(LawModel m, const std::vector<double>& theta, const PathGrid& g, std::vector<double>& out);
+
+/// Loss applied to normalised residuals (docs/fitting.md).
+struct LossSettings {
+  enum class Kind { L2, SoftL1, Huber };
+  Kind kind = Kind::SoftL1;
+  double scale = 0.05;  ///< residual (fraction of the curve's force range) where the loss turns linear
+};
+
+/// rho(r): r^2 near 0 for every kind; soft-L1: 2 c^2 (sqrt(1 + (r/c)^2) - 1); Huber:
+/// r^2 for |r| <= c, else 2 c |r| - c^2.
+double lossValue(double r, const LossSettings& loss);
+/// IRLS weight rho'(r) / (2 r) (1 for L2), used for the covariance at the optimum.
+double lossWeight(double r, const LossSettings& loss);
+
+/// One law to fit against a set of curves.
+struct CurveSet {
+  LawModel model = LawModel::ElasticPerfectlyPlastic;
+  std::vector<PathGrid> grids;
+  LossSettings loss;
+};
+
+/// Normalised residuals (model - data) / scale of every grid point, curve after curve.
+std::vector<double> residuals(const CurveSet& set, const std::vector<double>& theta);
+/// Misfit: sum over points of a_c rho(r), a_c = effective/grid points of curve c
+/// (so a curve counts for its independent observations, not its grid size).
+double misfit(const CurveSet& set, const std::vector<double>& theta);
+/// Effective number of observations: sum of effectivePoints().
+double effectiveObservations(const CurveSet& set);
+/// Noise variance of the normalised residuals, estimated on the ORIGINAL points
+/// (resampling interpolates, which would understate it): sum rho(r) / (n_raw - p),
+/// with p = theta.size(). Infinite when n_raw <= p.
+double residualVariance(const CurveSet& set, const std::vector<double>& theta);
+/// Normalised RMS error sqrt(mean r^2) over all grid points (no robust loss).
+double normalisedRms(const CurveSet& set, const std::vector<double>& theta);
+
+}  // namespace gabion::fitting

@@ -1,0 +1,305 @@
+#include "fitting/fit_case.hpp"
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <optional>
+#include <set>
+
+#include "bridge/errors.hpp"
+#include "bridge/law_file.hpp"
+#include "bridge/output.hpp"
+#include "bridge/plot.hpp"
+#include "fitting/case_input.hpp"
+#include "fitting/sha256.hpp"
+#include "gabion_version.hpp"
+
+namespace gabion::fitting {
+
+namespace fs = std::filesystem;
+using bridge::Check;
+using bridge::JsonReader;
+using nlohmann::json;
+
+namespace {
+
+/// The four laws a `fit` case may identify, in the order they are run.
+const std::vector<std::string> kTests = {"axial", "lateral", "interface", "impact"};
+
+CurveDefaults defaultsFor(const std::string& test) {
+  if (test == "axial") return {"displacement_m", "force_N", "/curves/axial", "", true};
+  if (test == "lateral") return {"axial_force_N", "lateral_force_N", "/curves/lateral", "", true};
+  if (test == "interface") return {"displacement_m", "force_N", "/curves/shear", "normal_force_N", false};
+  return {"penetration_m", "force_N", "/curves/impact", "velocity_m_s", false};
+}
+
+struct TestSpec {
+  std::string name;
+  std::vector<LawModel> candidates;
+  std::vector<CurveSource> curves;
+  Bounds bounds;
+  std::string pointer;
+};
+
+struct FitCase {
+  std::string material;
+  std::optional<double> edge_m, mass_kg;
+  std::optional<fs::path> base_law;
+  std::string base_material;
+  LawFitSettings settings;
+  std::size_t grid_points = 200;
+  bool plots = true;
+  std::vector<TestSpec> tests;
+};
+
+std::vector<LawModel> readModels(const JsonReader& t, const std::string& test) {
+  if (test == "lateral") return {LawModel::LateralLinear};
+  if (test == "interface") return {LawModel::InterfaceSlider};
+  std::vector<LawModel> out{LawModel::ElasticPerfectlyPlastic, LawModel::Bilinear};
+  if (!t.has("models")) return out;
+  const json& v = t.raw("models");
+  if (!v.is_array() || v.empty()) t.fail("models", "must be a non-empty array of model names");
+  out.clear();
+  for (const auto& m : v) {
+    if (!m.is_string()) t.fail("models", "entries must be strings");
+    const std::string s = m.get<std::string>();
+    if (s == "elastic_perfectly_plastic")
+      out.push_back(LawModel::ElasticPerfectlyPlastic);
+    else if (s == "bilinear")
+      out.push_back(LawModel::Bilinear);
+    else
+      t.fail("models", "unknown model '" + s + "' (elastic_perfectly_plastic, bilinear)");
+  }
+  return out;
+}
+
+FitCase readFitCase(const bridge::JsonDocument& doc) {
+  const JsonReader root = doc.root();
+  const fs::path dir = caseDirectory(doc);
+  FitCase c;
+  const auto seed = static_cast<unsigned long>(root.integer("seed", 1, 0));
+  c.settings.optimizer = readOptimizer(root.optionalObject("optimizer"), seed, OptimizerSettings{});
+  c.settings.loss = readLoss(root.optionalObject("objective"), c.grid_points);
+  if (auto u = root.optionalObject("uncertainty")) c.settings.profile = u->boolean("profile", true);
+  c.settings.criterion = root.choice("criterion", {"bic", "aicc"}, "bic") == "aicc" ? Criterion::Aicc : Criterion::Bic;
+  c.plots = root.boolean("plots", true);
+
+  const JsonReader mat = root.object("material");
+  c.material = mat.string("name");
+  if (c.material.empty()) mat.fail("name", "must not be empty");
+  if (mat.has("edge_m")) c.edge_m = mat.number("edge_m", Check::Positive);
+  if (mat.has("mass_kg")) c.mass_kg = mat.number("mass_kg", Check::Positive);
+  if (auto base = root.optionalObject("base_law")) {
+    c.base_law = dir / base->string("file");
+    c.base_material = base->string("material");
+  }
+
+  for (const auto& test : kTests) {
+    auto t = root.optionalObject(test);
+    if (!t) continue;
+    TestSpec spec;
+    spec.name = test;
+    spec.pointer = t->pointer();
+    spec.candidates = readModels(*t, test);
+    const auto curves = t->objects("curves", true);
+    if (curves.empty()) t->fail("curves", "at least one curve is required");
+    for (std::size_t i = 0; i < curves.size(); ++i)
+      spec.curves.push_back(readCurveSource(curves[i], defaultsFor(test), i, dir));
+    std::set<std::string> names;
+    for (LawModel m : spec.candidates)
+      for (const auto& n : parameterNames(m)) names.insert(n);
+    const JsonReader b = t->object("bounds");
+    spec.bounds = readBounds(b, std::vector<std::string>(names.begin(), names.end()));
+    for (const auto& [name, lu] : spec.bounds) {
+      const bool may_be_zero = name == "hardening_stiffness_N_m" || name == "reaction_coefficient";
+      if (may_be_zero ? lu.first < 0.0 : !(lu.first > 0.0))
+        b.fail(name, may_be_zero ? "lower bound must be >= 0" : "lower bound must be > 0");
+    }
+    c.tests.push_back(std::move(spec));
+  }
+  if (c.tests.empty()) root.failHere("nothing to fit: give at least one of axial, lateral, interface, impact");
+
+  const bool complete = c.tests.size() == kTests.size();
+  if (!complete && !c.base_law)
+    root.fail("base_law",
+              "required: law.json needs every law, and this case fits only some; give "
+              "{\"file\", \"material\"} for the others");
+  if (!c.base_law && (!c.edge_m || !c.mass_kg))
+    mat.fail(c.edge_m ? "mass_kg" : "edge_m", "required without a base_law");
+  return c;
+}
+
+// Loads and checks every curve of a test (InputError names file, line, column).
+std::vector<PathGrid> loadGrids(const TestSpec& t, std::size_t grid_points) {
+  std::vector<PathGrid> grids;
+  for (const auto& s : t.curves) {
+    PathGrid g = resampleOnPath(loadCurve(s), grid_points);
+    g.condition = curveCondition(s);
+    g.replicate = s.replicate;
+    grids.push_back(std::move(g));
+  }
+  return grids;
+}
+
+// "displacement_m" -> "displacement (m)".
+std::string axisLabel(const std::string& name) {
+  const auto pos = name.rfind('_');
+  if (pos == std::string::npos) return name;
+  std::string stem = name.substr(0, pos);
+  std::replace(stem.begin(), stem.end(), '_', ' ');
+  return stem + " (" + name.substr(pos + 1) + ")";
+}
+
+void plotFit(const fs::path& file, const TestSpec& t, const std::vector<PathGrid>& grids, const ModelFit& fit) {
+  bridge::PlotSpec spec;
+  spec.title = t.name + ": data and fitted " + modelName(fit.model) + " law (nRMS " +
+               std::to_string(fit.nrms).substr(0, 6) + ")";
+  const auto d = defaultsFor(t.name);
+  spec.x_label = axisLabel(t.curves.front().request.x_name);
+  spec.y_label = axisLabel(t.curves.front().request.y_name);
+  std::vector<double> model;
+  for (std::size_t i = 0; i < grids.size(); ++i) {
+    const auto& g = grids[i];
+    std::string tag = "curve " + std::to_string(i + 1);
+    if (!d.condition_key.empty())
+      tag += " (" + d.condition_key + " = " + std::to_string(g.condition).substr(0, 7) + ")";
+    spec.series.push_back({"data " + tag, g.x, g.y, bridge::PlotSeries::Style::Markers});
+    evaluateModel(fit.model, fit.theta, g, model);
+    spec.series.push_back({"fit " + tag, g.x, model, bridge::PlotSeries::Style::Line});
+  }
+  bridge::writePlotPng(file, spec);
+}
+
+bridge::AxialLawParams axialParams(const ModelFit& f) {
+  bridge::AxialLawParams p;
+  p.model = f.model == LawModel::Bilinear ? bridge::AxialModel::Bilinear : bridge::AxialModel::ElasticPerfectlyPlastic;
+  p.stiffness_N_m = f.theta[0];
+  p.yield_force_N = f.theta[1];
+  if (f.model == LawModel::Bilinear) p.hardening_stiffness_N_m = f.theta[2];
+  return p;
+}
+
+void checkCase(const bridge::JsonDocument& doc) {
+  const FitCase c = readFitCase(doc);
+  for (const auto& t : c.tests) loadGrids(t, c.grid_points);
+  if (c.base_law) {
+    const auto base = bridge::loadLawFile(*c.base_law);
+    if (base.materials.count(c.base_material) == 0)
+      throw bridge::InputError(doc.file(), "/base_law/material",
+                               "no material '" + c.base_material + "' in " + c.base_law->string());
+  }
+}
+
+bridge::RunOutcome runCase(const bridge::JsonDocument& doc, const bridge::RunContext& ctx) {
+  const FitCase c = readFitCase(doc);
+  bridge::RunOutcome outcome;
+
+  bridge::CellMaterial material;
+  json provenance = json::object();
+  std::string base_status;
+  if (c.base_law) {
+    const auto base = bridge::loadLawFile(*c.base_law);
+    const auto it = base.materials.find(c.base_material);
+    if (it == base.materials.end())
+      throw bridge::InputError(doc.file(), "/base_law/material",
+                               "no material '" + c.base_material + "' in " + c.base_law->string());
+    material = it->second;
+    base_status = it->second.provenance.value("status", "illustrative");
+    json from = {{"file", c.base_law->string()},
+                 {"sha256", sha256File(*c.base_law)},
+                 {"material", c.base_material},
+                 {"status", base_status},
+                 {"laws", json::array()}};
+    for (const auto& name : kTests) {
+      bool fitted = false;
+      for (const auto& t : c.tests) fitted = fitted || t.name == name;
+      if (!fitted) from["laws"].push_back(name);
+    }
+    provenance["from_base_law"] = from;
+  }
+  if (c.edge_m) material.edge_m = *c.edge_m;
+  if (c.mass_kg) material.mass_kg = *c.mass_kg;
+
+  json results = json::object();
+  json fitted = json::object();
+  json plots = json::array();
+  int evaluations = 0;
+  double fit_time = 0.0;
+  for (const auto& t : c.tests) {
+    const auto grids = loadGrids(t, c.grid_points);
+    const LawFitResult r = fitLaw(t.candidates, grids, t.bounds, c.settings);
+    evaluations += r.evaluations;
+    fit_time += r.wall_time_s;
+    json entry = toJson(r, c.settings.criterion);
+    json inputs = json::array();
+    for (std::size_t i = 0; i < t.curves.size(); ++i) {
+      json in = {{"file", t.curves[i].file.string()},
+                 {"sha256", sha256File(t.curves[i].file)},
+                 {"points", grids[i].raw_points},
+                 {"replicate", grids[i].replicate}};
+      if (grids[i].condition != 0.0) in[defaultsFor(t.name).condition_key] = grids[i].condition;
+      inputs.push_back(in);
+    }
+    entry["inputs"] = inputs;
+    entry["algorithm"] = {{"global", c.settings.optimizer.global_algorithm},
+                          {"local", c.settings.optimizer.local_algorithm},
+                          {"xtol_rel", c.settings.optimizer.xtol_rel},
+                          {"seed", c.settings.optimizer.seed},
+                          {"loss", c.settings.loss.kind == LossSettings::Kind::SoftL1  ? "soft_l1"
+                                   : c.settings.loss.kind == LossSettings::Kind::Huber ? "huber"
+                                                                                       : "l2"},
+                          {"loss_scale", c.settings.loss.scale},
+                          {"grid_points", c.grid_points}};
+    results[t.name] = entry;
+    fitted[t.name] = entry;
+
+    const ModelFit& best = r.best();
+    if (t.name == "axial") material.axial = axialParams(best);
+    if (t.name == "impact") material.impact = axialParams(best);
+    if (t.name == "lateral") material.lateral.reaction_coefficient = best.theta[0];
+    if (t.name == "interface") {
+      material.interface.friction = best.theta[0];
+      material.interface.tangential_stiffness_N_m = best.theta[1];
+    }
+    if (c.plots) {
+      const std::string png = "fit_" + t.name + ".png";
+      plotFit(ctx.outdir / png, t, grids, best);
+      plots.push_back(png);
+    }
+  }
+
+  // A law file is only "fitted" if no part of it is illustrative.
+  provenance["status"] = c.tests.size() == kTests.size() || base_status != "illustrative" ? "fitted" : "illustrative";
+  provenance["software"] = std::string("gabion ") + gabion::kVersion;
+  provenance["method"] =
+      "fit case: NLopt global stage then local polish; 95 % intervals from the Jacobian, the "
+      "profile likelihood and the replicate spread (docs/fitting.md)";
+  provenance["case_file"] = ctx.case_file.string();
+  provenance["fitted"] = fitted;
+  material.provenance = provenance;
+
+  bridge::LawFile law;
+  law.materials.emplace(c.material, material);
+  json law_json = bridge::toJson(law);
+  law_json["description"] = "Cell laws identified by `gabion run " + ctx.case_file.string() + "`";
+  bridge::writeJsonAtomic(ctx.outdir / "law.json", law_json);
+  // Read back through the validating reader: what we write must be a valid law file.
+  bridge::loadLawFile(ctx.outdir / "law.json");
+
+  outcome.results["fit"] = results;
+  outcome.results["law_file"] = "law.json";
+  outcome.results["law_status"] = provenance["status"];
+  outcome.results["plots"] = plots;
+  outcome.results["evaluations"] = evaluations;
+  outcome.results["fit_wall_time_s"] = fit_time;
+  return outcome;
+}
+
+}  // namespace
+
+bridge::CaseKind fitCaseKind() {
+  return {"fit", "identify the macro cell laws (axial, lateral, interface, impact) from curves with NLopt", checkCase,
+          runCase};
+}
+
+}  // namespace gabion::fitting

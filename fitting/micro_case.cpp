@@ -1,0 +1,336 @@
+#include "fitting/micro_case.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <iomanip>
+#include <sstream>
+
+#include "bridge/errors.hpp"
+#include "bridge/plot.hpp"
+#include "fitting/calibration.hpp"
+#include "fitting/case_input.hpp"
+#include "fitting/sha256.hpp"
+#include "gabion_version.hpp"
+#include "micro/cases.hpp"
+
+namespace gabion::fitting {
+
+namespace fs = std::filesystem;
+using bridge::Check;
+using bridge::JsonReader;
+using nlohmann::json;
+
+namespace {
+
+/// A micro parameter and the keys of the micro case it is written to.
+struct MicroParameter {
+  Parameter param;
+  std::vector<std::string> set;  ///< dotted paths for JsonDocument::applySet
+};
+
+/// How the model curve is read from the micro run's result.h5.
+struct ModelCurve {
+  bool wall = false;
+  int wall_index = 0;
+  bridge::Vec3 direction{0, 0, 1};
+  std::string x_dataset, y_dataset;
+};
+
+struct MicroCase {
+  fs::path micro_case;
+  std::vector<MicroParameter> params;
+  ModelCurve model;
+  std::vector<CurveSource> lab;
+  LossSettings loss;
+  std::size_t grid_points = 100;
+  CalibrationSettings search;
+  bool resume = true;
+};
+
+std::string formatValue(double v) {
+  std::ostringstream s;
+  s << std::setprecision(17) << v;
+  return s.str();
+}
+
+// The base micro case with `values` written at the parameters' keys.
+bridge::JsonDocument substituted(const bridge::JsonDocument& base, const MicroCase& c,
+                                 const std::vector<double>& values) {
+  bridge::JsonDocument doc(base.json(), base.file());
+  for (std::size_t i = 0; i < c.params.size(); ++i)
+    for (const auto& path : c.params[i].set) doc.applySet(path + "=" + formatValue(values[i]));
+  return doc;
+}
+
+const bridge::CaseKind& microKind(const bridge::JsonDocument& base) {
+  const std::string kind = base.root().string("kind");
+  static const std::vector<bridge::CaseKind> kinds = micro::caseKinds();
+  std::string known;
+  for (const auto& k : kinds) {
+    if (k.kind == kind) return k;
+    known += (known.empty() ? "" : ", ") + k.kind;
+  }
+  throw bridge::InputError(
+      base.file(), "/kind",
+      "'" + kind + "' is not a micro case kind of this build (known: " + (known.empty() ? "none" : known) + ")");
+}
+
+MicroCase readMicroCase(const bridge::JsonDocument& doc) {
+  const JsonReader root = doc.root();
+  const fs::path dir = caseDirectory(doc);
+  MicroCase c;
+  c.micro_case = dir / root.string("micro_case");
+  const auto params = root.objects("parameters", true);
+  if (params.empty()) root.fail("parameters", "at least one parameter is required");
+  for (const auto& p : params) {
+    MicroParameter mp;
+    const std::string name = p.string("name");
+    const auto b = p.numbers("bounds", Check::Finite, 2);
+    if (b.size() != 2 || !(b[1] > b[0])) p.fail("bounds", "must be [lower, upper] with upper > lower");
+    mp.param = makeParameter(name, b[0], b[1]);
+    const std::string scale = p.choice("scale", {"auto", "log", "linear"}, "auto");
+    if (scale == "log") {
+      if (!(b[0] > 0.0)) p.fail("scale", "a log scale needs a positive lower bound");
+      mp.param.log_scale = true;
+    } else if (scale == "linear") {
+      mp.param.log_scale = false;
+    }
+    const json& set = p.raw("set");
+    if (set.is_string()) {
+      mp.set.push_back(set.get<std::string>());
+    } else if (set.is_array() && !set.empty()) {
+      for (const auto& s : set) {
+        if (!s.is_string()) p.fail("set", "must be a key path or an array of key paths");
+        mp.set.push_back(s.get<std::string>());
+      }
+    } else {
+      p.fail("set", "must be a key path (\"materials.grain.normal_stiffness_N_m\") or an array of them");
+    }
+    c.params.push_back(mp);
+  }
+  const JsonReader m = root.object("model_curve");
+  if (auto w = m.optionalObject("wall")) {
+    c.model.wall = true;
+    c.model.wall_index = static_cast<int>(w->integer("index", 0));
+    c.model.direction = w->vec3("direction");
+    if (!(c.model.direction.norm() > 0.0)) w->fail("direction", "must be a non-zero vector");
+    if (m.has("x_dataset") || m.has("y_dataset")) m.fail("wall", "give either \"wall\" or datasets, not both");
+  } else {
+    c.model.x_dataset = m.string("x_dataset", "/curves/axial/displacement_m");
+    c.model.y_dataset = m.string("y_dataset", "/curves/axial/force_N");
+  }
+  const auto curves = root.objects("curves", true);
+  if (curves.empty()) root.fail("curves", "at least one lab curve is required");
+  for (std::size_t i = 0; i < curves.size(); ++i) {
+    c.lab.push_back(readCurveSource(curves[i], {"displacement_m", "force_N", "/curves/axial", "", true}, i, dir));
+    if (c.lab.back().request.path != bridge::CurvePath::Monotonic)
+      curves[i].fail("path", "fit.micro compares monotonic loading curves (the model is interpolated in x)");
+  }
+  c.loss = readLoss(root.optionalObject("objective"), c.grid_points);
+  c.search.seed = static_cast<unsigned long>(root.integer("seed", 1, 0));
+  if (auto s = root.optionalObject("search")) {
+    c.search.initial_samples = static_cast<std::size_t>(s->integer("initial_samples", 8, 1));
+    c.search.starts = static_cast<std::size_t>(s->integer("starts", 2, 0));
+    if (c.search.starts > c.search.initial_samples) s->fail("starts", "cannot exceed initial_samples");
+    c.search.local_algorithm = s->string("local", "LN_BOBYQA");
+    if (!isNloptAlgorithm(c.search.local_algorithm, false))
+      s->fail("local", "unknown local algorithm '" + c.search.local_algorithm + "' (LN_BOBYQA, LN_SBPLX, ...)");
+    c.search.local_max_evaluations = static_cast<int>(s->integer("local_max_evaluations", 40, 1));
+    c.search.xtol_rel = s->number("xtol_rel", 1e-3, Check::Positive);
+    c.search.penalty = s->number("penalty", 1e6, Check::Positive);
+  }
+  c.search.max_new_evaluations = root.integer("max_new_evaluations", -1, -1);
+  c.search.keep_evaluation_folders = root.boolean("keep_evaluation_folders", false);
+  c.resume = root.boolean("resume", true);
+  return c;
+}
+
+// The model curve of a finished micro run.
+bridge::Curve readModelCurve(const fs::path& h5, const ModelCurve& m) {
+  bridge::CurveRequest req;
+  req.min_points = 3;
+  req.path = bridge::CurvePath::Cyclic;  // a DEM wall may jitter back by round-off; interpolation checks below
+  return m.wall ? bridge::readWallCurveH5(h5, m.wall_index, m.direction, req)
+                : bridge::readCurveH5(h5, m.x_dataset, m.y_dataset, req);
+}
+
+// Model force at the lab grid's displacements (linear interpolation in x on the
+// model's loading curve, made monotone by a running maximum of x).
+std::vector<double> modelAt(const bridge::Curve& model, const std::vector<double>& x) {
+  std::vector<double> mx, my;
+  for (std::size_t i = 0; i < model.size(); ++i) {
+    if (!mx.empty() && model.x[i] <= mx.back()) continue;
+    mx.push_back(model.x[i]);
+    my.push_back(model.y[i]);
+  }
+  std::vector<double> out;
+  for (double xi : x) {
+    if (mx.size() < 2 || xi > mx.back() + 1e-12 * std::abs(mx.back()) || xi < mx.front())
+      throw std::runtime_error("the micro run's curve does not cover the lab curve (x = " + formatValue(xi) +
+                               " outside [" + formatValue(mx.empty() ? 0.0 : mx.front()) + ", " +
+                               formatValue(mx.empty() ? 0.0 : mx.back()) + "]): lengthen the micro run");
+    const auto it = std::lower_bound(mx.begin(), mx.end(), xi);
+    const std::size_t j =
+        it == mx.begin() ? 1 : std::min<std::size_t>(static_cast<std::size_t>(it - mx.begin()), mx.size() - 1);
+    const double t = (xi - mx[j - 1]) / (mx[j] - mx[j - 1]);
+    out.push_back(my[j - 1] + t * (my[j] - my[j - 1]));
+  }
+  return out;
+}
+
+struct MicroObjective {
+  const bridge::JsonDocument* base;
+  const bridge::CaseKind* kind;
+  const MicroCase* c;
+  std::vector<PathGrid> lab;
+
+  // Misfit between a model curve and the lab grids (same loss as the macro fit).
+  double misfitOf(const bridge::Curve& model) const {
+    double total = 0.0, n = 0.0;
+    for (const auto& g : lab) {
+      const auto y = modelAt(model, g.x);
+      const double a = g.effectivePoints() / static_cast<double>(g.x.size());
+      for (std::size_t i = 0; i < y.size(); ++i) total += a * lossValue((y[i] - g.y[i]) / g.scale, c->loss);
+      n += g.effectivePoints();
+    }
+    return total / n;
+  }
+
+  double operator()(const std::vector<double>& values, const fs::path& scratch) const {
+    bridge::JsonDocument doc = substituted(*base, *c, values);
+    bridge::RunContext ctx;
+    ctx.outdir = scratch;
+    ctx.threads = 1;  // parallelism is across evaluations
+    ctx.case_file = base->file();
+    bridge::RunOutcome outcome;
+    try {
+      outcome = kind->run(doc, ctx);
+    } catch (const bridge::NumericalError& e) {
+      throw std::runtime_error(std::string("numerical failure: ") + e.what());
+    }
+    if (outcome.status != bridge::RunOutcome::Status::Ok)
+      throw std::runtime_error("numerical failure: " + outcome.message);
+    return misfitOf(readModelCurve(scratch / "result.h5", c->model));
+  }
+};
+
+std::vector<PathGrid> labGrids(const MicroCase& c) {
+  std::vector<PathGrid> grids;
+  for (const auto& s : c.lab) {
+    PathGrid g = resampleOnPath(loadCurve(s), c.grid_points);
+    g.replicate = s.replicate;
+    grids.push_back(std::move(g));
+  }
+  return grids;
+}
+
+std::vector<double> midpoint(const MicroCase& c) {
+  std::vector<double> v;
+  for (const auto& p : c.params) v.push_back(fromUnit(p.param, 0.5));
+  return v;
+}
+
+void checkCase(const bridge::JsonDocument& doc) {
+  const MicroCase c = readMicroCase(doc);
+  labGrids(c);
+  const bridge::JsonDocument base = bridge::JsonDocument::load(c.micro_case);
+  const auto& kind = microKind(base);
+  // The base case with parameters substituted must be a valid micro case.
+  const bridge::JsonDocument trial = substituted(base, c, midpoint(c));
+  kind.check(trial);
+  if (trial.root().has("description")) trial.root().string("description");
+  trial.root().string("format");
+  trial.root().string("kind");
+  trial.finish();
+}
+
+// A hash of the case that identifies its evaluations: the effective case
+// without the keys that only steer a session (budget, resume, threads).
+std::string caseHash(const bridge::JsonDocument& doc, const fs::path& micro_case) {
+  json j = doc.json();
+  for (const char* k : {"max_new_evaluations", "resume", "keep_evaluation_folders", "description"}) j.erase(k);
+  return sha256Hex(j.dump() + "\n" + sha256File(micro_case));
+}
+
+bridge::RunOutcome runCase(const bridge::JsonDocument& doc, const bridge::RunContext& ctx) {
+  const MicroCase c = readMicroCase(doc);
+  const bridge::JsonDocument base = bridge::JsonDocument::load(c.micro_case);
+  const auto& kind = microKind(base);
+  MicroObjective objective{&base, &kind, &c, labGrids(c)};
+
+  std::vector<Parameter> params;
+  std::vector<std::string> names;
+  for (const auto& p : c.params) params.push_back(p.param), names.push_back(p.param.name);
+  EvaluationLog log(ctx.outdir / "evaluations.jsonl", caseHash(doc, c.micro_case), names, c.resume);
+  CalibrationSettings search = c.search;
+  search.threads = ctx.threads;
+  bridge::Progress progress(ctx.progress, "fit.micro");
+  const auto result = calibrate(
+      params, [&](const std::vector<double>& v, const fs::path& scratch) { return objective(v, scratch); }, search, log,
+      ctx.outdir / "evaluations", &progress);
+  progress.finish();
+  std::error_code ec;
+  if (!c.search.keep_evaluation_folders) fs::remove(ctx.outdir / "evaluations", ec);
+
+  bridge::RunOutcome outcome;
+  json res;
+  res["evaluation_log"] = "evaluations.jsonl";
+  res["new_evaluations"] = result.new_evaluations;
+  res["reused_evaluations"] = result.reused_evaluations;
+  res["resumed_from_log"] = log.resumed();
+  res["failed_evaluations"] = result.failed_evaluations;
+  res["interrupted"] = result.interrupted;
+  res["local_status"] = result.local_status;
+  res["calibration_wall_time_s"] = result.wall_time_s;
+  res["micro_case"] = {{"file", c.micro_case.string()}, {"sha256", sha256File(c.micro_case)}, {"kind", kind.kind}};
+  json inputs = json::array();
+  for (const auto& s : c.lab) inputs.push_back({{"file", s.file.string()}, {"sha256", sha256File(s.file)}});
+  res["inputs"] = inputs;
+  res["software"] = std::string("gabion ") + gabion::kVersion;
+  if (result.best.empty()) {
+    outcome.status = bridge::RunOutcome::Status::NumericalFailure;
+    outcome.message = result.interrupted ? "interrupted before any successful evaluation; run again to resume"
+                                         : "every micro evaluation failed (see evaluations.jsonl)";
+    outcome.results["fit_micro"] = res;
+    return outcome;
+  }
+  json best = json::object();
+  for (std::size_t i = 0; i < params.size(); ++i) best[params[i].name] = result.best[i];
+  res["parameters"] = best;
+  res["misfit"] = result.best_error;
+
+  // Re-run the best point once, kept, to report its curve and plot it.
+  const fs::path best_dir = ctx.outdir / "best";
+  fs::remove_all(best_dir, ec);
+  fs::create_directories(best_dir);
+  objective(result.best, best_dir);
+  const bridge::Curve model = readModelCurve(best_dir / "result.h5", c.model);
+  double sum = 0.0, count = 0.0;
+  bridge::PlotSpec plot;
+  plot.title = "fit.micro: lab curves and the micro run at the best parameters";
+  plot.x_label = "displacement (m)";
+  plot.y_label = "force (N)";
+  for (std::size_t k = 0; k < objective.lab.size(); ++k) {
+    const auto& g = objective.lab[k];
+    const auto y = modelAt(model, g.x);
+    for (std::size_t i = 0; i < y.size(); ++i) sum += std::pow((y[i] - g.y[i]) / g.scale, 2), count += 1.0;
+    plot.series.push_back({"lab curve " + std::to_string(k + 1), g.x, g.y, bridge::PlotSeries::Style::Markers});
+  }
+  plot.series.push_back({"micro run (best)", model.x, model.y, bridge::PlotSeries::Style::Line});
+  res["nrms"] = std::sqrt(sum / count);
+  res["best_run"] = "best/result.h5";
+  bridge::writePlotPng(ctx.outdir / "fit_micro.png", plot);
+  res["plots"] = json::array({"fit_micro.png"});
+  outcome.results["fit_micro"] = res;
+  return outcome;
+}
+
+}  // namespace
+
+bridge::CaseKind fitMicroCaseKind() {
+  return {"fit.micro",
+          "identify micro contact parameters so that a micro case matches lab curves (DEM in the loop, resumable)",
+          checkCase, runCase};
+}
+
+}  // namespace gabion::fitting

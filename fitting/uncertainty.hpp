@@ -1,0 +1,43 @@
+#pragma once
+/// \file
+/// 95 % confidence intervals of fitted law parameters: from the Jacobian at the
+/// optimum (linearised least squares), from the profile likelihood, and from the
+/// spread of replicate fits (docs/fitting.md, "Uncertainty").
+#include <vector>
+
+#include "fitting/curve_model.hpp"
+#include "fitting/optimizer.hpp"
+
+namespace gabion::fitting {
+
+/// A two-sided interval; both ends NaN when the parameter is not identifiable.
+/// `at_bound` when the profile interval reached a search bound on either side.
+struct Interval {
+  double lower, upper;
+  bool at_bound = false;
+};
+
+/// Two-sided 95 % quantile of Student's t with `dof` degrees of freedom (t_{0.975}).
+double studentT975(double dof);
+/// 95 % quantile of chi-square with one degree of freedom (3.841).
+constexpr double kChiSquare1_95 = 3.841458820694124;
+
+/// Linearised intervals: cov = s^2 (J^T W J)^-1 with J = d r / d theta (central
+/// differences), W = a_c w_i (effective-point factor times the robust IRLS weight
+/// at the optimum), s^2 = residualVariance (on the original points, since
+/// resampling smooths the noise); theta +- t_{n_eff-p} sqrt(cov).
+/// Also returns the standard errors in `stderr_out` (NaN when singular).
+std::vector<Interval> jacobianIntervals(const CurveSet& set, const std::vector<Parameter>& params,
+                                        const std::vector<double>& theta, std::vector<double>& stderr_out);
+
+/// Profile-likelihood intervals: for each parameter, the values where
+/// (S_prof - S_min) / s^2 = chi2_{1,0.95}, with S_prof the misfit minimised over
+/// the other parameters (local NLopt search), S_min the misfit at the optimum and
+/// s^2 = residualVariance (the likelihood ratio with the noise variance estimated).
+/// `initial_steps` (physical units; e.g. the Jacobian standard errors) start the
+/// outward search. Adds the evaluations it spends to `evaluations`.
+std::vector<Interval> profileIntervals(const CurveSet& set, const std::vector<Parameter>& params,
+                                       const std::vector<double>& theta, const std::vector<double>& initial_steps,
+                                       const OptimizerSettings& settings, int& evaluations);
+
+}  // namespace gabion::fitting

@@ -1,0 +1,120 @@
+// The `fit` case through the gabion command line: bad curve data exits with
+// code 2 and names the file, line and column; a good case writes a valid
+// law.json with provenance, plots and the summary entries.
+#include <gtest/gtest.h>
+
+#include <fstream>
+
+#include "bridge/law_file.hpp"
+#include "tests/support/run_gabion.hpp"
+
+namespace gabion::fitting {
+namespace {
+
+namespace fs = std::filesystem;
+using nlohmann::json;
+using testing::runGabion;
+
+const fs::path kData = fs::path(GABION_TEST_DATA_DIR) / "fitting";
+const fs::path kCases = fs::path(GABION_SOURCE_DIR) / "cases";
+
+// A fit case of the axial law from one CSV curve, completed by the example base law.
+fs::path writeAxialCase(const fs::path& dir, const fs::path& csv) {
+  const json c = {
+      {"format", "gabion.case/1"},
+      {"kind", "fit"},
+      {"material", {{"name", "cell"}}},
+      {"base_law", {{"file", (kCases / "data/fit/illustrative_law.json").string()}, {"material", "limestone_cell"}}},
+      {"axial",
+       {{"curves", {{{"file", csv.string()}}}},
+        {"bounds",
+         {{"stiffness_N_m", {1e5, 1e8}}, {"yield_force_N", {1e3, 1e6}}, {"hardening_stiffness_N_m", {0, 1e6}}}}}}};
+  const fs::path file = dir / "case.json";
+  std::ofstream(file) << c.dump(2);
+  return file;
+}
+
+TEST(FitCli, BadCurveDataExitsTwoNamingFileLineAndColumn) {
+  const auto dir = testing::scratchDir("fit_cli_bad");
+  const std::vector<std::pair<std::string, std::string>> cases = {
+      {"empty.csv", "empty file"},
+      {"non_numeric.csv", "line 4, column 2 (force_N): not a number"},
+      {"unsorted.csv", "line 5, column 1 (displacement_m): unsorted"},
+      {"nan.csv", "line 5, column 2 (force_N): value is not finite"},
+      {"wrong_units.csv", "line 1, column 1 (displacement_mm): column 'displacement_mm' has the wrong unit"},
+      {"too_short.csv", "curve too short"}};
+  for (const auto& [file, message] : cases) {
+    const auto c = writeAxialCase(dir, kData / file);
+    for (const char* cmd : {"check", "run"}) {
+      const auto r = runGabion(std::string(cmd) + " " + c.string() +
+                               (std::string(cmd) == "run" ? " -q -o " + (dir / "out").string() : ""));
+      EXPECT_EQ(r.exit_code, 2) << file << ": " << r.output;
+      EXPECT_NE(r.output.find(file), std::string::npos) << r.output;
+      EXPECT_NE(r.output.find(message), std::string::npos) << r.output;
+    }
+  }
+}
+
+TEST(FitCli, CaseErrorsNameThePointer) {
+  const auto dir = testing::scratchDir("fit_cli_pointer");
+  json c = json::parse(std::ifstream(kCases / "fit_lab_cc.json"));
+  c["base_law"]["file"] = (kCases / "data/fit/illustrative_law.json").string();
+  for (auto& curve : c["axial"]["curves"]) curve["file"] = (kCases / curve["file"].get<std::string>()).string();
+  for (auto& curve : c["lateral"]["curves"]) curve["file"] = (kCases / curve["file"].get<std::string>()).string();
+  c["optimizer"]["local"] = "LN_MAGIC";
+  std::ofstream(dir / "c.json") << c.dump();
+  auto r = runGabion("check " + (dir / "c.json").string());
+  EXPECT_EQ(r.exit_code, 2);
+  EXPECT_NE(r.output.find("/optimizer/local"), std::string::npos) << r.output;
+  c["optimizer"]["local"] = "LN_BOBYQA";
+  c["axial"]["bounds"]["stiffness_N_m"] = {1e6, 1e5};
+  std::ofstream(dir / "c.json") << c.dump();
+  r = runGabion("check " + (dir / "c.json").string());
+  EXPECT_EQ(r.exit_code, 2);
+  EXPECT_NE(r.output.find("/axial/bounds/stiffness_N_m"), std::string::npos) << r.output;
+  c["axial"]["bounds"]["stiffness_N_m"] = {1e5, 1e8};
+  c["axial"]["curves"][0]["velocity_m_s"] = 3;  // not a key of axial curves
+  std::ofstream(dir / "c.json") << c.dump();
+  r = runGabion("check " + (dir / "c.json").string());
+  EXPECT_EQ(r.exit_code, 2);
+  EXPECT_NE(r.output.find("/axial/curves/0/velocity_m_s"), std::string::npos) << r.output;
+}
+
+TEST(FitCli, ExampleCaseWritesLawSummaryAndPlots) {
+  const auto out = testing::scratchDir("fit_cli_run");
+  const auto r = runGabion("run " + (kCases / "fit_cell_laws.json").string() + " -q -o " + out.string());
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  const auto law = bridge::loadLawFile(out / "law.json");  // validates gabion.law/1
+  const auto& m = law.materials.at("limestone_cell");
+  EXPECT_EQ(m.provenance.at("status"), "fitted");
+  // The synthetic truth of cases/data/fit/generate.py.
+  EXPECT_EQ(m.axial.model, bridge::AxialModel::Bilinear);
+  EXPECT_NEAR(m.axial.stiffness_N_m, 4e6, 0.02 * 4e6);
+  EXPECT_NEAR(m.axial.yield_force_N, 6e4, 0.02 * 6e4);
+  EXPECT_NEAR(m.lateral.reaction_coefficient, 0.4, 0.01);
+  EXPECT_NEAR(m.interface.friction, 0.55, 0.01);
+  EXPECT_EQ(m.impact.model, bridge::AxialModel::ElasticPerfectlyPlastic);
+  EXPECT_NEAR(m.impact.yield_force_N, 1.2e5, 0.02 * 1.2e5);
+  const auto& fitted = m.provenance.at("fitted");
+  EXPECT_EQ(fitted.at("axial").at("inputs").at(0).at("sha256").get<std::string>().size(), 64u);
+  EXPECT_TRUE(fitted.at("axial").at("parameters").at("stiffness_N_m").at("profile_95").is_array());
+  const json summary = json::parse(std::ifstream(out / "summary.json"));
+  for (const char* t : {"axial", "lateral", "interface", "impact"}) {
+    EXPECT_GT(summary.at("fit").at(t).at("evaluations").get<int>(), 0) << t;
+    EXPECT_LT(summary.at("fit").at(t).at("wall_time_s").get<double>(), 1.0) << t;
+    EXPECT_TRUE(fs::exists(out / (std::string("fit_") + t + ".png"))) << t;
+  }
+}
+
+TEST(FitCli, PartialFitFromIllustrativeBaseIsIllustrative) {
+  const auto out = testing::scratchDir("fit_cli_partial");
+  const auto r = runGabion("run " + (kCases / "fit_lab_cc.json").string() + " -q -o " + out.string());
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  const auto law = bridge::loadLawFile(out / "law.json");
+  const auto& m = law.materials.at("limestone_cell");
+  EXPECT_EQ(m.provenance.at("status"), "illustrative");
+  EXPECT_EQ(m.provenance.at("from_base_law").at("laws"), json({"interface", "impact"}));
+}
+
+}  // namespace
+}  // namespace gabion::fitting
