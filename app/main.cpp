@@ -38,16 +38,8 @@ struct Options {
 std::pair<JsonDocument, const gabion::bridge::CaseKind*> loadAndCheck(const Options& o) {
   JsonDocument doc = JsonDocument::load(o.case_file);
   for (const auto& s : o.sets) doc.applySet(s);
-  const auto root = doc.root();
-  const std::string format = root.string("format");
-  if (format != "gabion.case/1") root.fail("format", "expected 'gabion.case/1', got '" + format + "'");
-  const std::string kind = root.string("kind");
-  const auto* k = gabion::app::findKind(kind);
-  if (k == nullptr) root.fail("kind", "unknown case kind '" + kind + "' (known: " + gabion::app::kindList() + ")");
-  k->check(doc);
-  if (root.has("description")) root.string("description");
-  doc.finish();
-  return {std::move(doc), k};
+  const auto* kind = &gabion::app::checkCase(doc);
+  return {std::move(doc), kind};
 }
 
 int commandCheck(const Options& o) {

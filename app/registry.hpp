@@ -14,4 +14,9 @@ const bridge::CaseKind* findKind(const std::string& kind);
 /// "a, b, c" for messages.
 std::string kindList();
 
+/// Validates a whole case: "format" (gabion.case/1), "kind" (a registered
+/// kind, or `expected_kind` when given), the optional "description", the
+/// kind's own keys, and no unknown key. Throws InputError; returns the kind.
+const bridge::CaseKind& checkCase(const bridge::JsonDocument& doc, const std::string& expected_kind = "");
+
 }  // namespace gabion::app
