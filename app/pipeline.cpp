@@ -3,7 +3,6 @@
 #include <algorithm>
 #include <cmath>
 #include <filesystem>
-#include <fstream>
 #include <iomanip>
 #include <sstream>
 
@@ -390,7 +389,7 @@ bridge::RunOutcome runStages(const JsonDocument& doc, const bridge::RunContext& 
                      {"settled_height_m", top},
                      {"settled_porosity", porosity},
                      {"mass_kg", cell_mass},
-                     {"settle_kinetic_energy_J", settle.results.contains("energy") ? settle.results["energy"] : json()},
+                     {"settle_energy_J", settle.results.at("energy")},
                      {"seating_m", curves.seating_m}};
   results["fit"] = fit.results;
   results["law_file"] = "law.json";
