@@ -56,6 +56,7 @@ struct Engine::Wall {
 struct Engine::WorkerScratch {
   std::vector<double> fx, fy, fz, tx, ty, tz;
   std::vector<std::uint32_t> touch_i, touch_k;
+  std::vector<std::uint32_t> rows;  // neighbour-list rows built by this worker
   std::uint32_t lo = 0, hi = 0;
   ContactEnergy energy;
   std::size_t contacts = 0;
@@ -79,6 +80,15 @@ Engine::Engine(const Scene& scene, int threads) {
   laws_.resize(nmat_ * nmat_);
   for (std::size_t a = 0; a < nmat_; ++a)
     for (std::size_t b = 0; b < nmat_; ++b) laws_[a * nmat_ + b] = mixMaterials(materials_[a], materials_[b]);
+  for (const PairLaw& l : laws_) {
+    law_kn_.push_back(l.normal.stiffness_N_m);
+    law_flim_.push_back(l.normal.force_limit_N);
+    law_ks_.push_back(l.tangential.stiffness_N_m);
+    law_mu_.push_back(l.tangential.friction);
+    law_zeta_.push_back(l.damping_ratio);
+    any_plastic_ = any_plastic_ || std::isfinite(l.normal.force_limit_N);
+    any_viscous_ = any_viscous_ || l.damping_ratio > 0.0;
+  }
   gravity_ = scene.gravity_m_s2;
   max_overlap_ratio_ = scene.run.max_overlap_ratio;
   runaway_factor_ = scene.run.energy_runaway_factor;
@@ -107,7 +117,7 @@ Engine::Engine(const Scene& scene, int threads) {
     const Material& m = materials_[sp.material];
     const double mass = m.density_kg_m3 * 4.0 / 3.0 * kPi * sp.radius_m * sp.radius_m * sp.radius_m;
     r_[s] = sp.radius_m;
-    mat_[s] = static_cast<std::uint16_t>(sp.material);
+    mat_[s] = static_cast<std::uint32_t>(sp.material);
     if (sp.fixed) {
       setParticle(s, sp.center_m, Vec3::Zero(), Vec3::Zero());
     } else {
@@ -145,7 +155,7 @@ Engine::Engine(const Scene& scene, int threads) {
       const Vec3 arm = b.q * b.offsets[k];
       setParticle(next, b.x + arm, b.v + b.omega.cross(arm), b.omega);
       r_[next] = spec.member_radii_m[k];
-      mat_[next] = static_cast<std::uint16_t>(spec.material);
+      mat_[next] = static_cast<std::uint32_t>(spec.material);
       block_[next] = static_cast<std::int32_t>(bi);
       inv_body_mass_[next] = b.inv_mass;
       b.pids.push_back(static_cast<std::uint32_t>(next));
@@ -323,31 +333,50 @@ void Engine::rebuildNeighbourList() {
   };
 
   // 3. Half neighbour list, CSR by row; rows come out sorted by j because
-  // cells are visited in increasing index order.
+  // cells are visited in increasing index order. Each worker builds a fixed
+  // range of rows into its own buffer; the buffers are joined in worker order,
+  // so the list is the same for any thread count.
   row_begin_.assign(n_ + 1, 0);
-  nbr_.clear();
-  nbr_.reserve(8 * n_);
-  for (std::size_t i = 0; i < n_; ++i) {
-    row_begin_[i] = static_cast<std::uint32_t>(nbr_.size());
-    if (is_big_[i]) continue;
-    const std::size_t c = new_cell[i];
-    const std::size_t cx = c % nx, cy = (c / nx) % ny, cz = c / (nx * ny);
-    for (int dz = -1; dz <= 1; ++dz) {
-      if ((dz < 0 && cz == 0) || (dz > 0 && cz + 1 >= nz)) continue;
-      for (int dy = -1; dy <= 1; ++dy) {
-        if ((dy < 0 && cy == 0) || (dy > 0 && cy + 1 >= ny)) continue;
-        for (int dx = -1; dx <= 1; ++dx) {
-          if ((dx < 0 && cx == 0) || (dx > 0 && cx + 1 >= nx)) continue;
-          const std::size_t cc = ((cz + dz) * ny + (cy + dy)) * nx + (cx + dx);
-          for (std::uint32_t j = std::max<std::uint32_t>(cell_start[cc], static_cast<std::uint32_t>(i + 1));
-               j < cell_start[cc + 1]; ++j) {
-            const double ex = x_[j] - x_[i], ey = y_[j] - y_[i], ez = z_[j] - z_[i];
-            const double reach = r_[i] + r_[j] + skin_m_;
-            if (ex * ex + ey * ey + ez * ez < reach * reach && pairAllowed(i, j)) nbr_.push_back(j);
+  const std::size_t workers = scratch_.size();
+  pool_->run([&](int t) {
+    std::vector<std::uint32_t>& out = scratch_[static_cast<std::size_t>(t)].rows;
+    out.clear();
+    out.reserve(8 * n_ / workers);
+    const std::size_t i0 = n_ * static_cast<std::size_t>(t) / workers;
+    const std::size_t i1 = n_ * (static_cast<std::size_t>(t) + 1) / workers;
+    for (std::size_t i = i0; i < i1; ++i) {
+      row_begin_[i] = static_cast<std::uint32_t>(out.size());  // local offset, made global below
+      if (is_big_[i]) continue;
+      const std::size_t c = new_cell[i];
+      const std::size_t cx = c % nx, cy = (c / nx) % ny, cz = c / (nx * ny);
+      for (int dz = -1; dz <= 1; ++dz) {
+        if ((dz < 0 && cz == 0) || (dz > 0 && cz + 1 >= nz)) continue;
+        for (int dy = -1; dy <= 1; ++dy) {
+          if ((dy < 0 && cy == 0) || (dy > 0 && cy + 1 >= ny)) continue;
+          for (int dx = -1; dx <= 1; ++dx) {
+            if ((dx < 0 && cx == 0) || (dx > 0 && cx + 1 >= nx)) continue;
+            const std::size_t cc = ((cz + dz) * ny + (cy + dy)) * nx + (cx + dx);
+            for (std::uint32_t j = std::max<std::uint32_t>(cell_start[cc], static_cast<std::uint32_t>(i + 1));
+                 j < cell_start[cc + 1]; ++j) {
+              const double ex = x_[j] - x_[i], ey = y_[j] - y_[i], ez = z_[j] - z_[i];
+              const double reach = r_[i] + r_[j] + skin_m_;
+              if (ex * ex + ey * ey + ez * ez < reach * reach && pairAllowed(i, j)) out.push_back(j);
+            }
           }
         }
       }
     }
+  });
+  {
+    std::vector<std::size_t> base(workers + 1, 0);
+    for (std::size_t t = 0; t < workers; ++t) base[t + 1] = base[t] + scratch_[t].rows.size();
+    nbr_.resize(base[workers]);
+    pool_->run([&](int t) {
+      const auto tt = static_cast<std::size_t>(t);
+      const std::size_t i0 = n_ * tt / workers, i1 = n_ * (tt + 1) / workers;
+      for (std::size_t i = i0; i < i1; ++i) row_begin_[i] += static_cast<std::uint32_t>(base[tt]);
+      std::copy(scratch_[tt].rows.begin(), scratch_[tt].rows.end(), nbr_.begin() + static_cast<long>(base[tt]));
+    });
   }
   row_begin_[n_] = static_cast<std::uint32_t>(nbr_.size());
   hist_.resize(nbr_.size());
@@ -421,14 +450,25 @@ void Engine::rebuildNeighbourList() {
   }
 
   // 5. Reference positions for the displacement test; row partitions with
-  // equal pair counts for the workers (fixed for a given thread count).
+  // equal estimated work for the workers: one unit per list entry (touch
+  // scan) plus kTouchWeight per pair that touched at the last step (contact
+  // law). They depend only on the state, so runs stay deterministic for a
+  // given thread count.
   x0_ = x_, y0_ = y_, z0_ = z_;
   const std::size_t T = scratch_.size();
   part_begin_.assign(T + 1, static_cast<std::uint32_t>(n_));
   part_begin_[0] = 0;
-  std::size_t t = 1;
-  for (std::size_t i = 0; i < n_ && t < T; ++i)
-    if (row_begin_[i] >= nbr_.size() * t / T) part_begin_[t++] = static_cast<std::uint32_t>(i);
+  if (T > 1) {
+    constexpr std::size_t kTouchWeight = 3;
+    std::size_t total = nbr_.size();
+    for (std::size_t k = 0; k < nbr_.size(); ++k) total += hist_.stamp[k] == last ? kTouchWeight : 0;
+    std::size_t t = 1, acc = 0;
+    for (std::size_t i = 0; i < n_ && t < T; ++i) {
+      while (t < T && acc >= total * t / T) part_begin_[t++] = static_cast<std::uint32_t>(i);
+      for (std::uint32_t k = row_begin_[i]; k < row_begin_[i + 1]; ++k)
+        acc += 1 + (hist_.stamp[k] == last ? kTouchWeight : 0);
+    }
+  }
   for (auto& s : scratch_) {
     s.touch_i.resize(nbr_.size() + 1);
     s.touch_k.resize(nbr_.size() + 1);
@@ -442,7 +482,7 @@ void Engine::reorderParticles(const std::vector<std::uint32_t>& order) {
     permute(*v, order, tmp);
   std::vector<std::int32_t> ti;
   permute(block_, order, ti);
-  std::vector<std::uint16_t> tm;
+  std::vector<std::uint32_t> tm;
   permute(mat_, order, tm);
   std::vector<std::uint8_t> tb;
   permute(is_big_, order, tb);
@@ -452,34 +492,236 @@ void Engine::reorderParticles(const std::vector<std::uint32_t>& order) {
 }
 
 // ---------------------------------------------------------------------------
+// The contact law on the touching pairs of the Verlet list, vectorised: a
+// branch-free SIMD pass evaluates a chunk of pairs (the laws of
+// micro/contact.hpp and bridge/laws/contact_*.hpp, written out with selects
+// instead of branches) into small per-pair buffers, then a scalar pass adds
+// the forces to the bodies in pair order (a body can appear twice in a SIMD
+// chunk, so this part cannot be vectorised; its order keeps the sums
+// deterministic). The rare features (F_lim, viscous damping) and the stored
+// energy are compile-time switches, so the settling case pays for none.
+
+namespace {
+struct KernelIn {
+  const double *X, *Y, *Z, *R, *VX, *VY, *VZ, *WX, *WY, *WZ, *IM;
+  const std::uint32_t* MAT;
+  const std::uint32_t* NBR;
+  const double *KN, *FLIM, *KS, *MU, *ZETA;
+  double *UX, *UY, *UZ, *PL, *VI;
+  std::int64_t* STAMP;
+  std::size_t nmat;
+  double dt, ratio;
+  std::int64_t now;
+};
+struct KernelOut {
+  double *FX, *FY, *FZ, *TX, *TY, *TZ;
+  ContactEnergy* energy;
+  std::size_t contacts = 0;
+  std::uint32_t hi = 0;  // largest particle index written
+  bool failed = false;
+  std::uint32_t fail_i = 0, fail_j = 0;
+  double fail_ratio = 0.0;
+};
+
+constexpr std::size_t kChunk = 256;
+
+template <bool kMeasure, bool kViscous, bool kPlastic>
+void touchingPairs(const KernelIn& in, const std::uint32_t* ti, const std::uint32_t* tk, std::size_t m,
+                   KernelOut& out) {
+  const double *__restrict X = in.X, *__restrict Y = in.Y, *__restrict Z = in.Z, *__restrict R = in.R;
+  const double *__restrict VX = in.VX, *__restrict VY = in.VY, *__restrict VZ = in.VZ;
+  const double *__restrict WX = in.WX, *__restrict WY = in.WY, *__restrict WZ = in.WZ, *__restrict IM = in.IM;
+  const std::uint32_t* __restrict MAT = in.MAT;
+  const std::uint32_t* __restrict NBR = in.NBR;
+  const double *__restrict KN = in.KN, *__restrict FLIM = in.FLIM, *__restrict KS = in.KS, *__restrict MU = in.MU,
+               *__restrict ZETA = in.ZETA;
+  double *__restrict UX = in.UX, *__restrict UY = in.UY, *__restrict UZ = in.UZ, *__restrict PL = in.PL,
+         *__restrict VI = in.VI;
+  std::int64_t* __restrict STAMP = in.STAMP;
+  const std::size_t nmat = in.nmat;
+  const double dt = in.dt, ratio = in.ratio;
+  const std::int64_t now = in.now, last = in.now - 1;
+  alignas(64) double bfx[kChunk], bfy[kChunk], bfz[kChunk];
+  alignas(64) double bix[kChunk], biy[kChunk], biz[kChunk];
+  alignas(64) double bjx[kChunk], bjy[kChunk], bjz[kChunk];
+  // per-pair energy increments (J) and flags, summed in pair order below
+  alignas(64) double bfr[kChunk], bpl[kChunk], bvi[kChunk], bel[kChunk], bon[kChunk], bbad[kChunk];
+  double friction = 0.0, plastic_w = 0.0, viscous_w = 0.0, elastic = 0.0;
+  for (std::size_t q0 = 0; q0 < m; q0 += kChunk) {
+    const std::size_t nq = std::min(kChunk, m - q0);
+    const std::uint32_t* __restrict ci = ti + q0;
+    const std::uint32_t* __restrict ck = tk + q0;
+#pragma omp simd
+    for (std::size_t q = 0; q < nq; ++q) {
+      const std::uint32_t i = ci[q], k = ck[q], j = NBR[k];
+      const double ex = X[j] - X[i], ey = Y[j] - Y[i], ez = Z[j] - Z[i];
+      const double d = std::sqrt(ex * ex + ey * ey + ez * ez);
+      const double ri = R[i], rj = R[j];
+      const double overlap = ri + rj - d;
+      // Pass 1 found d < ri + rj; rounding may still give overlap <= 0: such a
+      // pair does nothing (no force, history stamp unchanged).
+      const bool act = overlap > 0.0;
+      const double on = act ? 1.0 : 0.0;
+      const double inv = d > 0.0 ? 1.0 / d : 0.0;
+      const double nx = d > 0.0 ? ex * inv : 0.0, ny = d > 0.0 ? ey * inv : 0.0, nz = d > 0.0 ? ez * inv : 1.0;
+      bbad[q] = act && overlap > ratio * std::min(ri, rj) ? 1.0 : 0.0;
+      const double li = ri - 0.5 * overlap, lj = rj - 0.5 * overlap;
+      // velocity of the contact point on j relative to the one on i
+      const double ax = lj * WX[j] + li * WX[i], ay = lj * WY[j] + li * WY[i], az = lj * WZ[j] + li * WZ[i];
+      const double vx = VX[j] - VX[i] - (ay * nz - az * ny), vy = VY[j] - VY[i] - (az * nx - ax * nz),
+                   vz = VZ[j] - VZ[i] - (ax * ny - ay * nx);
+      const std::size_t L = MAT[i] * nmat + MAT[j];
+      const double kn = KN[L], ks = KS[L], mu = MU[L];
+      const bool old = STAMP[k] == last;
+      double ux = old ? UX[k] : 0.0, uy = old ? UY[k] : 0.0, uz = old ? UZ[k] : 0.0;
+      const double vn = vx * nx + vy * ny + vz * nz;
+      // normal spring (bridge::normalContactForce)
+      double fel, pl_new = 0.0;
+      if constexpr (kPlastic) {
+        const double flim = FLIM[L];
+        const double pl = old ? PL[k] : 0.0;
+        const double trial = kn * (overlap - pl);
+        const bool cap = trial > flim;
+        const double dp = overlap - flim / kn;
+        fel = trial <= 0.0 ? 0.0 : (cap ? flim : trial);
+        pl_new = trial > 0.0 && cap ? dp : pl;
+        bpl[q] = act && trial > 0.0 && cap ? flim * (dp - pl) : 0.0;
+      } else {
+        const double trial = kn * overlap;
+        fel = trial > 0.0 ? trial : 0.0;
+      }
+      double fn = fel, vi_new = 0.0;
+      if constexpr (kViscous) {
+        const double zeta = ZETA[L];
+        const double vi = old ? VI[k] : 0.0;
+        const double c = 2.0 * zeta * std::sqrt(1.0 / (IM[i] + IM[j]) * kn);  // bridge::normalDampingCoefficient
+        const double fv = zeta > 0.0 ? c * -vn : vi;
+        bvi[q] = act && zeta > 0.0 ? 0.5 * (fv + vi) * (-vn) * dt : 0.0;
+        vi_new = fv;
+        fn += zeta > 0.0 ? fv : 0.0;
+      }
+      // shear history turned into the tangent plane (bridge::rotateShearIntoPlane)
+      const double un = ux * nx + uy * ny + uz * nz;
+      const double before = ux * ux + uy * uy + uz * uz;
+      const double px = ux - un * nx, py = uy - un * ny, pz = uz - un * nz;
+      const double after = px * px + py * py + pz * pz;
+      const bool turn = un != 0.0;
+      const double s = turn && after > 0.0 ? std::sqrt(before / (after > 0.0 ? after : 1.0)) : 1.0;
+      ux = turn ? px * s : ux, uy = turn ? py * s : uy, uz = turn ? pz * s : uz;
+      // Coulomb update (bridge::coulombShearUpdate)
+      const double dux = (vx - vn * nx) * dt, duy = (vy - vn * ny) * dt, duz = (vz - vn * nz) * dt;
+      const double u0x = ux, u0y = uy, u0z = uz;
+      ux += dux, uy += duy, uz += duz;
+      const double u2 = ux * ux + uy * uy + uz * uz;
+      const double umax = mu * fel / ks;
+      const bool slide = u2 > umax * umax;
+      const double sc = slide ? umax / std::sqrt(slide ? u2 : 1.0) : 1.0;
+      ux *= sc, uy *= sc, uz *= sc;
+      const double work = 0.5 * ((u0x + ux) * dux + (u0y + uy) * duy + (u0z + uz) * duz);
+      const double stored = 0.5 * (umax * umax - (u0x * u0x + u0y * u0y + u0z * u0z));
+      bfr[q] = act && slide ? ks * (work - stored) : 0.0;
+      if constexpr (kMeasure)  // bridge::normalElasticEnergy + tangentialElasticEnergy
+        bel[q] = act ? 0.5 * fel * fel / kn + 0.5 * ks * (ux * ux + uy * uy + uz * uz) : 0.0;
+      // the history of a pair that does not touch is never read (stamp)
+      UX[k] = ux, UY[k] = uy, UZ[k] = uz;
+      if constexpr (kPlastic) PL[k] = pl_new;
+      if constexpr (kViscous) VI[k] = vi_new;
+      STAMP[k] = act ? now : STAMP[k];
+      const double fx = on * (-fn * nx + ks * ux), fy = on * (-fn * ny + ks * uy), fz = on * (-fn * nz + ks * uz);
+      const double cx = ny * fz - nz * fy, cy = nz * fx - nx * fz, cz = nx * fy - ny * fx;
+      bfx[q] = fx, bfy[q] = fy, bfz[q] = fz;
+      bix[q] = li * cx, biy[q] = li * cy, biz[q] = li * cz;
+      bjx[q] = lj * cx, bjy[q] = lj * cy, bjz[q] = lj * cz;
+      bon[q] = on;
+    }
+    double active_n = 0.0, bad = 0.0;
+    double *__restrict FX = out.FX, *__restrict FY = out.FY, *__restrict FZ = out.FZ;
+    double *__restrict TX = out.TX, *__restrict TY = out.TY, *__restrict TZ = out.TZ;
+    std::uint32_t hi = out.hi;
+    for (std::size_t q = 0; q < nq; ++q) {
+      const std::uint32_t i = ci[q], j = NBR[ck[q]];
+      hi = std::max(hi, j);
+      FX[i] += bfx[q], FY[i] += bfy[q], FZ[i] += bfz[q];
+      FX[j] -= bfx[q], FY[j] -= bfy[q], FZ[j] -= bfz[q];
+      TX[i] += bix[q], TY[i] += biy[q], TZ[i] += biz[q];
+      TX[j] += bjx[q], TY[j] += bjy[q], TZ[j] += bjz[q];
+      friction += bfr[q];
+      if constexpr (kPlastic) plastic_w += bpl[q];
+      if constexpr (kViscous) viscous_w += bvi[q];
+      if constexpr (kMeasure) elastic += bel[q];
+      active_n += bon[q];
+      bad += bbad[q];
+    }
+    out.hi = hi;
+    out.contacts += static_cast<std::size_t>(active_n);
+    if (bad > 0.0 && !out.failed) {  // rare: find the first pair over the limit
+      for (std::size_t q = 0; q < nq; ++q) {
+        const std::uint32_t i = ci[q], j = NBR[ck[q]];
+        const double ex = X[j] - X[i], ey = Y[j] - Y[i], ez = Z[j] - Z[i];
+        const double overlap = R[i] + R[j] - std::sqrt(ex * ex + ey * ey + ez * ez);
+        const double rmin = std::min(R[i], R[j]);
+        if (overlap > 0.0 && overlap > ratio * rmin) {
+          out.failed = true, out.fail_i = i, out.fail_j = j, out.fail_ratio = overlap / rmin;
+          break;
+        }
+      }
+    }
+  }
+  out.energy->friction_J += friction;
+  out.energy->plastic_J += plastic_w;
+  out.energy->viscous_J += viscous_w;
+  out.energy->elastic_J += elastic;
+}
+
+using TouchingPairsFn = void (*)(const KernelIn&, const std::uint32_t*, const std::uint32_t*, std::size_t,
+                                 KernelOut&);
+TouchingPairsFn touchingPairsFor(bool measure, bool viscous, bool plastic) {
+  static const TouchingPairsFn table[8] = {
+      touchingPairs<false, false, false>, touchingPairs<false, false, true>, touchingPairs<false, true, false>,
+      touchingPairs<false, true, true>,   touchingPairs<true, false, false>,  touchingPairs<true, false, true>,
+      touchingPairs<true, true, false>,   touchingPairs<true, true, true>};
+  return table[(measure ? 4 : 0) + (viscous ? 2 : 0) + (plastic ? 1 : 0)];
+}
+}  // namespace
+
+// ---------------------------------------------------------------------------
 // computeContactForces: particle-particle contacts. Each worker takes a fixed
 // range of rows (and of the oversized-sphere pairs), writes into its own
 // force buffer, and the buffers are added in worker order: the result does
 // not depend on timing.
 
 void Engine::computeContactForces(bool measure) {
-  std::fill(fx_.begin(), fx_.end(), 0.0);
-  std::fill(fy_.begin(), fy_.end(), 0.0);
-  std::fill(fz_.begin(), fz_.end(), 0.0);
-  std::fill(tx_.begin(), tx_.end(), 0.0);
-  std::fill(ty_.begin(), ty_.end(), 0.0);
-  std::fill(tz_.begin(), tz_.end(), 0.0);
+  // Partition 0 writes the global force arrays (and clears them first, in
+  // parallel with the other partitions' work); the others write their own
+  // buffers, cleared again when they are added.
   pool_->run([this, measure](int t) { contactKernel(t, measure); });
   contacts_ = 0;
-  for (std::size_t t = 0; t < scratch_.size(); ++t) {
-    WorkerScratch& s = scratch_[t];
+  const std::size_t workers = scratch_.size();
+  for (std::size_t t = 0; t < workers; ++t) {
+    const WorkerScratch& s = scratch_[t];
     friction_ += s.energy.friction_J;
     plastic_ += s.energy.plastic_J;
     viscous_ += s.energy.viscous_J;
     if (measure) elastic_ += s.energy.elastic_J;
     contacts_ += s.contacts;
-    if (t > 0 && s.lo <= s.hi) {
-      for (std::uint32_t i = s.lo; i <= s.hi; ++i) {
-        fx_[i] += s.fx[i], fy_[i] += s.fy[i], fz_[i] += s.fz[i];
-        tx_[i] += s.tx[i], ty_[i] += s.ty[i], tz_[i] += s.tz[i];
-        s.fx[i] = s.fy[i] = s.fz[i] = s.tx[i] = s.ty[i] = s.tz[i] = 0.0;
+  }
+  if (workers > 1) {
+    // Add the buffers in parallel over particle ranges; for each particle the
+    // buffers are added in worker order, as a serial sum would.
+    pool_->run([this, workers](int part) {
+      const auto p = static_cast<std::size_t>(part);
+      const std::size_t b = n_ * p / workers, e = n_ * (p + 1) / workers;
+      for (std::size_t t = 1; t < workers; ++t) {
+        WorkerScratch& s = scratch_[t];
+        if (s.lo > s.hi) continue;
+        const std::size_t lo = std::max<std::size_t>(b, s.lo), hi = std::min<std::size_t>(e, s.hi + std::size_t{1});
+        for (std::size_t i = lo; i < hi; ++i) {
+          fx_[i] += s.fx[i], fy_[i] += s.fy[i], fz_[i] += s.fz[i];
+          tx_[i] += s.tx[i], ty_[i] += s.ty[i], tz_[i] += s.tz[i];
+          s.fx[i] = s.fy[i] = s.fz[i] = s.tx[i] = s.ty[i] = s.tz[i] = 0.0;
+        }
       }
-    }
+    });
   }
   for (const WorkerScratch& s : scratch_)
     if (s.failed) {
@@ -499,6 +741,8 @@ void Engine::contactKernel(int t, bool measure) {
   s.failed = false;
   s.lo = static_cast<std::uint32_t>(n_);
   s.hi = 0;
+  if (t == 0)
+    for (auto* v : {&fx_, &fy_, &fz_, &tx_, &ty_, &tz_}) std::fill(v->begin(), v->end(), 0.0);
   double* const FX = t == 0 ? fx_.data() : s.fx.data();
   double* const FY = t == 0 ? fy_.data() : s.fy.data();
   double* const FZ = t == 0 ? fz_.data() : s.fz.data();
@@ -516,7 +760,7 @@ void Engine::contactKernel(int t, bool measure) {
   const double* __restrict const WY = wy_.data();
   const double* __restrict const WZ = wz_.data();
   const double* __restrict const IM = inv_body_mass_.data();
-  const std::uint16_t* __restrict const MAT = mat_.data();
+  const std::uint32_t* __restrict const MAT = mat_.data();
   const PairLaw* __restrict const LAWS = laws_.data();
   const std::size_t nmat = nmat_;
   const std::int64_t now = step_;
@@ -580,7 +824,15 @@ void Engine::contactKernel(int t, bool measure) {
     s.hi = std::max(s.hi, j);
     ++s.contacts;
   };
-  for (std::size_t q = 0; q < m; ++q) contact(ti[q], nbr_[tk[q]], hist_, tk[q]);
+  KernelIn in{X,  Y,  Z,  R,  VX, VY, VZ, WX, WY, WZ, IM, MAT, nbr_.data(),
+              law_kn_.data(), law_flim_.data(), law_ks_.data(), law_mu_.data(), law_zeta_.data(),
+              hist_.ux.data(), hist_.uy.data(), hist_.uz.data(), hist_.plastic.data(), hist_.viscous.data(),
+              hist_.stamp.data(), nmat, dt, ratio, now};
+  KernelOut out{FX, FY, FZ, TX, TY, TZ, &s.energy};
+  touchingPairsFor(measure, any_viscous_, any_plastic_)(in, ti, tk, m, out);
+  s.contacts += out.contacts;
+  if (out.failed) s.failed = true, s.fail_i = out.fail_i, s.fail_j = out.fail_j, s.fail_ratio = out.fail_ratio;
+  if (m > 0) s.lo = std::min(s.lo, ti[0]), s.hi = std::max(s.hi, out.hi);
   const std::size_t nb = big_i_.size();
   for (std::size_t q = nb * static_cast<std::size_t>(t) / T; q < nb * (static_cast<std::size_t>(t) + 1) / T; ++q)
     contact(big_i_[q], big_j_[q], big_hist_, q);

@@ -113,7 +113,7 @@ class Engine {
   std::vector<double> alpha_;          // local damping of free spheres
   std::vector<double> x0_, y0_, z0_;   // positions at the last rebuild
   std::vector<std::int32_t> block_;    // owning block, -1 for a free sphere
-  std::vector<std::uint16_t> mat_;
+  std::vector<std::uint32_t> mat_;   // 32-bit: the vectorised contact kernel gathers it
   std::vector<std::uint32_t> pid_;     // stable particle id (input order)
   std::vector<std::uint32_t> slot_;    // pid -> current index
   std::size_t sphere_count_ = 0;
@@ -138,6 +138,11 @@ class Engine {
   std::size_t nmat_ = 0;
   std::vector<Material> materials_;
   std::vector<PairLaw> laws_;  // nmat x nmat
+  // The same laws as flat arrays for the vectorised contact kernel, and
+  // which rare features any of them uses (the kernel is compiled without the
+  // others): a finite F_lim, viscous damping.
+  std::vector<double> law_kn_, law_flim_, law_ks_, law_mu_, law_zeta_;
+  bool any_plastic_ = false, any_viscous_ = false;
 
   std::vector<Block> blocks_;
   std::vector<Wall> walls_;

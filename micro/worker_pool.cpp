@@ -1,15 +1,62 @@
 #include "micro/worker_pool.hpp"
 
+#include <chrono>
+#if defined(__x86_64__) || defined(__i386__)
+#include <immintrin.h>
+#endif
+
 namespace gabion::micro {
 
+namespace {
+// How long a waiting thread spins before it blocks: longer than the gap
+// between two parallel stages of a step, much shorter than a scheduler slice.
+constexpr std::chrono::microseconds kSpin{50};
+
+inline void cpuRelax() {
+#if defined(__x86_64__) || defined(__i386__)
+  _mm_pause();
+#else
+  std::this_thread::yield();
+#endif
+}
+
+// Spins until done() or kSpin has passed; returns done().
+template <class Done>
+bool spinFor(Done done) {
+  const auto until = std::chrono::steady_clock::now() + kSpin;
+  for (unsigned k = 1;; ++k) {
+    if (done()) return true;
+    cpuRelax();
+    if ((k & 31u) == 0 && std::chrono::steady_clock::now() > until) return done();
+  }
+}
+}  // namespace
+
 WorkerPool::WorkerPool(int threads) : threads_(threads < 1 ? 1 : threads) {
-  for (int t = 1; t < threads_; ++t) workers_.emplace_back([this, t] { workerLoop(t); });
+  next_.store(threads_, std::memory_order_relaxed);
+  for (int t = 1; t < threads_; ++t) workers_.emplace_back([this] { workerLoop(); });
 }
 
 WorkerPool::~WorkerPool() {
-  stop_.store(true, std::memory_order_release);
-  generation_.fetch_add(1, std::memory_order_acq_rel);
+  {
+    std::lock_guard<std::mutex> lock(mutex_);
+    stop_.store(true, std::memory_order_release);
+    generation_.fetch_add(1, std::memory_order_acq_rel);
+  }
+  wake_.notify_all();
   for (auto& w : workers_) w.join();
+}
+
+bool WorkerPool::drain() {
+  bool finished_last = false;
+  for (;;) {
+    // acquire: pairs with the release store of next_ in run(), so job_ and
+    // pending_ of this job are visible.
+    const int t = next_.fetch_add(1, std::memory_order_acq_rel);
+    if (t >= threads_) return finished_last;
+    (*job_.load(std::memory_order_acquire))(t);
+    finished_last = pending_.fetch_sub(1, std::memory_order_acq_rel) == 1;
+  }
 }
 
 void WorkerPool::run(const std::function<void(int)>& job) {
@@ -17,26 +64,40 @@ void WorkerPool::run(const std::function<void(int)>& job) {
     job(0);
     return;
   }
-  job_ = &job;
-  pending_.store(threads_ - 1, std::memory_order_release);
-  generation_.fetch_add(1, std::memory_order_acq_rel);
-  job(0);
-  unsigned spins = 0;
-  while (pending_.load(std::memory_order_acquire) != 0)
-    if (++spins > 2000) std::this_thread::yield();
+  // Order matters: a worker still claiming from the previous job only sees
+  // next_ >= threads_ until the release store below publishes this job.
+  pending_.store(threads_, std::memory_order_relaxed);
+  job_.store(&job, std::memory_order_relaxed);
+  next_.store(0, std::memory_order_release);
+  {
+    std::lock_guard<std::mutex> lock(mutex_);
+    generation_.fetch_add(1, std::memory_order_acq_rel);
+  }
+  wake_.notify_all();
+  drain();
+  const auto done = [this] { return pending_.load(std::memory_order_acquire) == 0; };
+  if (spinFor(done)) return;
+  std::unique_lock<std::mutex> lock(mutex_);
+  done_.wait(lock, done);
 }
 
-void WorkerPool::workerLoop(int t) {
+void WorkerPool::workerLoop() {
   unsigned seen = 0;
   for (;;) {
-    unsigned spins = 0;
-    unsigned g;
-    while ((g = generation_.load(std::memory_order_acquire)) == seen)
-      if (++spins > 2000) std::this_thread::yield();
-    seen = g;
+    const auto fresh = [&] { return generation_.load(std::memory_order_acquire) != seen; };
+    if (!spinFor(fresh)) {
+      std::unique_lock<std::mutex> lock(mutex_);
+      wake_.wait(lock, fresh);
+    }
+    seen = generation_.load(std::memory_order_acquire);
     if (stop_.load(std::memory_order_acquire)) return;
-    (*job_)(t);
-    pending_.fetch_sub(1, std::memory_order_acq_rel);
+    if (drain()) {
+      // This worker finished the job's last partition: wake the caller if it
+      // blocks (under the mutex, so the wake-up cannot fall between its test
+      // of pending_ and its wait).
+      std::lock_guard<std::mutex> lock(mutex_);
+      done_.notify_one();
+    }
   }
 }
 
