@@ -364,15 +364,15 @@ bridge::RunOutcome runStages(const JsonDocument& doc, const bridge::RunContext& 
     const auto out = runStage("structure impact at " + fmt(v) + " m/s (macro.impact)", "macro.impact", impact, ctx, dir,
                               ctx.outdir / "law.json");
     json row = {{"velocity_m_s", v}, {"folder", dir.filename().string()}};
-    for (const char* key : {"impact_energy_J", "peak_force_N", "max_penetration_m", "contact_duration_s",
+    // macro.impact always reports these: a missing key is a broken contract, not a blank cell.
+    for (const char* key : {"input_energy_J", "peak_force_N", "max_penetration_m", "contact_duration_s",
                             "rebound_velocity_m_s", "balance_rel_error"})
-      if (out.results.contains(key)) row[key] = out.results.at(key);
+      row[key] = out.results.at(key);
     impacts.push_back(row);
     const bridge::H5Reader h5(dir / "result.h5");
     force_plot.series.push_back({fmt(v) + " m/s", h5.read("/series/time_s"), h5.read("/series/boulder_force_N"),
                                  bridge::PlotSeries::Style::Line});
-    if (out.results.contains("contact_duration_s"))
-      plot_until = std::max(plot_until, 2.0 * out.results.at("contact_duration_s").get<double>());
+    plot_until = std::max(plot_until, 2.0 * out.results.at("contact_duration_s").get<double>());
   }
   // Show the contacts, not the long quiet tail after the boulder has left.
   if (plot_until > 0.0)
@@ -408,10 +408,13 @@ bridge::RunOutcome runStages(const JsonDocument& doc, const bridge::RunContext& 
     << "## 2. Fitted cell laws\n\n";
   const json& fj = fit.results.at("fit");
   for (const char* test : {"axial", "lateral"}) {
-    if (!fj.contains(test)) continue;
-    r << "### " << test << "\n\n```json\n" << fj.at(test).dump(2).substr(0, 4000) << "\n```\n\n";
+    // The chosen model, its error and its parameters with their intervals;
+    // every candidate and evaluation count is in 4_fit/summary.json.
+    const json& t = fj.at(test);
+    const json brief = {{"model", t.at("model")}, {"nrms", t.at("nrms")}, {"parameters", t.at("parameters")}};
+    r << "### " << test << "\n\n```json\n" << brief.dump(2) << "\n```\n\n";
   }
-  r << "Law status: **" << fit.results.value("law_status", "?") << "**. `law.json` is the structure's law file with "
+  r << "Law status: **" << fit.results.at("law_status").get<std::string>() << "**. `law.json` is the structure's law file with "
     << "material `" << c.structure_material << "` replaced by the calibrated one; laws the CC test cannot identify "
     << "(interface, impact) are carried from `" << base_law.string() << "`, as its provenance records.\n\n"
     << "![axial](4_fit/fit_axial.png)\n![lateral](4_fit/fit_lateral.png)\n\n"
@@ -419,11 +422,11 @@ bridge::RunOutcome runStages(const JsonDocument& doc, const bridge::RunContext& 
        "duration (ms) | energy balance error |\n|---|---|---|---|---|---|\n";
   for (const auto& row : impacts)
     r << "| " << fmt(row.at("velocity_m_s").get<double>()) << " | "
-      << (row.contains("impact_energy_J") ? fmt(row["impact_energy_J"].get<double>() / 1e3) : "-") << " | "
-      << (row.contains("peak_force_N") ? fmt(row["peak_force_N"].get<double>() / 1e3) : "-") << " | "
-      << (row.contains("max_penetration_m") ? fmt(row["max_penetration_m"].get<double>() * 1e3) : "-") << " | "
-      << (row.contains("contact_duration_s") ? fmt(row["contact_duration_s"].get<double>() * 1e3) : "-") << " | "
-      << (row.contains("balance_rel_error") ? fmt(row["balance_rel_error"].get<double>(), 2) : "-") << " |\n";
+      << fmt(row.at("input_energy_J").get<double>() / 1e3) << " | "
+      << fmt(row.at("peak_force_N").get<double>() / 1e3) << " | "
+      << fmt(row.at("max_penetration_m").get<double>() * 1e3) << " | "
+      << fmt(row.at("contact_duration_s").get<double>() * 1e3) << " | "
+      << fmt(row.at("balance_rel_error").get<double>(), 2) << " |\n";
   r << "\n![force](impact_force_time.png)\n";
   bridge::writeTextAtomic(ctx.outdir / "report.md", r.str());
   results["report"] = "report.md";

@@ -44,6 +44,8 @@ TEST(Pipeline, DefaultCaseRunsEndToEnd) {
   ASSERT_EQ(s.at("impacts").size(), 1u);
   EXPECT_LT(std::abs(s.at("impacts")[0].at("balance_rel_error").get<double>()), 5e-3);
   EXPECT_GT(s.at("impacts")[0].at("peak_force_N").get<double>(), 0.0);
+  // 0.5 m limestone boulder (170 kg) at 15 m/s: E = m v^2 / 2 = 19.1 kJ (shared/reference).
+  EXPECT_NEAR(s.at("impacts")[0].at("input_energy_J").get<double>(), 19.1e3, 0.2e3);
 
   // The law file: the calibrated material is replaced, the others carried;
   // it stays "illustrative" because interface and impact come from an
