@@ -17,6 +17,8 @@ constexpr double kPi = 3.14159265358979323846;
 // Spheres larger than this many times the median radius stay out of the cell
 // grid (a boulder among grains would otherwise set the cell size for all).
 constexpr double kBigRadiusFactor = 2.0;
+// Touching pairs evaluated together by the vectorised contact law.
+constexpr std::size_t kChunk = 128;
 
 template <class T>
 void permute(std::vector<T>& v, const std::vector<std::uint32_t>& order, std::vector<T>& tmp) {
@@ -51,11 +53,34 @@ struct Engine::Wall {
   double t_ref = 0.0;  // time of the last rebuild
 };
 
+namespace {
+/// The contacts of one partition of the neighbour list that touched at one
+/// step, in list order: the list index k of the pair and its history (shear
+/// spring, plastic overlap, dashpot force). Only touching pairs have an
+/// entry; a pair absent from the last step's set starts from a zero history.
+struct ContactSet {
+  std::vector<std::uint32_t> k;
+  std::vector<double> ux, uy, uz, plastic, viscous;  // plastic/viscous: only when a material uses them
+  std::size_t n = 0;
+  /// Room for m contacts (sizes grow geometrically; n is unchanged).
+  void ensure(std::size_t m, bool with_plastic, bool with_viscous) {
+    if (k.size() >= m) return;
+    const std::size_t size = std::max(m, 2 * k.size() + 64);
+    k.resize(size);
+    for (auto* v : {&ux, &uy, &uz}) v->resize(size);
+    if (with_plastic) plastic.resize(size);
+    if (with_viscous) viscous.resize(size);
+  }
+};
+}  // namespace
+
 /// Per-worker scratch: force buffers (worker 0 writes the global arrays),
-/// the list of touching pairs, energy sums and the first failure seen.
+/// the contact sets of its partition (the last step's and this step's),
+/// energy sums and the first failure seen.
 struct Engine::WorkerScratch {
   std::vector<double> fx, fy, fz, tx, ty, tz;
-  std::vector<std::uint32_t> touch_i, touch_k;
+  ContactSet sets[2];
+  std::vector<std::uint32_t> touch_i, touch_k;  // a chunk of touching pairs (+ one list row)
   std::vector<std::uint32_t> rows;  // neighbour-list rows built by this worker
   std::uint32_t lo = 0, hi = 0;
   ContactEnergy energy;
@@ -173,6 +198,8 @@ Engine::Engine(const Scene& scene, int threads) {
     walls_.push_back(std::move(w));
   }
 
+  uniform_material_ = n_ > 0 && std::all_of(mat_.begin(), mat_.end(), [&](std::uint32_t m) { return m == mat_[0]; });
+
   // Grid spheres vs oversized ones; the skin is a fraction of the mean grid radius.
   std::vector<double> sorted_r = r_;
   std::nth_element(sorted_r.begin(), sorted_r.begin() + static_cast<long>(n_ / 2), sorted_r.end());
@@ -258,21 +285,33 @@ void Engine::updateNeighbours() {
 
 void Engine::rebuildNeighbourList() {
   const double t_now = time();
-  // 1. Save the contacts that touched at the last step, by stable ids.
+  // 1. Note the contacts that touched at the last step by stable ids: list
+  // pairs by where their history is (partition, index in its contact set),
+  // which stays untouched until step 4 copies it; oversized-sphere and wall
+  // pairs with their history.
+  struct SavedContact {
+    std::uint32_t a, b, t, c;
+  };
+  std::vector<SavedContact> saved;
+  for (std::size_t t = 0; t < scratch_.size(); ++t) {
+    const ContactSet& cs = scratch_[t].sets[hcur_];
+    std::size_t i = cs.n > 0 ? part_begin_[t] : 0;
+    for (std::size_t c = 0; c < cs.n; ++c) {
+      const std::uint32_t k = cs.k[c];
+      while (row_begin_[i + 1] <= k) ++i;
+      saved.push_back({pid_[i], pid_[nbr_[k]], static_cast<std::uint32_t>(t), static_cast<std::uint32_t>(c)});
+    }
+  }
   struct Saved {
     std::uint32_t a, b;
     double ux, uy, uz, plastic, viscous;
   };
-  std::vector<Saved> saved;
+  std::vector<Saved> saved_big;
   const std::int64_t last = step_ - 1;
-  for (std::size_t i = 0; i + 1 < row_begin_.size(); ++i)
-    for (std::uint32_t k = row_begin_[i]; k < row_begin_[i + 1]; ++k)
-      if (hist_.stamp[k] == last)
-        saved.push_back({pid_[i], pid_[nbr_[k]], hist_.ux[k], hist_.uy[k], hist_.uz[k], hist_.plastic[k], hist_.viscous[k]});
   for (std::size_t q = 0; q < big_i_.size(); ++q)
     if (big_hist_.stamp[q] == last)
-      saved.push_back({pid_[big_i_[q]], pid_[big_j_[q]], big_hist_.ux[q], big_hist_.uy[q], big_hist_.uz[q],
-                       big_hist_.plastic[q], big_hist_.viscous[q]});
+      saved_big.push_back({pid_[big_i_[q]], pid_[big_j_[q]], big_hist_.ux[q], big_hist_.uy[q], big_hist_.uz[q],
+                           big_hist_.plastic[q], big_hist_.viscous[q]});
   std::vector<std::vector<Saved>> saved_wall(walls_.size());
   for (std::size_t w = 0; w < walls_.size(); ++w) {
     const Wall& wall = walls_[w];
@@ -339,35 +378,53 @@ void Engine::rebuildNeighbourList() {
   row_begin_.assign(n_ + 1, 0);
   const std::size_t workers = scratch_.size();
   pool_->run([&](int t) {
-    std::vector<std::uint32_t>& out = scratch_[static_cast<std::size_t>(t)].rows;
-    out.clear();
-    out.reserve(8 * n_ / workers);
+    // One worker writes the list itself (no second copy in memory).
+    // The three cells along x of one (y, z) row of the stencil hold one
+    // contiguous range of particles (cell order), so each particle scans 9
+    // ranges, branch-free, appending in place.
+    std::vector<std::uint32_t>& out = workers == 1 ? nbr_ : scratch_[static_cast<std::size_t>(t)].rows;
+    std::size_t len = 0;
     const std::size_t i0 = n_ * static_cast<std::size_t>(t) / workers;
     const std::size_t i1 = n_ * (static_cast<std::size_t>(t) + 1) / workers;
+    const double *__restrict X = x_.data(), *__restrict Y = y_.data(), *__restrict Z = z_.data(),
+                 *__restrict R = r_.data(), *__restrict IMB = inv_body_mass_.data();
+    const std::int32_t* __restrict BLK = block_.data();
+    const double skin = skin_m_;
     for (std::size_t i = i0; i < i1; ++i) {
-      row_begin_[i] = static_cast<std::uint32_t>(out.size());  // local offset, made global below
+      row_begin_[i] = static_cast<std::uint32_t>(len);  // local offset, made global below
       if (is_big_[i]) continue;
       const std::size_t c = new_cell[i];
       const std::size_t cx = c % nx, cy = (c / nx) % ny, cz = c / (nx * ny);
+      const double xi = X[i], yi = Y[i], zi = Z[i], ri = R[i] + skin;
+      const std::int32_t bi = BLK[i];
+      const bool free_i = IMB[i] > 0.0;
       for (int dz = -1; dz <= 1; ++dz) {
         if ((dz < 0 && cz == 0) || (dz > 0 && cz + 1 >= nz)) continue;
         for (int dy = -1; dy <= 1; ++dy) {
           if ((dy < 0 && cy == 0) || (dy > 0 && cy + 1 >= ny)) continue;
-          for (int dx = -1; dx <= 1; ++dx) {
-            if ((dx < 0 && cx == 0) || (dx > 0 && cx + 1 >= nx)) continue;
-            const std::size_t cc = ((cz + dz) * ny + (cy + dy)) * nx + (cx + dx);
-            for (std::uint32_t j = std::max<std::uint32_t>(cell_start[cc], static_cast<std::uint32_t>(i + 1));
-                 j < cell_start[cc + 1]; ++j) {
-              const double ex = x_[j] - x_[i], ey = y_[j] - y_[i], ez = z_[j] - z_[i];
-              const double reach = r_[i] + r_[j] + skin_m_;
-              if (ex * ex + ey * ey + ez * ez < reach * reach && pairAllowed(i, j)) out.push_back(j);
-            }
+          const std::size_t row = ((cz + dz) * ny + (cy + dy)) * nx;
+          const std::uint32_t jb = std::max<std::uint32_t>(cell_start[row + (cx > 0 ? cx - 1 : 0)],
+                                                           static_cast<std::uint32_t>(i + 1));
+          const std::uint32_t je = cell_start[row + std::min(cx + 1, nx - 1) + 1];
+          if (jb >= je) continue;
+          if (out.size() < len + (je - jb)) out.resize(std::max<std::size_t>(len + (je - jb), 2 * out.size()));
+          std::uint32_t* __restrict o = out.data() + len;
+          std::size_t cnt = 0;
+          for (std::uint32_t j = jb; j < je; ++j) {
+            const double ex = X[j] - xi, ey = Y[j] - yi, ez = Z[j] - zi, reach = ri + R[j];
+            // pairAllowed, branch-free
+            const bool near = ex * ex + ey * ey + ez * ez < reach * reach;
+            const bool allowed = (bi < 0 || BLK[j] != bi) && (free_i || IMB[j] > 0.0);
+            o[cnt] = j;
+            cnt += static_cast<std::size_t>(near & allowed);
           }
+          len += cnt;
         }
       }
     }
+    out.resize(len);
   });
-  {
+  if (workers > 1) {
     std::vector<std::size_t> base(workers + 1, 0);
     for (std::size_t t = 0; t < workers; ++t) base[t + 1] = base[t] + scratch_[t].rows.size();
     nbr_.resize(base[workers]);
@@ -379,7 +436,12 @@ void Engine::rebuildNeighbourList() {
     });
   }
   row_begin_[n_] = static_cast<std::uint32_t>(nbr_.size());
-  hist_.resize(nbr_.size());
+  std::uint32_t longest_row = 0;
+  for (std::size_t i = 0; i < n_; ++i) longest_row = std::max(longest_row, row_begin_[i + 1] - row_begin_[i]);
+  for (auto& sc : scratch_) {
+    sc.touch_i.resize(kChunk + longest_row);
+    sc.touch_k.resize(kChunk + longest_row);
+  }
 
   // Oversized spheres: tested against every particle by bounding box.
   std::vector<std::pair<std::uint32_t, std::uint32_t>> big;
@@ -413,28 +475,27 @@ void Engine::rebuildNeighbourList() {
     w.t_ref = t_now;
   }
 
-  // 4. Carry the history of touching contacts over to the new lists.
-  for (const Saved& s : saved) {
-    const std::uint32_t a = slot_[s.a], b = slot_[s.b];
+  // 4. Carry the history of touching contacts over to the new lists. A pair
+  // that touched is within reach, so it is in the new list (both grid
+  // spheres) or in the oversized-pair list (one oversized): is_big_ does not
+  // change during a run.
+  constexpr std::uint32_t kNone = std::numeric_limits<std::uint32_t>::max();
+  std::vector<std::uint32_t> from(nbr_.size(), kNone);  // list entry -> index in saved
+  for (std::size_t q = 0; q < saved.size(); ++q) {
+    const std::uint32_t a = slot_[saved[q].a], b = slot_[saved[q].b];
     const std::uint32_t i = std::min(a, b), j = std::max(a, b);
-    History* H = nullptr;
-    std::size_t k = 0;
     const auto first = nbr_.begin() + row_begin_[i], end = nbr_.begin() + row_begin_[i + 1];
     const auto it = std::lower_bound(first, end, j);
-    if (it != end && *it == j) {
-      H = &hist_;
-      k = static_cast<std::size_t>(it - nbr_.begin());
-    } else {
-      const auto pair = std::make_pair(i, j);
-      const auto bt = std::lower_bound(big.begin(), big.end(), pair);
-      if (bt != big.end() && *bt == pair) {
-        H = &big_hist_;
-        k = static_cast<std::size_t>(bt - big.begin());
-      }
-    }
-    if (H == nullptr) continue;  // cannot happen for a pair that touched (it is within reach)
-    H->ux[k] = s.ux, H->uy[k] = s.uy, H->uz[k] = s.uz, H->plastic[k] = s.plastic, H->viscous[k] = s.viscous;
-    H->stamp[k] = last;
+    if (it != end && *it == j) from[static_cast<std::size_t>(it - nbr_.begin())] = static_cast<std::uint32_t>(q);
+  }
+  for (const Saved& s : saved_big) {
+    const std::uint32_t a = slot_[s.a], b = slot_[s.b];
+    const auto pair = std::make_pair(std::min(a, b), std::max(a, b));
+    const auto bt = std::lower_bound(big.begin(), big.end(), pair);
+    if (bt == big.end() || *bt != pair) continue;
+    const auto k = static_cast<std::size_t>(bt - big.begin());
+    big_hist_.ux[k] = s.ux, big_hist_.uy[k] = s.uy, big_hist_.uz[k] = s.uz, big_hist_.plastic[k] = s.plastic;
+    big_hist_.viscous[k] = s.viscous, big_hist_.stamp[k] = last;
   }
   for (std::size_t w = 0; w < walls_.size(); ++w) {
     Wall& wall = walls_[w];
@@ -461,18 +522,36 @@ void Engine::rebuildNeighbourList() {
   if (T > 1) {
     constexpr std::size_t kTouchWeight = 3;
     std::size_t total = nbr_.size();
-    for (std::size_t k = 0; k < nbr_.size(); ++k) total += hist_.stamp[k] == last ? kTouchWeight : 0;
+    for (std::size_t k = 0; k < nbr_.size(); ++k) total += from[k] != kNone ? kTouchWeight : 0;
     std::size_t t = 1, acc = 0;
     for (std::size_t i = 0; i < n_ && t < T; ++i) {
       while (t < T && acc >= total * t / T) part_begin_[t++] = static_cast<std::uint32_t>(i);
       for (std::uint32_t k = row_begin_[i]; k < row_begin_[i + 1]; ++k)
-        acc += 1 + (hist_.stamp[k] == last ? kTouchWeight : 0);
+        acc += 1 + (from[k] != kNone ? kTouchWeight : 0);
     }
   }
-  for (auto& s : scratch_) {
-    s.touch_i.resize(nbr_.size() + 1);
-    s.touch_k.resize(nbr_.size() + 1);
+  // Each partition's carried contacts, in list order, become its "last step"
+  // contact set; the history is copied from where step 1 noted it.
+  const int next = hcur_ ^ 1;
+  for (std::size_t t = 0; t < T; ++t) {
+    ContactSet& out = scratch_[t].sets[next];
+    const std::uint32_t k0 = row_begin_[part_begin_[t]], k1 = row_begin_[part_begin_[t + 1]];
+    std::size_t count = 0;
+    for (std::uint32_t k = k0; k < k1; ++k) count += from[k] != kNone ? 1 : 0;
+    out.ensure(count, any_plastic_, any_viscous_);
+    out.n = 0;
+    for (std::uint32_t k = k0; k < k1; ++k) {
+      if (from[k] == kNone) continue;
+      const SavedContact& sc = saved[from[k]];
+      const ContactSet& in = scratch_[sc.t].sets[hcur_];
+      out.k[out.n] = k;
+      out.ux[out.n] = in.ux[sc.c], out.uy[out.n] = in.uy[sc.c], out.uz[out.n] = in.uz[sc.c];
+      if (any_plastic_) out.plastic[out.n] = in.plastic[sc.c];
+      if (any_viscous_) out.viscous[out.n] = in.viscous[sc.c];
+      ++out.n;
+    }
   }
+  hcur_ = next;
 }
 
 void Engine::reorderParticles(const std::vector<std::uint32_t>& order) {
@@ -492,14 +571,19 @@ void Engine::reorderParticles(const std::vector<std::uint32_t>& order) {
 }
 
 // ---------------------------------------------------------------------------
-// The contact law on the touching pairs of the Verlet list, vectorised: a
-// branch-free SIMD pass evaluates a chunk of pairs (the laws of
-// micro/contact.hpp and bridge/laws/contact_*.hpp, written out with selects
-// instead of branches) into small per-pair buffers, then a scalar pass adds
-// the forces to the bodies in pair order (a body can appear twice in a SIMD
-// chunk, so this part cannot be vectorised; its order keeps the sums
-// deterministic). The rare features (F_lim, viscous damping) and the stored
-// energy are compile-time switches, so the settling case pays for none.
+// The contact law on the touching pairs of the Verlet list, vectorised, one
+// chunk of at most kChunk touching pairs at a time (the scan of the list
+// fills the chunk): a scalar merge takes each pair's history from the last
+// step's contact set (both in list order, so this is one forward walk); a
+// branch-free SIMD pass evaluates the laws of micro/contact.hpp and
+// bridge/laws/contact_*.hpp, written out with selects instead of branches,
+// into small per-pair buffers; a scalar pass adds the forces to the bodies in
+// pair order (a body can appear twice in a SIMD chunk, so this part cannot be
+// vectorised; its order keeps the sums deterministic) and appends the
+// touching pairs to this step's contact set. History is read and written
+// sequentially: no gathers or scatters on arrays as long as the list. The
+// rare features (F_lim, viscous damping), the stored energy and a single
+// material are compile-time switches, so a case pays only for what it uses.
 
 namespace {
 struct KernelIn {
@@ -507,11 +591,16 @@ struct KernelIn {
   const std::uint32_t* MAT;
   const std::uint32_t* NBR;
   const double *KN, *FLIM, *KS, *MU, *ZETA;
-  double *UX, *UY, *UZ, *PL, *VI;
-  std::int64_t* STAMP;
   std::size_t nmat;
+  std::size_t law0;  // the law of a single-material scene
   double dt, ratio;
-  std::int64_t now;
+};
+/// The last step's contact set of a partition (read, with the merge cursor)
+/// and this step's (appended to; room for the chunk is made by the caller).
+struct KernelHistory {
+  const ContactSet* last;
+  std::size_t cursor = 0;
+  ContactSet* next;
 };
 struct KernelOut {
   double *FX, *FY, *FZ, *TX, *TY, *TZ;
@@ -523,11 +612,9 @@ struct KernelOut {
   double fail_ratio = 0.0;
 };
 
-constexpr std::size_t kChunk = 256;
-
-template <bool kMeasure, bool kViscous, bool kPlastic>
-void touchingPairs(const KernelIn& in, const std::uint32_t* ti, const std::uint32_t* tk, std::size_t m,
-                   KernelOut& out) {
+template <bool kMeasure, bool kViscous, bool kPlastic, bool kUniform>
+void touchingPairs(const KernelIn& in, const std::uint32_t* ci, const std::uint32_t* ck, std::size_t nq,
+                   KernelHistory& h, KernelOut& out) {
   const double *__restrict X = in.X, *__restrict Y = in.Y, *__restrict Z = in.Z, *__restrict R = in.R;
   const double *__restrict VX = in.VX, *__restrict VY = in.VY, *__restrict VZ = in.VZ;
   const double *__restrict WX = in.WX, *__restrict WY = in.WY, *__restrict WZ = in.WZ, *__restrict IM = in.IM;
@@ -535,25 +622,38 @@ void touchingPairs(const KernelIn& in, const std::uint32_t* ti, const std::uint3
   const std::uint32_t* __restrict NBR = in.NBR;
   const double *__restrict KN = in.KN, *__restrict FLIM = in.FLIM, *__restrict KS = in.KS, *__restrict MU = in.MU,
                *__restrict ZETA = in.ZETA;
-  double *__restrict UX = in.UX, *__restrict UY = in.UY, *__restrict UZ = in.UZ, *__restrict PL = in.PL,
-         *__restrict VI = in.VI;
-  std::int64_t* __restrict STAMP = in.STAMP;
-  const std::size_t nmat = in.nmat;
+  const std::size_t nmat = in.nmat, law0 = in.law0;
   const double dt = in.dt, ratio = in.ratio;
-  const std::int64_t now = in.now, last = in.now - 1;
   alignas(64) double bfx[kChunk], bfy[kChunk], bfz[kChunk];
   alignas(64) double bix[kChunk], biy[kChunk], biz[kChunk];
   alignas(64) double bjx[kChunk], bjy[kChunk], bjz[kChunk];
   // per-pair energy increments (J) and flags, summed in pair order below
   alignas(64) double bfr[kChunk], bpl[kChunk], bvi[kChunk], bel[kChunk], bon[kChunk], bbad[kChunk];
+  // per-pair history: the last step's on entry (zero for a new contact), this step's on exit
+  alignas(64) double hux[kChunk], huy[kChunk], huz[kChunk], hpl[kChunk], hvi[kChunk];
   double friction = 0.0, plastic_w = 0.0, viscous_w = 0.0, elastic = 0.0;
-  for (std::size_t q0 = 0; q0 < m; q0 += kChunk) {
-    const std::size_t nq = std::min(kChunk, m - q0);
-    const std::uint32_t* __restrict ci = ti + q0;
-    const std::uint32_t* __restrict ck = tk + q0;
+  {
+    const ContactSet& last = *h.last;
+    std::size_t p = h.cursor;
+    for (std::size_t q = 0; q < nq; ++q) {
+      const std::uint32_t k = ck[q];
+      while (p < last.n && last.k[p] < k) ++p;
+      if (p < last.n && last.k[p] == k) {
+        hux[q] = last.ux[p], huy[q] = last.uy[p], huz[q] = last.uz[p];
+        if constexpr (kPlastic) hpl[q] = last.plastic[p];
+        if constexpr (kViscous) hvi[q] = last.viscous[p];
+      } else {
+        hux[q] = huy[q] = huz[q] = 0.0;
+        if constexpr (kPlastic) hpl[q] = 0.0;
+        if constexpr (kViscous) hvi[q] = 0.0;
+      }
+    }
+    h.cursor = p;
+  }
+  {
 #pragma omp simd
     for (std::size_t q = 0; q < nq; ++q) {
-      const std::uint32_t i = ci[q], k = ck[q], j = NBR[k];
+      const std::uint32_t i = ci[q], j = NBR[ck[q]];
       const double ex = X[j] - X[i], ey = Y[j] - Y[i], ez = Z[j] - Z[i];
       const double d = std::sqrt(ex * ex + ey * ey + ez * ez);
       const double ri = R[i], rj = R[j];
@@ -570,16 +670,15 @@ void touchingPairs(const KernelIn& in, const std::uint32_t* ti, const std::uint3
       const double ax = lj * WX[j] + li * WX[i], ay = lj * WY[j] + li * WY[i], az = lj * WZ[j] + li * WZ[i];
       const double vx = VX[j] - VX[i] - (ay * nz - az * ny), vy = VY[j] - VY[i] - (az * nx - ax * nz),
                    vz = VZ[j] - VZ[i] - (ax * ny - ay * nx);
-      const std::size_t L = MAT[i] * nmat + MAT[j];
+      const std::size_t L = kUniform ? law0 : MAT[i] * nmat + MAT[j];
       const double kn = KN[L], ks = KS[L], mu = MU[L];
-      const bool old = STAMP[k] == last;
-      double ux = old ? UX[k] : 0.0, uy = old ? UY[k] : 0.0, uz = old ? UZ[k] : 0.0;
+      double ux = hux[q], uy = huy[q], uz = huz[q];
       const double vn = vx * nx + vy * ny + vz * nz;
       // normal spring (bridge::normalContactForce)
       double fel, pl_new = 0.0;
       if constexpr (kPlastic) {
         const double flim = FLIM[L];
-        const double pl = old ? PL[k] : 0.0;
+        const double pl = hpl[q];
         const double trial = kn * (overlap - pl);
         const bool cap = trial > flim;
         const double dp = overlap - flim / kn;
@@ -593,7 +692,7 @@ void touchingPairs(const KernelIn& in, const std::uint32_t* ti, const std::uint3
       double fn = fel, vi_new = 0.0;
       if constexpr (kViscous) {
         const double zeta = ZETA[L];
-        const double vi = old ? VI[k] : 0.0;
+        const double vi = hvi[q];
         const double c = 2.0 * zeta * std::sqrt(1.0 / (IM[i] + IM[j]) * kn);  // bridge::normalDampingCoefficient
         const double fv = zeta > 0.0 ? c * -vn : vi;
         bvi[q] = act && zeta > 0.0 ? 0.5 * (fv + vi) * (-vn) * dt : 0.0;
@@ -622,11 +721,10 @@ void touchingPairs(const KernelIn& in, const std::uint32_t* ti, const std::uint3
       bfr[q] = act && slide ? ks * (work - stored) : 0.0;
       if constexpr (kMeasure)  // bridge::normalElasticEnergy + tangentialElasticEnergy
         bel[q] = act ? 0.5 * fel * fel / kn + 0.5 * ks * (ux * ux + uy * uy + uz * uz) : 0.0;
-      // the history of a pair that does not touch is never read (stamp)
-      UX[k] = ux, UY[k] = uy, UZ[k] = uz;
-      if constexpr (kPlastic) PL[k] = pl_new;
-      if constexpr (kViscous) VI[k] = vi_new;
-      STAMP[k] = act ? now : STAMP[k];
+      // (a pair that does not touch is not appended to the contact set below)
+      hux[q] = ux, huy[q] = uy, huz[q] = uz;
+      if constexpr (kPlastic) hpl[q] = pl_new;
+      if constexpr (kViscous) hvi[q] = vi_new;
       const double fx = on * (-fn * nx + ks * ux), fy = on * (-fn * ny + ks * uy), fz = on * (-fn * nz + ks * uz);
       const double cx = ny * fz - nz * fy, cy = nz * fx - nx * fz, cz = nx * fy - ny * fx;
       bfx[q] = fx, bfy[q] = fy, bfz[q] = fz;
@@ -638,9 +736,19 @@ void touchingPairs(const KernelIn& in, const std::uint32_t* ti, const std::uint3
     double *__restrict FX = out.FX, *__restrict FY = out.FY, *__restrict FZ = out.FZ;
     double *__restrict TX = out.TX, *__restrict TY = out.TY, *__restrict TZ = out.TZ;
     std::uint32_t hi = out.hi;
+    ContactSet& next = *h.next;
+    std::size_t nn = next.n;
+    std::uint32_t* __restrict NK = next.k.data();
+    double *__restrict NUX = next.ux.data(), *__restrict NUY = next.uy.data(), *__restrict NUZ = next.uz.data();
+    double *__restrict NPL = next.plastic.data(), *__restrict NVI = next.viscous.data();
     for (std::size_t q = 0; q < nq; ++q) {
       const std::uint32_t i = ci[q], j = NBR[ck[q]];
       hi = std::max(hi, j);
+      // append the pair's history (overwritten by the next pair if it does not touch)
+      NK[nn] = ck[q], NUX[nn] = hux[q], NUY[nn] = huy[q], NUZ[nn] = huz[q];
+      if constexpr (kPlastic) NPL[nn] = hpl[q];
+      if constexpr (kViscous) NVI[nn] = hvi[q];
+      nn += bon[q] > 0.0 ? 1 : 0;
       FX[i] += bfx[q], FY[i] += bfy[q], FZ[i] += bfz[q];
       FX[j] -= bfx[q], FY[j] -= bfy[q], FZ[j] -= bfz[q];
       TX[i] += bix[q], TY[i] += biy[q], TZ[i] += biz[q];
@@ -652,6 +760,7 @@ void touchingPairs(const KernelIn& in, const std::uint32_t* ti, const std::uint3
       active_n += bon[q];
       bad += bbad[q];
     }
+    next.n = nn;
     out.hi = hi;
     out.contacts += static_cast<std::size_t>(active_n);
     if (bad > 0.0 && !out.failed) {  // rare: find the first pair over the limit
@@ -674,13 +783,15 @@ void touchingPairs(const KernelIn& in, const std::uint32_t* ti, const std::uint3
 }
 
 using TouchingPairsFn = void (*)(const KernelIn&, const std::uint32_t*, const std::uint32_t*, std::size_t,
-                                 KernelOut&);
-TouchingPairsFn touchingPairsFor(bool measure, bool viscous, bool plastic) {
-  static const TouchingPairsFn table[8] = {
-      touchingPairs<false, false, false>, touchingPairs<false, false, true>, touchingPairs<false, true, false>,
-      touchingPairs<false, true, true>,   touchingPairs<true, false, false>,  touchingPairs<true, false, true>,
-      touchingPairs<true, true, false>,   touchingPairs<true, true, true>};
-  return table[(measure ? 4 : 0) + (viscous ? 2 : 0) + (plastic ? 1 : 0)];
+                                 KernelHistory&, KernelOut&);
+template <bool kMeasure, bool kViscous>
+constexpr TouchingPairsFn kPlasticUniform[4] = {
+    touchingPairs<kMeasure, kViscous, false, false>, touchingPairs<kMeasure, kViscous, false, true>,
+    touchingPairs<kMeasure, kViscous, true, false>, touchingPairs<kMeasure, kViscous, true, true>};
+TouchingPairsFn touchingPairsFor(bool measure, bool viscous, bool plastic, bool uniform) {
+  const int v = (plastic ? 2 : 0) + (uniform ? 1 : 0);
+  if (measure) return viscous ? kPlasticUniform<true, true>[v] : kPlasticUniform<true, false>[v];
+  return viscous ? kPlasticUniform<false, true>[v] : kPlasticUniform<false, false>[v];
 }
 }  // namespace
 
@@ -695,6 +806,7 @@ void Engine::computeContactForces(bool measure) {
   // parallel with the other partitions' work); the others write their own
   // buffers, cleared again when they are added.
   pool_->run([this, measure](int t) { contactKernel(t, measure); });
+  hcur_ ^= 1;  // this step's contact sets become the last step's
   contacts_ = 0;
   const std::size_t workers = scratch_.size();
   for (std::size_t t = 0; t < workers; ++t) {
@@ -768,24 +880,50 @@ void Engine::contactKernel(int t, bool measure) {
   const std::int64_t last = step_ - 1;
   const double ratio = max_overlap_ratio_;
 
-  // Pass 1 (branch-free, cache friendly): which list entries touch.
-  const std::uint32_t r0 = part_begin_[static_cast<std::size_t>(t)], r1 = part_begin_[static_cast<std::size_t>(t) + 1];
-  std::uint32_t* const ti = s.touch_i.data();
-  std::uint32_t* const tk = s.touch_k.data();
+  // The scan (branch-free, cache friendly) collects the touching list
+  // entries of this partition's rows into a chunk; each full chunk goes
+  // through the contact law (touchingPairs).
+  KernelIn in{X, Y, Z, R, VX, VY, VZ, WX, WY, WZ, IM, MAT, nbr_.data(),
+              law_kn_.data(), law_flim_.data(), law_ks_.data(), law_mu_.data(), law_zeta_.data(),
+              nmat, uniform_material_ ? mat_[0] * (nmat + 1) : 0, dt, ratio};
+  KernelOut out{FX, FY, FZ, TX, TY, TZ, &s.energy};
+  ContactSet& next = s.sets[hcur_ ^ 1];
+  next.n = 0;
+  KernelHistory hist{&s.sets[hcur_], 0, &next};
+  const TouchingPairsFn law = touchingPairsFor(measure, any_viscous_, any_plastic_, uniform_material_);
+  std::uint32_t* __restrict const ti = s.touch_i.data();
+  std::uint32_t* __restrict const tk = s.touch_k.data();
   std::size_t m = 0;
+  // Evaluates the first nq collected pairs and keeps the rest for the next chunk.
+  const auto flush = [&](std::size_t nq) {
+    next.ensure(next.n + nq, any_plastic_, any_viscous_);
+    law(in, ti, tk, nq, hist, out);
+    s.lo = std::min(s.lo, ti[0]);
+    std::copy(ti + nq, ti + m, ti);
+    std::copy(tk + nq, tk + m, tk);
+    m -= nq;
+  };
+  const std::uint32_t r0 = part_begin_[static_cast<std::size_t>(t)], r1 = part_begin_[static_cast<std::size_t>(t) + 1];
+  const std::uint32_t* __restrict const NBR = nbr_.data();
+  const std::uint32_t* __restrict const ROW = row_begin_.data();
   for (std::uint32_t i = r0; i < r1; ++i) {
     const double xi = X[i], yi = Y[i], zi = Z[i], ri = R[i];
-    const std::uint32_t kb = row_begin_[i], ke = row_begin_[i + 1];
-    for (std::uint32_t k = kb; k < ke; ++k) {
-      const std::uint32_t j = nbr_[k];
+    const std::uint32_t kb = ROW[i], ke = ROW[i + 1];
+    for (std::uint32_t k = kb; k < ke; ++k) {  // the buffers hold kChunk + the longest row
+      const std::uint32_t j = NBR[k];
       const double ex = X[j] - xi, ey = Y[j] - yi, ez = Z[j] - zi, rs = ri + R[j];
       ti[m] = i;
       tk[m] = k;
       m += (ex * ex + ey * ey + ez * ez < rs * rs) ? 1 : 0;
     }
+    if (m >= kChunk) flush(kChunk);
   }
+  if (m > 0) flush(m);
+  s.contacts += out.contacts;
+  if (out.failed) s.failed = true, s.fail_i = out.fail_i, s.fail_j = out.fail_j, s.fail_ratio = out.fail_ratio;
+  s.hi = std::max(s.hi, out.hi);
 
-  // Pass 2: the contact law on touching pairs.
+  // Pairs with an oversized sphere: the scalar law with a per-pair history.
   const auto contact = [&](std::uint32_t i, std::uint32_t j, History& H, std::size_t k) {
     const double ex = X[j] - X[i], ey = Y[j] - Y[i], ez = Z[j] - Z[i];
     const double d = std::sqrt(ex * ex + ey * ey + ez * ez);
@@ -824,15 +962,6 @@ void Engine::contactKernel(int t, bool measure) {
     s.hi = std::max(s.hi, j);
     ++s.contacts;
   };
-  KernelIn in{X,  Y,  Z,  R,  VX, VY, VZ, WX, WY, WZ, IM, MAT, nbr_.data(),
-              law_kn_.data(), law_flim_.data(), law_ks_.data(), law_mu_.data(), law_zeta_.data(),
-              hist_.ux.data(), hist_.uy.data(), hist_.uz.data(), hist_.plastic.data(), hist_.viscous.data(),
-              hist_.stamp.data(), nmat, dt, ratio, now};
-  KernelOut out{FX, FY, FZ, TX, TY, TZ, &s.energy};
-  touchingPairsFor(measure, any_viscous_, any_plastic_)(in, ti, tk, m, out);
-  s.contacts += out.contacts;
-  if (out.failed) s.failed = true, s.fail_i = out.fail_i, s.fail_j = out.fail_j, s.fail_ratio = out.fail_ratio;
-  if (m > 0) s.lo = std::min(s.lo, ti[0]), s.hi = std::max(s.hi, out.hi);
   const std::size_t nb = big_i_.size();
   for (std::size_t q = nb * static_cast<std::size_t>(t) / T; q < nb * (static_cast<std::size_t>(t) + 1) / T; ++q)
     contact(big_i_[q], big_j_[q], big_hist_, q);

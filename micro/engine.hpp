@@ -118,8 +118,10 @@ class Engine {
   std::vector<std::uint32_t> slot_;    // pid -> current index
   std::size_t sphere_count_ = 0;
 
-  // --- neighbour list (half list, CSR by row i, j > i) with the contact
-  // history aligned to it; oversized spheres in a separate pair list.
+  // --- neighbour list (half list, CSR by row i, j > i); the history of its
+  // touching pairs lives in per-partition contact sets (WorkerScratch), one
+  // entry per contact, not per list entry. Oversized spheres and walls keep
+  // a history per candidate pair (History, with the step it last touched).
   std::vector<std::uint32_t> row_begin_, nbr_;
   std::vector<std::uint32_t> big_i_, big_j_;
   struct History {
@@ -127,7 +129,8 @@ class Engine {
     std::vector<std::int64_t> stamp;  // last step the pair touched
     void resize(std::size_t m);
   };
-  History hist_, big_hist_;
+  History big_hist_;
+  int hcur_ = 0;  // which of the two contact sets of each partition holds the last step's contacts
   std::vector<std::uint8_t> is_big_;
   double skin_m_ = 0.0;
   double big_radius_m_ = 0.0;  // spheres above this are kept out of the grid
@@ -143,6 +146,9 @@ class Engine {
   // others): a finite F_lim, viscous damping.
   std::vector<double> law_kn_, law_flim_, law_ks_, law_mu_, law_zeta_;
   bool any_plastic_ = false, any_viscous_ = false;
+  // Every particle has the same material: the kernel reads one law instead
+  // of gathering it per pair.
+  bool uniform_material_ = false;
 
   std::vector<Block> blocks_;
   std::vector<Wall> walls_;
