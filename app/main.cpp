@@ -59,6 +59,10 @@ int commandRun(const Options& o) {
   ctx.case_file = o.case_file;
   ctx.progress = !o.quiet && isatty(STDOUT_FILENO) != 0;
   if (!o.law_file.empty()) ctx.law_file = o.law_file;
+  // The effective case for summary.json, kept as text so that the kind may
+  // free the document while it runs.
+  const std::string case_text = doc.json().dump();
+  ctx.may_release_case = true;
 
   const auto t0 = std::chrono::steady_clock::now();
   gabion::bridge::RunOutcome outcome;
@@ -80,7 +84,7 @@ int commandRun(const Options& o) {
   summary["wall_time_s"] = wall;
   summary["threads"] = o.threads;
   summary["case_file"] = o.case_file;
-  summary["case"] = doc.json();
+  summary["case"] = nlohmann::json::parse(case_text);
   for (auto it = outcome.results.begin(); it != outcome.results.end(); ++it) summary[it.key()] = it.value();
   gabion::bridge::writeJsonAtomic(outdir / "summary.json", summary);
 

@@ -1,5 +1,10 @@
 #include "bridge/json_reader.hpp"
 
+#include <algorithm>
+#ifdef __GLIBC__
+#include <malloc.h>
+#endif
+
 #include <cmath>
 #include <fstream>
 #include <sstream>
@@ -59,24 +64,20 @@ bool satisfies(double x, Check check) {
   return false;
 }
 
-void findUnknown(const Json& v, const std::string& ptr, const std::set<std::string>& used, const std::string& file) {
+// used and whole are sorted; the pointer string is built only for an error.
+void findUnknown(const Json& v, const std::string& ptr, const std::vector<const Json*>& used,
+                 const std::vector<const Json*>& whole, const std::string& file) {
+  if (std::binary_search(whole.begin(), whole.end(), &v)) return;
   if (v.is_object()) {
     for (auto it = v.begin(); it != v.end(); ++it) {
-      const std::string child = ptr + "/" + escapePointerToken(it.key());
-      if (used.count(child) == 0) throw InputError(file, child, "unknown key '" + it.key() + "'");
-      findUnknown(it.value(), child, used, file);
+      if (!std::binary_search(used.begin(), used.end(), &it.value()))
+        throw InputError(file, ptr + "/" + escapePointerToken(it.key()), "unknown key '" + it.key() + "'");
+      if (it.value().is_structured())
+        findUnknown(it.value(), ptr + "/" + escapePointerToken(it.key()), used, whole, file);
     }
   } else if (v.is_array()) {
-    for (std::size_t i = 0; i < v.size(); ++i) findUnknown(v[i], ptr + "/" + std::to_string(i), used, file);
-  }
-}
-
-void markSubtree(const Json& v, const std::string& ptr, std::set<std::string>& used) {
-  used.insert(ptr);
-  if (v.is_object()) {
-    for (auto it = v.begin(); it != v.end(); ++it) markSubtree(it.value(), ptr + "/" + escapePointerToken(it.key()), used);
-  } else if (v.is_array()) {
-    for (std::size_t i = 0; i < v.size(); ++i) markSubtree(v[i], ptr + "/" + std::to_string(i), used);
+    for (std::size_t i = 0; i < v.size(); ++i)
+      if (v[i].is_structured()) findUnknown(v[i], ptr + "/" + std::to_string(i), used, whole, file);
   }
 }
 
@@ -91,12 +92,10 @@ JsonDocument JsonDocument::load(const std::filesystem::path& path) {
   if (std::filesystem::is_directory(path, ec)) throw InputError(file, "", "is a directory, not a JSON file");
   std::ifstream in(path, std::ios::binary);
   if (!in) throw InputError(file, "", "cannot open file for reading");
-  std::ostringstream buffer;
-  buffer << in.rdbuf();
-  if (in.bad()) throw InputError(file, "", "read error");
   Json value;
   try {
-    value = Json::parse(buffer.str());
+    value = Json::parse(in);  // from the stream: no copy of a large file's text beside its DOM
+    if (in.bad()) throw InputError(file, "", "read error");
   } catch (const Json::parse_error& e) {
     std::string what = e.what();
     const auto pos = what.find("parse error");
@@ -160,7 +159,22 @@ void JsonDocument::applySet(const std::string& assignment) {
   *node = std::move(value);
 }
 
-void JsonDocument::finish() const { findUnknown(state_->value, "", state_->used, state_->file); }
+void JsonDocument::finish() const {
+  for (auto* v : {&state_->used, &state_->whole}) {
+    std::sort(v->begin(), v->end());
+    v->erase(std::unique(v->begin(), v->end()), v->end());
+  }
+  findUnknown(state_->value, "", state_->used, state_->whole, state_->file);
+}
+
+void JsonDocument::releaseValue() const {
+  state_->value = nullptr;
+  std::vector<const Json*>().swap(state_->used);
+  std::vector<const Json*>().swap(state_->whole);
+#ifdef __GLIBC__
+  malloc_trim(0);  // the many small nodes of a large case go back to the system
+#endif
+}
 
 // ---------------------------------------------------------------- JsonReader
 
@@ -183,7 +197,7 @@ const Json* JsonReader::find(const std::string& key) const {
   if (!node_->is_object()) failHere("expected an object, got " + typeName(*node_));
   auto it = node_->find(key);
   if (it == node_->end()) return nullptr;
-  state_->used.insert(pointer(key));
+  state_->used.push_back(&*it);
   return &*it;
 }
 
@@ -303,6 +317,7 @@ std::vector<JsonReader> JsonReader::objects(const std::string& key, bool require
   if (v == nullptr) return out;
   if (!v->is_array()) fail(key, "expected an array of objects, got " + typeName(*v));
   const std::string base = pointer(key);
+  out.reserve(v->size());
   for (std::size_t i = 0; i < v->size(); ++i) {
     const std::string p = base + "/" + std::to_string(i);
     if (!(*v)[i].is_object()) throw InputError(state_->file, p, "expected an object, got " + typeName((*v)[i]));
@@ -316,7 +331,7 @@ std::vector<std::pair<std::string, JsonReader>> JsonReader::members() const {
   std::vector<std::pair<std::string, JsonReader>> out;
   for (auto it = node_->begin(); it != node_->end(); ++it) {
     const std::string p = pointer(it.key());
-    state_->used.insert(p);
+    state_->used.push_back(&it.value());
     if (!it.value().is_object()) throw InputError(state_->file, p, "expected an object, got " + typeName(it.value()));
     out.emplace_back(it.key(), JsonReader(&it.value(), p, state_));
   }
@@ -325,7 +340,7 @@ std::vector<std::pair<std::string, JsonReader>> JsonReader::members() const {
 
 const Json& JsonReader::raw(const std::string& key) const {
   const Json& v = required(key);
-  markSubtree(v, pointer(key), state_->used);
+  state_->whole.push_back(&v);
   return v;
 }
 

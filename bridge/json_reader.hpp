@@ -42,6 +42,11 @@ class JsonDocument {
   void applySet(const std::string& assignment);
   /// Throws InputError for the first key in the document that was never read.
   void finish() const;
+  /// Frees the parsed value and the bookkeeping (json() is null afterwards):
+  /// for a kind that has read all it needs from a large case, when the caller
+  /// allows it (RunContext::may_release_case). Readers of this document must
+  /// not be used afterwards.
+  void releaseValue() const;
 
   const nlohmann::json& json() const { return state_->value; }
   const std::string& file() const { return state_->file; }
@@ -51,7 +56,10 @@ class JsonDocument {
   struct State {
     nlohmann::json value;
     std::string file;
-    std::set<std::string> used;  // JSON pointers of keys that were read
+    // Values that were read, by address (stable: the value is not modified
+    // after applySet); `whole`: read as a whole (raw), nothing inside is
+    // checked. Sorted by finish(). A pointer per key read, not a string.
+    std::vector<const nlohmann::json*> used, whole;
   };
   std::shared_ptr<State> state_;
 };

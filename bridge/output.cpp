@@ -3,6 +3,7 @@
 #include <H5Cpp.h>
 
 #include <fstream>
+#include <iomanip>
 #include <numeric>
 #include <sstream>
 #include <stdexcept>
@@ -40,19 +41,36 @@ const QuietHdf5 kQuiet;
 
 }  // namespace
 
-void writeTextAtomic(const fs::path& path, const std::string& text) {
+namespace {
+// Writes through `emit` into PATH.part, then renames it to PATH; on failure
+// the part file is removed and PATH is left as it was.
+template <class Emit>
+void writeAtomic(const fs::path& path, Emit emit) {
   const fs::path part = partPath(path);
   {
     std::ofstream out(part, std::ios::binary | std::ios::trunc);
     if (!out) throw std::runtime_error("cannot write " + part.string());
-    out << text;
+    emit(out);
     out.flush();
-    if (!out) throw std::runtime_error("write failed: " + part.string());
+    if (!out) {
+      out.close();
+      std::error_code ec;
+      fs::remove(part, ec);
+      throw std::runtime_error("write failed: " + part.string());
+    }
   }
   renameInto(part, path);
 }
+}  // namespace
 
-void writeJsonAtomic(const fs::path& path, const nlohmann::json& value) { writeTextAtomic(path, value.dump(2) + "\n"); }
+void writeTextAtomic(const fs::path& path, const std::string& text) {
+  writeAtomic(path, [&](std::ostream& out) { out << text; });
+}
+
+// Streamed: a summary that embeds a large case is never held as one string.
+void writeJsonAtomic(const fs::path& path, const nlohmann::json& value) {
+  writeAtomic(path, [&](std::ostream& out) { out << std::setw(2) << value << "\n"; });
+}
 
 // ---------------------------------------------------------------- H5Writer
 
@@ -95,6 +113,51 @@ void H5Writer::write(const std::string& dataset, const std::vector<double>& data
       H5::Attribute a = ds.createAttribute("unit", st, H5::DataSpace(H5S_SCALAR));
       a.write(st, unit);
     }
+  } catch (const H5::Exception& e) {
+    throw std::runtime_error("HDF5 write " + part_.string() + ":" + dataset + ": " + e.getDetailMsg());
+  }
+}
+
+void H5Writer::appendRow(const std::string& dataset, const std::vector<double>& row,
+                         const std::vector<std::size_t>& row_dims, const std::string& unit) {
+  const std::size_t n = std::accumulate(row_dims.begin(), row_dims.end(), std::size_t{1}, std::multiplies<>());
+  if (n != row.size()) throw std::logic_error("H5Writer: " + dataset + ": row size does not match row_dims");
+  try {
+    const int rank = static_cast<int>(row_dims.size()) + 1;
+    std::vector<hsize_t> one(static_cast<std::size_t>(rank), 1);
+    for (std::size_t d = 0; d < row_dims.size(); ++d) one[d + 1] = std::max<hsize_t>(1, row_dims[d]);
+    H5::DataSet ds;
+    ensureGroups(impl_->file, dataset);
+    if (!impl_->file.nameExists(dataset)) {
+      std::vector<hsize_t> start(one), max_dims(one);
+      start[0] = 0;
+      for (std::size_t d = 0; d < row_dims.size(); ++d) start[d + 1] = row_dims[d];
+      max_dims[0] = H5S_UNLIMITED;
+      for (std::size_t d = 0; d < row_dims.size(); ++d) max_dims[d + 1] = row_dims[d];
+      H5::DataSpace space(rank, start.data(), max_dims.data());
+      H5::DSetCreatPropList plist;
+      plist.setChunk(rank, one.data());  // one row per chunk
+      ds = impl_->file.createDataSet(dataset, H5::PredType::NATIVE_DOUBLE, space, plist);
+      if (!unit.empty()) {
+        H5::StrType st(H5::PredType::C_S1, unit.size());
+        ds.createAttribute("unit", st, H5::DataSpace(H5S_SCALAR)).write(st, unit);
+      }
+    } else {
+      ds = impl_->file.openDataSet(dataset);
+    }
+    std::vector<hsize_t> dims(static_cast<std::size_t>(rank));
+    ds.getSpace().getSimpleExtentDims(dims.data());
+    const hsize_t at = dims[0];
+    dims[0] = at + 1;
+    ds.extend(dims.data());
+    if (n == 0) return;
+    H5::DataSpace file_space = ds.getSpace();
+    std::vector<hsize_t> offset(static_cast<std::size_t>(rank), 0), count(dims);
+    offset[0] = at;
+    count[0] = 1;
+    file_space.selectHyperslab(H5S_SELECT_SET, count.data(), offset.data());
+    H5::DataSpace mem_space(rank, count.data());
+    ds.write(row.data(), H5::PredType::NATIVE_DOUBLE, mem_space, file_space);
   } catch (const H5::Exception& e) {
     throw std::runtime_error("HDF5 write " + part_.string() + ":" + dataset + ": " + e.getDetailMsg());
   }

@@ -33,6 +33,12 @@ class H5Writer {
   /// An N-D dataset in row-major (C) order; data.size() must equal the product of dims.
   void write(const std::string& dataset, const std::vector<double>& data, const std::vector<std::size_t>& dims,
              const std::string& unit = "");
+  /// Appends one row to a dataset whose first dimension grows (created on the
+  /// first call with shape (0, row_dims...), chunked by row): a run streams its
+  /// snapshots instead of keeping them in memory. row.size() must equal the
+  /// product of row_dims, and row_dims must not change between calls.
+  void appendRow(const std::string& dataset, const std::vector<double>& row, const std::vector<std::size_t>& row_dims,
+                 const std::string& unit = "");
   /// A 1-D integer dataset.
   void writeInts(const std::string& dataset, const std::vector<long long>& values);
   /// A string attribute on the root group or on an existing object.

@@ -47,6 +47,10 @@ struct RunContext {
   int threads = 1;                               ///< --threads
   bool progress = false;                         ///< show a progress line
   std::filesystem::path case_file;               ///< for provenance and messages
+  /// The kind may free the case document's parsed value once it has read it
+  /// (JsonDocument::releaseValue; a large particle case would otherwise keep
+  /// its DOM beside the engine). The caller then keeps its own copy.
+  bool may_release_case = false;
 };
 
 /// What a run gives back. `results` is merged into summary.json.

@@ -13,15 +13,16 @@ namespace gabion::micro {
 namespace {
 
 // The step to use: dt_s if given (refused above the critical step unless
-// run.allow_dt_above_critical), else dt_safety x critical.
-double chooseDt(const Scene& scene, double critical, const bridge::JsonReader& root) {
+// run.allow_dt_above_critical), else dt_safety x critical. `file` names the
+// case in the error.
+double chooseDt(const Scene& scene, double critical, const std::string& file) {
   const RunSpec& rs = scene.run;
   if (rs.dt_s > 0.0) {
     if (rs.dt_s > critical && !rs.allow_dt_above_critical) {
       std::ostringstream m;
       m << "dt_s = " << rs.dt_s << " s is above the critical time step " << critical
         << " s (set run.allow_dt_above_critical = true to run anyway)";
-      root.object("run").fail("dt_s", m.str());
+      throw bridge::InputError(file, "/run/dt_s", m.str());
     }
     return rs.dt_s;
   }
@@ -31,10 +32,11 @@ double chooseDt(const Scene& scene, double critical, const bridge::JsonReader& r
 
 void checkScene(const bridge::JsonDocument& doc) {
   const Scene scene = parseScene(doc.root());
-  const Engine engine(scene, 1);
-  chooseDt(scene, engine.criticalDt(), doc.root());
+  chooseDt(scene, criticalTimeStep(scene), doc.file());
 }
 
+// Scalar series, kept in memory (a few numbers per sample) and written at the
+// end; body snapshots are streamed to the file as they are taken.
 struct Series {
   std::vector<double> time;
   std::vector<std::vector<double>> energy;  // per term
@@ -59,9 +61,15 @@ const std::vector<std::pair<std::string, double EnergyTotals::*>>& energyTerms()
 }
 
 bridge::RunOutcome runScene(const bridge::JsonDocument& doc, const bridge::RunContext& ctx) {
-  const Scene scene = parseScene(doc.root());
+  Scene scene = parseScene(doc.root());
+  // Everything is read: a large case's DOM need not stay beside the engine.
+  const std::string file = doc.file();
+  if (ctx.may_release_case) doc.releaseValue();
+  const std::size_t sphere_count = scene.spheres.size();
   Engine engine(scene, ctx.threads);
-  const double dt = chooseDt(scene, engine.criticalDt(), doc.root());
+  std::vector<SphereSpec>().swap(scene.spheres);  // the engine has its own copy
+  std::vector<BlockSpec>().swap(scene.blocks);
+  const double dt = chooseDt(scene, engine.criticalDt(), file);
   engine.setDt(dt);
   const auto steps = static_cast<long long>(std::ceil(scene.run.duration_s / dt - 1e-9));
   const long long series_every = std::max(1LL, std::llround(scene.run.series_interval_s / dt));
@@ -72,21 +80,27 @@ bridge::RunOutcome runScene(const bridge::JsonDocument& doc, const bridge::RunCo
   series.energy.resize(energyTerms().size());
   series.wall_force.resize(nw);
   series.wall_position.resize(nw);
-  std::vector<double> snap_t, snap_x, snap_v, snap_w, snap_q;
+  bridge::H5Writer h5(ctx.outdir / "result.h5");
+  std::vector<double> snap_t, row(3 * nb), row_q(4 * nblk);
   const auto snapshot = [&](double t) {
     snap_t.push_back(t);
-    for (std::size_t b = 0; b < nb; ++b) {
-      const BodyState s = engine.body(b);
-      for (int c = 0; c < 3; ++c) {
-        snap_x.push_back(s.position_m[c]);
-        snap_v.push_back(s.velocity_m_s[c]);
-        snap_w.push_back(s.angular_velocity_rad_s[c]);
+    const std::pair<const char*, Vec3 BodyState::*> fields[3] = {{"position_m", &BodyState::position_m},
+                                                                 {"velocity_m_s", &BodyState::velocity_m_s},
+                                                                 {"angular_velocity_rad_s", &BodyState::angular_velocity_rad_s}};
+    const char* units[3] = {"m", "m/s", "rad/s"};
+    for (int f = 0; f < 3; ++f) {
+      for (std::size_t b = 0; b < nb; ++b) {
+        const Vec3 v = engine.body(b).*(fields[f].second);
+        row[3 * b] = v.x(), row[3 * b + 1] = v.y(), row[3 * b + 2] = v.z();
       }
+      h5.appendRow(std::string("/bodies/") + fields[f].first, row, {nb, 3}, units[f]);
     }
+    if (nblk == 0) return;
     for (std::size_t k = 0; k < nblk; ++k) {
       const Eigen::Quaterniond q = engine.blockOrientation(k);
-      snap_q.insert(snap_q.end(), {q.w(), q.x(), q.y(), q.z()});
+      row_q[4 * k] = q.w(), row_q[4 * k + 1] = q.x(), row_q[4 * k + 2] = q.y(), row_q[4 * k + 3] = q.z();
     }
+    h5.appendRow("/blocks/orientation", row_q, {nblk, 4}, "1");
   };
   const auto record = [&](double t) {
     series.time.push_back(t);
@@ -118,9 +132,8 @@ bridge::RunOutcome runScene(const bridge::JsonDocument& doc, const bridge::RunCo
   progress.finish();
   if (!ok) snapshot(engine.time());
 
-  // Result files.
+  // Result files (the snapshots are in h5 already).
   {
-    bridge::H5Writer h5(ctx.outdir / "result.h5");
     h5.write("/series/time_s", series.time, "s");
     for (std::size_t k = 0; k < energyTerms().size(); ++k) {
       const std::string& name = energyTerms()[k].first;
@@ -132,15 +145,10 @@ bridge::RunOutcome runScene(const bridge::JsonDocument& doc, const bridge::RunCo
       h5.write("/series/wall_" + std::to_string(w) + "_force_N", series.wall_force[w], {ns, 3}, "N");
       h5.write("/series/wall_" + std::to_string(w) + "_position_m", series.wall_position[w], {ns, 3}, "m");
     }
-    const std::size_t nt = snap_t.size();
     std::vector<double> radius(nb);
     for (std::size_t b = 0; b < nb; ++b) radius[b] = engine.bodyRadius(b);
     h5.write("/bodies/time_s", snap_t, "s");
-    h5.write("/bodies/position_m", snap_x, {nt, nb, 3}, "m");
-    h5.write("/bodies/velocity_m_s", snap_v, {nt, nb, 3}, "m/s");
-    h5.write("/bodies/angular_velocity_rad_s", snap_w, {nt, nb, 3}, "rad/s");
     h5.write("/bodies/radius_m", radius, "m");
-    if (nblk > 0) h5.write("/blocks/orientation", snap_q, {nt, nblk, 4}, "1");
     h5.attribute("/", "format", "gabion.micro.scene/1");
     h5.commit();
     bridge::writeXdmfPoints(ctx.outdir / "result.xdmf", "result.h5", snap_t, nb, "/bodies/position_m",
@@ -157,7 +165,7 @@ bridge::RunOutcome runScene(const bridge::JsonDocument& doc, const bridge::RunCo
   out.results["dt_s"] = dt;
   out.results["dt_critical_s"] = engine.criticalDt();
   out.results["bodies"] = nb;
-  out.results["spheres"] = scene.spheres.size();
+  out.results["spheres"] = sphere_count;
   out.results["blocks"] = nblk;
   out.results["walls"] = nw;
   out.results["energy"] = energy;

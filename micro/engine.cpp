@@ -62,10 +62,12 @@ struct ContactSet {
   std::vector<std::uint32_t> k;
   std::vector<double> ux, uy, uz, plastic, viscous;  // plastic/viscous: only when a material uses them
   std::size_t n = 0;
-  /// Room for m contacts (sizes grow geometrically; n is unchanged).
+  /// Room for m contacts (n is unchanged). Sizes grow by a quarter: the
+  /// count changes slowly from step to step, and two sets per partition are
+  /// kept, so a doubling would waste memory for the whole run.
   void ensure(std::size_t m, bool with_plastic, bool with_viscous) {
     if (k.size() >= m) return;
-    const std::size_t size = std::max(m, 2 * k.size() + 64);
+    const std::size_t size = std::max(m, k.size() + k.size() / 4 + kChunk);
     k.resize(size);
     for (auto* v : {&ux, &uy, &uz}) v->resize(size);
     if (with_plastic) plastic.resize(size);
@@ -98,6 +100,61 @@ void Engine::History::resize(std::size_t m) {
   viscous.assign(m, 0.0);
   stamp.assign(m, std::numeric_limits<std::int64_t>::min() / 2);
 }
+
+namespace {
+std::vector<MassProperties> blockMassProperties(const Scene& scene) {
+  std::vector<MassProperties> out;
+  out.reserve(scene.blocks.size());
+  for (const BlockSpec& b : scene.blocks)
+    out.push_back(clusterMassProperties(b.member_centers_m, b.member_radii_m,
+                                        scene.materials[static_cast<std::size_t>(b.material)].density_kg_m3));
+  return out;
+}
+
+// Critical step: each free body against the stiffest contact it can meet
+// (docs/micro.md): sqrt(m / k_n) and sqrt(I / (k l^2)) with l the farthest
+// reach of the body from its centre (R for a sphere, I = 0.4 m R^2).
+double criticalStep(const Scene& scene, const std::vector<MassProperties>& block_props) {
+  const std::size_t nmat = scene.materials.size();
+  std::vector<PairLaw> laws(nmat * nmat);
+  for (std::size_t a = 0; a < nmat; ++a)
+    for (std::size_t b = 0; b < nmat; ++b) laws[a * nmat + b] = mixMaterials(scene.materials[a], scene.materials[b]);
+  std::vector<bool> present(nmat, false);
+  for (const auto& sp : scene.spheres) present[static_cast<std::size_t>(sp.material)] = true;
+  for (const auto& b : scene.blocks) present[static_cast<std::size_t>(b.material)] = true;
+  for (const auto& w : scene.walls) present[static_cast<std::size_t>(w.material)] = true;
+  std::vector<double> kn_max(nmat, 0.0), k_max(nmat, 0.0), ks_max(nmat, 0.0);
+  for (std::size_t a = 0; a < nmat; ++a)
+    for (std::size_t b = 0; b < nmat; ++b)
+      if (present[b]) {
+        const PairLaw& l = laws[a * nmat + b];
+        kn_max[a] = std::max(kn_max[a], l.normal.stiffness_N_m);
+        ks_max[a] = std::max(ks_max[a], l.tangential.stiffness_N_m);
+        k_max[a] = std::max({k_max[a], l.normal.stiffness_N_m, l.tangential.stiffness_N_m});
+      }
+  double dt = std::numeric_limits<double>::infinity();
+  for (const auto& sp : scene.spheres) {
+    if (sp.fixed) continue;
+    const auto m = static_cast<std::size_t>(sp.material);
+    const double mass = scene.materials[m].density_kg_m3 * 4.0 / 3.0 * kPi * sp.radius_m * sp.radius_m * sp.radius_m;
+    dt = std::min({dt, std::sqrt(mass / kn_max[m]), std::sqrt(0.4 * mass / ks_max[m])});
+  }
+  for (std::size_t bi = 0; bi < scene.blocks.size(); ++bi) {
+    const BlockSpec& spec = scene.blocks[bi];
+    if (spec.fixed) continue;
+    const MassProperties& props = block_props[bi];
+    const std::vector<Vec3> offsets = principalFrameOffsets(props, spec.member_centers_m);
+    const auto m = static_cast<std::size_t>(spec.material);
+    double lever = 0.0;
+    for (std::size_t k = 0; k < offsets.size(); ++k) lever = std::max(lever, offsets[k].norm() + spec.member_radii_m[k]);
+    dt = std::min({dt, std::sqrt(props.mass_kg / kn_max[m]),
+                   std::sqrt(props.principal_moments_kg_m2.minCoeff() / (k_max[m] * lever * lever))});
+  }
+  return dt;
+}
+}  // namespace
+
+double criticalTimeStep(const Scene& scene) { return criticalStep(scene, blockMassProperties(scene)); }
 
 Engine::Engine(const Scene& scene, int threads) {
   materials_ = scene.materials;
@@ -155,10 +212,11 @@ Engine::Engine(const Scene& scene, int threads) {
     }
   }
   std::size_t next = sphere_count_;
+  const std::vector<MassProperties> block_props = blockMassProperties(scene);
   for (std::size_t bi = 0; bi < scene.blocks.size(); ++bi) {
     const BlockSpec& spec = scene.blocks[bi];
     const Material& m = materials_[spec.material];
-    const MassProperties props = clusterMassProperties(spec.member_centers_m, spec.member_radii_m, m.density_kg_m3);
+    const MassProperties& props = block_props[bi];
     Block b;
     b.mass = props.mass_kg;
     b.volume = props.volume_m3;
@@ -213,37 +271,7 @@ Engine::Engine(const Scene& scene, int threads) {
   }
   skin_m_ = scene.run.verlet_skin_ratio * sum_r / static_cast<double>(std::max<std::size_t>(small, 1));
 
-  // Critical step: each body against the stiffest contact it can meet.
-  std::vector<double> kn_max(nmat_, 0.0), k_max(nmat_, 0.0);
-  std::vector<bool> present(nmat_, false);
-  for (std::size_t i = 0; i < n_; ++i) present[mat_[i]] = true;
-  for (const auto& w : walls_) present[w.mat] = true;
-  for (std::size_t a = 0; a < nmat_; ++a)
-    for (std::size_t b = 0; b < nmat_; ++b)
-      if (present[b]) {
-        const PairLaw& l = laws_[a * nmat_ + b];
-        kn_max[a] = std::max(kn_max[a], l.normal.stiffness_N_m);
-        k_max[a] = std::max({k_max[a], l.normal.stiffness_N_m, l.tangential.stiffness_N_m});
-      }
-  dt_critical_ = std::numeric_limits<double>::infinity();
-  for (std::size_t s = 0; s < sphere_count_; ++s) {
-    if (mass_[s] == 0.0) continue;
-    double ks_max = 0.0;
-    for (std::size_t b = 0; b < nmat_; ++b)
-      if (present[b]) ks_max = std::max(ks_max, laws_[mat_[s] * nmat_ + b].tangential.stiffness_N_m);
-    dt_critical_ = std::min({dt_critical_, std::sqrt(mass_[s] / kn_max[mat_[s]]),
-                             std::sqrt(0.4 * mass_[s] / ks_max)});
-  }
-  for (std::size_t bi = 0; bi < blocks_.size(); ++bi) {
-    const Block& b = blocks_[bi];
-    if (b.fixed) continue;
-    const int m = scene.blocks[bi].material;
-    double lever = 0.0;
-    for (std::size_t k = 0; k < b.offsets.size(); ++k)
-      lever = std::max(lever, b.offsets[k].norm() + scene.blocks[bi].member_radii_m[k]);
-    dt_critical_ = std::min({dt_critical_, std::sqrt(b.mass / kn_max[m]),
-                             std::sqrt(b.inertia.minCoeff() / (k_max[m] * lever * lever))});
-  }
+  dt_critical_ = criticalStep(scene, block_props);
 
   pool_ = std::make_unique<WorkerPool>(threads);
   scratch_.resize(static_cast<std::size_t>(pool_->size()));
@@ -293,6 +321,11 @@ void Engine::rebuildNeighbourList() {
     std::uint32_t a, b, t, c;
   };
   std::vector<SavedContact> saved;
+  {
+    std::size_t count = 0;
+    for (const auto& sc : scratch_) count += sc.sets[hcur_].n;
+    saved.reserve(count);
+  }
   for (std::size_t t = 0; t < scratch_.size(); ++t) {
     const ContactSet& cs = scratch_[t].sets[hcur_];
     std::size_t i = cs.n > 0 ? part_begin_[t] : 0;
@@ -407,7 +440,8 @@ void Engine::rebuildNeighbourList() {
                                                            static_cast<std::uint32_t>(i + 1));
           const std::uint32_t je = cell_start[row + std::min(cx + 1, nx - 1) + 1];
           if (jb >= je) continue;
-          if (out.size() < len + (je - jb)) out.resize(std::max<std::size_t>(len + (je - jb), 2 * out.size()));
+          if (out.size() < len + (je - jb))  // grows by a quarter (the list is the largest array)
+            out.resize(std::max<std::size_t>(len + (je - jb), out.size() + out.size() / 4 + 1024));
           std::uint32_t* __restrict o = out.data() + len;
           std::size_t cnt = 0;
           for (std::uint32_t j = jb; j < je; ++j) {

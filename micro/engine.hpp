@@ -40,6 +40,10 @@ struct BodyState {
   Vec3 position_m, velocity_m_s, angular_velocity_rad_s;
 };
 
+/// Critical time step of a scene (s), as Engine::criticalDt() gives it,
+/// without building the engine (docs/micro.md).
+double criticalTimeStep(const Scene& scene);
+
 class Engine {
  public:
   /// Builds the state from a parsed scene with `threads` workers (>= 1) for

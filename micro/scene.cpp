@@ -58,7 +58,9 @@ Scene parseScene(const JsonReader& root) {
   }
   if (s.materials.empty()) root.fail("materials", "at least one material is required");
 
-  for (const auto& r : root.objects("spheres")) {
+  const std::vector<bridge::JsonReader> sphere_readers = root.objects("spheres");
+  s.spheres.reserve(sphere_readers.size());
+  for (const auto& r : sphere_readers) {
     SphereSpec sp;
     sp.center_m = r.vec3("center_m");
     sp.radius_m = r.number("radius_m", Check::Positive);

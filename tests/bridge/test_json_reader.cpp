@@ -48,6 +48,26 @@ TEST(JsonReader, UnknownKeyIsRejectedAfterReading) {
   EXPECT_EQ(errorOf([&] { d.finish(); }), "case.json: /nested/typo_m: unknown key 'typo_m'");
 }
 
+TEST(JsonReader, UnknownKeyInsideArrayOfObjectsAndRawSubtrees) {
+  // Keys are tracked by the address of the value read: the same key name in
+  // another array element is a different key.
+  auto d = doc(R"({"list":[{"v":1},{"v":2,"w":3}],"free":{"any":{"thing":1}}})");
+  for (const auto& r : d.root().objects("list")) r.number("v");
+  d.root().raw("free");  // read as a whole: nothing inside is checked
+  EXPECT_EQ(errorOf([&] { d.finish(); }), "case.json: /list/1/w: unknown key 'w'");
+  d.root().objects("list")[1].number("w");
+  EXPECT_NO_THROW(d.finish());
+}
+
+TEST(JsonReader, ReleaseFreesTheValue) {
+  auto d = doc(R"({"x":2})");
+  EXPECT_DOUBLE_EQ(d.root().number("x"), 2.0);
+  d.finish();
+  d.releaseValue();
+  EXPECT_TRUE(d.json().is_null());
+  EXPECT_EQ(d.file(), "case.json");
+}
+
 TEST(JsonReader, DefaultsDoNotMarkAbsentKeys) {
   auto d = doc(R"({"x":2})");
   EXPECT_DOUBLE_EQ(d.root().number("y", 5.0), 5.0);

@@ -29,6 +29,25 @@ TEST(Output, Hdf5RoundTripAndAtomicRename) {
   EXPECT_THROW(r.read("/nothing/here"), InputError);
 }
 
+TEST(Output, AppendedRowsGrowTheFirstDimension) {
+  const fs::path path = fs::path(::testing::TempDir()) / "append.h5";
+  fs::remove(path);
+  {
+    H5Writer w(path);
+    w.appendRow("/bodies/position_m", {1, 2, 3, 4, 5, 6}, {2, 3}, "m");
+    w.appendRow("/bodies/position_m", {7, 8, 9, 10, 11, 12}, {2, 3}, "m");
+    w.appendRow("/bodies/position_m", {13, 14, 15, 16, 17, 18}, {2, 3}, "m");
+    EXPECT_THROW(w.appendRow("/bodies/position_m", {1, 2}, {2, 3}), std::logic_error);
+    w.commit();
+  }
+  H5Reader r(path);
+  EXPECT_EQ(r.dims("/bodies/position_m"), (std::vector<std::size_t>{3, 2, 3}));
+  const std::vector<double> all = r.read("/bodies/position_m");
+  ASSERT_EQ(all.size(), 18u);
+  for (std::size_t k = 0; k < all.size(); ++k) EXPECT_EQ(all[k], static_cast<double>(k + 1));
+  EXPECT_EQ(r.attribute("/bodies/position_m", "unit"), "m");
+}
+
 TEST(Output, UncommittedWriterLeavesNoFile) {
   const fs::path path = fs::path(::testing::TempDir()) / "abandoned.h5";
   fs::remove(path);
