@@ -83,6 +83,12 @@ struct Engine::WorkerScratch {
   std::vector<double> fx, fy, fz, tx, ty, tz;
   ContactSet sets[2];
   std::vector<std::uint32_t> touch_i, touch_k;  // a chunk of touching pairs (+ one list row)
+  // wall contacts of this worker's particle range
+  std::vector<Vec3> wall_force;  // per wall, force exerted on it (N)
+  ContactEnergy wall_energy;
+  double wall_work = 0.0;
+  std::size_t wall_contacts = 0;
+  std::string wall_failure;
   std::vector<std::uint32_t> rows;  // neighbour-list rows built by this worker
   std::uint32_t lo = 0, hi = 0;
   ContactEnergy energy;
@@ -166,7 +172,7 @@ Engine::Engine(const Scene& scene, int threads) {
     law_kn_.push_back(l.normal.stiffness_N_m);
     law_flim_.push_back(l.normal.force_limit_N);
     law_ks_.push_back(l.tangential.stiffness_N_m);
-    law_mu_.push_back(l.tangential.friction);
+    law_mu_ks_.push_back(l.tangential.friction / l.tangential.stiffness_N_m);
     law_zeta_.push_back(l.damping_ratio);
     any_plastic_ = any_plastic_ || std::isfinite(l.normal.force_limit_N);
     any_viscous_ = any_viscous_ || l.damping_ratio > 0.0;
@@ -378,13 +384,17 @@ void Engine::rebuildNeighbourList() {
       h *= 1.26;
     }
   }
+  // The grid has a layer of empty cells all round, so that the neighbour
+  // cells of any occupied cell exist (no bounds tests in the search).
+  const std::size_t px = nx + 2, py = ny + 2;
+  ncell = px * py * (nz + 2);
   const double inv_h = 1.0 / h;
   std::vector<std::uint32_t> cell(n_);
   const auto cellOf = [&](std::size_t i) {
     const auto cx = std::min(nx - 1, static_cast<std::size_t>((x_[i] - lo.x()) * inv_h));
     const auto cy = std::min(ny - 1, static_cast<std::size_t>((y_[i] - lo.y()) * inv_h));
     const auto cz = std::min(nz - 1, static_cast<std::size_t>((z_[i] - lo.z()) * inv_h));
-    return static_cast<std::uint32_t>((cz * ny + cy) * nx + cx);
+    return static_cast<std::uint32_t>(((cz + 1) * py + (cy + 1)) * px + (cx + 1));
   };
   for (std::size_t i = 0; i < n_; ++i) cell[i] = is_big_[i] ? static_cast<std::uint32_t>(ncell) : cellOf(i);
   std::vector<std::uint32_t> cell_start(ncell + 2, 0);
@@ -405,7 +415,9 @@ void Engine::rebuildNeighbourList() {
   };
 
   // 3. Half neighbour list, CSR by row; rows come out sorted by j because
-  // cells are visited in increasing index order. Each worker builds a fixed
+  // cells are visited in increasing index order. A partner j > i lies in a
+  // cell at or after i's: of the 27 cells around i's, only the rest of its own
+  // x-row and the four x-rows (y+1), (z+1, y-1..y+1) can hold one. Each worker builds a fixed
   // range of rows into its own buffer; the buffers are joined in worker order,
   // so the list is the same for any thread count.
   row_begin_.assign(n_ + 1, 0);
@@ -413,7 +425,7 @@ void Engine::rebuildNeighbourList() {
   pool_->run([&](int t) {
     // One worker writes the list itself (no second copy in memory).
     // The three cells along x of one (y, z) row of the stencil hold one
-    // contiguous range of particles (cell order), so each particle scans 9
+    // contiguous range of particles (cell order), so each particle scans 5
     // ranges, branch-free, appending in place.
     std::vector<std::uint32_t>& out = workers == 1 ? nbr_ : scratch_[static_cast<std::size_t>(t)].rows;
     std::size_t len = 0;
@@ -423,37 +435,32 @@ void Engine::rebuildNeighbourList() {
                  *__restrict R = r_.data(), *__restrict IMB = inv_body_mass_.data();
     const std::int32_t* __restrict BLK = block_.data();
     const double skin = skin_m_;
+    const std::size_t row_offset[5] = {0, px, px * py - px, px * py, px * py + px};
     for (std::size_t i = i0; i < i1; ++i) {
       row_begin_[i] = static_cast<std::uint32_t>(len);  // local offset, made global below
       if (is_big_[i]) continue;
       const std::size_t c = new_cell[i];
-      const std::size_t cx = c % nx, cy = (c / nx) % ny, cz = c / (nx * ny);
       const double xi = X[i], yi = Y[i], zi = Z[i], ri = R[i] + skin;
       const std::int32_t bi = BLK[i];
       const bool free_i = IMB[i] > 0.0;
-      for (int dz = -1; dz <= 1; ++dz) {
-        if ((dz < 0 && cz == 0) || (dz > 0 && cz + 1 >= nz)) continue;
-        for (int dy = -1; dy <= 1; ++dy) {
-          if ((dy < 0 && cy == 0) || (dy > 0 && cy + 1 >= ny)) continue;
-          const std::size_t row = ((cz + dz) * ny + (cy + dy)) * nx;
-          const std::uint32_t jb = std::max<std::uint32_t>(cell_start[row + (cx > 0 ? cx - 1 : 0)],
-                                                           static_cast<std::uint32_t>(i + 1));
-          const std::uint32_t je = cell_start[row + std::min(cx + 1, nx - 1) + 1];
-          if (jb >= je) continue;
-          if (out.size() < len + (je - jb))  // grows by a quarter (the list is the largest array)
-            out.resize(std::max<std::size_t>(len + (je - jb), out.size() + out.size() / 4 + 1024));
-          std::uint32_t* __restrict o = out.data() + len;
-          std::size_t cnt = 0;
-          for (std::uint32_t j = jb; j < je; ++j) {
-            const double ex = X[j] - xi, ey = Y[j] - yi, ez = Z[j] - zi, reach = ri + R[j];
-            // pairAllowed, branch-free
-            const bool near = ex * ex + ey * ey + ez * ez < reach * reach;
-            const bool allowed = (bi < 0 || BLK[j] != bi) && (free_i || IMB[j] > 0.0);
-            o[cnt] = j;
-            cnt += static_cast<std::size_t>(near & allowed);
-          }
-          len += cnt;
+      for (std::size_t r = 0; r < 5; ++r) {
+        const std::size_t mid = c + row_offset[r];  // middle cell of the x-row
+        const std::uint32_t jb = r == 0 ? static_cast<std::uint32_t>(i + 1) : cell_start[mid - 1];
+        const std::uint32_t je = cell_start[mid + 2];
+        if (jb >= je) continue;
+        if (out.size() < len + (je - jb))  // grows by a quarter (the list is the largest array)
+          out.resize(std::max<std::size_t>(len + (je - jb), out.size() + out.size() / 4 + 1024));
+        std::uint32_t* __restrict o = out.data() + len;
+        std::size_t cnt = 0;
+        for (std::uint32_t j = jb; j < je; ++j) {
+          const double ex = X[j] - xi, ey = Y[j] - yi, ez = Z[j] - zi, reach = ri + R[j];
+          // pairAllowed, branch-free
+          const bool near = ex * ex + ey * ey + ez * ez < reach * reach;
+          const bool allowed = (bi < 0 || BLK[j] != bi) && (free_i || IMB[j] > 0.0);
+          o[cnt] = j;
+          cnt += static_cast<std::size_t>(near & allowed);
         }
+        len += cnt;
       }
     }
     out.resize(len);
@@ -496,17 +503,43 @@ void Engine::rebuildNeighbourList() {
   for (std::size_t q = 0; q < big.size(); ++q) big_i_[q] = big[q].first, big_j_[q] = big[q].second;
   big_hist_.resize(big.size());
 
-  // Walls: candidates within reach of the plane (the wall may move half a skin).
-  for (auto& w : walls_) {
-    const Vec3 p = w.p0 + w.v * t_now;
-    w.cand.clear();
-    for (std::size_t i = 0; i < n_; ++i) {
-      if (inv_body_mass_[i] == 0.0) continue;
-      const double d = (x_[i] - p.x()) * w.n.x() + (y_[i] - p.y()) * w.n.y() + (z_[i] - p.z()) * w.n.z();
-      if (d < r_[i] + skin_m_) w.cand.push_back(static_cast<std::uint32_t>(i));
+  // Walls: candidates within reach of the plane (the wall may move half a
+  // skin), in particle order; one wall per task.
+  pool_->run([&](int t) {
+    for (std::size_t wi = static_cast<std::size_t>(t); wi < walls_.size(); wi += workers) {
+      Wall& w = walls_[wi];
+      const Vec3 p = w.p0 + w.v * t_now;
+      w.cand.clear();
+      for (std::size_t i = 0; i < n_; ++i) {
+        if (inv_body_mass_[i] == 0.0) continue;
+        const double d = (x_[i] - p.x()) * w.n.x() + (y_[i] - p.y()) * w.n.y() + (z_[i] - p.z()) * w.n.z();
+        if (d < r_[i] + skin_m_) w.cand.push_back(static_cast<std::uint32_t>(i));
+      }
+      w.hist.resize(w.cand.size());
+      w.t_ref = t_now;
     }
-    w.hist.resize(w.cand.size());
-    w.t_ref = t_now;
+  });
+  // Particle ranges with about equal numbers of wall candidates (the
+  // candidates crowd into the index range of the cells next to the walls,
+  // the floor's into the first cells): boundary t is the smallest index with
+  // at least total t / T candidates below it.
+  {
+    const auto below = [&](std::uint32_t b) {
+      std::size_t c = 0;
+      for (const auto& w : walls_) c += static_cast<std::size_t>(std::lower_bound(w.cand.begin(), w.cand.end(), b) - w.cand.begin());
+      return c;
+    };
+    const std::size_t total = below(static_cast<std::uint32_t>(n_));
+    wall_part_.assign(workers + 1, static_cast<std::uint32_t>(n_));
+    wall_part_[0] = 0;
+    for (std::size_t t = 1; t < workers; ++t) {
+      std::uint32_t first = wall_part_[t - 1], past = static_cast<std::uint32_t>(n_);
+      while (first < past) {
+        const std::uint32_t mid = first + (past - first) / 2;
+        if (below(mid) * workers >= total * t) past = mid; else first = mid + 1;
+      }
+      wall_part_[t] = first;
+    }
   }
 
   // 4. Carry the history of touching contacts over to the new lists. A pair
@@ -515,13 +548,16 @@ void Engine::rebuildNeighbourList() {
   // change during a run.
   constexpr std::uint32_t kNone = std::numeric_limits<std::uint32_t>::max();
   std::vector<std::uint32_t> from(nbr_.size(), kNone);  // list entry -> index in saved
-  for (std::size_t q = 0; q < saved.size(); ++q) {
-    const std::uint32_t a = slot_[saved[q].a], b = slot_[saved[q].b];
-    const std::uint32_t i = std::min(a, b), j = std::max(a, b);
-    const auto first = nbr_.begin() + row_begin_[i], end = nbr_.begin() + row_begin_[i + 1];
-    const auto it = std::lower_bound(first, end, j);
-    if (it != end && *it == j) from[static_cast<std::size_t>(it - nbr_.begin())] = static_cast<std::uint32_t>(q);
-  }
+  pool_->run([&](int t) {  // each pair has its own list entry: no two workers write the same
+    const auto tt = static_cast<std::size_t>(t);
+    for (std::size_t q = saved.size() * tt / workers; q < saved.size() * (tt + 1) / workers; ++q) {
+      const std::uint32_t a = slot_[saved[q].a], b = slot_[saved[q].b];
+      const std::uint32_t i = std::min(a, b), j = std::max(a, b);
+      const auto first = nbr_.begin() + row_begin_[i], end = nbr_.begin() + row_begin_[i + 1];
+      const auto it = std::lower_bound(first, end, j);
+      if (it != end && *it == j) from[static_cast<std::size_t>(it - nbr_.begin())] = static_cast<std::uint32_t>(q);
+    }
+  });
   for (const Saved& s : saved_big) {
     const std::uint32_t a = slot_[s.a], b = slot_[s.b];
     const auto pair = std::make_pair(std::min(a, b), std::max(a, b));
@@ -567,7 +603,8 @@ void Engine::rebuildNeighbourList() {
   // Each partition's carried contacts, in list order, become its "last step"
   // contact set; the history is copied from where step 1 noted it.
   const int next = hcur_ ^ 1;
-  for (std::size_t t = 0; t < T; ++t) {
+  pool_->run([&](int task) {
+    const auto t = static_cast<std::size_t>(task);
     ContactSet& out = scratch_[t].sets[next];
     const std::uint32_t k0 = row_begin_[part_begin_[t]], k1 = row_begin_[part_begin_[t + 1]];
     std::size_t count = 0;
@@ -584,24 +621,36 @@ void Engine::rebuildNeighbourList() {
       if (any_viscous_) out.viscous[out.n] = in.viscous[sc.c];
       ++out.n;
     }
-  }
+  });
   hcur_ = next;
 }
 
 void Engine::reorderParticles(const std::vector<std::uint32_t>& order) {
-  std::vector<double> tmp;
-  for (auto* v : {&x_, &y_, &z_, &vx_, &vy_, &vz_, &wx_, &wy_, &wz_, &r_, &inv_body_mass_, &mass_, &inv_mass_,
-                  &inv_inertia_, &alpha_})
-    permute(*v, order, tmp);
-  std::vector<std::int32_t> ti;
-  permute(block_, order, ti);
-  std::vector<std::uint32_t> tm;
-  permute(mat_, order, tm);
-  std::vector<std::uint8_t> tb;
-  permute(is_big_, order, tb);
-  std::vector<std::uint32_t> tp;
-  permute(pid_, order, tp);
-  for (std::size_t k = 0; k < n_; ++k) slot_[pid_[k]] = static_cast<std::uint32_t>(k);
+  // One array per task, tasks dealt to the workers in turn.
+  std::vector<std::vector<double>*> arrays = {&x_,  &y_,  &z_,  &vx_, &vy_,           &vz_,  &wx_,      &wy_,
+                                              &wz_, &r_,  &inv_body_mass_, &mass_, &inv_mass_, &inv_inertia_, &alpha_};
+  const std::size_t workers = scratch_.size(), tasks = arrays.size() + 4;
+  pool_->run([&](int t) {
+    std::vector<double> tmp;
+    for (std::size_t a = static_cast<std::size_t>(t); a < tasks; a += workers) {
+      if (a < arrays.size()) {
+        permute(*arrays[a], order, tmp);
+      } else if (a == arrays.size()) {
+        std::vector<std::int32_t> ti;
+        permute(block_, order, ti);
+      } else if (a == arrays.size() + 1) {
+        std::vector<std::uint32_t> tm;
+        permute(mat_, order, tm);
+      } else if (a == arrays.size() + 2) {
+        std::vector<std::uint8_t> tb;
+        permute(is_big_, order, tb);
+      } else {
+        std::vector<std::uint32_t> tp;
+        permute(pid_, order, tp);
+        for (std::size_t k = 0; k < n_; ++k) slot_[pid_[k]] = static_cast<std::uint32_t>(k);
+      }
+    }
+  });
 }
 
 // ---------------------------------------------------------------------------
@@ -624,7 +673,7 @@ struct KernelIn {
   const double *X, *Y, *Z, *R, *VX, *VY, *VZ, *WX, *WY, *WZ, *IM;
   const std::uint32_t* MAT;
   const std::uint32_t* NBR;
-  const double *KN, *FLIM, *KS, *MU, *ZETA;
+  const double *KN, *FLIM, *KS, *MU_KS, *ZETA;  // MU_KS: friction / k_s (m/N)
   std::size_t nmat;
   std::size_t law0;  // the law of a single-material scene
   double dt, ratio;
@@ -654,7 +703,7 @@ void touchingPairs(const KernelIn& in, const std::uint32_t* ci, const std::uint3
   const double *__restrict WX = in.WX, *__restrict WY = in.WY, *__restrict WZ = in.WZ, *__restrict IM = in.IM;
   const std::uint32_t* __restrict MAT = in.MAT;
   const std::uint32_t* __restrict NBR = in.NBR;
-  const double *__restrict KN = in.KN, *__restrict FLIM = in.FLIM, *__restrict KS = in.KS, *__restrict MU = in.MU,
+  const double *__restrict KN = in.KN, *__restrict FLIM = in.FLIM, *__restrict KS = in.KS, *__restrict MU_KS = in.MU_KS,
                *__restrict ZETA = in.ZETA;
   const std::size_t nmat = in.nmat, law0 = in.law0;
   const double dt = in.dt, ratio = in.ratio;
@@ -705,7 +754,7 @@ void touchingPairs(const KernelIn& in, const std::uint32_t* ci, const std::uint3
       const double vx = VX[j] - VX[i] - (ay * nz - az * ny), vy = VY[j] - VY[i] - (az * nx - ax * nz),
                    vz = VZ[j] - VZ[i] - (ax * ny - ay * nx);
       const std::size_t L = kUniform ? law0 : MAT[i] * nmat + MAT[j];
-      const double kn = KN[L], ks = KS[L], mu = MU[L];
+      const double kn = KN[L], ks = KS[L], mu_ks = MU_KS[L];
       double ux = hux[q], uy = huy[q], uz = huz[q];
       const double vn = vx * nx + vy * ny + vz * nz;
       // normal spring (bridge::normalContactForce)
@@ -746,7 +795,7 @@ void touchingPairs(const KernelIn& in, const std::uint32_t* ci, const std::uint3
       const double u0x = ux, u0y = uy, u0z = uz;
       ux += dux, uy += duy, uz += duz;
       const double u2 = ux * ux + uy * uy + uz * uz;
-      const double umax = mu * fel / ks;
+      const double umax = mu_ks * fel;  // the spring's reach at the Coulomb limit
       const bool slide = u2 > umax * umax;
       const double sc = slide ? umax / std::sqrt(slide ? u2 : 1.0) : 1.0;
       ux *= sc, uy *= sc, uz *= sc;
@@ -918,7 +967,7 @@ void Engine::contactKernel(int t, bool measure) {
   // entries of this partition's rows into a chunk; each full chunk goes
   // through the contact law (touchingPairs).
   KernelIn in{X, Y, Z, R, VX, VY, VZ, WX, WY, WZ, IM, MAT, nbr_.data(),
-              law_kn_.data(), law_flim_.data(), law_ks_.data(), law_mu_.data(), law_zeta_.data(),
+              law_kn_.data(), law_flim_.data(), law_ks_.data(), law_mu_ks_.data(), law_zeta_.data(),
               nmat, uniform_material_ ? mat_[0] * (nmat + 1) : 0, dt, ratio};
   KernelOut out{FX, FY, FZ, TX, TY, TZ, &s.energy};
   ContactSet& next = s.sets[hcur_ ^ 1];
@@ -1007,23 +1056,52 @@ void Engine::contactKernel(int t, bool measure) {
 
 void Engine::applyWallsAndLoads(bool measure) {
   const double t_now = time();
+  for (auto& w : walls_) w.position = w.p0 + w.v * t_now;
+  // Each worker takes the candidates of its particle range (particles are
+  // disjoint, so it adds to the global force arrays); wall forces, energies
+  // and work are summed in worker order.
+  pool_->run([this, measure](int t) { wallContacts(t, measure); });
+  for (auto& w : walls_) w.force_N.setZero();
+  for (WorkerScratch& s : scratch_) {
+    for (std::size_t w = 0; w < walls_.size(); ++w) walls_[w].force_N += s.wall_force[w];
+    friction_ += s.wall_energy.friction_J;
+    plastic_ += s.wall_energy.plastic_J;
+    viscous_ += s.wall_energy.viscous_J;
+    if (measure) elastic_ += s.wall_energy.elastic_J;
+    wall_work_ += s.wall_work;
+    contacts_ += s.wall_contacts;
+    if (!s.wall_failure.empty()) fail(s.wall_failure);
+  }
+}
+
+void Engine::wallContacts(int t, bool measure) {
+  WorkerScratch& s = scratch_[static_cast<std::size_t>(t)];
+  const std::uint32_t b = wall_part_[static_cast<std::size_t>(t)], e = wall_part_[static_cast<std::size_t>(t) + 1];
   const std::int64_t last = step_ - 1;
-  ContactEnergy e;
-  for (auto& w : walls_) {
-    w.force_N.setZero();
-    const Vec3 p = w.p0 + w.v * t_now;
-    w.position = p;
+  s.wall_force.assign(walls_.size(), Vec3::Zero());
+  s.wall_energy = ContactEnergy{};
+  s.wall_work = 0.0;
+  s.wall_contacts = 0;
+  s.wall_failure.clear();
+  for (std::size_t wi = 0; wi < walls_.size(); ++wi) {
+    Wall& w = walls_[wi];
+    const Vec3 p = w.position;
     const double nc[3] = {-w.n.x(), -w.n.y(), -w.n.z()};  // from the particle to the wall
-    for (std::size_t k = 0; k < w.cand.size(); ++k) {
+    const PairLaw* laws = laws_.data() + static_cast<std::size_t>(w.mat);
+    Vec3 force = Vec3::Zero();
+    double work = 0.0;
+    // candidates are in particle order
+    for (auto k = static_cast<std::size_t>(std::lower_bound(w.cand.begin(), w.cand.end(), b) - w.cand.begin());
+         k < w.cand.size() && w.cand[k] < e; ++k) {
       const std::uint32_t i = w.cand[k];
       const double dist = (x_[i] - p.x()) * w.n.x() + (y_[i] - p.y()) * w.n.y() + (z_[i] - p.z()) * w.n.z();
       const double overlap = r_[i] - dist;
       if (overlap <= 0.0) continue;
-      if (overlap > max_overlap_ratio_ * r_[i] && failure_.empty()) {
+      if (overlap > max_overlap_ratio_ * r_[i] && s.wall_failure.empty()) {
         std::ostringstream m;
         m << "overlap " << overlap / r_[i] << " of the radius (limit " << max_overlap_ratio_ << ") between "
-          << bodyName(pid_[i]) << " and wall " << (&w - walls_.data());
-        fail(m.str());
+          << bodyName(pid_[i]) << " and wall " << wi;
+        s.wall_failure = m.str();
       }
       const double li = dist;
       const double vrel[3] = {w.v.x() - vx_[i] - li * (wy_[i] * nc[2] - wz_[i] * nc[1]),
@@ -1035,23 +1113,21 @@ void Engine::applyWallsAndLoads(bool measure) {
       if (H.stamp[k] == last)
         u[0] = H.ux[k], u[1] = H.uy[k], u[2] = H.uz[k], plastic = H.plastic[k], viscous = H.viscous[k];
       double f[3];
-      evaluateContact(laws_[mat_[i] * nmat_ + static_cast<std::size_t>(w.mat)], inv_body_mass_[i], nc, overlap,
-                      vrel, dt_, u, plastic, viscous, f, e, measure);
+      evaluateContact(laws[mat_[i] * nmat_], inv_body_mass_[i], nc, overlap, vrel, dt_, u, plastic, viscous, f,
+                      s.wall_energy, measure);
       H.ux[k] = u[0], H.uy[k] = u[1], H.uz[k] = u[2], H.plastic[k] = plastic, H.viscous[k] = viscous;
       H.stamp[k] = step_;
       fx_[i] += f[0], fy_[i] += f[1], fz_[i] += f[2];
       tx_[i] += li * (nc[1] * f[2] - nc[2] * f[1]);
       ty_[i] += li * (nc[2] * f[0] - nc[0] * f[2]);
       tz_[i] += li * (nc[0] * f[1] - nc[1] * f[0]);
-      w.force_N -= Vec3(f[0], f[1], f[2]);
-      wall_work_ += (f[0] * w.v.x() + f[1] * w.v.y() + f[2] * w.v.z()) * dt_;
-      ++contacts_;
+      force -= Vec3(f[0], f[1], f[2]);
+      work += (f[0] * w.v.x() + f[1] * w.v.y() + f[2] * w.v.z()) * dt_;
+      ++s.wall_contacts;
     }
+    s.wall_force[wi] = force;
+    s.wall_work += work;
   }
-  friction_ += e.friction_J;
-  plastic_ += e.plastic_J;
-  viscous_ += e.viscous_J;
-  if (measure) elastic_ += e.elastic_J;
 }
 
 // ---------------------------------------------------------------------------
@@ -1065,7 +1141,19 @@ namespace {
 // loop vectorises (SoA arrays, no aliasing between them).
 struct ComponentSums {
   double local = 0.0, ke = 0.0, pe = 0.0, finite = 0.0;
+  double max_d2 = 0.0;  // largest squared displacement since the last list build
 };
+double maxSquaredDisplacement(std::size_t n, const double* __restrict px, const double* __restrict py,
+                              const double* __restrict pz, const double* __restrict qx, const double* __restrict qy,
+                              const double* __restrict qz) {
+  double max_d2 = 0.0;
+#pragma omp simd reduction(max : max_d2)
+  for (std::size_t i = 0; i < n; ++i) {
+    const double ex = px[i] - qx[i], ey = py[i] - qy[i], ez = pz[i] - qz[i];
+    max_d2 = std::max(max_d2, ex * ex + ey * ey + ez * ez);
+  }
+  return max_d2;
+}
 template <bool kMeasure>
 ComponentSums integrateComponent(std::size_t n, double dt, double g, const double* __restrict m,
                                  const double* __restrict im, const double* __restrict alpha,
@@ -1141,6 +1229,9 @@ void Engine::integrate(bool measure) {
       lin.local += a.local, lin.ke += a.ke, lin.pe += a.pe, lin.finite += a.finite;
       rot.local += r.local, rot.ke += r.ke, rot.finite += r.finite;
     }
+    // (block members are placed below and checked there)
+    lin.max_d2 = maxSquaredDisplacement(e - b, X[0] + b, X[1] + b, X[2] + b, x0_.data() + b, y0_.data() + b,
+                                        z0_.data() + b);
   });
   for (std::size_t t = 0; t < workers; ++t) {
     local += part[2 * t].local + part[2 * t + 1].local;
@@ -1148,6 +1239,7 @@ void Engine::integrate(bool measure) {
     ke_r += part[2 * t + 1].ke;
     pe += part[2 * t].pe;
     finite += part[2 * t].finite + part[2 * t + 1].finite;
+    max_d2 = std::max(max_d2, part[2 * t].max_d2);
   }
   for (auto& b : blocks_) {
     if (b.fixed) continue;
@@ -1184,15 +1276,7 @@ void Engine::integrate(bool measure) {
       x_[i] = b.x.x() + arm.x(), y_[i] = b.x.y() + arm.y(), z_[i] = b.x.z() + arm.z();
       vx_[i] = vm.x(), vy_[i] = vm.y(), vz_[i] = vm.z();
       wx_[i] = b.omega.x(), wy_[i] = b.omega.y(), wz_[i] = b.omega.z();
-    }
-  }
-  {
-    const double *__restrict px = x_.data(), *__restrict py = y_.data(), *__restrict pz = z_.data();
-    const double *__restrict qx = x0_.data(), *__restrict qy = y0_.data(), *__restrict qz = z0_.data();
-#pragma omp simd reduction(max : max_d2)
-    for (std::size_t i = 0; i < n_; ++i) {
-      const double ex = px[i] - qx[i], ey = py[i] - qy[i], ez = pz[i] - qz[i];
-      max_d2 = std::max(max_d2, ex * ex + ey * ey + ez * ez);
+      max_d2 = std::max(max_d2, Vec3(x_[i] - x0_[i], y_[i] - y0_[i], z_[i] - z0_[i]).squaredNorm());
     }
   }
   local_work_ += local;

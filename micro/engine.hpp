@@ -102,6 +102,7 @@ class Engine {
   void rebuildNeighbourList();
   void reorderParticles(const std::vector<std::uint32_t>& order);
   void contactKernel(int t, bool measure);
+  void wallContacts(int t, bool measure);
   void checkFailures();
   std::string bodyName(std::uint32_t pid) const;
   void fail(const std::string& what);
@@ -148,7 +149,7 @@ class Engine {
   // The same laws as flat arrays for the vectorised contact kernel, and
   // which rare features any of them uses (the kernel is compiled without the
   // others): a finite F_lim, viscous damping.
-  std::vector<double> law_kn_, law_flim_, law_ks_, law_mu_, law_zeta_;
+  std::vector<double> law_kn_, law_flim_, law_ks_, law_mu_ks_, law_zeta_;
   bool any_plastic_ = false, any_viscous_ = false;
   // Every particle has the same material: the kernel reads one law instead
   // of gathering it per pair.
@@ -173,6 +174,7 @@ class Engine {
   std::unique_ptr<WorkerPool> pool_;
   std::vector<WorkerScratch> scratch_;
   std::vector<std::uint32_t> part_begin_;  // row partitions per worker
+  std::vector<std::uint32_t> wall_part_;   // particle ranges per worker with equal wall candidates
   std::string failure_;
 };
 
