@@ -281,7 +281,7 @@ Engine::Engine(const Scene& scene, int threads) {
 
   pool_ = std::make_unique<WorkerPool>(threads);
   scratch_.resize(static_cast<std::size_t>(pool_->size()));
-  for (std::size_t t = 1; t < scratch_.size(); ++t)
+  for (std::size_t t = 0; t + 1 < scratch_.size(); ++t)  // partners beyond partition t's particles
     for (auto* v : {&scratch_[t].fx, &scratch_[t].fy, &scratch_[t].fz, &scratch_[t].tx, &scratch_[t].ty,
                     &scratch_[t].tz})
       v->assign(n_, 0.0);
@@ -685,11 +685,15 @@ struct KernelHistory {
   std::size_t cursor = 0;
   ContactSet* next;
 };
+/// Where forces go: the global arrays for particles of the partition's own
+/// range (below own_end), the partition's buffer for partners beyond it.
 struct KernelOut {
   double *FX, *FY, *FZ, *TX, *TY, *TZ;
+  double *BFX, *BFY, *BFZ, *BTX, *BTY, *BTZ;
+  std::uint32_t own_end;
   ContactEnergy* energy;
   std::size_t contacts = 0;
-  std::uint32_t hi = 0;  // largest particle index written
+  std::uint32_t hi = 0;  // largest particle index written to the buffer
   bool failed = false;
   std::uint32_t fail_i = 0, fail_j = 0;
   double fail_ratio = 0.0;
@@ -824,18 +828,22 @@ void touchingPairs(const KernelIn& in, const std::uint32_t* ci, const std::uint3
     std::uint32_t* __restrict NK = next.k.data();
     double *__restrict NUX = next.ux.data(), *__restrict NUY = next.uy.data(), *__restrict NUZ = next.uz.data();
     double *__restrict NPL = next.plastic.data(), *__restrict NVI = next.viscous.data();
+    const std::uint32_t own_end = out.own_end;
     for (std::size_t q = 0; q < nq; ++q) {
       const std::uint32_t i = ci[q], j = NBR[ck[q]];
-      hi = std::max(hi, j);
+      const bool mine = j < own_end;
+      hi = mine ? hi : std::max(hi, j);
+      double *fjx = mine ? FX : out.BFX, *fjy = mine ? FY : out.BFY, *fjz = mine ? FZ : out.BFZ;
+      double *tjx = mine ? TX : out.BTX, *tjy = mine ? TY : out.BTY, *tjz = mine ? TZ : out.BTZ;
       // append the pair's history (overwritten by the next pair if it does not touch)
       NK[nn] = ck[q], NUX[nn] = hux[q], NUY[nn] = huy[q], NUZ[nn] = huz[q];
       if constexpr (kPlastic) NPL[nn] = hpl[q];
       if constexpr (kViscous) NVI[nn] = hvi[q];
       nn += bon[q] > 0.0 ? 1 : 0;
       FX[i] += bfx[q], FY[i] += bfy[q], FZ[i] += bfz[q];
-      FX[j] -= bfx[q], FY[j] -= bfy[q], FZ[j] -= bfz[q];
+      fjx[j] -= bfx[q], fjy[j] -= bfy[q], fjz[j] -= bfz[q];
       TX[i] += bix[q], TY[i] += biy[q], TZ[i] += biz[q];
-      TX[j] += bjx[q], TY[j] += bjy[q], TZ[j] += bjz[q];
+      tjx[j] += bjx[q], tjy[j] += bjy[q], tjz[j] += bjz[q];
       friction += bfr[q];
       if constexpr (kPlastic) plastic_w += bpl[q];
       if constexpr (kViscous) viscous_w += bvi[q];
@@ -885,9 +893,9 @@ TouchingPairsFn touchingPairsFor(bool measure, bool viscous, bool plastic, bool 
 // not depend on timing.
 
 void Engine::computeContactForces(bool measure) {
-  // Partition 0 writes the global force arrays (and clears them first, in
-  // parallel with the other partitions' work); the others write their own
-  // buffers, cleared again when they are added.
+  // Partition t owns the particles of its rows [p_t, p_t+1): it clears and
+  // writes their global force arrays; a partner j beyond them (j > i always)
+  // goes to its buffer, added below in partition order.
   pool_->run([this, measure](int t) { contactKernel(t, measure); });
   hcur_ ^= 1;  // this step's contact sets become the last step's
   contacts_ = 0;
@@ -902,11 +910,11 @@ void Engine::computeContactForces(bool measure) {
   }
   if (workers > 1) {
     // Add the buffers in parallel over particle ranges; for each particle the
-    // buffers are added in worker order, as a serial sum would.
+    // buffers are added in partition order.
     pool_->run([this, workers](int part) {
       const auto p = static_cast<std::size_t>(part);
       const std::size_t b = n_ * p / workers, e = n_ * (p + 1) / workers;
-      for (std::size_t t = 1; t < workers; ++t) {
+      for (std::size_t t = 0; t + 1 < workers; ++t) {
         WorkerScratch& s = scratch_[t];
         if (s.lo > s.hi) continue;
         const std::size_t lo = std::max<std::size_t>(b, s.lo), hi = std::min<std::size_t>(e, s.hi + std::size_t{1});
@@ -918,6 +926,7 @@ void Engine::computeContactForces(bool measure) {
       }
     });
   }
+  oversizedContacts(measure);
   for (const WorkerScratch& s : scratch_)
     if (s.failed) {
       std::ostringstream m;
@@ -928,6 +937,58 @@ void Engine::computeContactForces(bool measure) {
     }
 }
 
+// Pairs with an oversized sphere (a boulder among grains: a short list),
+// serially with the scalar law and a history per pair.
+void Engine::oversizedContacts(bool measure) {
+  const std::int64_t last = step_ - 1;
+  ContactEnergy e;
+  for (std::size_t q = 0; q < big_i_.size(); ++q) {
+    const std::uint32_t i = big_i_[q], j = big_j_[q];
+    const double ex = x_[j] - x_[i], ey = y_[j] - y_[i], ez = z_[j] - z_[i];
+    const double d = std::sqrt(ex * ex + ey * ey + ez * ez);
+    const double ri = r_[i], rj = r_[j];
+    const double overlap = ri + rj - d;
+    if (overlap <= 0.0) continue;
+    double n[3] = {0.0, 0.0, 1.0};
+    if (d > 0.0) {
+      const double inv = 1.0 / d;
+      n[0] = ex * inv, n[1] = ey * inv, n[2] = ez * inv;
+    }
+    if (overlap > max_overlap_ratio_ * std::min(ri, rj)) {
+      std::ostringstream m;
+      m << "overlap " << overlap / std::min(ri, rj) << " of the smaller radius (limit " << max_overlap_ratio_
+        << ") between " << bodyName(pid_[i]) << " and " << bodyName(pid_[j]);
+      fail(m.str());
+    }
+    const double li = ri - 0.5 * overlap, lj = rj - 0.5 * overlap;
+    // velocity of the contact point on j relative to the one on i; the angular
+    // velocities enter as lj w_j + li w_i: one cross product with n
+    const double ax = lj * wx_[j] + li * wx_[i], ay = lj * wy_[j] + li * wy_[i], az = lj * wz_[j] + li * wz_[i];
+    const double vrel[3] = {vx_[j] - vx_[i] - (ay * n[2] - az * n[1]), vy_[j] - vy_[i] - (az * n[0] - ax * n[2]),
+                            vz_[j] - vz_[i] - (ax * n[1] - ay * n[0])};
+    History& H = big_hist_;
+    double u[3] = {0.0, 0.0, 0.0};
+    double plastic = 0.0, viscous = 0.0;
+    if (H.stamp[q] == last)
+      u[0] = H.ux[q], u[1] = H.uy[q], u[2] = H.uz[q], plastic = H.plastic[q], viscous = H.viscous[q];
+    double f[3];
+    evaluateContact(laws_[mat_[i] * nmat_ + mat_[j]], inv_body_mass_[i] + inv_body_mass_[j], n, overlap, vrel, dt_,
+                    u, plastic, viscous, f, e, measure);
+    H.ux[q] = u[0], H.uy[q] = u[1], H.uz[q] = u[2], H.plastic[q] = plastic, H.viscous[q] = viscous;
+    H.stamp[q] = step_;
+    fx_[i] += f[0], fy_[i] += f[1], fz_[i] += f[2];
+    fx_[j] -= f[0], fy_[j] -= f[1], fz_[j] -= f[2];
+    const double c[3] = {n[1] * f[2] - n[2] * f[1], n[2] * f[0] - n[0] * f[2], n[0] * f[1] - n[1] * f[0]};
+    tx_[i] += li * c[0], ty_[i] += li * c[1], tz_[i] += li * c[2];
+    tx_[j] += lj * c[0], ty_[j] += lj * c[1], tz_[j] += lj * c[2];
+    ++contacts_;
+  }
+  friction_ += e.friction_J;
+  plastic_ += e.plastic_J;
+  viscous_ += e.viscous_J;
+  if (measure) elastic_ += e.elastic_J;
+}
+
 void Engine::contactKernel(int t, bool measure) {
   WorkerScratch& s = scratch_[static_cast<std::size_t>(t)];
   const auto T = scratch_.size();
@@ -936,14 +997,15 @@ void Engine::contactKernel(int t, bool measure) {
   s.failed = false;
   s.lo = static_cast<std::uint32_t>(n_);
   s.hi = 0;
-  if (t == 0)
-    for (auto* v : {&fx_, &fy_, &fz_, &tx_, &ty_, &tz_}) std::fill(v->begin(), v->end(), 0.0);
-  double* const FX = t == 0 ? fx_.data() : s.fx.data();
-  double* const FY = t == 0 ? fy_.data() : s.fy.data();
-  double* const FZ = t == 0 ? fz_.data() : s.fz.data();
-  double* const TX = t == 0 ? tx_.data() : s.tx.data();
-  double* const TY = t == 0 ? ty_.data() : s.ty.data();
-  double* const TZ = t == 0 ? tz_.data() : s.tz.data();
+  const std::uint32_t r0 = part_begin_[static_cast<std::size_t>(t)], r1 = part_begin_[static_cast<std::size_t>(t) + 1];
+  for (auto* v : {&fx_, &fy_, &fz_, &tx_, &ty_, &tz_}) std::fill(v->begin() + r0, v->begin() + r1, 0.0);
+  const bool last_part = static_cast<std::size_t>(t) + 1 == T;  // has no partner beyond its range
+  double* const FX = fx_.data();
+  double* const FY = fy_.data();
+  double* const FZ = fz_.data();
+  double* const TX = tx_.data();
+  double* const TY = ty_.data();
+  double* const TZ = tz_.data();
   const double* __restrict const X = x_.data();
   const double* __restrict const Y = y_.data();
   const double* __restrict const Z = z_.data();
@@ -956,11 +1018,8 @@ void Engine::contactKernel(int t, bool measure) {
   const double* __restrict const WZ = wz_.data();
   const double* __restrict const IM = inv_body_mass_.data();
   const std::uint32_t* __restrict const MAT = mat_.data();
-  const PairLaw* __restrict const LAWS = laws_.data();
   const std::size_t nmat = nmat_;
-  const std::int64_t now = step_;
   const double dt = dt_;
-  const std::int64_t last = step_ - 1;
   const double ratio = max_overlap_ratio_;
 
   // The scan (branch-free, cache friendly) collects the touching list
@@ -969,7 +1028,10 @@ void Engine::contactKernel(int t, bool measure) {
   KernelIn in{X, Y, Z, R, VX, VY, VZ, WX, WY, WZ, IM, MAT, nbr_.data(),
               law_kn_.data(), law_flim_.data(), law_ks_.data(), law_mu_ks_.data(), law_zeta_.data(),
               nmat, uniform_material_ ? mat_[0] * (nmat + 1) : 0, dt, ratio};
-  KernelOut out{FX, FY, FZ, TX, TY, TZ, &s.energy};
+  WorkerScratch& buf = scratch_[last_part ? 0 : static_cast<std::size_t>(t)];  // (unused by the last partition)
+  KernelOut out{FX,         FY,         FZ,         TX,         TY,         TZ,
+                buf.fx.data(), buf.fy.data(), buf.fz.data(), buf.tx.data(), buf.ty.data(), buf.tz.data(),
+                r1,         &s.energy};
   ContactSet& next = s.sets[hcur_ ^ 1];
   next.n = 0;
   KernelHistory hist{&s.sets[hcur_], 0, &next};
@@ -981,12 +1043,10 @@ void Engine::contactKernel(int t, bool measure) {
   const auto flush = [&](std::size_t nq) {
     next.ensure(next.n + nq, any_plastic_, any_viscous_);
     law(in, ti, tk, nq, hist, out);
-    s.lo = std::min(s.lo, ti[0]);
     std::copy(ti + nq, ti + m, ti);
     std::copy(tk + nq, tk + m, tk);
     m -= nq;
   };
-  const std::uint32_t r0 = part_begin_[static_cast<std::size_t>(t)], r1 = part_begin_[static_cast<std::size_t>(t) + 1];
   const std::uint32_t* __restrict const NBR = nbr_.data();
   const std::uint32_t* __restrict const ROW = row_begin_.data();
   for (std::uint32_t i = r0; i < r1; ++i) {
@@ -1004,50 +1064,8 @@ void Engine::contactKernel(int t, bool measure) {
   if (m > 0) flush(m);
   s.contacts += out.contacts;
   if (out.failed) s.failed = true, s.fail_i = out.fail_i, s.fail_j = out.fail_j, s.fail_ratio = out.fail_ratio;
-  s.hi = std::max(s.hi, out.hi);
+  if (out.hi >= r1) s.lo = r1, s.hi = out.hi;  // the band of its buffer that the partition wrote
 
-  // Pairs with an oversized sphere: the scalar law with a per-pair history.
-  const auto contact = [&](std::uint32_t i, std::uint32_t j, History& H, std::size_t k) {
-    const double ex = X[j] - X[i], ey = Y[j] - Y[i], ez = Z[j] - Z[i];
-    const double d = std::sqrt(ex * ex + ey * ey + ez * ez);
-    const double ri = R[i], rj = R[j];
-    const double overlap = ri + rj - d;
-    if (overlap <= 0.0) return;
-    double n[3] = {0.0, 0.0, 1.0};
-    if (d > 0.0) {
-      const double inv = 1.0 / d;
-      n[0] = ex * inv, n[1] = ey * inv, n[2] = ez * inv;
-    }
-    if (overlap > ratio * std::min(ri, rj) && !s.failed) {
-      s.failed = true, s.fail_i = i, s.fail_j = j, s.fail_ratio = overlap / std::min(ri, rj);
-    }
-    const double li = ri - 0.5 * overlap, lj = rj - 0.5 * overlap;
-    // velocity of the contact point on j relative to the one on i
-    // the angular velocities enter as lj w_j + li w_i: one cross product with n
-    const double ax = lj * WX[j] + li * WX[i], ay = lj * WY[j] + li * WY[i], az = lj * WZ[j] + li * WZ[i];
-    const double vrel[3] = {VX[j] - VX[i] - (ay * n[2] - az * n[1]), VY[j] - VY[i] - (az * n[0] - ax * n[2]),
-                            VZ[j] - VZ[i] - (ax * n[1] - ay * n[0])};
-    double u[3] = {0.0, 0.0, 0.0};
-    double plastic = 0.0, viscous = 0.0;
-    if (H.stamp[k] == last)
-      u[0] = H.ux[k], u[1] = H.uy[k], u[2] = H.uz[k], plastic = H.plastic[k], viscous = H.viscous[k];
-    double f[3];
-    evaluateContact(LAWS[MAT[i] * nmat + MAT[j]], IM[i] + IM[j], n, overlap, vrel, dt, u, plastic, viscous, f,
-                    s.energy, measure);
-    H.ux[k] = u[0], H.uy[k] = u[1], H.uz[k] = u[2], H.plastic[k] = plastic, H.stamp[k] = now;
-    if (viscous != 0.0) H.viscous[k] = viscous;
-    FX[i] += f[0], FY[i] += f[1], FZ[i] += f[2];
-    FX[j] -= f[0], FY[j] -= f[1], FZ[j] -= f[2];
-    const double c[3] = {n[1] * f[2] - n[2] * f[1], n[2] * f[0] - n[0] * f[2], n[0] * f[1] - n[1] * f[0]};
-    TX[i] += li * c[0], TY[i] += li * c[1], TZ[i] += li * c[2];
-    TX[j] += lj * c[0], TY[j] += lj * c[1], TZ[j] += lj * c[2];
-    s.lo = std::min(s.lo, i);
-    s.hi = std::max(s.hi, j);
-    ++s.contacts;
-  };
-  const std::size_t nb = big_i_.size();
-  for (std::size_t q = nb * static_cast<std::size_t>(t) / T; q < nb * (static_cast<std::size_t>(t) + 1) / T; ++q)
-    contact(big_i_[q], big_j_[q], big_hist_, q);
 }
 
 // ---------------------------------------------------------------------------

@@ -103,6 +103,7 @@ class Engine {
   void reorderParticles(const std::vector<std::uint32_t>& order);
   void contactKernel(int t, bool measure);
   void wallContacts(int t, bool measure);
+  void oversizedContacts(bool measure);
   void checkFailures();
   std::string bodyName(std::uint32_t pid) const;
   void fail(const std::string& what);
