@@ -8,9 +8,15 @@
 namespace gabion::micro {
 
 namespace {
-// How long a waiting thread spins before it blocks: longer than the gap
-// between two parallel stages of a step, much shorter than a scheduler slice.
+// A waiting thread first spins (kSpin: longer than the gap between two
+// parallel stages of a step), then keeps polling but yields its core to any
+// other runnable thread (kPoll: longer than the serial parts of a neighbour
+// list rebuild), and only then blocks. Blocking is expensive on a virtual
+// machine: waking an idle vCPU takes tens of microseconds, during which the
+// caller does the sleeping worker's partition too. Yielding keeps a shared
+// core useful to the other jobs on it.
 constexpr std::chrono::microseconds kSpin{50};
+constexpr std::chrono::microseconds kPoll{2000};
 
 inline void cpuRelax() {
 #if defined(__x86_64__) || defined(__i386__)
@@ -20,14 +26,21 @@ inline void cpuRelax() {
 #endif
 }
 
-// Spins until done() or kSpin has passed; returns done().
+// Spins, then polls with yields, until done() or kSpin + kPoll has passed;
+// returns done().
 template <class Done>
 bool spinFor(Done done) {
-  const auto until = std::chrono::steady_clock::now() + kSpin;
+  const auto start = std::chrono::steady_clock::now();
+  const auto spin_until = start + kSpin, poll_until = start + kSpin + kPoll;
   for (unsigned k = 1;; ++k) {
     if (done()) return true;
     cpuRelax();
-    if ((k & 31u) == 0 && std::chrono::steady_clock::now() > until) return done();
+    if ((k & 31u) == 0 && std::chrono::steady_clock::now() > spin_until) break;
+  }
+  for (;;) {
+    if (done()) return true;
+    std::this_thread::yield();
+    if (std::chrono::steady_clock::now() > poll_until) return done();
   }
 }
 }  // namespace
