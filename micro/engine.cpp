@@ -1059,13 +1059,12 @@ void Engine::contactKernel(int t, bool measure) {
       tk[m] = k;
       m += (ex * ex + ey * ey + ez * ez < rs * rs) ? 1 : 0;
     }
-    if (m >= kChunk) flush(kChunk);
+    while (m >= kChunk) flush(kChunk);  // leaves fewer than kChunk, so the next row fits
   }
   if (m > 0) flush(m);
   s.contacts += out.contacts;
   if (out.failed) s.failed = true, s.fail_i = out.fail_i, s.fail_j = out.fail_j, s.fail_ratio = out.fail_ratio;
   if (out.hi >= r1) s.lo = r1, s.hi = out.hi;  // the band of its buffer that the partition wrote
-
 }
 
 // ---------------------------------------------------------------------------
