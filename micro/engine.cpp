@@ -76,9 +76,10 @@ struct ContactSet {
 };
 }  // namespace
 
-/// Per-worker scratch: force buffers (worker 0 writes the global arrays),
-/// the contact sets of its partition (the last step's and this step's),
-/// energy sums and the first failure seen.
+/// Per-worker scratch: the force buffer for partners beyond the particles of
+/// its partition (none for the last partition), the contact sets of its
+/// partition (the last step's and this step's), its share of the wall
+/// contacts, energy sums and the first failure seen.
 struct Engine::WorkerScratch {
   std::vector<double> fx, fy, fz, tx, ty, tz;
   ContactSet sets[2];
@@ -416,17 +417,17 @@ void Engine::rebuildNeighbourList() {
 
   // 3. Half neighbour list, CSR by row; rows come out sorted by j because
   // cells are visited in increasing index order. A partner j > i lies in a
-  // cell at or after i's: of the 27 cells around i's, only the rest of its own
-  // x-row and the four x-rows (y+1), (z+1, y-1..y+1) can hold one. Each worker builds a fixed
-  // range of rows into its own buffer; the buffers are joined in worker order,
-  // so the list is the same for any thread count.
+  // cell at or after i's: of the 27 cells around i's, only the rest of its
+  // own x-row and the four x-rows (y+1), (z+1, y-1..y+1) can hold one. Each
+  // worker builds a fixed range of rows into its own buffer; the buffers are
+  // joined in worker order, so the list is the same for any thread count.
   row_begin_.assign(n_ + 1, 0);
   const std::size_t workers = scratch_.size();
   pool_->run([&](int t) {
-    // One worker writes the list itself (no second copy in memory).
-    // The three cells along x of one (y, z) row of the stencil hold one
-    // contiguous range of particles (cell order), so each particle scans 5
-    // ranges, branch-free, appending in place.
+    // One worker writes the list itself (no second copy in memory). The
+    // three cells along x of one (y, z) row of the stencil hold one contiguous
+    // range of particles (cell order), so each particle scans 5 ranges,
+    // branch-free, appending in place.
     std::vector<std::uint32_t>& out = workers == 1 ? nbr_ : scratch_[static_cast<std::size_t>(t)].rows;
     std::size_t len = 0;
     const std::size_t i0 = n_ * static_cast<std::size_t>(t) / workers;
@@ -526,7 +527,8 @@ void Engine::rebuildNeighbourList() {
   {
     const auto below = [&](std::uint32_t b) {
       std::size_t c = 0;
-      for (const auto& w : walls_) c += static_cast<std::size_t>(std::lower_bound(w.cand.begin(), w.cand.end(), b) - w.cand.begin());
+      for (const auto& w : walls_)
+        c += static_cast<std::size_t>(std::lower_bound(w.cand.begin(), w.cand.end(), b) - w.cand.begin());
       return c;
     };
     const std::size_t total = below(static_cast<std::uint32_t>(n_));
