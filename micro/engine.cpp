@@ -1156,109 +1156,88 @@ void Engine::wallContacts(int t, bool measure) {
 // the displacement since the last list build and NaN.
 
 namespace {
-// One Cartesian component of the free-sphere update, branch-free so that the
-// loop vectorises (SoA arrays, no aliasing between them).
-struct ComponentSums {
-  double local = 0.0, ke = 0.0, pe = 0.0, finite = 0.0;
-  double max_d2 = 0.0;  // largest squared displacement since the last list build
+// The free spheres of one worker's range in one pass over their arrays
+// (translation and rotation of the three components, branch-free so that the
+// loop vectorises; SoA arrays, no aliasing between them): each array is read
+// once per step. Also the largest squared displacement since the last list
+// build; block members are placed afterwards and checked there.
+struct SphereSums {
+  double local = 0.0, ke_t = 0.0, ke_r = 0.0, pe = 0.0, finite = 0.0, max_d2 = 0.0;
 };
-double maxSquaredDisplacement(std::size_t n, const double* __restrict px, const double* __restrict py,
-                              const double* __restrict pz, const double* __restrict qx, const double* __restrict qy,
-                              const double* __restrict qz) {
-  double max_d2 = 0.0;
-#pragma omp simd reduction(max : max_d2)
-  for (std::size_t i = 0; i < n; ++i) {
-    const double ex = px[i] - qx[i], ey = py[i] - qy[i], ez = pz[i] - qz[i];
+struct SphereArrays {
+  double *x, *y, *z, *vx, *vy, *vz, *wx, *wy, *wz;
+  const double *fx, *fy, *fz, *tx, *ty, *tz, *m, *im, *ii, *alpha, *x0, *y0, *z0;
+};
+
+// One component's kick with Cundall local damping
+// (bridge/laws/contact_local_damping.hpp, written out branch-free): returns
+// the new velocity and adds the damping work to `local`.
+[[gnu::always_inline]] inline double dampedKick(double F, double v0, double inv_m, double alpha, double dt,
+                                                double& local) {
+  const double sgn = static_cast<double>(v0 > 0.0) - static_cast<double>(v0 < 0.0);
+  const double Fd = -alpha * std::fabs(F) * sgn;
+  const double v1 = v0 + dt * inv_m * (F + Fd);
+  local -= Fd * (v0 + v1) * 0.5 * dt;
+  return v1;
+}
+
+template <bool kMeasure>
+SphereSums integrateSpheres(std::size_t b, std::size_t e, double dt, const Vec3& g, const SphereArrays& a) {
+  double *__restrict X = a.x, *__restrict Y = a.y, *__restrict Z = a.z;
+  double *__restrict VX = a.vx, *__restrict VY = a.vy, *__restrict VZ = a.vz;
+  double *__restrict WX = a.wx, *__restrict WY = a.wy, *__restrict WZ = a.wz;
+  const double *__restrict FX = a.fx, *__restrict FY = a.fy, *__restrict FZ = a.fz;
+  const double *__restrict TX = a.tx, *__restrict TY = a.ty, *__restrict TZ = a.tz;
+  const double *__restrict M = a.m, *__restrict IM = a.im, *__restrict II = a.ii, *__restrict AL = a.alpha;
+  const double *__restrict X0 = a.x0, *__restrict Y0 = a.y0, *__restrict Z0 = a.z0;
+  const double gx = g.x(), gy = g.y(), gz = g.z();
+  double local = 0.0, ke_t = 0.0, ke_r = 0.0, pe = 0.0, finite = 0.0, max_d2 = 0.0;
+#pragma omp simd reduction(+ : local, ke_t, ke_r, pe, finite) reduction(max : max_d2)
+  for (std::size_t i = b; i < e; ++i) {
+    const double m = M[i], im = IM[i], ii = II[i], al = AL[i];
+    const double vx = dampedKick(FX[i] + m * gx, VX[i], im, al, dt, local);
+    const double vy = dampedKick(FY[i] + m * gy, VY[i], im, al, dt, local);
+    const double vz = dampedKick(FZ[i] + m * gz, VZ[i], im, al, dt, local);
+    const double wx = dampedKick(TX[i], WX[i], ii, al, dt, local);
+    const double wy = dampedKick(TY[i], WY[i], ii, al, dt, local);
+    const double wz = dampedKick(TZ[i], WZ[i], ii, al, dt, local);
+    const double x0 = X[i], y0 = Y[i], z0 = Z[i];
+    const double x1 = x0 + dt * vx, y1 = y0 + dt * vy, z1 = z0 + dt * vz;
+    if (kMeasure) {
+      ke_t += 0.5 * m * (vx * vx + vy * vy + vz * vz);
+      pe -= m * (gx * 0.5 * (x0 + x1) + gy * 0.5 * (y0 + y1) + gz * 0.5 * (z0 + z1));
+      ke_r += ii > 0.0 ? 0.5 * (wx * wx + wy * wy + wz * wz) / ii : 0.0;
+    }
+    VX[i] = vx, VY[i] = vy, VZ[i] = vz, WX[i] = wx, WY[i] = wy, WZ[i] = wz;
+    X[i] = x1, Y[i] = y1, Z[i] = z1;
+    finite += x1 + y1 + z1 + vx + vy + vz + wx + wy + wz;
+    const double ex = x1 - X0[i], ey = y1 - Y0[i], ez = z1 - Z0[i];
     max_d2 = std::max(max_d2, ex * ex + ey * ey + ez * ez);
   }
-  return max_d2;
-}
-template <bool kMeasure>
-ComponentSums integrateComponent(std::size_t n, double dt, double g, const double* __restrict m,
-                                 const double* __restrict im, const double* __restrict alpha,
-                                 const double* __restrict f, double* __restrict v, double* __restrict x) {
-  double local = 0.0, ke = 0.0, pe = 0.0, finite = 0.0;
-#pragma omp simd reduction(+ : local, ke, pe, finite)
-  for (std::size_t i = 0; i < n; ++i) {
-    const double F = f[i] + m[i] * g;
-    const double v0 = v[i];
-    const double sgn = static_cast<double>(v0 > 0.0) - static_cast<double>(v0 < 0.0);
-    // Cundall local damping, bridge/laws/contact_local_damping.hpp, written out branch-free
-    const double Fd = -alpha[i] * std::fabs(F) * sgn;
-    const double v1 = v0 + dt * im[i] * (F + Fd);
-    local -= Fd * (v0 + v1) * 0.5 * dt;
-    const double x0 = x[i], x1 = x0 + dt * v1;
-    if (kMeasure) {
-      ke += 0.5 * m[i] * v1 * v1;
-      pe -= m[i] * g * 0.5 * (x0 + x1);
-    }
-    v[i] = v1;
-    x[i] = x1;
-    finite += x1 + v1;
-  }
-  return {local, ke, pe, finite};
-}
-// Rotation of one component (torque t, inverse inertia ii, angular velocity w).
-template <bool kMeasure>
-ComponentSums rotateComponent(std::size_t n, double dt, const double* __restrict ii,
-                              const double* __restrict alpha, const double* __restrict t, double* __restrict w) {
-  double local = 0.0, ke = 0.0, finite = 0.0;
-#pragma omp simd reduction(+ : local, ke, finite)
-  for (std::size_t i = 0; i < n; ++i) {
-    const double T = t[i], w0 = w[i];
-    const double sgn = static_cast<double>(w0 > 0.0) - static_cast<double>(w0 < 0.0);
-    const double Td = -alpha[i] * std::fabs(T) * sgn;
-    const double w1 = w0 + dt * ii[i] * (T + Td);
-    local -= Td * (w0 + w1) * 0.5 * dt;
-    if (kMeasure) ke += ii[i] > 0.0 ? 0.5 * w1 * w1 / ii[i] : 0.0;
-    w[i] = w1;
-    finite += w1;
-  }
-  return {local, ke, 0.0, finite};
+  return {local, ke_t, ke_r, pe, finite, max_d2};
 }
 }  // namespace
 
 void Engine::integrate(bool measure) {
   const double dt = dt_;
   double local = 0.0, ke_t = 0.0, ke_r = 0.0, pe = 0.0, max_d2 = 0.0, finite = 0.0;
-  double* const X[3] = {x_.data(), y_.data(), z_.data()};
-  double* const V[3] = {vx_.data(), vy_.data(), vz_.data()};
-  double* const W[3] = {wx_.data(), wy_.data(), wz_.data()};
-  const double* const Fc[3] = {fx_.data(), fy_.data(), fz_.data()};
-  const double* const Tq[3] = {tx_.data(), ty_.data(), tz_.data()};
-  // Free spheres: fixed contiguous chunks per worker, partial sums added in
+  // Free spheres: fixed contiguous ranges per worker, partial sums added in
   // worker order (deterministic for a given thread count).
   const std::size_t workers = scratch_.size();
-  std::vector<ComponentSums> part(workers * 2);
+  std::vector<SphereSums> part(workers);
+  const SphereArrays arrays{x_.data(),  y_.data(),  z_.data(),  vx_.data(), vy_.data(),          vz_.data(),
+                            wx_.data(), wy_.data(), wz_.data(), fx_.data(), fy_.data(),          fz_.data(),
+                            tx_.data(), ty_.data(), tz_.data(), mass_.data(), inv_mass_.data(), inv_inertia_.data(),
+                            alpha_.data(), x0_.data(), y0_.data(), z0_.data()};
   pool_->run([&](int t) {
     const std::size_t b = n_ * static_cast<std::size_t>(t) / workers;
     const std::size_t e = n_ * (static_cast<std::size_t>(t) + 1) / workers;
-    ComponentSums& lin = part[2 * static_cast<std::size_t>(t)];
-    ComponentSums& rot = part[2 * static_cast<std::size_t>(t) + 1];
-    for (int c = 0; c < 3; ++c) {
-      const ComponentSums a =
-          measure ? integrateComponent<true>(e - b, dt, gravity_[c], mass_.data() + b, inv_mass_.data() + b,
-                                             alpha_.data() + b, Fc[c] + b, V[c] + b, X[c] + b)
-                  : integrateComponent<false>(e - b, dt, gravity_[c], mass_.data() + b, inv_mass_.data() + b,
-                                              alpha_.data() + b, Fc[c] + b, V[c] + b, X[c] + b);
-      const ComponentSums r =
-          measure ? rotateComponent<true>(e - b, dt, inv_inertia_.data() + b, alpha_.data() + b, Tq[c] + b, W[c] + b)
-                  : rotateComponent<false>(e - b, dt, inv_inertia_.data() + b, alpha_.data() + b, Tq[c] + b,
-                                           W[c] + b);
-      lin.local += a.local, lin.ke += a.ke, lin.pe += a.pe, lin.finite += a.finite;
-      rot.local += r.local, rot.ke += r.ke, rot.finite += r.finite;
-    }
-    // (block members are placed below and checked there)
-    lin.max_d2 = maxSquaredDisplacement(e - b, X[0] + b, X[1] + b, X[2] + b, x0_.data() + b, y0_.data() + b,
-                                        z0_.data() + b);
+    part[static_cast<std::size_t>(t)] = measure ? integrateSpheres<true>(b, e, dt, gravity_, arrays)
+                                                : integrateSpheres<false>(b, e, dt, gravity_, arrays);
   });
-  for (std::size_t t = 0; t < workers; ++t) {
-    local += part[2 * t].local + part[2 * t + 1].local;
-    ke_t += part[2 * t].ke;
-    ke_r += part[2 * t + 1].ke;
-    pe += part[2 * t].pe;
-    finite += part[2 * t].finite + part[2 * t + 1].finite;
-    max_d2 = std::max(max_d2, part[2 * t].max_d2);
+  for (const SphereSums& p : part) {
+    local += p.local, ke_t += p.ke_t, ke_r += p.ke_r, pe += p.pe, finite += p.finite;
+    max_d2 = std::max(max_d2, p.max_d2);
   }
   for (auto& b : blocks_) {
     if (b.fixed) continue;
