@@ -39,11 +39,14 @@ struct Collision {
 // Two spheres head-on along x, no gravity: contact duration and restitution.
 // r2 > 2 x r1 puts the second sphere in the oversized-sphere list (a
 // boulder among grains: tested by bounding box, not in the cell grid).
-Collision headOn(double r1, double r2, double zeta) {
+Collision headOn(double r1, double r2, double zeta, double k2 = 1e5) {
   Scene s;
   s.gravity_m_s2.setZero();
-  s.materials = {material(1e5, 2.5e4, 0.5, zeta)};
+  // k2: the normal stiffness of the second sphere's material (a second
+  // material makes the contact kernel gather the mixed law per pair)
+  s.materials = {material(1e5, 2.5e4, 0.5, zeta), material(k2, 2.5e4, 0.5, zeta)};
   SphereSpec a, b;
+  b.material = k2 == 1e5 ? 0 : 1;
   a.radius_m = r1;
   a.center_m = Vec3(-r1 - 1e-4, 0, 0);
   a.velocity_m_s = Vec3(0.1, 0, 0);
@@ -85,6 +88,16 @@ TEST(MicroEngine, HeadOnElasticContactDurationAndRestitution) {
     EXPECT_NEAR(c.duration_s, kPi * std::sqrt(mstar / 1e5), 0.01 * kPi * std::sqrt(mstar / 1e5)) << "r2 " << r2;
     EXPECT_NEAR(c.restitution, 1.0, 1e-3) << "r2 " << r2;
   }
+}
+
+// Two materials: the stiffnesses in series, k = 2 k1 k2 / (k1 + k2) (the
+// mixing rule of micro/contact.hpp), set the contact duration.
+TEST(MicroEngine, HeadOnContactOfTwoMaterialsUsesTheMixedStiffness) {
+  const double k1 = 1e5, k2 = 3e5, k = 2.0 * k1 * k2 / (k1 + k2);
+  const double mstar = 0.5 * sphereMass(0.01);
+  const Collision c = headOn(0.01, 0.01, 0.0, k2);
+  EXPECT_NEAR(c.duration_s, kPi * std::sqrt(mstar / k), 0.01 * kPi * std::sqrt(mstar / k));
+  EXPECT_NEAR(c.restitution, 1.0, 1e-3);
 }
 
 TEST(MicroEngine, HeadOnViscousRestitution) {
