@@ -3,11 +3,14 @@
 #include <algorithm>
 #include <atomic>
 #include <chrono>
+#include <condition_variable>
 #include <cmath>
 #include <fstream>
 #include <limits>
+#include <mutex>
 #include <nlopt.hpp>
 #include <random>
+#include <set>
 #include <thread>
 
 #include "bridge/errors.hpp"
@@ -128,6 +131,8 @@ struct Loop {
   fs::path scratch_root;
   bridge::Progress* progress = nullptr;
   std::mutex mutex;
+  std::condition_variable finished;              // an in-flight evaluation ended
+  std::set<std::vector<double>> in_flight;       // points being evaluated now
   long long fresh = 0, reused = 0, failed = 0, done = 0, planned = 0;
   bool interrupted = false;
 
@@ -136,18 +141,25 @@ struct Loop {
     std::vector<double> x;
     for (std::size_t i = 0; i < u.size(); ++i) x.push_back(fromUnit(params[i], u[i]));
     EvaluationRecord r;
-    if (log.find(x, r)) {
-      std::lock_guard<std::mutex> lock(mutex);
-      ++reused;
-      return r.ok ? r.error : settings.penalty;
-    }
     {
-      std::lock_guard<std::mutex> lock(mutex);
+      // Two searches may ask for the same point at once (a shared start, a
+      // converged pair): the second waits for the first and reuses its
+      // result, so that a point is never run twice.
+      std::unique_lock<std::mutex> lock(mutex);
+      for (;;) {
+        if (log.find(x, r)) {
+          ++reused;
+          return r.ok ? r.error : settings.penalty;
+        }
+        if (in_flight.count(x) == 0) break;
+        finished.wait(lock);
+      }
       if (settings.max_new_evaluations >= 0 && fresh >= settings.max_new_evaluations) {
         interrupted = true;
         throw Interrupted();
       }
       ++fresh;
+      in_flight.insert(x);
     }
     r.id = log.nextId();
     r.parameters = x;
@@ -172,10 +184,14 @@ struct Loop {
       fs::remove_all(scratch, ec);
     }
     log.append(r);
-    std::lock_guard<std::mutex> lock(mutex);
-    if (!r.ok) ++failed;
-    ++done;
-    if (progress) progress->update(static_cast<double>(done), static_cast<double>(planned), done);
+    {
+      std::lock_guard<std::mutex> lock(mutex);
+      in_flight.erase(x);
+      if (!r.ok) ++failed;
+      ++done;
+      if (progress) progress->update(static_cast<double>(done), static_cast<double>(planned), done);
+    }
+    finished.notify_all();
     return r.error;
   }
 };
