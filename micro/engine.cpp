@@ -911,11 +911,11 @@ void Engine::computeContactForces(bool measure) {
     contacts_ += s.contacts;
   }
   if (workers > 1) {
-    // Add the buffers in parallel over particle ranges; for each particle the
-    // buffers are added in partition order.
+    // Add the buffers in parallel, each partition over its own particles;
+    // for each particle the buffers are added in partition order.
     pool_->run([this, workers](int part) {
       const auto p = static_cast<std::size_t>(part);
-      const std::size_t b = n_ * p / workers, e = n_ * (p + 1) / workers;
+      const std::size_t b = part_begin_[p], e = part_begin_[p + 1];
       for (std::size_t t = 0; t + 1 < workers; ++t) {
         WorkerScratch& s = scratch_[t];
         if (s.lo > s.hi) continue;
@@ -1221,8 +1221,10 @@ SphereSums integrateSpheres(std::size_t b, std::size_t e, double dt, const Vec3&
 void Engine::integrate(bool measure) {
   const double dt = dt_;
   double local = 0.0, ke_t = 0.0, ke_r = 0.0, pe = 0.0, max_d2 = 0.0, finite = 0.0;
-  // Free spheres: fixed contiguous ranges per worker, partial sums added in
-  // worker order (deterministic for a given thread count).
+  // Free spheres: the particles of each row partition (the same ranges as
+  // the contact kernel's, so a particle's data stays in one core's cache),
+  // partial sums added in partition order (deterministic for a given thread
+  // count).
   const std::size_t workers = scratch_.size();
   std::vector<SphereSums> part(workers);
   const SphereArrays arrays{x_.data(),  y_.data(),  z_.data(),  vx_.data(), vy_.data(),          vz_.data(),
@@ -1230,8 +1232,7 @@ void Engine::integrate(bool measure) {
                             tx_.data(), ty_.data(), tz_.data(), mass_.data(), inv_mass_.data(), inv_inertia_.data(),
                             alpha_.data(), x0_.data(), y0_.data(), z0_.data()};
   pool_->run([&](int t) {
-    const std::size_t b = n_ * static_cast<std::size_t>(t) / workers;
-    const std::size_t e = n_ * (static_cast<std::size_t>(t) + 1) / workers;
+    const std::size_t b = part_begin_[static_cast<std::size_t>(t)], e = part_begin_[static_cast<std::size_t>(t) + 1];
     part[static_cast<std::size_t>(t)] = measure ? integrateSpheres<true>(b, e, dt, gravity_, arrays)
                                                 : integrateSpheres<false>(b, e, dt, gravity_, arrays);
   });

@@ -45,9 +45,10 @@ bool spinFor(Done done) {
 }
 }  // namespace
 
-WorkerPool::WorkerPool(int threads) : threads_(threads < 1 ? 1 : threads) {
-  next_.store(threads_, std::memory_order_relaxed);
-  for (int t = 1; t < threads_; ++t) workers_.emplace_back([this] { workerLoop(); });
+WorkerPool::WorkerPool(int threads)
+    : threads_(threads < 1 ? 1 : threads), claimed_(new std::atomic<std::uint64_t>[static_cast<std::size_t>(threads_)]) {
+  for (int t = 0; t < threads_; ++t) claimed_[static_cast<std::size_t>(t)].store(0, std::memory_order_relaxed);
+  for (int t = 1; t < threads_; ++t) workers_.emplace_back([this, t] { workerLoop(t); });
 }
 
 WorkerPool::~WorkerPool() {
@@ -60,16 +61,21 @@ WorkerPool::~WorkerPool() {
   for (auto& w : workers_) w.join();
 }
 
-bool WorkerPool::drain() {
+bool WorkerPool::drain(int self, std::uint64_t generation) {
+  // The caller publishes job_ and pending_ before it bumps generation_
+  // (release); a worker reads generation_ (acquire) before it comes here. A
+  // worker still here from an earlier job finds every partition claimed by
+  // that job or a later one, and claims nothing.
   bool finished_last = false;
-  for (;;) {
-    // acquire: pairs with the release store of next_ in run(), so job_ and
-    // pending_ of this job are visible.
-    const int t = next_.fetch_add(1, std::memory_order_acq_rel);
-    if (t >= threads_) return finished_last;
+  for (int k = 0; k < threads_; ++k) {
+    const int t = (self + k) % threads_;
+    std::atomic<std::uint64_t>& c = claimed_[static_cast<std::size_t>(t)];
+    std::uint64_t seen = c.load(std::memory_order_relaxed);
+    if (seen >= generation || !c.compare_exchange_strong(seen, generation, std::memory_order_acq_rel)) continue;
     (*job_.load(std::memory_order_acquire))(t);
     finished_last = pending_.fetch_sub(1, std::memory_order_acq_rel) == 1;
   }
+  return finished_last;
 }
 
 void WorkerPool::run(const std::function<void(int)>& job) {
@@ -77,25 +83,25 @@ void WorkerPool::run(const std::function<void(int)>& job) {
     job(0);
     return;
   }
-  // Order matters: a worker still claiming from the previous job only sees
-  // next_ >= threads_ until the release store below publishes this job.
+  // Order matters: job_ and pending_ are published by the release of the
+  // generation bump; partitions are claimable only with the new generation.
   pending_.store(threads_, std::memory_order_relaxed);
   job_.store(&job, std::memory_order_relaxed);
-  next_.store(0, std::memory_order_release);
+  std::uint64_t generation = 0;
   {
     std::lock_guard<std::mutex> lock(mutex_);
-    generation_.fetch_add(1, std::memory_order_acq_rel);
+    generation = generation_.fetch_add(1, std::memory_order_acq_rel) + 1;
   }
   wake_.notify_all();
-  drain();
+  drain(0, generation);
   const auto done = [this] { return pending_.load(std::memory_order_acquire) == 0; };
   if (spinFor(done)) return;
   std::unique_lock<std::mutex> lock(mutex_);
   done_.wait(lock, done);
 }
 
-void WorkerPool::workerLoop() {
-  unsigned seen = 0;
+void WorkerPool::workerLoop(int self) {
+  std::uint64_t seen = 0;
   for (;;) {
     const auto fresh = [&] { return generation_.load(std::memory_order_acquire) != seen; };
     if (!spinFor(fresh)) {
@@ -104,7 +110,7 @@ void WorkerPool::workerLoop() {
     }
     seen = generation_.load(std::memory_order_acquire);
     if (stop_.load(std::memory_order_acquire)) return;
-    if (drain()) {
+    if (drain(self, seen)) {
       // This worker finished the job's last partition: wake the caller if it
       // blocks (under the mutex, so the wake-up cannot fall between its test
       // of pending_ and its wait).
