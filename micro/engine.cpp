@@ -344,22 +344,17 @@ void Engine::rebuildNeighbourList() {
   }
   struct Saved {
     std::uint32_t a, b;
-    double ux, uy, uz, plastic, viscous;
+    History::Entry h;
   };
   std::vector<Saved> saved_big;
   const std::int64_t last = step_ - 1;
   for (std::size_t q = 0; q < big_i_.size(); ++q)
-    if (big_hist_.stamp[q] == last)
-      saved_big.push_back({pid_[big_i_[q]], pid_[big_j_[q]], big_hist_.ux[q], big_hist_.uy[q], big_hist_.uz[q],
-                           big_hist_.plastic[q], big_hist_.viscous[q]});
+    if (big_hist_.touched(q, last)) saved_big.push_back({pid_[big_i_[q]], pid_[big_j_[q]], big_hist_.get(q, last)});
   std::vector<std::vector<Saved>> saved_wall(walls_.size());
   for (std::size_t w = 0; w < walls_.size(); ++w) {
     const Wall& wall = walls_[w];
     for (std::size_t k = 0; k < wall.cand.size(); ++k)
-      if (wall.hist.stamp[k] == last)
-        saved_wall[w].push_back(
-            {pid_[wall.cand[k]], 0, wall.hist.ux[k], wall.hist.uy[k], wall.hist.uz[k], wall.hist.plastic[k],
-             wall.hist.viscous[k]});
+      if (wall.hist.touched(k, last)) saved_wall[w].push_back({pid_[wall.cand[k]], 0, wall.hist.get(k, last)});
   }
 
   // 2. Cell grid over the grid spheres; sort particles into cell order
@@ -565,9 +560,7 @@ void Engine::rebuildNeighbourList() {
     const auto pair = std::make_pair(std::min(a, b), std::max(a, b));
     const auto bt = std::lower_bound(big.begin(), big.end(), pair);
     if (bt == big.end() || *bt != pair) continue;
-    const auto k = static_cast<std::size_t>(bt - big.begin());
-    big_hist_.ux[k] = s.ux, big_hist_.uy[k] = s.uy, big_hist_.uz[k] = s.uz, big_hist_.plastic[k] = s.plastic;
-    big_hist_.viscous[k] = s.viscous, big_hist_.stamp[k] = last;
+    big_hist_.set(static_cast<std::size_t>(bt - big.begin()), s.h, last);
   }
   for (std::size_t w = 0; w < walls_.size(); ++w) {
     Wall& wall = walls_[w];
@@ -575,10 +568,7 @@ void Engine::rebuildNeighbourList() {
       const std::uint32_t i = slot_[s.a];
       const auto it = std::lower_bound(wall.cand.begin(), wall.cand.end(), i);
       if (it == wall.cand.end() || *it != i) continue;
-      const auto k = static_cast<std::size_t>(it - wall.cand.begin());
-      wall.hist.ux[k] = s.ux, wall.hist.uy[k] = s.uy, wall.hist.uz[k] = s.uz, wall.hist.plastic[k] = s.plastic;
-      wall.hist.viscous[k] = s.viscous;
-      wall.hist.stamp[k] = last;
+      wall.hist.set(static_cast<std::size_t>(it - wall.cand.begin()), s.h, last);
     }
   }
 
@@ -968,16 +958,11 @@ void Engine::oversizedContacts(bool measure) {
     const double ax = lj * wx_[j] + li * wx_[i], ay = lj * wy_[j] + li * wy_[i], az = lj * wz_[j] + li * wz_[i];
     const double vrel[3] = {vx_[j] - vx_[i] - (ay * n[2] - az * n[1]), vy_[j] - vy_[i] - (az * n[0] - ax * n[2]),
                             vz_[j] - vz_[i] - (ax * n[1] - ay * n[0])};
-    History& H = big_hist_;
-    double u[3] = {0.0, 0.0, 0.0};
-    double plastic = 0.0, viscous = 0.0;
-    if (H.stamp[q] == last)
-      u[0] = H.ux[q], u[1] = H.uy[q], u[2] = H.uz[q], plastic = H.plastic[q], viscous = H.viscous[q];
+    History::Entry h = big_hist_.get(q, last);
     double f[3];
     evaluateContact(laws_[mat_[i] * nmat_ + mat_[j]], inv_body_mass_[i] + inv_body_mass_[j], n, overlap, vrel, dt_,
-                    u, plastic, viscous, f, e, measure);
-    H.ux[q] = u[0], H.uy[q] = u[1], H.uz[q] = u[2], H.plastic[q] = plastic, H.viscous[q] = viscous;
-    H.stamp[q] = step_;
+                    h.u, h.plastic, h.viscous, f, e, measure);
+    big_hist_.set(q, h, step_);
     fx_[i] += f[0], fy_[i] += f[1], fz_[i] += f[2];
     fx_[j] -= f[0], fy_[j] -= f[1], fz_[j] -= f[2];
     const double c[3] = {n[1] * f[2] - n[2] * f[1], n[2] * f[0] - n[0] * f[2], n[0] * f[1] - n[1] * f[0]};
@@ -1126,16 +1111,11 @@ void Engine::wallContacts(int t, bool measure) {
       const double vrel[3] = {w.v.x() - vx_[i] - li * (wy_[i] * nc[2] - wz_[i] * nc[1]),
                               w.v.y() - vy_[i] - li * (wz_[i] * nc[0] - wx_[i] * nc[2]),
                               w.v.z() - vz_[i] - li * (wx_[i] * nc[1] - wy_[i] * nc[0])};
-      double u[3] = {0.0, 0.0, 0.0};
-      double plastic = 0.0, viscous = 0.0;
-      History& H = w.hist;
-      if (H.stamp[k] == last)
-        u[0] = H.ux[k], u[1] = H.uy[k], u[2] = H.uz[k], plastic = H.plastic[k], viscous = H.viscous[k];
+      History::Entry h = w.hist.get(k, last);
       double f[3];
-      evaluateContact(laws[mat_[i] * nmat_], inv_body_mass_[i], nc, overlap, vrel, dt_, u, plastic, viscous, f,
+      evaluateContact(laws[mat_[i] * nmat_], inv_body_mass_[i], nc, overlap, vrel, dt_, h.u, h.plastic, h.viscous, f,
                       s.wall_energy, measure);
-      H.ux[k] = u[0], H.uy[k] = u[1], H.uz[k] = u[2], H.plastic[k] = plastic, H.viscous[k] = viscous;
-      H.stamp[k] = step_;
+      w.hist.set(k, h, step_);
       fx_[i] += f[0], fy_[i] += f[1], fz_[i] += f[2];
       tx_[i] += li * (nc[1] * f[2] - nc[2] * f[1]);
       ty_[i] += li * (nc[2] * f[0] - nc[0] * f[2]);

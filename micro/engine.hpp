@@ -131,9 +131,26 @@ class Engine {
   std::vector<std::uint32_t> row_begin_, nbr_;
   std::vector<std::uint32_t> big_i_, big_j_;
   struct History {
+    /// One pair's history: shear spring (m), plastic overlap (m), dashpot force (N).
+    struct Entry {
+      double u[3] = {0.0, 0.0, 0.0};
+      double plastic = 0.0, viscous = 0.0;
+    };
     std::vector<double> ux, uy, uz, plastic, viscous;
     std::vector<std::int64_t> stamp;  // last step the pair touched
     void resize(std::size_t m);
+    bool touched(std::size_t k, std::int64_t step) const { return stamp[k] == step; }
+    /// Pair k's history if it touched at step `last`, else an empty one (contact begins).
+    Entry get(std::size_t k, std::int64_t last) const {
+      Entry e;
+      if (touched(k, last)) e = {{ux[k], uy[k], uz[k]}, plastic[k], viscous[k]};
+      return e;
+    }
+    /// Stores pair k's history as of `step`.
+    void set(std::size_t k, const Entry& e, std::int64_t step) {
+      ux[k] = e.u[0], uy[k] = e.u[1], uz[k] = e.u[2], plastic[k] = e.plastic, viscous[k] = e.viscous;
+      stamp[k] = step;
+    }
   };
   History big_hist_;
   int hcur_ = 0;  // which of the two contact sets of each partition holds the last step's contacts
