@@ -143,7 +143,7 @@ double criticalStep(const Scene& scene, const std::vector<MassProperties>& block
   for (const auto& sp : scene.spheres) {
     if (sp.fixed) continue;
     const auto m = static_cast<std::size_t>(sp.material);
-    const double mass = scene.materials[m].density_kg_m3 * 4.0 / 3.0 * kPi * sp.radius_m * sp.radius_m * sp.radius_m;
+    const double mass = scene.materials[m].density_kg_m3 * sphereVolume(sp.radius_m);
     dt = std::min({dt, std::sqrt(mass / kn_max[m]), std::sqrt(0.4 * mass / ks_max[m])});
   }
   for (std::size_t bi = 0; bi < scene.blocks.size(); ++bi) {
@@ -204,7 +204,7 @@ Engine::Engine(const Scene& scene, int threads) {
   for (std::size_t s = 0; s < sphere_count_; ++s) {
     const SphereSpec& sp = scene.spheres[s];
     const Material& m = materials_[sp.material];
-    const double mass = m.density_kg_m3 * 4.0 / 3.0 * kPi * sp.radius_m * sp.radius_m * sp.radius_m;
+    const double mass = m.density_kg_m3 * sphereVolume(sp.radius_m);
     r_[s] = sp.radius_m;
     mat_[s] = static_cast<std::uint32_t>(sp.material);
     if (sp.fixed) {

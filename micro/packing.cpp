@@ -7,11 +7,11 @@
 #include <stdexcept>
 #include <unordered_map>
 
+#include "micro/rigid_body.hpp"
+
 namespace gabion::micro {
 
 namespace {
-
-constexpr double kPi = 3.14159265358979323846;
 
 // A hash grid of cell size >= the largest diameter + gap: a new sphere only
 // has to be tested against the 27 surrounding cells.
@@ -89,7 +89,7 @@ Packing randomPacking(const PackingSpec& spec) {
     grid.cells[grid.key(c)].push_back(static_cast<int>(out.radii_m.size()));
     out.centers_m.push_back(p);
     out.radii_m.push_back(radius);
-    solid += 4.0 / 3.0 * kPi * radius * radius * radius;
+    solid += sphereVolume(radius);
     need_radius = true;
   }
   out.solid_fraction = solid / box_volume;

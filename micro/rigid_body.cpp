@@ -304,7 +304,7 @@ MassProperties clusterMassProperties(const std::vector<Eigen::Vector3d>& centers
   // Exact sum over the spheres: int x x^T over a ball = V (c c^T + r^2/5 I).
   Moments sum;
   for (const Sphere& s : spheres) {
-    const double V = 4.0 / 3.0 * kPi * s.r * s.r * s.r;
+    const double V = sphereVolume(s.r);
     sum.V += V;
     sum.M1 += V * s.c;
     sum.M2 += V * (s.c * s.c.transpose() + 0.2 * s.r * s.r * Eigen::Matrix3d::Identity());

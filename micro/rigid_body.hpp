@@ -11,6 +11,9 @@
 
 namespace gabion::micro {
 
+/// Volume of a sphere of radius r (m^3).
+inline double sphereVolume(double r) { return 4.0 / 3.0 * 3.14159265358979323846 * r * r * r; }
+
 /// Mass properties of a rigid cluster of spheres; overlapping volume counted once (union).
 struct MassProperties {
   double mass_kg = 0;      ///< density * volume_m3 (kg)
