@@ -54,6 +54,11 @@ struct Engine::Wall {
 };
 
 namespace {
+/// A worker's sums over its free spheres in integrate().
+struct SphereSums {
+  double local = 0.0, ke_t = 0.0, ke_r = 0.0, pe = 0.0, finite = 0.0, max_d2 = 0.0;
+};
+
 /// The contacts of one partition of the neighbour list that touched at one
 /// step, in list order: the list index k of the pair and its history (shear
 /// spring, plastic overlap, dashpot force). Only touching pairs have an
@@ -90,6 +95,7 @@ struct Engine::WorkerScratch {
   double wall_work = 0.0;
   std::size_t wall_contacts = 0;
   std::string wall_failure;
+  SphereSums spheres;  // integrate(): sums over the free spheres of its partition
   std::vector<std::uint32_t> rows;  // neighbour-list rows built by this worker
   std::uint32_t lo = 0, hi = 0;
   ContactEnergy energy;
@@ -1141,9 +1147,6 @@ namespace {
 // loop vectorises; SoA arrays, no aliasing between them): each array is read
 // once per step. Also the largest squared displacement since the last list
 // build; block members are placed afterwards and checked there.
-struct SphereSums {
-  double local = 0.0, ke_t = 0.0, ke_r = 0.0, pe = 0.0, finite = 0.0, max_d2 = 0.0;
-};
 struct SphereArrays {
   double *x, *y, *z, *vx, *vy, *vz, *wx, *wy, *wz;
   const double *fx, *fy, *fz, *tx, *ty, *tz, *m, *im, *ii, *alpha, *x0, *y0, *z0;
@@ -1205,18 +1208,18 @@ void Engine::integrate(bool measure) {
   // the contact kernel's, so a particle's data stays in one core's cache),
   // partial sums added in partition order (deterministic for a given thread
   // count).
-  const std::size_t workers = scratch_.size();
-  std::vector<SphereSums> part(workers);
   const SphereArrays arrays{x_.data(),  y_.data(),  z_.data(),  vx_.data(), vy_.data(),          vz_.data(),
                             wx_.data(), wy_.data(), wz_.data(), fx_.data(), fy_.data(),          fz_.data(),
                             tx_.data(), ty_.data(), tz_.data(), mass_.data(), inv_mass_.data(), inv_inertia_.data(),
                             alpha_.data(), x0_.data(), y0_.data(), z0_.data()};
   pool_->run([&](int t) {
     const std::size_t b = part_begin_[static_cast<std::size_t>(t)], e = part_begin_[static_cast<std::size_t>(t) + 1];
-    part[static_cast<std::size_t>(t)] = measure ? integrateSpheres<true>(b, e, dt, gravity_, arrays)
-                                                : integrateSpheres<false>(b, e, dt, gravity_, arrays);
+    scratch_[static_cast<std::size_t>(t)].spheres =
+        measure ? integrateSpheres<true>(b, e, dt, gravity_, arrays)
+                : integrateSpheres<false>(b, e, dt, gravity_, arrays);
   });
-  for (const SphereSums& p : part) {
+  for (const WorkerScratch& w : scratch_) {
+    const SphereSums& p = w.spheres;
     local += p.local, ke_t += p.ke_t, ke_r += p.ke_r, pe += p.pe, finite += p.finite;
     max_d2 = std::max(max_d2, p.max_d2);
   }
