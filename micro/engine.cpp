@@ -984,7 +984,6 @@ void Engine::oversizedContacts(bool measure) {
 
 void Engine::contactKernel(int t, bool measure) {
   WorkerScratch& s = scratch_[static_cast<std::size_t>(t)];
-  const auto T = scratch_.size();
   s.energy = ContactEnergy{};
   s.contacts = 0;
   s.failed = false;
@@ -992,7 +991,6 @@ void Engine::contactKernel(int t, bool measure) {
   s.hi = 0;
   const std::uint32_t r0 = part_begin_[static_cast<std::size_t>(t)], r1 = part_begin_[static_cast<std::size_t>(t) + 1];
   for (auto* v : {&fx_, &fy_, &fz_, &tx_, &ty_, &tz_}) std::fill(v->begin() + r0, v->begin() + r1, 0.0);
-  const bool last_part = static_cast<std::size_t>(t) + 1 == T;  // has no partner beyond its range
   double* const FX = fx_.data();
   double* const FY = fy_.data();
   double* const FZ = fz_.data();
@@ -1021,10 +1019,10 @@ void Engine::contactKernel(int t, bool measure) {
   KernelIn in{X, Y, Z, R, VX, VY, VZ, WX, WY, WZ, IM, MAT, nbr_.data(),
               law_kn_.data(), law_flim_.data(), law_ks_.data(), law_mu_ks_.data(), law_zeta_.data(),
               nmat, uniform_material_ ? mat_[0] * (nmat + 1) : 0, dt, ratio};
-  WorkerScratch& buf = scratch_[last_part ? 0 : static_cast<std::size_t>(t)];  // (unused by the last partition)
-  KernelOut out{FX,         FY,         FZ,         TX,         TY,         TZ,
-                buf.fx.data(), buf.fy.data(), buf.fz.data(), buf.tx.data(), buf.ty.data(), buf.tz.data(),
-                r1,         &s.energy};
+  // The last partition has no partner beyond its range and no buffer (empty vectors).
+  KernelOut out{FX,          FY,          FZ,          TX,          TY,          TZ,
+                s.fx.data(), s.fy.data(), s.fz.data(), s.tx.data(), s.ty.data(), s.tz.data(),
+                r1,          &s.energy};
   ContactSet& next = s.sets[hcur_ ^ 1];
   next.n = 0;
   KernelHistory hist{&s.sets[hcur_], 0, &next};
