@@ -174,6 +174,16 @@ bridge::RunOutcome runScene(const bridge::JsonDocument& doc, const bridge::RunCo
   out.results["step_loop_wall_time_s"] = loop_s;
   out.results["body_steps_per_s"] =
       loop_s > 0.0 ? static_cast<double>(nb) * static_cast<double>(engine.steps()) / loop_s : 0.0;
+  // Where the time went (docs/formats.md): per stage, and per partition.
+  const StageProfile& prof = engine.profile();
+  nlohmann::json stage_wall = nlohmann::json::object(), busy = nlohmann::json::object();
+  for (int k = 0; k < StageProfile::kStageCount; ++k) {
+    stage_wall[StageProfile::name(k)] = prof.wall_s[static_cast<std::size_t>(k)];
+    nlohmann::json per = nlohmann::json::array();
+    for (const auto& p : prof.partition_busy_s) per.push_back(p[static_cast<std::size_t>(k)]);
+    if (k != StageProfile::kEnergy) busy[StageProfile::name(k)] = per;
+  }
+  out.results["profile"] = {{"stage_wall_time_s", stage_wall}, {"partition_busy_time_s", busy}};
   if (!ok) {
     out.status = bridge::RunOutcome::Status::NumericalFailure;
     out.message = engine.failure();

@@ -1,6 +1,7 @@
 #include "micro/engine.hpp"
 
 #include <algorithm>
+#include <atomic>
 #include <cmath>
 #include <limits>
 #include <numeric>
@@ -96,7 +97,6 @@ struct Engine::WorkerScratch {
   std::size_t wall_contacts = 0;
   std::string wall_failure;
   SphereSums spheres;  // integrate(): sums over the free spheres of its partition
-  std::vector<std::uint32_t> rows;  // neighbour-list rows built by this worker
   std::uint32_t lo = 0, hi = 0;
   ContactEnergy energy;
   std::size_t contacts = 0;
@@ -288,6 +288,7 @@ Engine::Engine(const Scene& scene, int threads) {
 
   pool_ = std::make_unique<WorkerPool>(threads);
   scratch_.resize(static_cast<std::size_t>(pool_->size()));
+  profile_.partition_busy_s.resize(scratch_.size());
   for (std::size_t t = 0; t + 1 < scratch_.size(); ++t)  // partners beyond partition t's particles
     for (auto* v : {&scratch_[t].fx, &scratch_[t].fy, &scratch_[t].fz, &scratch_[t].tx, &scratch_[t].ty,
                     &scratch_[t].tz})
@@ -300,17 +301,55 @@ Engine::~Engine() = default;
 // The step.
 
 bool Engine::step(bool measure) {
+  using S = StageProfile;
   failure_.clear();
+  lap_ = std::chrono::steady_clock::now();
   updateNeighbours();
+  lap(S::kNeighbours);
   computeContactForces(measure);
+  lap(S::kContacts);
   // (The netting stage, wire links between node particles, goes here.)
   applyWallsAndLoads(measure);
+  lap(S::kWalls);
   if (!failure_.empty()) return false;
   integrate(measure);
+  lap(S::kIntegrate);
   if (!failure_.empty()) return false;
   if (measure) measureEnergy();
+  lap(S::kEnergy);
   ++step_;
   return failure_.empty();
+}
+
+const char* StageProfile::name(int stage) {
+  static const char* const names[kStageCount] = {"neighbours", "contacts", "walls", "integrate", "energy"};
+  return names[stage];
+}
+
+void Engine::lap(StageProfile::Stage stage) {
+  const auto now = std::chrono::steady_clock::now();
+  profile_.wall_s[stage] += std::chrono::duration<double>(now - lap_).count();
+  lap_ = now;
+}
+
+template <class Job>
+void Engine::parallel(StageProfile::Stage stage, const Job& job) {
+  pool_->run([&](int t) {
+    const auto start = std::chrono::steady_clock::now();
+    job(t);
+    profile_.partition_busy_s[static_cast<std::size_t>(t)][stage] +=
+        std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  });
+}
+
+template <class Fn>
+void Engine::forBlocks(StageProfile::Stage stage, std::size_t blocks, const Fn& fn) {
+  std::atomic<std::size_t> next{0};
+  parallel(stage, [&](int) {
+    for (std::size_t b = next.fetch_add(1, std::memory_order_relaxed); b < blocks;
+         b = next.fetch_add(1, std::memory_order_relaxed))
+      fn(b);
+  });
 }
 
 // ---------------------------------------------------------------------------
@@ -333,21 +372,21 @@ void Engine::rebuildNeighbourList() {
   struct SavedContact {
     std::uint32_t a, b, t, c;
   };
-  std::vector<SavedContact> saved;
-  {
-    std::size_t count = 0;
-    for (const auto& sc : scratch_) count += sc.sets[hcur_].n;
-    saved.reserve(count);
-  }
-  for (std::size_t t = 0; t < scratch_.size(); ++t) {
+  const std::size_t workers = scratch_.size();
+  std::vector<std::size_t> saved_base(workers + 1, 0);
+  for (std::size_t t = 0; t < workers; ++t) saved_base[t + 1] = saved_base[t] + scratch_[t].sets[hcur_].n;
+  std::vector<SavedContact> saved(saved_base[workers]);
+  parallel(StageProfile::kNeighbours, [&](int task) {
+    const auto t = static_cast<std::size_t>(task);
     const ContactSet& cs = scratch_[t].sets[hcur_];
+    SavedContact* const out = saved.data() + saved_base[t];
     std::size_t i = cs.n > 0 ? part_begin_[t] : 0;
     for (std::size_t c = 0; c < cs.n; ++c) {
       const std::uint32_t k = cs.k[c];
       while (row_begin_[i + 1] <= k) ++i;
-      saved.push_back({pid_[i], pid_[nbr_[k]], static_cast<std::uint32_t>(t), static_cast<std::uint32_t>(c)});
+      out[c] = {pid_[i], pid_[nbr_[k]], static_cast<std::uint32_t>(t), static_cast<std::uint32_t>(c)};
     }
-  }
+  });
   struct Saved {
     std::uint32_t a, b;
     History::Entry h;
@@ -364,15 +403,29 @@ void Engine::rebuildNeighbourList() {
   }
 
   // 2. Cell grid over the grid spheres; sort particles into cell order
-  // (oversized spheres last) so that neighbours are close in memory.
-  Vec3 lo = Vec3::Constant(std::numeric_limits<double>::infinity()), hi = -lo;
+  // (oversized spheres last) so that neighbours are close in memory. The
+  // per-particle passes of the rebuild go in blocks of particles that the
+  // workers claim as they come free; a block writes only its own output, so
+  // the result does not depend on who ran it.
+  const std::size_t nblocks = workers == 1 ? 1 : std::min<std::size_t>(16 * workers, n_ / 256 + 1);
+  const auto blockBegin = [&](std::size_t b) { return n_ * b / nblocks; };
+  struct Box {
+    Vec3 lo = Vec3::Constant(std::numeric_limits<double>::infinity()), hi = -lo;
+    double rmax = 0.0;
+  };
+  std::vector<Box> boxes(nblocks);
+  forBlocks(StageProfile::kNeighbours, nblocks, [&](std::size_t b) {
+    Box& box = boxes[b];
+    for (std::size_t i = blockBegin(b); i < blockBegin(b + 1); ++i) {
+      if (is_big_[i]) continue;
+      box.lo = box.lo.cwiseMin(Vec3(x_[i], y_[i], z_[i]));
+      box.hi = box.hi.cwiseMax(Vec3(x_[i], y_[i], z_[i]));
+      box.rmax = std::max(box.rmax, r_[i]);
+    }
+  });
+  Vec3 lo = boxes[0].lo, hi = boxes[0].hi;
   double rmax = 0.0;
-  for (std::size_t i = 0; i < n_; ++i) {
-    if (is_big_[i]) continue;
-    lo = lo.cwiseMin(Vec3(x_[i], y_[i], z_[i]));
-    hi = hi.cwiseMax(Vec3(x_[i], y_[i], z_[i]));
-    rmax = std::max(rmax, r_[i]);
-  }
+  for (const Box& box : boxes) lo = lo.cwiseMin(box.lo), hi = hi.cwiseMax(box.hi), rmax = std::max(rmax, box.rmax);
   double h = 2.0 * rmax + skin_m_;
   std::size_t nx = 1, ny = 1, nz = 1, ncell = 1;
   if (rmax > 0.0) {
@@ -398,7 +451,10 @@ void Engine::rebuildNeighbourList() {
     const auto cz = std::min(nz - 1, static_cast<std::size_t>((z_[i] - lo.z()) * inv_h));
     return static_cast<std::uint32_t>(((cz + 1) * py + (cy + 1)) * px + (cx + 1));
   };
-  for (std::size_t i = 0; i < n_; ++i) cell[i] = is_big_[i] ? static_cast<std::uint32_t>(ncell) : cellOf(i);
+  forBlocks(StageProfile::kNeighbours, nblocks, [&](std::size_t b) {
+    for (std::size_t i = blockBegin(b); i < blockBegin(b + 1); ++i)
+      cell[i] = is_big_[i] ? static_cast<std::uint32_t>(ncell) : cellOf(i);
+  });
   std::vector<std::uint32_t> cell_start(ncell + 2, 0);
   for (std::size_t i = 0; i < n_; ++i) ++cell_start[cell[i] + 1];
   for (std::size_t c = 0; c + 1 < cell_start.size(); ++c) cell_start[c + 1] += cell_start[c];
@@ -420,19 +476,18 @@ void Engine::rebuildNeighbourList() {
   // cells are visited in increasing index order. A partner j > i lies in a
   // cell at or after i's: of the 27 cells around i's, only the rest of its
   // own x-row and the four x-rows (y+1), (z+1, y-1..y+1) can hold one. Each
-  // worker builds a fixed range of rows into its own buffer; the buffers are
-  // joined in worker order, so the list is the same for any thread count.
+  // block of rows goes into its own buffer; the buffers are joined in block
+  // order, so the list is the same for any thread count.
   row_begin_.assign(n_ + 1, 0);
-  const std::size_t workers = scratch_.size();
-  pool_->run([&](int t) {
+  list_blocks_.resize(nblocks);
+  forBlocks(StageProfile::kNeighbours, nblocks, [&](std::size_t blk) {
     // One worker writes the list itself (no second copy in memory). The
     // three cells along x of one (y, z) row of the stencil hold one contiguous
     // range of particles (cell order), so each particle scans 5 ranges,
     // branch-free, appending in place.
-    std::vector<std::uint32_t>& out = workers == 1 ? nbr_ : scratch_[static_cast<std::size_t>(t)].rows;
+    std::vector<std::uint32_t>& out = nblocks == 1 ? nbr_ : list_blocks_[blk];
     std::size_t len = 0;
-    const std::size_t i0 = n_ * static_cast<std::size_t>(t) / workers;
-    const std::size_t i1 = n_ * (static_cast<std::size_t>(t) + 1) / workers;
+    const std::size_t i0 = blockBegin(blk), i1 = blockBegin(blk + 1);
     const double *__restrict X = x_.data(), *__restrict Y = y_.data(), *__restrict Z = z_.data(),
                  *__restrict R = r_.data(), *__restrict IMB = inv_body_mass_.data();
     const std::int32_t* __restrict BLK = block_.data();
@@ -467,15 +522,14 @@ void Engine::rebuildNeighbourList() {
     }
     out.resize(len);
   });
-  if (workers > 1) {
-    std::vector<std::size_t> base(workers + 1, 0);
-    for (std::size_t t = 0; t < workers; ++t) base[t + 1] = base[t] + scratch_[t].rows.size();
-    nbr_.resize(base[workers]);
-    pool_->run([&](int t) {
-      const auto tt = static_cast<std::size_t>(t);
-      const std::size_t i0 = n_ * tt / workers, i1 = n_ * (tt + 1) / workers;
-      for (std::size_t i = i0; i < i1; ++i) row_begin_[i] += static_cast<std::uint32_t>(base[tt]);
-      std::copy(scratch_[tt].rows.begin(), scratch_[tt].rows.end(), nbr_.begin() + static_cast<long>(base[tt]));
+  if (nblocks > 1) {
+    std::vector<std::size_t> base(nblocks + 1, 0);
+    for (std::size_t b = 0; b < nblocks; ++b) base[b + 1] = base[b] + list_blocks_[b].size();
+    nbr_.resize(base[nblocks]);
+    forBlocks(StageProfile::kNeighbours, nblocks, [&](std::size_t b) {
+      const auto shift = static_cast<std::uint32_t>(base[b]);
+      for (std::size_t i = blockBegin(b); i < blockBegin(b + 1); ++i) row_begin_[i] += shift;
+      std::copy(list_blocks_[b].begin(), list_blocks_[b].end(), nbr_.begin() + static_cast<long>(base[b]));
     });
   }
   row_begin_[n_] = static_cast<std::uint32_t>(nbr_.size());
@@ -506,21 +560,30 @@ void Engine::rebuildNeighbourList() {
   big_hist_.resize(big.size());
 
   // Walls: candidates within reach of the plane (the wall may move half a
-  // skin), in particle order; one wall per task.
-  pool_->run([&](int t) {
-    for (std::size_t wi = static_cast<std::size_t>(t); wi < walls_.size(); wi += workers) {
-      Wall& w = walls_[wi];
+  // skin), in particle order: each block of particles lists its own, then
+  // the blocks are joined in order.
+  const std::size_t nwalls = walls_.size();
+  std::vector<std::vector<std::uint32_t>> wall_blocks(nblocks * nwalls);
+  forBlocks(StageProfile::kNeighbours, nblocks, [&](std::size_t b) {
+    for (std::size_t wi = 0; wi < nwalls; ++wi) {
+      const Wall& w = walls_[wi];
       const Vec3 p = w.p0 + w.v * t_now;
-      w.cand.clear();
-      for (std::size_t i = 0; i < n_; ++i) {
+      std::vector<std::uint32_t>& out = wall_blocks[b * nwalls + wi];
+      for (std::size_t i = blockBegin(b); i < blockBegin(b + 1); ++i) {
         if (inv_body_mass_[i] == 0.0) continue;
         const double d = (x_[i] - p.x()) * w.n.x() + (y_[i] - p.y()) * w.n.y() + (z_[i] - p.z()) * w.n.z();
-        if (d < r_[i] + skin_m_) w.cand.push_back(static_cast<std::uint32_t>(i));
+        if (d < r_[i] + skin_m_) out.push_back(static_cast<std::uint32_t>(i));
       }
-      w.hist.resize(w.cand.size());
-      w.t_ref = t_now;
     }
   });
+  for (std::size_t wi = 0; wi < nwalls; ++wi) {
+    Wall& w = walls_[wi];
+    w.cand.clear();
+    for (std::size_t b = 0; b < nblocks; ++b)
+      w.cand.insert(w.cand.end(), wall_blocks[b * nwalls + wi].begin(), wall_blocks[b * nwalls + wi].end());
+    w.hist.resize(w.cand.size());
+    w.t_ref = t_now;
+  }
   // Particle ranges with about equal numbers of wall candidates (the
   // candidates crowd into the index range of the cells next to the walls,
   // the floor's into the first cells): boundary t is the smallest index with
@@ -551,9 +614,9 @@ void Engine::rebuildNeighbourList() {
   // change during a run.
   constexpr std::uint32_t kNone = std::numeric_limits<std::uint32_t>::max();
   std::vector<std::uint32_t> from(nbr_.size(), kNone);  // list entry -> index in saved
-  pool_->run([&](int t) {  // each pair has its own list entry: no two workers write the same
-    const auto tt = static_cast<std::size_t>(t);
-    for (std::size_t q = saved.size() * tt / workers; q < saved.size() * (tt + 1) / workers; ++q) {
+  // each pair has its own list entry: no two blocks write the same
+  forBlocks(StageProfile::kNeighbours, nblocks, [&](std::size_t blk) {
+    for (std::size_t q = saved.size() * blk / nblocks; q < saved.size() * (blk + 1) / nblocks; ++q) {
       const std::uint32_t a = slot_[saved[q].a], b = slot_[saved[q].b];
       const std::uint32_t i = std::min(a, b), j = std::max(a, b);
       const auto first = nbr_.begin() + row_begin_[i], end = nbr_.begin() + row_begin_[i + 1];
@@ -588,20 +651,35 @@ void Engine::rebuildNeighbourList() {
   part_begin_.assign(T + 1, static_cast<std::uint32_t>(n_));
   part_begin_[0] = 0;
   if (T > 1) {
-    constexpr std::size_t kTouchWeight = 3;
-    std::size_t total = nbr_.size();
-    for (std::size_t k = 0; k < nbr_.size(); ++k) total += from[k] != kNone ? kTouchWeight : 0;
+    constexpr std::size_t kTouchWeight = 4;
+    const auto rowWeight = [&](std::size_t i) {
+      std::size_t w = 0;
+      for (std::uint32_t k = row_begin_[i]; k < row_begin_[i + 1]; ++k) w += 1 + (from[k] != kNone ? kTouchWeight : 0);
+      return w;
+    };
+    // Block sums in parallel; the boundaries are then found row by row only
+    // inside the blocks that hold them (the same boundaries as a serial scan).
+    std::vector<std::size_t> block_weight(nblocks, 0);
+    forBlocks(StageProfile::kNeighbours, nblocks, [&](std::size_t b) {
+      for (std::size_t i = blockBegin(b); i < blockBegin(b + 1); ++i) block_weight[b] += rowWeight(i);
+    });
+    const std::size_t total = std::accumulate(block_weight.begin(), block_weight.end(), std::size_t{0});
     std::size_t t = 1, acc = 0;
-    for (std::size_t i = 0; i < n_ && t < T; ++i) {
-      while (t < T && acc >= total * t / T) part_begin_[t++] = static_cast<std::uint32_t>(i);
-      for (std::uint32_t k = row_begin_[i]; k < row_begin_[i + 1]; ++k)
-        acc += 1 + (from[k] != kNone ? kTouchWeight : 0);
+    for (std::size_t b = 0; b < nblocks && t < T; ++b) {
+      if (acc + block_weight[b] < total * t / T) {
+        acc += block_weight[b];
+        continue;
+      }
+      for (std::size_t i = blockBegin(b); i < blockBegin(b + 1) && t < T; ++i) {
+        while (t < T && acc >= total * t / T) part_begin_[t++] = static_cast<std::uint32_t>(i);
+        acc += rowWeight(i);
+      }
     }
   }
   // Each partition's carried contacts, in list order, become its "last step"
   // contact set; the history is copied from where step 1 noted it.
   const int next = hcur_ ^ 1;
-  pool_->run([&](int task) {
+  parallel(StageProfile::kNeighbours, [&](int task) {
     const auto t = static_cast<std::size_t>(task);
     ContactSet& out = scratch_[t].sets[next];
     const std::uint32_t k0 = row_begin_[part_begin_[t]], k1 = row_begin_[part_begin_[t + 1]];
@@ -628,7 +706,7 @@ void Engine::reorderParticles(const std::vector<std::uint32_t>& order) {
   std::vector<std::vector<double>*> arrays = {&x_,  &y_,  &z_,  &vx_, &vy_,           &vz_,  &wx_,      &wy_,
                                               &wz_, &r_,  &inv_body_mass_, &mass_, &inv_mass_, &inv_inertia_, &alpha_};
   const std::size_t workers = scratch_.size(), tasks = arrays.size() + 4;
-  pool_->run([&](int t) {
+  parallel(StageProfile::kNeighbours, [&](int t) {
     std::vector<double> tmp;
     for (std::size_t a = static_cast<std::size_t>(t); a < tasks; a += workers) {
       if (a < arrays.size()) {
@@ -894,7 +972,7 @@ void Engine::computeContactForces(bool measure) {
   // Partition t owns the particles of its rows [p_t, p_t+1): it clears and
   // writes their global force arrays; a partner j beyond them (j > i always)
   // goes to its buffer, added below in partition order.
-  pool_->run([this, measure](int t) { contactKernel(t, measure); });
+  parallel(StageProfile::kContacts, [this, measure](int t) { contactKernel(t, measure); });
   hcur_ ^= 1;  // this step's contact sets become the last step's
   contacts_ = 0;
   const std::size_t workers = scratch_.size();
@@ -906,24 +984,8 @@ void Engine::computeContactForces(bool measure) {
     if (measure) elastic_ += s.energy.elastic_J;
     contacts_ += s.contacts;
   }
-  if (workers > 1) {
-    // Add the buffers in parallel, each partition over its own particles;
-    // for each particle the buffers are added in partition order.
-    pool_->run([this, workers](int part) {
-      const auto p = static_cast<std::size_t>(part);
-      const std::size_t b = part_begin_[p], e = part_begin_[p + 1];
-      for (std::size_t t = 0; t + 1 < workers; ++t) {
-        WorkerScratch& s = scratch_[t];
-        if (s.lo > s.hi) continue;
-        const std::size_t lo = std::max<std::size_t>(b, s.lo), hi = std::min<std::size_t>(e, s.hi + std::size_t{1});
-        for (std::size_t i = lo; i < hi; ++i) {
-          fx_[i] += s.fx[i], fy_[i] += s.fy[i], fz_[i] += s.fz[i];
-          tx_[i] += s.tx[i], ty_[i] += s.ty[i], tz_[i] += s.tz[i];
-          s.fx[i] = s.fy[i] = s.fz[i] = s.tx[i] = s.ty[i] = s.tz[i] = 0.0;
-        }
-      }
-    });
-  }
+  // (The partitions' buffers are added at the start of integrate(), in the
+  // same pass over the particles.)
   oversizedContacts(measure);
   for (const WorkerScratch& s : scratch_)
     if (s.failed) {
@@ -1068,7 +1130,7 @@ void Engine::applyWallsAndLoads(bool measure) {
   // Each worker takes the candidates of its particle range (particles are
   // disjoint, so it adds to the global force arrays); wall forces, energies
   // and work are summed in worker order.
-  pool_->run([this, measure](int t) { wallContacts(t, measure); });
+  parallel(StageProfile::kWalls, [this, measure](int t) { wallContacts(t, measure); });
   for (auto& w : walls_) w.force_N.setZero();
   for (WorkerScratch& s : scratch_) {
     for (std::size_t w = 0; w < walls_.size(); ++w) walls_[w].force_N += s.wall_force[w];
@@ -1199,6 +1261,22 @@ SphereSums integrateSpheres(std::size_t b, std::size_t e, double dt, const Vec3&
 }
 }  // namespace
 
+// The contact kernel's partition t left the forces on particles beyond its
+// rows in its buffer (the band [lo, hi]); they are added here, for each
+// particle in partition order, and the buffers cleared.
+void Engine::addForceBuffers(std::size_t b, std::size_t e) {
+  for (std::size_t t = 0; t + 1 < scratch_.size(); ++t) {
+    WorkerScratch& s = scratch_[t];
+    if (s.lo > s.hi) continue;
+    const std::size_t lo = std::max<std::size_t>(b, s.lo), hi = std::min<std::size_t>(e, s.hi + std::size_t{1});
+    for (std::size_t i = lo; i < hi; ++i) {
+      fx_[i] += s.fx[i], fy_[i] += s.fy[i], fz_[i] += s.fz[i];
+      tx_[i] += s.tx[i], ty_[i] += s.ty[i], tz_[i] += s.tz[i];
+      s.fx[i] = s.fy[i] = s.fz[i] = s.tx[i] = s.ty[i] = s.tz[i] = 0.0;
+    }
+  }
+}
+
 void Engine::integrate(bool measure) {
   const double dt = dt_;
   double local = 0.0, ke_t = 0.0, ke_r = 0.0, pe = 0.0, max_d2 = 0.0, finite = 0.0;
@@ -1210,9 +1288,12 @@ void Engine::integrate(bool measure) {
                             wx_.data(), wy_.data(), wz_.data(), fx_.data(), fy_.data(),          fz_.data(),
                             tx_.data(), ty_.data(), tz_.data(), mass_.data(), inv_mass_.data(), inv_inertia_.data(),
                             alpha_.data(), x0_.data(), y0_.data(), z0_.data()};
-  pool_->run([&](int t) {
-    const std::size_t b = part_begin_[static_cast<std::size_t>(t)], e = part_begin_[static_cast<std::size_t>(t) + 1];
-    scratch_[static_cast<std::size_t>(t)].spheres =
+  const std::size_t workers = scratch_.size();
+  parallel(StageProfile::kIntegrate, [&](int task) {
+    const auto t = static_cast<std::size_t>(task);
+    const std::size_t b = n_ * t / workers, e = n_ * (t + 1) / workers;
+    addForceBuffers(b, e);
+    scratch_[t].spheres =
         measure ? integrateSpheres<true>(b, e, dt, gravity_, arrays)
                 : integrateSpheres<false>(b, e, dt, gravity_, arrays);
   });

@@ -8,6 +8,8 @@
 /// -> integrate -> (measure); docs/micro.md says what each stage reads and writes.
 #include <Eigen/Core>
 #include <Eigen/Geometry>
+#include <array>
+#include <chrono>
 #include <cstdint>
 #include <memory>
 #include <string>
@@ -38,6 +40,18 @@ struct EnergyTotals {
 /// One body's state (centre of mass for blocks).
 struct BodyState {
   Vec3 position_m, velocity_m_s, angular_velocity_rad_s;
+};
+
+/// Where the stepping time went (docs/micro.md, Speed): wall-clock seconds
+/// of each stage of step() since the engine was built, and for each
+/// partition of the parallel stages the seconds it was busy. A stage's wall
+/// time above its partitions' busiest shows the waiting and the serial parts;
+/// busy times that differ show imbalance. Costs a few clock reads per step.
+struct StageProfile {
+  enum Stage { kNeighbours, kContacts, kWalls, kIntegrate, kEnergy, kStageCount };
+  static const char* name(int stage);
+  std::array<double, kStageCount> wall_s{};
+  std::vector<std::array<double, kStageCount>> partition_busy_s;  // per partition
 };
 
 /// Critical time step of a scene (s), as Engine::criticalDt() gives it,
@@ -84,6 +98,7 @@ class Engine {
   /// Position of wall w's point at the time of the last force evaluation (m).
   Vec3 wallPosition(std::size_t w) const;
   std::size_t contactCount() const { return contacts_; }
+  const StageProfile& profile() const { return profile_; }
   std::size_t neighbourRebuilds() const { return rebuilds_; }
   /// Spheres kept out of the cell grid (radius > 2 x median radius).
   std::size_t oversizedCount() const;
@@ -97,6 +112,7 @@ class Engine {
   void computeContactForces(bool measure);
   void applyWallsAndLoads(bool measure);
   void integrate(bool measure);
+  void addForceBuffers(std::size_t b, std::size_t e);
   void measureEnergy();
 
   void rebuildNeighbourList();
@@ -107,6 +123,18 @@ class Engine {
   void checkFailures();
   std::string bodyName(std::uint32_t pid) const;
   void fail(const std::string& what);
+  /// Runs job(t) for every partition t on the pool, adding each partition's
+  /// busy time to the profile of `stage`.
+  template <class Job>
+  void parallel(StageProfile::Stage stage, const Job& job);
+  /// Runs fn(b) for the blocks b = 0 .. blocks-1, each claimed by whichever
+  /// worker comes free first (a core slowed by other work takes fewer).
+  /// fn(b) must write only what block b owns, so that the result does not
+  /// depend on which worker ran which block.
+  template <class Fn>
+  void forBlocks(StageProfile::Stage stage, std::size_t blocks, const Fn& fn);
+  /// Adds the time since the last lap to `stage`'s wall time.
+  void lap(StageProfile::Stage stage);
 
   // --- particles (every sphere in contact detection: free spheres and block
   // members), SoA, kept in cell order (re-sorted at every list rebuild).
@@ -129,6 +157,7 @@ class Engine {
   // entry per contact, not per list entry. Oversized spheres and walls keep
   // a history per candidate pair (History, with the step it last touched).
   std::vector<std::uint32_t> row_begin_, nbr_;
+  std::vector<std::vector<std::uint32_t>> list_blocks_;  // rows of each block while the list is built
   std::vector<std::uint32_t> big_i_, big_j_;
   struct History {
     /// One pair's history: shear spring (m), plastic overlap (m), dashpot force (N).
@@ -194,6 +223,8 @@ class Engine {
   std::vector<std::uint32_t> part_begin_;  // row partitions per worker
   std::vector<std::uint32_t> wall_part_;   // particle ranges per worker with equal wall candidates
   std::string failure_;
+  StageProfile profile_;
+  std::chrono::steady_clock::time_point lap_;
 };
 
 }  // namespace gabion::micro

@@ -218,8 +218,10 @@ struct DepositionResult {
   double worst = 0.0;
   gabion::micro::EnergyTotals energy;
   std::size_t contacts = 0;
+  std::vector<Vec3> positions;  // of every body at the end
+  gabion::micro::StageProfile profile;
 };
-DepositionResult deposition(double f, double zeta, double alpha);
+DepositionResult deposition(double f, double zeta, double alpha, int threads = 1, double duration_s = 0.6);
 
 TEST(MicroEngine, DepositionEnergyBalanceWithFriction) {
   const DepositionResult r = deposition(0.5, 0.0, 0.0);
@@ -237,7 +239,33 @@ TEST(MicroEngine, DepositionEnergyBalanceWithFrictionAndDamping) {
   EXPECT_GT(r.contacts, 1000u);
 }
 
-DepositionResult deposition(double f, double zeta, double alpha) {
+// Several workers: the neighbour list is built in blocks claimed by whichever
+// worker comes free, the contact kernel in fixed row partitions. The same
+// case with the same thread count must give bit-identical states, and the
+// stage profile must account for the time.
+TEST(MicroEngine, ParallelDepositionIsRepeatableAndProfiled) {
+  const DepositionResult a = deposition(0.5, 0.0, 0.0, 3, 0.2);
+  const DepositionResult b = deposition(0.5, 0.0, 0.0, 3, 0.2);
+  ASSERT_EQ(a.positions.size(), 1000u);
+  EXPECT_TRUE(a.positions == b.positions);
+  EXPECT_EQ(a.contacts, b.contacts);
+  EXPECT_GT(a.contacts, 100u);
+  EXPECT_LT(a.worst, 0.01);
+  using gabion::micro::StageProfile;
+  ASSERT_EQ(a.profile.partition_busy_s.size(), 3u);
+  for (const int stage : {StageProfile::kNeighbours, StageProfile::kContacts, StageProfile::kWalls,
+                          StageProfile::kIntegrate}) {
+    const auto k = static_cast<std::size_t>(stage);
+    double busy = 0.0;
+    for (const auto& p : a.profile.partition_busy_s) busy += p[k];
+    EXPECT_GT(a.profile.wall_s[k], 0.0) << StageProfile::name(stage);
+    EXPECT_GT(busy, 0.0) << StageProfile::name(stage);
+    // three partitions cannot be busy longer than three times the stage
+    EXPECT_LE(busy, 3.0 * a.profile.wall_s[k] * 1.001) << StageProfile::name(stage);
+  }
+}
+
+DepositionResult deposition(double f, double zeta, double alpha, int threads, double duration_s) {
   Scene s;
   s.materials = {material(1e5, 2.5e4, f, zeta, alpha)};
   std::mt19937_64 rng(7);
@@ -261,9 +289,9 @@ DepositionResult deposition(double f, double zeta, double alpha) {
     w.normal = n;
     s.walls.push_back(w);
   }
-  Engine e(s, 1);
+  Engine e(s, threads);
   e.setDt(0.2 * e.criticalDt());
-  const int steps = static_cast<int>(0.6 / e.dt());
+  const int steps = static_cast<int>(duration_s / e.dt());
   double worst = 0.0;
   for (int n = 0; n < steps; ++n) {
     const bool measure = n % 200 == 0 || n + 1 == steps;
@@ -273,7 +301,9 @@ DepositionResult deposition(double f, double zeta, double alpha) {
     }
     if (measure) worst = std::max(worst, std::fabs(e.energy().balance_rel_error));
   }
-  return {worst, e.energy(), e.contactCount()};
+  DepositionResult r{worst, e.energy(), e.contactCount(), {}, e.profile()};
+  for (std::size_t b = 0; b < e.bodyCount(); ++b) r.positions.push_back(e.body(b).position_m);
+  return r;
 }
 
 // An F_lim contact in the engine: a sphere pressed into the floor by gravity
