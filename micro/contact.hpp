@@ -81,4 +81,81 @@ struct ContactEnergy {
                                                    u_m[0] * u_m[0] + u_m[1] * u_m[1] + u_m[2] * u_m[2]);
 }
 
+/// What laneContact gives for one contact: the force on i (N) without the
+/// contact's on/off factor, the elastic normal force, and the energy
+/// increments (J) of this step, to be counted only for a contact that touches.
+struct LaneContact {
+  double fx, fy, fz;
+  double elastic_normal_N;
+  double friction_J, plastic_J, viscous_J, elastic_J;
+};
+
+/// The laws of evaluateContact written branch-free (selects instead of
+/// branches) for the vectorised kernels, one SIMD lane per contact: the
+/// particle-pair kernel and the wall kernel of micro/engine.cpp. n: unit
+/// normal from i to j; overlap_m (> 0 for a contact that acts); v*: velocity
+/// of j's contact point relative to i's; kn, ks, mu_ks = friction / ks,
+/// flim, zeta: the pair's law; inv_mass_sum: 1/m_i + 1/m_j; ux, uy, uz,
+/// plastic, viscous: the contact history, updated. F_lim, viscous damping and
+/// the stored energy are compile-time switches (a case pays only for what it
+/// uses). The arithmetic is that of bridge/laws/contact_*.hpp; the tests of
+/// tests/micro compare both paths with the analytic results.
+template <bool kMeasure, bool kViscous, bool kPlastic>
+[[gnu::always_inline]] inline LaneContact laneContact(double nx, double ny, double nz, double overlap, double vx,
+                                                      double vy, double vz, double kn, double ks, double mu_ks,
+                                                      double flim, double zeta, double inv_mass_sum, double dt,
+                                                      double& ux, double& uy, double& uz, double& plastic,
+                                                      double& viscous) {
+  LaneContact out{};
+  const double vn = vx * nx + vy * ny + vz * nz;
+  // normal spring (bridge::normalContactForce)
+  double fel;
+  if constexpr (kPlastic) {
+    const double pl = plastic;
+    const double trial = kn * (overlap - pl);
+    const bool cap = trial > flim;
+    const double dp = overlap - flim / kn;
+    fel = trial <= 0.0 ? 0.0 : (cap ? flim : trial);
+    plastic = trial > 0.0 && cap ? dp : pl;
+    out.plastic_J = trial > 0.0 && cap ? flim * (dp - pl) : 0.0;
+  } else {
+    const double trial = kn * overlap;
+    fel = trial > 0.0 ? trial : 0.0;
+  }
+  double fn = fel;
+  if constexpr (kViscous) {
+    const double vi = viscous;
+    const double c = 2.0 * zeta * std::sqrt(1.0 / inv_mass_sum * kn);  // bridge::normalDampingCoefficient
+    const double fv = zeta > 0.0 ? c * -vn : vi;
+    out.viscous_J = zeta > 0.0 ? 0.5 * (fv + vi) * (-vn) * dt : 0.0;
+    viscous = fv;
+    fn += zeta > 0.0 ? fv : 0.0;
+  }
+  // shear history turned into the tangent plane (bridge::rotateShearIntoPlane)
+  const double un = ux * nx + uy * ny + uz * nz;
+  const double before = ux * ux + uy * uy + uz * uz;
+  const double px = ux - un * nx, py = uy - un * ny, pz = uz - un * nz;
+  const double after = px * px + py * py + pz * pz;
+  const bool turn = un != 0.0;
+  const double s = turn && after > 0.0 ? std::sqrt(before / (after > 0.0 ? after : 1.0)) : 1.0;
+  ux = turn ? px * s : ux, uy = turn ? py * s : uy, uz = turn ? pz * s : uz;
+  // Coulomb update (bridge::coulombShearUpdate)
+  const double dux = (vx - vn * nx) * dt, duy = (vy - vn * ny) * dt, duz = (vz - vn * nz) * dt;
+  const double u0x = ux, u0y = uy, u0z = uz;
+  ux += dux, uy += duy, uz += duz;
+  const double u2 = ux * ux + uy * uy + uz * uz;
+  const double umax = mu_ks * fel;  // the spring's reach at the Coulomb limit
+  const bool slide = u2 > umax * umax;
+  const double sc = slide ? umax / std::sqrt(slide ? u2 : 1.0) : 1.0;
+  ux *= sc, uy *= sc, uz *= sc;
+  const double work = 0.5 * ((u0x + ux) * dux + (u0y + uy) * duy + (u0z + uz) * duz);
+  const double stored = 0.5 * (umax * umax - (u0x * u0x + u0y * u0y + u0z * u0z));
+  out.friction_J = slide ? ks * (work - stored) : 0.0;
+  if constexpr (kMeasure)  // bridge::normalElasticEnergy + tangentialElasticEnergy
+    out.elastic_J = 0.5 * fel * fel / kn + 0.5 * ks * (ux * ux + uy * uy + uz * uz);
+  out.fx = -fn * nx + ks * ux, out.fy = -fn * ny + ks * uy, out.fz = -fn * nz + ks * uz;
+  out.elastic_normal_N = fel;
+  return out;
+}
+
 }  // namespace gabion::micro

@@ -834,61 +834,22 @@ void touchingPairs(const KernelIn& in, const std::uint32_t* ci, const std::uint3
       const double vx = VX[j] - VX[i] - (ay * nz - az * ny), vy = VY[j] - VY[i] - (az * nx - ax * nz),
                    vz = VZ[j] - VZ[i] - (ax * ny - ay * nx);
       const std::size_t L = kUniform ? law0 : MAT[i] * nmat + MAT[j];
-      const double kn = KN[L], ks = KS[L], mu_ks = MU_KS[L];
-      double ux = hux[q], uy = huy[q], uz = huz[q];
-      const double vn = vx * nx + vy * ny + vz * nz;
-      // normal spring (bridge::normalContactForce)
-      double fel, pl_new = 0.0;
-      if constexpr (kPlastic) {
-        const double flim = FLIM[L];
-        const double pl = hpl[q];
-        const double trial = kn * (overlap - pl);
-        const bool cap = trial > flim;
-        const double dp = overlap - flim / kn;
-        fel = trial <= 0.0 ? 0.0 : (cap ? flim : trial);
-        pl_new = trial > 0.0 && cap ? dp : pl;
-        bpl[q] = act && trial > 0.0 && cap ? flim * (dp - pl) : 0.0;
-      } else {
-        const double trial = kn * overlap;
-        fel = trial > 0.0 ? trial : 0.0;
-      }
-      double fn = fel, vi_new = 0.0;
-      if constexpr (kViscous) {
-        const double zeta = ZETA[L];
-        const double vi = hvi[q];
-        const double c = 2.0 * zeta * std::sqrt(1.0 / (IM[i] + IM[j]) * kn);  // bridge::normalDampingCoefficient
-        const double fv = zeta > 0.0 ? c * -vn : vi;
-        bvi[q] = act && zeta > 0.0 ? 0.5 * (fv + vi) * (-vn) * dt : 0.0;
-        vi_new = fv;
-        fn += zeta > 0.0 ? fv : 0.0;
-      }
-      // shear history turned into the tangent plane (bridge::rotateShearIntoPlane)
-      const double un = ux * nx + uy * ny + uz * nz;
-      const double before = ux * ux + uy * uy + uz * uz;
-      const double px = ux - un * nx, py = uy - un * ny, pz = uz - un * nz;
-      const double after = px * px + py * py + pz * pz;
-      const bool turn = un != 0.0;
-      const double s = turn && after > 0.0 ? std::sqrt(before / (after > 0.0 ? after : 1.0)) : 1.0;
-      ux = turn ? px * s : ux, uy = turn ? py * s : uy, uz = turn ? pz * s : uz;
-      // Coulomb update (bridge::coulombShearUpdate)
-      const double dux = (vx - vn * nx) * dt, duy = (vy - vn * ny) * dt, duz = (vz - vn * nz) * dt;
-      const double u0x = ux, u0y = uy, u0z = uz;
-      ux += dux, uy += duy, uz += duz;
-      const double u2 = ux * ux + uy * uy + uz * uz;
-      const double umax = mu_ks * fel;  // the spring's reach at the Coulomb limit
-      const bool slide = u2 > umax * umax;
-      const double sc = slide ? umax / std::sqrt(slide ? u2 : 1.0) : 1.0;
-      ux *= sc, uy *= sc, uz *= sc;
-      const double work = 0.5 * ((u0x + ux) * dux + (u0y + uy) * duy + (u0z + uz) * duz);
-      const double stored = 0.5 * (umax * umax - (u0x * u0x + u0y * u0y + u0z * u0z));
-      bfr[q] = act && slide ? ks * (work - stored) : 0.0;
-      if constexpr (kMeasure)  // bridge::normalElasticEnergy + tangentialElasticEnergy
-        bel[q] = act ? 0.5 * fel * fel / kn + 0.5 * ks * (ux * ux + uy * uy + uz * uz) : 0.0;
+      const double ks = KS[L];
+      double ux = hux[q], uy = huy[q], uz = huz[q], pl = 0.0, vi = 0.0;
+      if constexpr (kPlastic) pl = hpl[q];
+      if constexpr (kViscous) vi = hvi[q];
+      const LaneContact c = laneContact<kMeasure, kViscous, kPlastic>(
+          nx, ny, nz, overlap, vx, vy, vz, KN[L], ks, MU_KS[L], kPlastic ? FLIM[L] : 0.0, kViscous ? ZETA[L] : 0.0,
+          IM[i] + IM[j], dt, ux, uy, uz, pl, vi);
+      if constexpr (kPlastic) bpl[q] = act ? c.plastic_J : 0.0;
+      if constexpr (kViscous) bvi[q] = act ? c.viscous_J : 0.0;
+      bfr[q] = act ? c.friction_J : 0.0;
+      if constexpr (kMeasure) bel[q] = act ? c.elastic_J : 0.0;
       // (a pair that does not touch is not appended to the contact set below)
       hux[q] = ux, huy[q] = uy, huz[q] = uz;
-      if constexpr (kPlastic) hpl[q] = pl_new;
-      if constexpr (kViscous) hvi[q] = vi_new;
-      const double fx = on * (-fn * nx + ks * ux), fy = on * (-fn * ny + ks * uy), fz = on * (-fn * nz + ks * uz);
+      if constexpr (kPlastic) hpl[q] = pl;
+      if constexpr (kViscous) hvi[q] = vi;
+      const double fx = on * c.fx, fy = on * c.fy, fz = on * c.fz;
       const double cx = ny * fz - nz * fy, cy = nz * fx - nx * fz, cz = nx * fy - ny * fx;
       bfx[q] = fx, bfy[q] = fy, bfz[q] = fz;
       bix[q] = li * cx, biy[q] = li * cy, biz[q] = li * cz;
@@ -1144,54 +1105,129 @@ void Engine::applyWallsAndLoads(bool measure) {
   }
 }
 
+namespace {
+/// One wall's contacts with the candidates [k0, k1) of its list, one SIMD
+/// lane per candidate (a particle is at most once in a wall's list, so the
+/// force writes do not collide): the same law as the pairs (laneContact),
+/// the history per candidate with the step it last touched.
+struct WallLanes {
+  const double *X, *Y, *Z, *R, *VX, *VY, *VZ, *WX, *WY, *WZ, *IM;
+  const std::uint32_t* MAT;
+  const double *KN, *FLIM, *KS, *MU_KS, *ZETA;
+  std::size_t nmat, wall_mat;
+  double dt, ratio;
+  double *FX, *FY, *FZ, *TX, *TY, *TZ;
+};
+struct WallSums {
+  double fx = 0.0, fy = 0.0, fz = 0.0, work = 0.0;  // force on the wall (N), work of its motion (J)
+  double friction = 0.0, plastic = 0.0, viscous = 0.0, elastic = 0.0, contacts = 0.0, bad = 0.0;
+};
+template <bool kMeasure, bool kViscous, bool kPlastic>
+WallSums wallLanes(const WallLanes& a, const std::uint32_t* cand, std::size_t k0, std::size_t k1, const Vec3& point,
+                   const Vec3& normal, const Vec3& velocity, std::int64_t last, std::int64_t step, double* HUX,
+                   double* HUY, double* HUZ, double* HPL, double* HVI, std::int64_t* STAMP) {
+  const double *__restrict X = a.X, *__restrict Y = a.Y, *__restrict Z = a.Z, *__restrict R = a.R;
+  const double *__restrict VX = a.VX, *__restrict VY = a.VY, *__restrict VZ = a.VZ;
+  const double *__restrict WX = a.WX, *__restrict WY = a.WY, *__restrict WZ = a.WZ, *__restrict IM = a.IM;
+  double *__restrict FX = a.FX, *__restrict FY = a.FY, *__restrict FZ = a.FZ;
+  double *__restrict TX = a.TX, *__restrict TY = a.TY, *__restrict TZ = a.TZ;
+  const double px = point.x(), py = point.y(), pz = point.z();
+  const double wnx = normal.x(), wny = normal.y(), wnz = normal.z();
+  const double nx = -wnx, ny = -wny, nz = -wnz;  // from the particle to the wall
+  const double wvx = velocity.x(), wvy = velocity.y(), wvz = velocity.z();
+  const double dt = a.dt, ratio = a.ratio;
+  double sfx = 0.0, sfy = 0.0, sfz = 0.0, work = 0.0, fr = 0.0, pw = 0.0, vw = 0.0, el = 0.0, on_n = 0.0, bad = 0.0;
+#pragma omp simd reduction(+ : sfx, sfy, sfz, work, fr, pw, vw, el, on_n, bad)
+  for (std::size_t k = k0; k < k1; ++k) {
+    const std::uint32_t i = cand[k];
+    const double dist = (X[i] - px) * wnx + (Y[i] - py) * wny + (Z[i] - pz) * wnz;
+    const double overlap = R[i] - dist;
+    const bool act = overlap > 0.0;
+    bad += act && overlap > ratio * R[i] ? 1.0 : 0.0;
+    const double li = dist;
+    // velocity of the wall's contact point relative to the particle's
+    const double vx = wvx - VX[i] - li * (WY[i] * nz - WZ[i] * ny), vy = wvy - VY[i] - li * (WZ[i] * nx - WX[i] * nz),
+                 vz = wvz - VZ[i] - li * (WX[i] * ny - WY[i] * nx);
+    const bool had = STAMP[k] == last;  // touched at the last step: its history goes on
+    double ux = had ? HUX[k] : 0.0, uy = had ? HUY[k] : 0.0, uz = had ? HUZ[k] : 0.0, pl = 0.0, vi = 0.0;
+    if constexpr (kPlastic) pl = had ? HPL[k] : 0.0;
+    if constexpr (kViscous) vi = had ? HVI[k] : 0.0;
+    const std::size_t L = a.MAT[i] * a.nmat + a.wall_mat;
+    const LaneContact c = laneContact<kMeasure, kViscous, kPlastic>(
+        nx, ny, nz, overlap, vx, vy, vz, a.KN[L], a.KS[L], a.MU_KS[L], kPlastic ? a.FLIM[L] : 0.0,
+        kViscous ? a.ZETA[L] : 0.0, IM[i], dt, ux, uy, uz, pl, vi);
+    HUX[k] = act ? ux : HUX[k], HUY[k] = act ? uy : HUY[k], HUZ[k] = act ? uz : HUZ[k];
+    if constexpr (kPlastic) HPL[k] = act ? pl : HPL[k];
+    if constexpr (kViscous) HVI[k] = act ? vi : HVI[k];
+    STAMP[k] = act ? step : STAMP[k];
+    const double fx = act ? c.fx : 0.0, fy = act ? c.fy : 0.0, fz = act ? c.fz : 0.0;
+    FX[i] += fx, FY[i] += fy, FZ[i] += fz;
+    TX[i] += li * (ny * fz - nz * fy), TY[i] += li * (nz * fx - nx * fz), TZ[i] += li * (nx * fy - ny * fx);
+    sfx -= fx, sfy -= fy, sfz -= fz;
+    work += (fx * wvx + fy * wvy + fz * wvz) * dt;
+    fr += act ? c.friction_J : 0.0;
+    if constexpr (kPlastic) pw += act ? c.plastic_J : 0.0;
+    if constexpr (kViscous) vw += act ? c.viscous_J : 0.0;
+    if constexpr (kMeasure) el += act ? c.elastic_J : 0.0;
+    on_n += act ? 1.0 : 0.0;
+  }
+  return {sfx, sfy, sfz, work, fr, pw, vw, el, on_n, bad};
+}
+using WallLanesFn = WallSums (*)(const WallLanes&, const std::uint32_t*, std::size_t, std::size_t, const Vec3&,
+                                 const Vec3&, const Vec3&, std::int64_t, std::int64_t, double*, double*, double*,
+                                 double*, double*, std::int64_t*);
+WallLanesFn wallLanesFor(bool measure, bool viscous, bool plastic) {
+  static constexpr WallLanesFn fns[8] = {wallLanes<false, false, false>, wallLanes<false, false, true>,
+                                         wallLanes<false, true, false>,  wallLanes<false, true, true>,
+                                         wallLanes<true, false, false>,  wallLanes<true, false, true>,
+                                         wallLanes<true, true, false>,   wallLanes<true, true, true>};
+  return fns[(measure ? 4 : 0) + (viscous ? 2 : 0) + (plastic ? 1 : 0)];
+}
+}  // namespace
+
 void Engine::wallContacts(int t, bool measure) {
   WorkerScratch& s = scratch_[static_cast<std::size_t>(t)];
   const std::uint32_t b = wall_part_[static_cast<std::size_t>(t)], e = wall_part_[static_cast<std::size_t>(t) + 1];
-  const std::int64_t last = step_ - 1;
   s.wall_force.assign(walls_.size(), Vec3::Zero());
   s.wall_energy = ContactEnergy{};
   s.wall_work = 0.0;
   s.wall_contacts = 0;
   s.wall_failure.clear();
+  const WallLanesFn lanes = wallLanesFor(measure, any_viscous_, any_plastic_);
+  WallLanes in{x_.data(),  y_.data(),  z_.data(),  r_.data(),        vx_.data(),       vy_.data(),
+               vz_.data(), wx_.data(), wy_.data(), wz_.data(),       inv_body_mass_.data(), mat_.data(),
+               law_kn_.data(), law_flim_.data(), law_ks_.data(), law_mu_ks_.data(), law_zeta_.data(), nmat_,
+               0,          dt_,        max_overlap_ratio_, fx_.data(), fy_.data(),   fz_.data(),
+               tx_.data(), ty_.data(), tz_.data()};
   for (std::size_t wi = 0; wi < walls_.size(); ++wi) {
     Wall& w = walls_[wi];
-    const Vec3 p = w.position;
-    const double nc[3] = {-w.n.x(), -w.n.y(), -w.n.z()};  // from the particle to the wall
-    const PairLaw* laws = laws_.data() + static_cast<std::size_t>(w.mat);
-    Vec3 force = Vec3::Zero();
-    double work = 0.0;
+    in.wall_mat = static_cast<std::size_t>(w.mat);
     // candidates are in particle order
-    for (auto k = static_cast<std::size_t>(std::lower_bound(w.cand.begin(), w.cand.end(), b) - w.cand.begin());
-         k < w.cand.size() && w.cand[k] < e; ++k) {
-      const std::uint32_t i = w.cand[k];
-      const double dist = (x_[i] - p.x()) * w.n.x() + (y_[i] - p.y()) * w.n.y() + (z_[i] - p.z()) * w.n.z();
-      const double overlap = r_[i] - dist;
-      if (overlap <= 0.0) continue;
-      if (overlap > max_overlap_ratio_ * r_[i] && s.wall_failure.empty()) {
-        std::ostringstream m;
-        m << "overlap " << overlap / r_[i] << " of the radius (limit " << max_overlap_ratio_ << ") between "
-          << bodyName(pid_[i]) << " and wall " << wi;
-        s.wall_failure = m.str();
+    const auto k0 = static_cast<std::size_t>(std::lower_bound(w.cand.begin(), w.cand.end(), b) - w.cand.begin());
+    const auto k1 = static_cast<std::size_t>(std::lower_bound(w.cand.begin(), w.cand.end(), e) - w.cand.begin());
+    History& h = w.hist;
+    const WallSums sum = lanes(in, w.cand.data(), k0, k1, w.position, w.n, w.v, step_ - 1, step_, h.ux.data(),
+                               h.uy.data(), h.uz.data(), h.plastic.data(), h.viscous.data(), h.stamp.data());
+    s.wall_force[wi] = Vec3(sum.fx, sum.fy, sum.fz);
+    s.wall_work += sum.work;
+    s.wall_energy.friction_J += sum.friction;
+    s.wall_energy.plastic_J += sum.plastic;
+    s.wall_energy.viscous_J += sum.viscous;
+    s.wall_energy.elastic_J += sum.elastic;
+    s.wall_contacts += static_cast<std::size_t>(sum.contacts);
+    if (sum.bad > 0.0 && s.wall_failure.empty())  // rare: name the first candidate over the limit
+      for (std::size_t k = k0; k < k1; ++k) {
+        const std::uint32_t i = w.cand[k];
+        const Vec3 d(x_[i] - w.position.x(), y_[i] - w.position.y(), z_[i] - w.position.z());
+        const double overlap = r_[i] - d.dot(w.n);
+        if (overlap > 0.0 && overlap > max_overlap_ratio_ * r_[i]) {
+          std::ostringstream m;
+          m << "overlap " << overlap / r_[i] << " of the radius (limit " << max_overlap_ratio_ << ") between "
+            << bodyName(pid_[i]) << " and wall " << wi;
+          s.wall_failure = m.str();
+          break;
+        }
       }
-      const double li = dist;
-      const double vrel[3] = {w.v.x() - vx_[i] - li * (wy_[i] * nc[2] - wz_[i] * nc[1]),
-                              w.v.y() - vy_[i] - li * (wz_[i] * nc[0] - wx_[i] * nc[2]),
-                              w.v.z() - vz_[i] - li * (wx_[i] * nc[1] - wy_[i] * nc[0])};
-      History::Entry h = w.hist.get(k, last);
-      double f[3];
-      evaluateContact(laws[mat_[i] * nmat_], inv_body_mass_[i], nc, overlap, vrel, dt_, h.u, h.plastic, h.viscous, f,
-                      s.wall_energy, measure);
-      w.hist.set(k, h, step_);
-      fx_[i] += f[0], fy_[i] += f[1], fz_[i] += f[2];
-      tx_[i] += li * (nc[1] * f[2] - nc[2] * f[1]);
-      ty_[i] += li * (nc[2] * f[0] - nc[0] * f[2]);
-      tz_[i] += li * (nc[0] * f[1] - nc[1] * f[0]);
-      force -= Vec3(f[0], f[1], f[2]);
-      work += (f[0] * w.v.x() + f[1] * w.v.y() + f[2] * w.v.z()) * dt_;
-      ++s.wall_contacts;
-    }
-    s.wall_force[wi] = force;
-    s.wall_work += work;
   }
 }
 
