@@ -890,16 +890,17 @@ void touchingPairs(const KernelIn& in, const std::uint32_t* ci, const std::uint3
     next.n = nn;
     out.hi = hi;
     out.contacts += static_cast<std::size_t>(active_n);
-    if (bad > 0.0 && !out.failed) {  // rare: find the first pair over the limit
+    if (bad > 0.0 && !out.failed) {  // rare: name the pair of the chunk that overlaps most
+      // (the largest ratio, not a re-test of the limit: a scalar re-evaluation
+      // may round differently from the vector loop, and the failure must not
+      // get lost)
+      out.failed = true, out.fail_ratio = -1.0;
       for (std::size_t q = 0; q < nq; ++q) {
         const std::uint32_t i = ci[q], j = NBR[ck[q]];
         const double ex = X[j] - X[i], ey = Y[j] - Y[i], ez = Z[j] - Z[i];
         const double overlap = R[i] + R[j] - std::sqrt(ex * ex + ey * ey + ez * ez);
-        const double rmin = std::min(R[i], R[j]);
-        if (overlap > 0.0 && overlap > ratio * rmin) {
-          out.failed = true, out.fail_i = i, out.fail_j = j, out.fail_ratio = overlap / rmin;
-          break;
-        }
+        const double r = overlap / std::min(R[i], R[j]);
+        if (r > out.fail_ratio) out.fail_i = i, out.fail_j = j, out.fail_ratio = r;
       }
     }
   }
@@ -1214,19 +1215,20 @@ void Engine::wallContacts(int t, bool measure) {
     s.wall_energy.viscous_J += sum.viscous;
     s.wall_energy.elastic_J += sum.elastic;
     s.wall_contacts += static_cast<std::size_t>(sum.contacts);
-    if (sum.bad > 0.0 && s.wall_failure.empty())  // rare: name the first candidate over the limit
+    if (sum.bad > 0.0 && s.wall_failure.empty()) {  // rare: name the candidate that overlaps most
+      std::uint32_t worst = w.cand[k0];
+      double worst_ratio = -std::numeric_limits<double>::infinity();
       for (std::size_t k = k0; k < k1; ++k) {
         const std::uint32_t i = w.cand[k];
         const Vec3 d(x_[i] - w.position.x(), y_[i] - w.position.y(), z_[i] - w.position.z());
-        const double overlap = r_[i] - d.dot(w.n);
-        if (overlap > 0.0 && overlap > max_overlap_ratio_ * r_[i]) {
-          std::ostringstream m;
-          m << "overlap " << overlap / r_[i] << " of the radius (limit " << max_overlap_ratio_ << ") between "
-            << bodyName(pid_[i]) << " and wall " << wi;
-          s.wall_failure = m.str();
-          break;
-        }
+        const double r = (r_[i] - d.dot(w.n)) / r_[i];
+        if (r > worst_ratio) worst = w.cand[k], worst_ratio = r;
       }
+      std::ostringstream m;
+      m << "overlap " << worst_ratio << " of the radius (limit " << max_overlap_ratio_ << ") between "
+        << bodyName(pid_[worst]) << " and wall " << wi;
+      s.wall_failure = m.str();
+    }
   }
 }
 

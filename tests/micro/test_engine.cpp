@@ -208,8 +208,46 @@ TEST(MicroEngine, WallForceOfRestingSphereIsItsWeight) {
   EXPECT_NEAR(e.body(0).position_m.z(), 0.01 - sphereMass(0.01) * 9.81 / 1e5, 1e-8);
 }
 
-// 1,000 spheres deposited under gravity in a box with friction and damping:
-// everything the energy bookkeeping tracks must balance.
+// An overlap beyond run.max_overlap_ratio (0.5 of the radius) stops the
+// step, and the failure names the bodies: soft spheres (k_n = 1e3 N/m) at
+// 5 m/s would reach v sqrt(m*/k) = 1.6 x their radius against a wall, 2.3 x
+// against each other.
+TEST(MicroEngine, ExcessiveOverlapStopsTheStepAndNamesTheBodies) {
+  const auto runUntilFailure = [](const Scene& s) {
+    Engine e(s, 1);
+    e.setDt(0.05 * e.criticalDt());
+    for (int n = 0; n < 100000; ++n)
+      if (!e.step(false)) return e.failure();
+    return std::string("no failure");
+  };
+  SphereSpec a;
+  a.radius_m = 0.01;
+  {
+    Scene s;
+    s.materials = {material(1e3, 1e3)};
+    a.center_m = Vec3(0, 0, 0.0105);
+    a.velocity_m_s = Vec3(0, 0, -5);
+    s.spheres = {a};
+    s.walls = {WallSpec{}};
+    const std::string f = runUntilFailure(s);
+    EXPECT_NE(f.find("overlap"), std::string::npos) << f;
+    EXPECT_NE(f.find("sphere 0 and wall 0"), std::string::npos) << f;
+  }
+  {
+    Scene s;
+    s.materials = {material(1e3, 1e3)};
+    s.gravity_m_s2 = Vec3::Zero();
+    SphereSpec b = a;
+    a.center_m = Vec3(-0.0105, 0, 0), a.velocity_m_s = Vec3(5, 0, 0);
+    b.center_m = Vec3(0.0105, 0, 0), b.velocity_m_s = Vec3(-5, 0, 0);
+    s.spheres = {a, b};
+    const std::string f = runUntilFailure(s);
+    EXPECT_NE(f.find("overlap"), std::string::npos) << f;
+    EXPECT_NE(f.find("sphere 0"), std::string::npos) << f;
+    EXPECT_NE(f.find("sphere 1"), std::string::npos) << f;
+  }
+}
+
 // 1,000 polydisperse spheres deposited under gravity in a box: everything
 // the energy bookkeeping tracks must balance, with friction alone (an elastic
 // frictional granular gas: the hardest case for the staggered scheme) and
