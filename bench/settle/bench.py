@@ -163,6 +163,7 @@ def run_gabion(binary, scene, threads, rundir, timeout_s):
     res["loop_s"] = float(loop)
     res["steps"] = int(steps)
     res["status"] = s.get("status")
+    res["profile"] = s.get("profile")
     mz, ket = gabion_sanity(s, scene)
     res["mean_z_m"] = mz
     res["ke_t_J"] = ket
@@ -296,6 +297,25 @@ def render(info):
     if marg:
         out.append(f"Memory per extra body (max RSS difference between N={ns[0]} and N={ns[-1]}): "
                    + "; ".join(marg) + ".")
+    stages = []
+    for r in info["rows"]:
+        prof = r.get("profile")
+        if r["engine"] != "gabion" or not prof:
+            continue
+        wall = prof.get("stage_wall_time_s", {})
+        busy = prof.get("partition_busy_time_s", {})
+        parts = []
+        for name in ("neighbours", "contacts", "walls", "integrate"):
+            if name not in wall:
+                continue
+            item = f"{name} {wall[name]:.2f}"
+            if r["threads"] > 1 and busy.get(name):
+                item += " (" + ", ".join(f"{b:.2f}" for b in busy[name]) + ")"
+            parts.append(item)
+        stages.append(f"N={r['n']} {r['threads']}t: " + ", ".join(parts))
+    if stages:
+        out.append("Gabion stages, s (summary.json `profile` of the runs above; with threads, each partition's "
+                   "busy time in brackets): " + "; ".join(stages) + ".")
     for item in info.get("skipped", []):
         e, why = (item["engine"], item["why"]) if isinstance(item, dict) else item
         out.append(f"Skipped {e}: {why}. Install: {INSTALL_HINT[e]}")
