@@ -96,6 +96,7 @@ int commandRun(const Options& o) {
   std::cout << "results: " << fs::absolute(outdir).string() << "\n";
   for (const auto& entry : fs::directory_iterator(outdir))
     if (entry.is_regular_file()) std::cout << "  " << entry.path().filename().string() << "\n";
+  if (!o.quiet && !outcome.report.empty()) std::cout << outcome.report;
   return kExitOk;
 }
 
@@ -113,7 +114,7 @@ int main(int argc, char** argv) {
   run->add_option("--law", o.law_file, "law file (gabion.law/1) overriding the case's laws");
   run->add_option("--set", o.sets, "override a case value: path.to.key=value (repeatable)");
   run->add_option("--threads", o.threads, "worker threads")->check(CLI::Range(1, 256));
-  run->add_flag("-q,--quiet", o.quiet, "no progress line");
+  run->add_flag("-q,--quiet", o.quiet, "no progress line and no timing report");
 
   auto* check = app.add_subcommand("check", "Validate a case without running it");
   check->add_option("case", o.case_file, "case file (JSON)")->required();

@@ -58,6 +58,10 @@ struct RunOutcome {
   enum class Status { Ok, NumericalFailure };
   Status status = Status::Ok;
   std::string message;    ///< why it failed (step, time, bodies)
+  /// A short account for the person at the terminal (e.g. where the time
+  /// went), printed by the app after the list of result files unless
+  /// --quiet; everything in it is also in `results`. Empty: nothing.
+  std::string report;
   nlohmann::json results = nlohmann::json::object();
 };
 

@@ -1,5 +1,6 @@
 #include "micro/cases.hpp"
 
+#include <algorithm>
 #include <chrono>
 #include <cmath>
 #include <sstream>
@@ -58,6 +59,51 @@ const std::vector<std::pair<std::string, double EnergyTotals::*>>& energyTerms()
       {"total_J", &EnergyTotals::total_J},
       {"balance_rel_error", &EnergyTotals::balance_rel_error}};
   return terms;
+}
+
+// Where the step loop's time went, as a small table (printed after a run):
+// each stage's wall time and share, with several threads the busiest
+// partition over the mean (1.00: balanced), and the rest of the loop
+// (series, snapshots, progress) as "other".
+std::string timingReport(const Engine& engine, double loop_s, int threads) {
+  const StageProfile& prof = engine.profile();
+  std::ostringstream r;
+  r.setf(std::ios::fixed);
+  const double bsps = loop_s > 0.0 ? static_cast<double>(engine.bodyCount() * engine.steps()) / loop_s : 0.0;
+  r.precision(2);
+  r << "step loop: " << engine.steps() << " steps in " << loop_s << " s, " << bsps / 1e6 << " M body-steps/s, "
+    << threads << (threads == 1 ? " thread, " : " threads, ") << engine.neighbourRebuilds()
+    << " neighbour rebuilds\n";
+  r << "  stage          wall s   share" << (threads > 1 ? "   busiest/mean partition" : "") << "\n";
+  double staged = 0.0;
+  const auto row = [&](const std::string& name, double s) {
+    r << "  " << name << std::string(name.size() < 12 ? 12 - name.size() : 1, ' ');
+    r.width(9);
+    r.precision(3);
+    r << s;
+    r.width(7);
+    r.precision(1);
+    r << (loop_s > 0.0 ? 100.0 * s / loop_s : 0.0) << " %";
+    r.precision(2);
+  };
+  for (int k = 0; k < StageProfile::kStageCount; ++k) {
+    const double s = prof.wall_s[static_cast<std::size_t>(k)];
+    staged += s;
+    row(StageProfile::name(k), s);
+    if (threads > 1 && k != StageProfile::kEnergy) {
+      double sum = 0.0, most = 0.0;
+      for (const auto& p : prof.partition_busy_s) {
+        sum += p[static_cast<std::size_t>(k)];
+        most = std::max(most, p[static_cast<std::size_t>(k)]);
+      }
+      const double mean = sum / static_cast<double>(prof.partition_busy_s.size());
+      if (mean > 0.0) r << "   " << most / mean;
+    }
+    r << "\n";
+  }
+  row("other", std::max(0.0, loop_s - staged));
+  r << "   (series, snapshots, progress)\n";
+  return r.str();
 }
 
 bridge::RunOutcome runScene(const bridge::JsonDocument& doc, const bridge::RunContext& ctx) {
@@ -184,6 +230,7 @@ bridge::RunOutcome runScene(const bridge::JsonDocument& doc, const bridge::RunCo
     if (k != StageProfile::kEnergy) busy[StageProfile::name(k)] = per;
   }
   out.results["profile"] = {{"stage_wall_time_s", stage_wall}, {"partition_busy_time_s", busy}};
+  out.report = timingReport(engine, loop_s, ctx.threads);
   if (!ok) {
     out.status = bridge::RunOutcome::Status::NumericalFailure;
     out.message = engine.failure();

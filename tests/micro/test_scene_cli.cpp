@@ -3,6 +3,8 @@
 // (exit 3), determinism and the result files.
 #include <gtest/gtest.h>
 
+#include <fstream>
+#include <nlohmann/json.hpp>
 #include <string>
 
 #include "bridge/output.hpp"
@@ -63,6 +65,28 @@ TEST(MicroSceneCli, ValidSceneRunsAndWritesResults) {
   EXPECT_TRUE(h5.has("/series/balance_rel_error"));
   EXPECT_TRUE(h5.has("/blocks/orientation"));
   EXPECT_TRUE(std::filesystem::exists(dir / "out" / "result.xdmf"));
+}
+
+// Without --quiet a run ends with the timing table (every stage, with two
+// threads the partitions' balance); --quiet leaves it out. The same numbers
+// are in summary.json's profile.
+TEST(MicroSceneCli, RunReportsWhereTheTimeWentUnlessQuiet) {
+  const auto dir = scratchDir("micro_scene_report");
+  writeFile(dir / "case.json", scene());
+  const auto r = runGabion("run " + (dir / "case.json").string() + " --threads 2 -o " + (dir / "out").string());
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  EXPECT_NE(r.output.find("step loop: "), std::string::npos) << r.output;
+  EXPECT_NE(r.output.find("busiest/mean partition"), std::string::npos) << r.output;
+  for (const char* stage : {"neighbours", "contacts", "walls", "integrate", "energy", "other"})
+    EXPECT_NE(r.output.find(std::string("  ") + stage + " "), std::string::npos) << stage << "\n" << r.output;
+  std::ifstream in(dir / "out" / "summary.json");
+  const auto summary = nlohmann::json::parse(in);
+  ASSERT_TRUE(summary.contains("profile"));
+  EXPECT_EQ(summary["profile"]["partition_busy_time_s"]["contacts"].size(), 2u);
+  EXPECT_GT(summary["profile"]["stage_wall_time_s"]["contacts"].get<double>(), 0.0);
+  const auto q = runGabion("run " + (dir / "case.json").string() + " -q -o " + (dir / "out2").string());
+  ASSERT_EQ(q.exit_code, 0) << q.output;
+  EXPECT_EQ(q.output.find("step loop: "), std::string::npos) << q.output;
 }
 
 TEST(MicroSceneCli, BadInputsExit2NamingTheField) {
