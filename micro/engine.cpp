@@ -11,6 +11,10 @@
 #include "bridge/laws/contact_local_damping.hpp"
 #include "micro/rigid_body.hpp"
 
+#if defined(__AVX512F__) && defined(__AVX512VL__)
+#include <immintrin.h>
+#endif
+
 namespace gabion::micro {
 
 namespace {
@@ -871,17 +875,38 @@ void touchingPairs(const KernelIn& in, const std::uint32_t* ci, const std::uint3
     double *__restrict NUX = next.ux.data(), *__restrict NUY = next.uy.data(), *__restrict NUZ = next.uz.data();
     double *__restrict NPL = next.plastic.data(), *__restrict NVI = next.viscous.data();
     const std::uint32_t own_end = out.own_end;
+    // This step's contact set: the touching pairs' history, in list order
+    // (with AVX-512, eight pairs at a time by compress-stores: the scalar
+    // appends were a third of the stores of the force loop below).
+#if defined(__AVX512F__) && defined(__AVX512VL__)
+    for (std::size_t q = 0; q < nq; q += 8) {
+      const std::size_t n = std::min<std::size_t>(8, nq - q);
+      const auto valid = static_cast<__mmask8>((1u << n) - 1u);
+      const __mmask8 on =
+          _mm512_mask_cmp_pd_mask(valid, _mm512_maskz_load_pd(valid, bon + q), _mm512_setzero_pd(), _CMP_GT_OQ);
+      _mm256_mask_compressstoreu_epi32(NK + nn, on, _mm256_maskz_loadu_epi32(valid, ck + q));
+      _mm512_mask_compressstoreu_pd(NUX + nn, on, _mm512_maskz_load_pd(valid, hux + q));
+      _mm512_mask_compressstoreu_pd(NUY + nn, on, _mm512_maskz_load_pd(valid, huy + q));
+      _mm512_mask_compressstoreu_pd(NUZ + nn, on, _mm512_maskz_load_pd(valid, huz + q));
+      if constexpr (kPlastic) _mm512_mask_compressstoreu_pd(NPL + nn, on, _mm512_maskz_load_pd(valid, hpl + q));
+      if constexpr (kViscous) _mm512_mask_compressstoreu_pd(NVI + nn, on, _mm512_maskz_load_pd(valid, hvi + q));
+      nn += static_cast<std::size_t>(__builtin_popcount(on));
+    }
+#else
+    for (std::size_t q = 0; q < nq; ++q) {
+      // (overwritten by the next pair if this one does not touch)
+      NK[nn] = ck[q], NUX[nn] = hux[q], NUY[nn] = huy[q], NUZ[nn] = huz[q];
+      if constexpr (kPlastic) NPL[nn] = hpl[q];
+      if constexpr (kViscous) NVI[nn] = hvi[q];
+      nn += bon[q] > 0.0 ? 1 : 0;
+    }
+#endif
     for (std::size_t q = 0; q < nq; ++q) {
       const std::uint32_t i = ci[q], j = NBR[ck[q]];
       const bool mine = j < own_end;
       hi = mine ? hi : std::max(hi, j);
       double *fjx = mine ? FX : out.BFX, *fjy = mine ? FY : out.BFY, *fjz = mine ? FZ : out.BFZ;
       double *tjx = mine ? TX : out.BTX, *tjy = mine ? TY : out.BTY, *tjz = mine ? TZ : out.BTZ;
-      // append the pair's history (overwritten by the next pair if it does not touch)
-      NK[nn] = ck[q], NUX[nn] = hux[q], NUY[nn] = huy[q], NUZ[nn] = huz[q];
-      if constexpr (kPlastic) NPL[nn] = hpl[q];
-      if constexpr (kViscous) NVI[nn] = hvi[q];
-      nn += bon[q] > 0.0 ? 1 : 0;
       FX[i] += bfx[q], FY[i] += bfy[q], FZ[i] += bfz[q];
       fjx[j] -= bfx[q], fjy[j] -= bfy[q], fjz[j] -= bfz[q];
       TX[i] += bix[q], TY[i] += biy[q], TZ[i] += biz[q];
