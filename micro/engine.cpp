@@ -431,29 +431,35 @@ void Engine::rebuildNeighbourList() {
   double rmax = 0.0;
   for (const Box& box : boxes) lo = lo.cwiseMin(box.lo), hi = hi.cwiseMax(box.hi), rmax = std::max(rmax, box.rmax);
   double h = 2.0 * rmax + skin_m_;
-  std::size_t nx = 1, ny = 1, nz = 1, ncell = 1;
+  std::size_t ncells[3] = {1, 1, 1}, ncell = 1;  // per axis x, y, z
   if (rmax > 0.0) {
     const Vec3 ext = hi - lo;
     for (;;) {  // keep the grid at most a few cells per particle (scattered clouds)
-      nx = static_cast<std::size_t>(ext.x() / h) + 1;
-      ny = static_cast<std::size_t>(ext.y() / h) + 1;
-      nz = static_cast<std::size_t>(ext.z() / h) + 1;
-      ncell = nx * ny * nz;
+      for (int a = 0; a < 3; ++a) ncells[a] = static_cast<std::size_t>(ext[a] / h) + 1;
+      ncell = ncells[0] * ncells[1] * ncells[2];
       if (ncell <= 4 * n_ + 64) break;
       h *= 1.26;
     }
   }
+  // Cell order: the axis with the most cells varies slowest, so the row
+  // partitions (contiguous runs of cells) cut the grid across its smallest
+  // cross-section, and the band of partners beyond a partition's rows (they
+  // go through its buffer and are shared by two cores) is smallest: for a
+  // bed 0.1 m deep on a 0.6 m floor, a slab across x instead of a layer.
+  const int slow_axis = static_cast<int>(std::max_element(ncells, ncells + 3) - ncells);
+  const int fast_axis = slow_axis == 0 ? 1 : 0, mid_axis = 3 - slow_axis - fast_axis;
   // The grid has a layer of empty cells all round, so that the neighbour
   // cells of any occupied cell exist (no bounds tests in the search).
-  const std::size_t px = nx + 2, py = ny + 2;
-  ncell = px * py * (nz + 2);
+  const std::size_t pf = ncells[fast_axis] + 2, pm = ncells[mid_axis] + 2;
+  ncell = pf * pm * (ncells[slow_axis] + 2);
   const double inv_h = 1.0 / h;
   std::vector<std::uint32_t> cell(n_);
+  const double* const pos[3] = {x_.data(), y_.data(), z_.data()};
   const auto cellOf = [&](std::size_t i) {
-    const auto cx = std::min(nx - 1, static_cast<std::size_t>((x_[i] - lo.x()) * inv_h));
-    const auto cy = std::min(ny - 1, static_cast<std::size_t>((y_[i] - lo.y()) * inv_h));
-    const auto cz = std::min(nz - 1, static_cast<std::size_t>((z_[i] - lo.z()) * inv_h));
-    return static_cast<std::uint32_t>(((cz + 1) * py + (cy + 1)) * px + (cx + 1));
+    std::size_t c[3];
+    for (int a = 0; a < 3; ++a)
+      c[a] = std::min(ncells[a] - 1, static_cast<std::size_t>((pos[a][i] - lo[a]) * inv_h));
+    return static_cast<std::uint32_t>(((c[slow_axis] + 1) * pm + (c[mid_axis] + 1)) * pf + (c[fast_axis] + 1));
   };
   forBlocks(StageProfile::kNeighbours, nblocks, [&](std::size_t b) {
     for (std::size_t i = blockBegin(b); i < blockBegin(b + 1); ++i)
@@ -479,16 +485,17 @@ void Engine::rebuildNeighbourList() {
   // 3. Half neighbour list, CSR by row; rows come out sorted by j because
   // cells are visited in increasing index order. A partner j > i lies in a
   // cell at or after i's: of the 27 cells around i's, only the rest of its
-  // own x-row and the four x-rows (y+1), (z+1, y-1..y+1) can hold one. Each
+  // own row along the fast axis and the four rows (mid+1), (slow+1,
+  // mid-1..mid+1) can hold one. Each
   // block of rows goes into its own buffer; the buffers are joined in block
   // order, so the list is the same for any thread count.
   row_begin_.assign(n_ + 1, 0);
   list_blocks_.resize(nblocks);
   forBlocks(StageProfile::kNeighbours, nblocks, [&](std::size_t blk) {
     // One worker writes the list itself (no second copy in memory). The
-    // three cells along x of one (y, z) row of the stencil hold one contiguous
-    // range of particles (cell order), so each particle scans 5 ranges,
-    // branch-free, appending in place.
+    // three cells along the fast axis of one row of the stencil hold one
+    // contiguous range of particles (cell order), so each particle scans 5
+    // ranges, branch-free, appending in place.
     std::vector<std::uint32_t>& out = nblocks == 1 ? nbr_ : list_blocks_[blk];
     std::size_t len = 0;
     const std::size_t i0 = blockBegin(blk), i1 = blockBegin(blk + 1);
@@ -496,7 +503,7 @@ void Engine::rebuildNeighbourList() {
                  *__restrict R = r_.data(), *__restrict IMB = inv_body_mass_.data();
     const std::int32_t* __restrict BLK = block_.data();
     const double skin = skin_m_;
-    const std::size_t row_offset[5] = {0, px, px * py - px, px * py, px * py + px};
+    const std::size_t row_offset[5] = {0, pf, pf * pm - pf, pf * pm, pf * pm + pf};
     for (std::size_t i = i0; i < i1; ++i) {
       row_begin_[i] = static_cast<std::uint32_t>(len);  // local offset, made global below
       if (is_big_[i]) continue;
@@ -505,9 +512,9 @@ void Engine::rebuildNeighbourList() {
       const std::int32_t bi = BLK[i];
       const bool free_i = IMB[i] > 0.0;
       for (std::size_t r = 0; r < 5; ++r) {
-        const std::size_t mid = c + row_offset[r];  // middle cell of the x-row
-        const std::uint32_t jb = r == 0 ? static_cast<std::uint32_t>(i + 1) : cell_start[mid - 1];
-        const std::uint32_t je = cell_start[mid + 2];
+        const std::size_t centre = c + row_offset[r];  // middle cell of the row
+        const std::uint32_t jb = r == 0 ? static_cast<std::uint32_t>(i + 1) : cell_start[centre - 1];
+        const std::uint32_t je = cell_start[centre + 2];
         if (jb >= je) continue;
         if (out.size() < len + (je - jb))  // grows by a quarter (the list is the largest array)
           out.resize(std::max<std::size_t>(len + (je - jb), out.size() + out.size() / 4 + 1024));
