@@ -220,7 +220,7 @@ bridge::RunOutcome runScene(const bridge::JsonDocument& doc, const bridge::RunCo
   out.results["step_loop_wall_time_s"] = loop_s;
   out.results["body_steps_per_s"] =
       loop_s > 0.0 ? static_cast<double>(nb) * static_cast<double>(engine.steps()) / loop_s : 0.0;
-  // Where the time went (docs/formats.md): per stage, and per partition.
+  // Where the time went (docs/micro.md, Output): per stage, and per partition.
   const StageProfile& prof = engine.profile();
   nlohmann::json stage_wall = nlohmann::json::object(), busy = nlohmann::json::object();
   for (int k = 0; k < StageProfile::kStageCount; ++k) {

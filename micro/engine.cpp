@@ -596,9 +596,9 @@ void Engine::rebuildNeighbourList() {
     w.t_ref = t_now;
   }
   // Particle ranges with about equal numbers of wall candidates (the
-  // candidates crowd into the index range of the cells next to the walls,
-  // the floor's into the first cells): boundary t is the smallest index with
-  // at least total t / T candidates below it.
+  // candidates crowd into the index ranges of the cells next to the walls; a
+  // wall across the slowest axis has all of its own at one end): boundary t
+  // is the smallest index with at least total t / T candidates below it.
   {
     const auto below = [&](std::uint32_t b) {
       std::size_t c = 0;
