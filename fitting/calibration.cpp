@@ -161,6 +161,19 @@ struct Loop {
       ++fresh;
       in_flight.insert(x);
     }
+    // However this evaluation ends (a log that cannot be written throws),
+    // the point leaves in_flight and the searches waiting for it wake up.
+    struct InFlight {
+      Loop& loop;
+      const std::vector<double>& x;
+      ~InFlight() {
+        {
+          std::lock_guard<std::mutex> lock(loop.mutex);
+          loop.in_flight.erase(x);
+        }
+        loop.finished.notify_all();
+      }
+    } in_flight_guard{*this, x};
     r.id = log.nextId();
     r.parameters = x;
     const fs::path scratch = scratch_root / ("eval_" + std::to_string(r.id));
@@ -184,14 +197,10 @@ struct Loop {
       fs::remove_all(scratch, ec);
     }
     log.append(r);
-    {
-      std::lock_guard<std::mutex> lock(mutex);
-      in_flight.erase(x);
-      if (!r.ok) ++failed;
-      ++done;
-      if (progress) progress->update(static_cast<double>(done), static_cast<double>(planned), done);
-    }
-    finished.notify_all();
+    std::lock_guard<std::mutex> lock(mutex);
+    if (!r.ok) ++failed;
+    ++done;
+    if (progress) progress->update(static_cast<double>(done), static_cast<double>(planned), done);
     return r.error;
   }
 };
