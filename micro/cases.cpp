@@ -65,13 +65,12 @@ const std::vector<std::pair<std::string, double EnergyTotals::*>>& energyTerms()
 // each stage's wall time and share, with several threads the busiest
 // partition over the mean (1.00: balanced), and the rest of the loop
 // (series, snapshots, progress) as "other".
-std::string timingReport(const Engine& engine, double loop_s, int threads) {
+std::string timingReport(const Engine& engine, double loop_s, double body_steps_per_s, int threads) {
   const StageProfile& prof = engine.profile();
   std::ostringstream r;
   r.setf(std::ios::fixed);
-  const double bsps = loop_s > 0.0 ? static_cast<double>(engine.bodyCount() * engine.steps()) / loop_s : 0.0;
   r.precision(2);
-  r << "step loop: " << engine.steps() << " steps in " << loop_s << " s, " << bsps / 1e6 << " M body-steps/s, "
+  r << "step loop: " << engine.steps() << " steps in " << loop_s << " s, " << body_steps_per_s / 1e6 << " M body-steps/s, "
     << threads << (threads == 1 ? " thread, " : " threads, ") << engine.neighbourRebuilds()
     << " neighbour rebuilds\n";
   r << "  stage          wall s   share" << (threads > 1 ? "   busiest/mean partition" : "") << "\n";
@@ -218,8 +217,9 @@ bridge::RunOutcome runScene(const bridge::JsonDocument& doc, const bridge::RunCo
   out.results["contacts"] = engine.contactCount();
   out.results["neighbour_rebuilds"] = engine.neighbourRebuilds();
   out.results["step_loop_wall_time_s"] = loop_s;
-  out.results["body_steps_per_s"] =
+  const double body_steps_per_s =
       loop_s > 0.0 ? static_cast<double>(nb) * static_cast<double>(engine.steps()) / loop_s : 0.0;
+  out.results["body_steps_per_s"] = body_steps_per_s;
   // Where the time went (docs/micro.md, Output): per stage, and per partition.
   const StageProfile& prof = engine.profile();
   nlohmann::json stage_wall = nlohmann::json::object(), busy = nlohmann::json::object();
@@ -230,7 +230,7 @@ bridge::RunOutcome runScene(const bridge::JsonDocument& doc, const bridge::RunCo
     if (k != StageProfile::kEnergy) busy[StageProfile::name(k)] = per;
   }
   out.results["profile"] = {{"stage_wall_time_s", stage_wall}, {"partition_busy_time_s", busy}};
-  out.report = timingReport(engine, loop_s, ctx.threads);
+  out.report = timingReport(engine, loop_s, body_steps_per_s, ctx.threads);
   if (!ok) {
     out.status = bridge::RunOutcome::Status::NumericalFailure;
     out.message = engine.failure();

@@ -120,7 +120,6 @@ class Engine {
   void contactKernel(int t, bool measure);
   void wallContacts(int t, bool measure);
   void oversizedContacts(bool measure);
-  void checkFailures();
   std::string bodyName(std::uint32_t pid) const;
   void fail(const std::string& what);
   /// Runs job(t) for every partition t on the pool, adding each partition's
