@@ -51,10 +51,12 @@ const std::vector<std::pair<std::string, double EnergyTotals::*>>& energyTerms()
       {"kinetic_rotational_J", &EnergyTotals::kinetic_rotational_J},
       {"gravity_potential_J", &EnergyTotals::gravity_potential_J},
       {"elastic_contact_J", &EnergyTotals::elastic_contact_J},
+      {"elastic_link_J", &EnergyTotals::elastic_link_J},
       {"friction_dissipation_J", &EnergyTotals::friction_dissipation_J},
       {"plastic_dissipation_J", &EnergyTotals::plastic_dissipation_J},
       {"local_damping_dissipation_J", &EnergyTotals::local_damping_dissipation_J},
       {"viscous_damping_dissipation_J", &EnergyTotals::viscous_damping_dissipation_J},
+      {"link_rupture_dissipation_J", &EnergyTotals::link_rupture_dissipation_J},
       {"wall_work_J", &EnergyTotals::wall_work_J},
       {"total_J", &EnergyTotals::total_J},
       {"balance_rel_error", &EnergyTotals::balance_rel_error}};
@@ -121,6 +123,8 @@ bridge::RunOutcome runScene(const bridge::JsonDocument& doc, const bridge::RunCo
   const long long output_every = std::max(1LL, std::llround(scene.run.output_interval_s / dt));
 
   const std::size_t nb = engine.bodyCount(), nw = engine.wallCount(), nblk = engine.blockCount();
+  std::vector<Vec3> initial_wall_position(nw);
+  for (std::size_t w = 0; w < nw; ++w) initial_wall_position[w] = engine.wallPosition(w);
   Series series;
   series.energy.resize(energyTerms().size());
   series.wall_force.resize(nw);
@@ -163,18 +167,20 @@ bridge::RunOutcome runScene(const bridge::JsonDocument& doc, const bridge::RunCo
 
   bridge::Progress progress(ctx.progress, "micro.scene");
   snapshot(0.0);
-  bool ok = true;
+  StepStatus status = StepStatus::Ok;
   const auto t0 = std::chrono::steady_clock::now();
   for (long long n = 0; n < steps; ++n) {
     const bool measure = n % series_every == 0 || n + 1 == steps;
-    ok = engine.step(measure);
-    if (!ok) break;
-    if (measure) record(static_cast<double>(n) * dt);
-    if ((n + 1) % output_every == 0 || n + 1 == steps) snapshot(static_cast<double>(n + 1) * dt);
+    const double t = engine.time();
+    status = engine.step(measure);
+    if (status != StepStatus::Ok) break;
+    if (measure) record(t);
+    if ((n + 1) % output_every == 0 || n + 1 == steps) snapshot(engine.time());
     progress.update(static_cast<double>(n + 1) * dt, scene.run.duration_s, n + 1);
   }
   const double loop_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   progress.finish();
+  const bool ok = status == StepStatus::Ok;
   if (!ok) snapshot(engine.time());
 
   // Result files (the snapshots are in h5 already).
@@ -186,15 +192,33 @@ bridge::RunOutcome runScene(const bridge::JsonDocument& doc, const bridge::RunCo
     }
     h5.write("/series/contacts", series.contacts, "1");
     const std::size_t ns = series.time.size();
+    // Each wall's series under its name: a program reads the "lid" curve, not "wall 5".
     for (std::size_t w = 0; w < nw; ++w) {
-      h5.write("/series/wall_" + std::to_string(w) + "_force_N", series.wall_force[w], {ns, 3}, "N");
-      h5.write("/series/wall_" + std::to_string(w) + "_position_m", series.wall_position[w], {ns, 3}, "m");
+      const std::string base = "/series/walls/" + engine.wallName(w) + "/";
+      h5.write(base + "force_N", series.wall_force[w], {ns, 3}, "N");
+      h5.write(base + "position_m", series.wall_position[w], {ns, 3}, "m");
+      std::vector<double> disp(series.wall_position[w]);
+      for (std::size_t k = 0; k < disp.size(); ++k) disp[k] -= initial_wall_position[w][k % 3];
+      h5.write(base + "displacement_m", disp, {ns, 3}, "m");
+    }
+    if (engine.linkCount() > 0) {
+      // Links that broke: time, link index, position (an empty table if none did).
+      const auto& events = engine.linkEvents();
+      std::vector<double> t, link, pos;
+      for (const LinkEvent& ev : events) {
+        t.push_back(ev.time_s);
+        link.push_back(static_cast<double>(ev.link));
+        for (int c = 0; c < 3; ++c) pos.push_back(ev.position_m[c]);
+      }
+      h5.write("/links/broken/time_s", t, "s");
+      h5.write("/links/broken/link", link, "1");
+      h5.write("/links/broken/position_m", pos, {events.size(), 3}, "m");
     }
     std::vector<double> radius(nb);
     for (std::size_t b = 0; b < nb; ++b) radius[b] = engine.bodyRadius(b);
     h5.write("/bodies/time_s", snap_t, "s");
     h5.write("/bodies/radius_m", radius, "m");
-    h5.attribute("/", "format", "gabion.micro.scene/1");
+    h5.attribute("/", "format", "gabion.micro.scene/2");
     h5.commit();
     bridge::writeXdmfPoints(ctx.outdir / "result.xdmf", "result.h5", snap_t, nb, "/bodies/position_m",
                             {{"velocity_m_s", "/bodies/velocity_m_s", 3, true},
@@ -213,6 +237,10 @@ bridge::RunOutcome runScene(const bridge::JsonDocument& doc, const bridge::RunCo
   out.results["spheres"] = sphere_count;
   out.results["blocks"] = nblk;
   out.results["walls"] = nw;
+  out.results["links"] = engine.linkCount();
+  out.results["broken_links"] = engine.linkEvents().size();
+  out.results["size_classes"] = engine.sizeClassCount();
+  out.results["step_status"] = statusName(status);
   out.results["energy"] = energy;
   out.results["contacts"] = engine.contactCount();
   out.results["neighbour_rebuilds"] = engine.neighbourRebuilds();

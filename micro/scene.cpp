@@ -3,10 +3,14 @@
 #include <cmath>
 #include <map>
 
+#include "bridge/errors.hpp"
+#include "micro/particles.hpp"
+
 namespace gabion::micro {
 namespace {
 
 using bridge::Check;
+constexpr int kMaxGroup = kGroupCount - 1;
 using bridge::JsonReader;
 
 int materialIndex(const JsonReader& r, const std::map<std::string, int>& names) {
@@ -45,6 +49,55 @@ Eigen::Quaterniond quaternion(const JsonReader& r, const std::string& key) {
   return out;
 }
 
+Vec3 unitVector(const JsonReader& r, const std::string& key) {
+  const Vec3 n = r.vec3(key);
+  if (!(n.norm() > 1e-12)) r.fail(key, "must not be the zero vector");
+  return n.normalized();
+}
+
+WallProgram parseProgram(const JsonReader& r) {
+  WallProgram p;
+  using K = WallProgram::Kind;
+  const std::string kind = r.choice("kind", {"fixed", "velocity", "velocity_table", "sinusoid", "servo"});
+  if (kind == "fixed") {
+    p.kind = K::Fixed;
+  } else if (kind == "velocity") {
+    p.kind = K::Velocity;
+    p.velocity_m_s = r.vec3("velocity_m_s");
+  } else if (kind == "velocity_table") {
+    p.kind = K::VelocityTable;
+    p.table_time_s = r.numbers("time_s", Check::NonNegative, 1);
+    if (p.table_time_s[0] != 0.0) r.fail("time_s", "the table starts at t = 0");
+    for (std::size_t k = 1; k < p.table_time_s.size(); ++k)
+      if (!(p.table_time_s[k] > p.table_time_s[k - 1])) r.fail("time_s", "times must increase strictly");
+    const nlohmann::json& v = r.raw("velocity_m_s");
+    if (!v.is_array() || v.size() != p.table_time_s.size())
+      r.fail("velocity_m_s", "expected one [vx, vy, vz] per time (" + std::to_string(p.table_time_s.size()) + ")");
+    for (const auto& row : v) {
+      if (!row.is_array() || row.size() != 3) r.fail("velocity_m_s", "each velocity is [vx, vy, vz]");
+      Vec3 q;
+      for (int c = 0; c < 3; ++c) {
+        if (!row[static_cast<std::size_t>(c)].is_number()) r.fail("velocity_m_s", "each velocity is 3 numbers");
+        q[c] = row[static_cast<std::size_t>(c)].get<double>();
+      }
+      if (!q.allFinite()) r.fail("velocity_m_s", "velocities must be finite");
+      p.table_velocity_m_s.push_back(q);
+    }
+  } else if (kind == "sinusoid") {
+    p.kind = K::Sinusoid;
+    p.direction = unitVector(r, "direction");
+    p.amplitude_m = r.number("amplitude_m", Check::Positive);
+    p.frequency_hz = r.number("frequency_hz", Check::Positive);
+    p.phase_rad = r.number("phase_rad", 0.0);
+  } else {
+    p.kind = K::Servo;
+    p.target_force_N = r.number("target_force_N", Check::NonNegative);
+    p.max_speed_m_s = r.number("max_speed_m_s", Check::Positive);
+    p.gain_m_s_N = r.number("gain_m_s_N", Check::Positive);
+  }
+  return p;
+}
+
 }  // namespace
 
 Scene parseScene(const JsonReader& root) {
@@ -68,6 +121,8 @@ Scene parseScene(const JsonReader& root) {
     sp.velocity_m_s = r.vec3("velocity_m_s", Vec3::Zero());
     sp.angular_velocity_rad_s = r.vec3("angular_velocity_rad_s", Vec3::Zero());
     sp.fixed = r.boolean("fixed", false);
+    sp.group = static_cast<int>(r.integer("group", 0, 0));
+    if (sp.group > kMaxGroup) r.fail("group", "contact groups are 0 .. " + std::to_string(kMaxGroup));
     s.spheres.push_back(sp);
   }
 
@@ -84,18 +139,75 @@ Scene parseScene(const JsonReader& root) {
     b.velocity_m_s = r.vec3("velocity_m_s", Vec3::Zero());
     b.angular_velocity_rad_s = r.vec3("angular_velocity_rad_s", Vec3::Zero());
     b.fixed = r.boolean("fixed", false);
+    b.group = static_cast<int>(r.integer("group", 0, 0));
+    if (b.group > kMaxGroup) r.fail("group", "contact groups are 0 .. " + std::to_string(kMaxGroup));
     s.blocks.push_back(b);
   }
 
-  for (const auto& r : root.objects("walls")) {
+  const std::vector<bridge::JsonReader> wall_readers = root.objects("walls");
+  for (std::size_t k = 0; k < wall_readers.size(); ++k) {
+    const JsonReader& r = wall_readers[k];
     WallSpec w;
+    w.name = r.string("name", "wall_" + std::to_string(k));
+    if (w.name.empty() || w.name.find_first_not_of("abcdefghijklmnopqrstuvwxyzABCDEFGHIJKLMNOPQRSTUVWXYZ0123456789_-") !=
+                              std::string::npos)
+      r.fail("name", "a wall name uses letters, digits, '_' and '-' only (it names the wall's series)");
+    for (std::size_t q = 0; q < k; ++q)
+      if (s.walls[q].name == w.name) r.fail("name", "wall name '" + w.name + "' is used by wall " + std::to_string(q));
     w.point_m = r.vec3("point_m");
-    const Vec3 n = r.vec3("normal");
-    if (!(n.norm() > 1e-12)) r.fail("normal", "must not be the zero vector");
-    w.normal = n.normalized();
+    w.normal = unitVector(r, "normal");
     w.material = materialIndex(r, names);
-    w.velocity_m_s = r.vec3("velocity_m_s", Vec3::Zero());
+    if (r.has("velocity_m_s") && r.has("motion"))
+      r.fail("velocity_m_s", "give either velocity_m_s (a constant velocity) or motion, not both");
+    if (r.has("velocity_m_s")) {
+      w.program.kind = WallProgram::Kind::Velocity;
+      w.program.velocity_m_s = r.vec3("velocity_m_s");
+    }
+    if (const auto m = r.optionalObject("motion")) w.program = parseProgram(*m);
+    if (const auto e = r.optionalObject("extent")) {
+      w.bounded = true;
+      w.axis_u = unitVector(*e, "axis_u");
+      if (std::fabs(w.axis_u.dot(w.normal)) > 1e-9) e->fail("axis_u", "must lie in the wall's plane (normal to `normal`)");
+      const auto half = e->numbers("half_lengths_m", Check::Positive, 2);
+      if (half.size() != 2) e->fail("half_lengths_m", "expected 2 numbers [along axis_u, along normal x axis_u]");
+      w.half_u_m = half[0], w.half_v_m = half[1];
+    }
     s.walls.push_back(w);
+  }
+
+  const std::vector<bridge::JsonReader> link_readers = root.objects("links");
+  for (const JsonReader& r : link_readers) {
+    LinkSpec l;
+    r.choice("law", {"linear"});
+    l.a = static_cast<std::size_t>(r.integer("a", 0));
+    l.b = static_cast<std::size_t>(r.integer("b", 0));
+    for (const auto& [key, index] : {std::pair<const char*, std::size_t>{"a", l.a}, {"b", l.b}})
+      if (index >= s.spheres.size())
+        r.fail(key, "sphere index " + std::to_string(index) + " out of range (" + std::to_string(s.spheres.size()) +
+                        " spheres)");
+    if (l.a == l.b) r.fail("b", "a link joins two different spheres");
+    l.law.stiffness_N_m = r.number("stiffness_N_m", Check::Positive);
+    const double initial = (s.spheres[l.b].center_m - s.spheres[l.a].center_m).norm();
+    l.law.rest_length_m = r.number("rest_length_m", initial, Check::Positive);
+    if (!(l.law.rest_length_m > 0.0)) r.fail("rest_length_m", "the spheres coincide: give a rest length > 0");
+    l.law.tension_only = r.boolean("tension_only", false);
+    if (r.has("rupture_strain")) l.law.rupture_strain = r.number("rupture_strain", Check::Positive);
+    s.links.push_back(l);
+  }
+
+  if (root.has("no_contact_groups")) {
+    const nlohmann::json& pairs = root.raw("no_contact_groups");
+    const auto bad = [&] {
+      root.fail("no_contact_groups", "expected an array of [group, group] pairs of integers 0 .. " +
+                                         std::to_string(kMaxGroup));
+    };
+    if (!pairs.is_array()) bad();
+    for (const auto& p : pairs) {
+      if (!p.is_array() || p.size() != 2 || !p[0].is_number_integer() || !p[1].is_number_integer()) bad();
+      const long long g = p[0].get<long long>(), h = p[1].get<long long>();
+      if (g < 0 || h < 0 || g > kMaxGroup || h > kMaxGroup) bad();
+      s.no_contact_groups.emplace_back(static_cast<int>(g), static_cast<int>(h));
+    }
   }
   if (s.spheres.empty() && s.blocks.empty()) root.failHere("the scene has no spheres and no blocks");
 
@@ -114,7 +226,127 @@ Scene parseScene(const JsonReader& root) {
   if (rs.energy_runaway_factor <= 1.0) run.fail("energy_runaway_factor", "must be > 1");
   rs.verlet_skin_ratio = run.number("verlet_skin_ratio", 0.2, Check::Positive);
   if (rs.verlet_skin_ratio > 2.0) run.fail("verlet_skin_ratio", "must be <= 2");
+  validateScene(s, root.file());
   return s;
+}
+
+}  // namespace gabion::micro
+
+namespace gabion::micro {
+
+std::string wallName(const Scene& scene, std::size_t w) {
+  const std::string& name = scene.walls[w].name;
+  return name.empty() ? "wall_" + std::to_string(w) : name;
+}
+
+void validateScene(const Scene& s, const std::string& file) {
+  const auto fail = [&](const std::string& pointer, const std::string& message) {
+    throw bridge::InputError(file, pointer, message);
+  };
+  const auto at = [](const char* list, std::size_t k, const char* key) {
+    return std::string("/") + list + "/" + std::to_string(k) + "/" + key;
+  };
+  const auto finite = [](const Vec3& v) { return v.allFinite(); };
+  if (!finite(s.gravity_m_s2)) fail("/gravity_m_s2", "must be finite");
+  if (s.materials.empty()) fail("/materials", "at least one material is required");
+  const int nmat = static_cast<int>(s.materials.size());
+  for (const Material& m : s.materials) {
+    const std::string p = "/materials/" + bridge::escapePointerToken(m.name) + "/";
+    if (!(m.density_kg_m3 > 0.0 && std::isfinite(m.density_kg_m3))) fail(p + "density_kg_m3", "must be > 0");
+    if (!(m.normal_stiffness_N_m > 0.0 && std::isfinite(m.normal_stiffness_N_m)))
+      fail(p + "normal_stiffness_N_m", "must be > 0");
+    if (!(m.shear_stiffness_N_m > 0.0 && std::isfinite(m.shear_stiffness_N_m)))
+      fail(p + "shear_stiffness_N_m", "must be > 0");
+    if (!(m.friction >= 0.0 && std::isfinite(m.friction))) fail(p + "friction", "must be >= 0");
+    if (!(m.normal_force_limit_N > 0.0)) fail(p + "normal_force_limit_N", "must be > 0");
+    if (!(m.local_damping >= 0.0 && m.local_damping < 1.0)) fail(p + "local_damping", "must be in [0, 1)");
+    if (!(m.viscous_damping_ratio >= 0.0 && m.viscous_damping_ratio < 1.0))
+      fail(p + "viscous_damping_ratio", "must be in [0, 1)");
+  }
+  const auto material = [&](int m, const std::string& p) {
+    if (m < 0 || m >= nmat) fail(p, "material index " + std::to_string(m) + " out of range");
+  };
+  const auto group = [&](int g, const std::string& p) {
+    if (g < 0 || g >= kGroupCount) fail(p, "contact groups are 0 .. " + std::to_string(kGroupCount - 1));
+  };
+  if (s.spheres.empty() && s.blocks.empty()) fail("", "the scene has no spheres and no blocks");
+  for (std::size_t k = 0; k < s.spheres.size(); ++k) {
+    const SphereSpec& sp = s.spheres[k];
+    if (!finite(sp.center_m)) fail(at("spheres", k, "center_m"), "must be finite");
+    if (!(sp.radius_m > 0.0 && std::isfinite(sp.radius_m))) fail(at("spheres", k, "radius_m"), "must be > 0");
+    if (!finite(sp.velocity_m_s)) fail(at("spheres", k, "velocity_m_s"), "must be finite");
+    if (!finite(sp.angular_velocity_rad_s)) fail(at("spheres", k, "angular_velocity_rad_s"), "must be finite");
+    material(sp.material, at("spheres", k, "material"));
+    group(sp.group, at("spheres", k, "group"));
+  }
+  for (std::size_t k = 0; k < s.blocks.size(); ++k) {
+    const BlockSpec& b = s.blocks[k];
+    if (b.member_centers_m.empty() || b.member_centers_m.size() != b.member_radii_m.size())
+      fail(at("blocks", k, "spheres"), "a block needs at least one sphere, each with a centre and a radius");
+    for (std::size_t q = 0; q < b.member_radii_m.size(); ++q) {
+      const std::string p = at("blocks", k, "spheres") + "/" + std::to_string(q) + "/";
+      if (!finite(b.member_centers_m[q])) fail(p + "center_m", "must be finite");
+      if (!(b.member_radii_m[q] > 0.0 && std::isfinite(b.member_radii_m[q]))) fail(p + "radius_m", "must be > 0");
+    }
+    if (!finite(b.position_m)) fail(at("blocks", k, "position_m"), "must be finite");
+    if (std::fabs(b.orientation.norm() - 1.0) > 1e-6) fail(at("blocks", k, "orientation"), "must have unit length");
+    if (!finite(b.velocity_m_s)) fail(at("blocks", k, "velocity_m_s"), "must be finite");
+    if (!finite(b.angular_velocity_rad_s)) fail(at("blocks", k, "angular_velocity_rad_s"), "must be finite");
+    material(b.material, at("blocks", k, "material"));
+    group(b.group, at("blocks", k, "group"));
+  }
+  for (std::size_t k = 0; k < s.walls.size(); ++k) {
+    const WallSpec& w = s.walls[k];
+    for (std::size_t q = 0; q < k; ++q)
+      if (wallName(s, q) == wallName(s, k))
+        fail(at("walls", k, "name"), "wall name '" + wallName(s, k) + "' is used twice");
+    if (!finite(w.point_m)) fail(at("walls", k, "point_m"), "must be finite");
+    if (!(std::fabs(w.normal.norm() - 1.0) < 1e-9)) fail(at("walls", k, "normal"), "must be a unit vector");
+    material(w.material, at("walls", k, "material"));
+    const WallProgram& p = w.program;
+    const std::string m = at("walls", k, "motion") + "/";
+    using K = WallProgram::Kind;
+    if (p.kind == K::Velocity && !finite(p.velocity_m_s)) fail(m + "velocity_m_s", "must be finite");
+    if (p.kind == K::VelocityTable) {
+      if (p.table_time_s.empty() || p.table_time_s[0] != 0.0 ||
+          p.table_time_s.size() != p.table_velocity_m_s.size())
+        fail(m + "time_s", "a table starts at t = 0 and has one velocity per time");
+      for (std::size_t q = 1; q < p.table_time_s.size(); ++q)
+        if (!(p.table_time_s[q] > p.table_time_s[q - 1])) fail(m + "time_s", "times must increase strictly");
+    }
+    if (p.kind == K::Sinusoid && !(p.amplitude_m > 0.0 && p.frequency_hz > 0.0 && std::isfinite(p.phase_rad) &&
+                                   std::fabs(p.direction.norm() - 1.0) < 1e-9))
+      fail(m + "amplitude_m", "a sinusoid needs amplitude > 0, frequency > 0 and a unit direction");
+    if (p.kind == K::Servo && !(p.target_force_N >= 0.0 && p.max_speed_m_s > 0.0 && p.gain_m_s_N > 0.0 &&
+                                std::isfinite(p.target_force_N) && std::isfinite(p.max_speed_m_s) &&
+                                std::isfinite(p.gain_m_s_N)))
+      fail(m + "gain_m_s_N", "a servo needs target_force_N >= 0, max_speed_m_s > 0 and gain_m_s_N > 0");
+    if (w.bounded && !(w.half_u_m > 0.0 && w.half_v_m > 0.0 && std::fabs(w.axis_u.norm() - 1.0) < 1e-9 &&
+                       std::fabs(w.axis_u.dot(w.normal)) < 1e-9))
+      fail(at("walls", k, "extent"), "a bounded wall needs a unit axis_u in its plane and half-lengths > 0");
+  }
+  for (std::size_t k = 0; k < s.links.size(); ++k) {
+    const LinkSpec& l = s.links[k];
+    if (l.a >= s.spheres.size()) fail(at("links", k, "a"), "sphere index out of range");
+    if (l.b >= s.spheres.size() || l.b == l.a) fail(at("links", k, "b"), "sphere index out of range or equal to a");
+    if (!(l.law.stiffness_N_m > 0.0 && std::isfinite(l.law.stiffness_N_m)))
+      fail(at("links", k, "stiffness_N_m"), "must be > 0");
+    if (!(l.law.rest_length_m > 0.0 && std::isfinite(l.law.rest_length_m)))
+      fail(at("links", k, "rest_length_m"), "must be > 0");
+    if (!(l.law.rupture_strain > 0.0)) fail(at("links", k, "rupture_strain"), "must be > 0");
+  }
+  for (std::size_t k = 0; k < s.no_contact_groups.size(); ++k) {
+    group(s.no_contact_groups[k].first, "/no_contact_groups/" + std::to_string(k) + "/0");
+    group(s.no_contact_groups[k].second, "/no_contact_groups/" + std::to_string(k) + "/1");
+  }
+  const RunSpec& rs = s.run;
+  // (0: an engine built in code, stepped by its caller)
+  if (!(rs.duration_s >= 0.0 && std::isfinite(rs.duration_s))) fail("/run/duration_s", "must be > 0");
+  if (!(rs.dt_s >= 0.0 && std::isfinite(rs.dt_s))) fail("/run/dt_s", "must be > 0");
+  if (!(rs.dt_safety > 0.0 && rs.dt_safety <= 1.0)) fail("/run/dt_safety", "must be in (0, 1]");
+  if (!(rs.max_overlap_ratio > 0.0 && rs.max_overlap_ratio <= 1.0)) fail("/run/max_overlap_ratio", "must be in (0, 1]");
+  if (!(rs.energy_runaway_factor > 1.0)) fail("/run/energy_runaway_factor", "must be > 1");
+  if (!(rs.verlet_skin_ratio > 0.0 && rs.verlet_skin_ratio <= 2.0)) fail("/run/verlet_skin_ratio", "must be in (0, 2]");
 }
 
 }  // namespace gabion::micro

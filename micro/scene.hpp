@@ -8,9 +8,11 @@
 #include <Eigen/Geometry>
 #include <limits>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "bridge/json_reader.hpp"
+#include "bridge/laws/link_linear.hpp"
 
 namespace gabion::micro {
 
@@ -37,6 +39,7 @@ struct SphereSpec {
   Vec3 velocity_m_s = Vec3::Zero();
   Vec3 angular_velocity_rad_s = Vec3::Zero();
   bool fixed = false;  ///< never moves (infinite mass)
+  int group = 0;       ///< contact group, 0 .. 31 (Scene::no_contact_groups)
 };
 
 /// A rigid multi-sphere block. Member centres are in body coordinates; the
@@ -50,14 +53,53 @@ struct BlockSpec {
   Vec3 velocity_m_s = Vec3::Zero();            ///< of the centre of mass
   Vec3 angular_velocity_rad_s = Vec3::Zero();  ///< world frame
   bool fixed = false;
+  int group = 0;  ///< contact group of its member spheres, 0 .. 31
 };
 
-/// A rigid infinite plane; bodies stay on the side `normal` points to.
+/// A link between two spheres (micro/links.hpp): a force of their distance
+/// only, with its own law; the two never touch through the contact law.
+struct LinkSpec {
+  std::size_t a = 0, b = 0;  ///< sphere indices (input order)
+  bridge::LinearLinkParams law;
+};
+
+/// How a wall moves (micro/walls.hpp). The motion is integrated step by step
+/// (each step adds the program's displacement over that step), so a change
+/// of the time step does not move the wall, and a servo can follow a force.
+struct WallProgram {
+  enum class Kind {
+    Fixed,          ///< never moves
+    Velocity,       ///< constant velocity `velocity_m_s`
+    VelocityTable,  ///< velocity piecewise linear in time through (table_time_s, table_velocity_m_s); the last value holds after the table
+    Sinusoid,       ///< displacement amplitude_m sin(2 pi f t + phase) - sin(phase), along `direction`
+    Servo           ///< along the wall normal, speed gain x (target - measured normal force), at most max_speed
+  };
+  Kind kind = Kind::Fixed;
+  Vec3 velocity_m_s = Vec3::Zero();
+  std::vector<double> table_time_s;         ///< strictly increasing, from 0 (s)
+  std::vector<Vec3> table_velocity_m_s;     ///< one velocity per time (m/s)
+  Vec3 direction = Vec3::UnitZ();           ///< unit vector of the sinusoid
+  double amplitude_m = 0.0;
+  double frequency_hz = 0.0;
+  double phase_rad = 0.0;
+  double target_force_N = 0.0;              ///< normal force the bodies exert on the wall (N), >= 0
+  double max_speed_m_s = 0.0;               ///< servo speed limit (m/s), > 0
+  double gain_m_s_N = 0.0;                  ///< servo gain (m/s per N), > 0
+};
+
+/// A rigid plane; bodies stay on the side `normal` points to. Infinite, or
+/// a rectangle (`bounded`) centred on point_m, with half-lengths along `axis_u`
+/// and along normal x axis_u: a plate acts on a particle whose centre is in
+/// front of it and projects inside the rectangle.
 struct WallSpec {
+  std::string name;                 ///< unique; names its series in the output (empty: wall_<index>)
   Vec3 point_m = Vec3::Zero();      ///< a point of the plane at t = 0 (m)
   Vec3 normal = Vec3::UnitZ();      ///< unit normal (normalised on input)
   int material = 0;
-  Vec3 velocity_m_s = Vec3::Zero(); ///< prescribed constant velocity (m/s)
+  WallProgram program;
+  bool bounded = false;
+  Vec3 axis_u = Vec3::UnitX();      ///< unit, in the plane (bounded walls)
+  double half_u_m = 0.0, half_v_m = 0.0;  ///< half-lengths of the rectangle (m)
 };
 
 /// Run settings (`run` object). Defaults in docs/micro.md.
@@ -80,11 +122,23 @@ struct Scene {
   std::vector<SphereSpec> spheres;
   std::vector<BlockSpec> blocks;
   std::vector<WallSpec> walls;
+  std::vector<LinkSpec> links;
+  /// Pairs of contact groups whose particles never touch.
+  std::vector<std::pair<int, int>> no_contact_groups;
   RunSpec run;
 };
 
 /// Parses the case root (format and kind are read by the app). Throws
 /// bridge::InputError naming the file and JSON pointer of the bad value.
 Scene parseScene(const bridge::JsonReader& root);
+
+/// The name of wall w: its own, or wall_<w> if it has none.
+std::string wallName(const Scene& scene, std::size_t w);
+
+/// Checks a scene however it was made (read from JSON or built in code) with
+/// the rules parseScene applies; throws bridge::InputError naming `file` and
+/// the JSON pointer the bad value would have (e.g. /spheres/3/radius_m).
+/// The Engine's constructor calls it.
+void validateScene(const Scene& scene, const std::string& file = "<scene built in code>");
 
 }  // namespace gabion::micro

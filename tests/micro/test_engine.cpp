@@ -14,6 +14,7 @@ using gabion::micro::Engine;
 using gabion::micro::Material;
 using gabion::micro::Scene;
 using gabion::micro::SphereSpec;
+using gabion::micro::StepStatus;
 using gabion::micro::Vec3;
 using gabion::micro::WallSpec;
 constexpr double kPi = 3.14159265358979323846;
@@ -37,8 +38,8 @@ struct Collision {
 };
 
 // Two spheres head-on along x, no gravity: contact duration and restitution.
-// r2 > 2 x r1 puts the second sphere in the oversized-sphere list (a
-// boulder among grains: tested by bounding box, not in the cell grid).
+// r2 > 2 x r1 puts the second sphere in a size class of its own (a
+// boulder among grains: its own grid of the neighbour search).
 Collision headOn(double r1, double r2, double zeta, double k2 = 1e5) {
   Scene s;
   s.gravity_m_s2.setZero();
@@ -54,8 +55,7 @@ Collision headOn(double r1, double r2, double zeta, double k2 = 1e5) {
   b.center_m = Vec3(r2 + 1e-4, 0, 0);
   b.velocity_m_s = Vec3(-0.1, 0, 0);
   s.spheres = {a, b};
-  // Three fixed spectators of radius r1 far away make r1 the median radius,
-  // so that a large r2 goes into the oversized-sphere list.
+  // Three fixed spectators of radius r1 far away.
   for (int k = 0; k < 3; ++k) {
     SphereSpec f;
     f.radius_m = r1;
@@ -65,12 +65,12 @@ Collision headOn(double r1, double r2, double zeta, double k2 = 1e5) {
   }
   Engine e(s, 1);
   e.setDt(e.criticalDt() * 2e-3);
-  EXPECT_EQ(e.oversizedCount(), r2 > 2.0 * r1 ? 1u : 0u);
+  EXPECT_EQ(e.sizeClassCount(), r2 > 2.0 * r1 ? 2 : 1);
   Collision c;
   const double v0 = 0.2;
   bool was = false;
   for (int n = 0; n < 2000000; ++n) {
-    EXPECT_TRUE(e.step(false)) << e.failure();
+    EXPECT_EQ(e.step(false), StepStatus::Ok) << e.failure();
     const bool touching = e.contactCount() > 0;
     if (touching) c.duration_s += e.dt();
     if (was && !touching) break;
@@ -136,7 +136,7 @@ TEST(MicroEngine, BlockOnInclineStaysAtRestBelowFrictionAngle) {
   Engine e(inclineScene(theta, 0.5), 1);
   e.setDt(0.1 * e.criticalDt());
   const int steps = static_cast<int>(0.3 / e.dt());
-  for (int n = 0; n < steps; ++n) ASSERT_TRUE(e.step(false)) << e.failure();
+  for (int n = 0; n < steps; ++n) ASSERT_EQ(e.step(false), StepStatus::Ok) << e.failure();
   // Only the elastic shear creep m g sin(theta) / (4 k_s) is allowed.
   EXPECT_LT(std::fabs(e.body(0).position_m.x()), 1e-4);
   EXPECT_LT(std::fabs(e.body(0).velocity_m_s.x()), 1e-3);
@@ -147,7 +147,7 @@ TEST(MicroEngine, BlockSlidesWithCoulombAcceleration) {
   Engine e(inclineScene(theta, f), 1);
   e.setDt(0.1 * e.criticalDt());
   const auto run = [&](double t) {
-    while (e.time() < t) ASSERT_TRUE(e.step(false)) << e.failure();
+    while (e.time() < t) ASSERT_EQ(e.step(false), StepStatus::Ok) << e.failure();
   };
   run(0.05);  // normal oscillation damped out
   const double t1 = e.time(), v1 = e.body(0).velocity_m_s.x();
@@ -177,13 +177,13 @@ TEST(MicroEngine, TorqueFreeAsymmetricBlockConservesEnergyAndMomentum) {
     const Eigen::Matrix3d R = e.blockOrientation(0).toRotationMatrix();
     return Vec3(R * props.inertia_kg_m2 * R.transpose() * e.body(0).angular_velocity_rad_s);
   };
-  ASSERT_TRUE(e.step(true));
+  ASSERT_EQ(e.step(true), StepStatus::Ok);
   const double ke0 = e.energy().kinetic_rotational_J;
   const Vec3 L0 = L();
   double worst = 0.0;
   for (int n = 1; n < 100000; ++n) {
     const bool measure = n % 1000 == 0 || n == 99999;
-    ASSERT_TRUE(e.step(measure)) << e.failure();
+    ASSERT_EQ(e.step(measure), StepStatus::Ok) << e.failure();
     if (measure) worst = std::max(worst, std::fabs(e.energy().kinetic_rotational_J - ke0) / ke0);
   }
   EXPECT_LT(worst, 1e-6);
@@ -203,7 +203,7 @@ TEST(MicroEngine, WallForceOfRestingSphereIsItsWeight) {
   s.walls = {w};
   Engine e(s, 1);
   e.setDt(0.1 * e.criticalDt());
-  while (e.time() < 0.2) ASSERT_TRUE(e.step(false)) << e.failure();
+  while (e.time() < 0.2) ASSERT_EQ(e.step(false), StepStatus::Ok) << e.failure();
   EXPECT_NEAR(e.wallForce(0).z(), -sphereMass(0.01) * 9.81, 1e-6);
   EXPECT_NEAR(e.body(0).position_m.z(), 0.01 - sphereMass(0.01) * 9.81 / 1e5, 1e-8);
 }
@@ -217,7 +217,7 @@ TEST(MicroEngine, ExcessiveOverlapStopsTheStepAndNamesTheBodies) {
     Engine e(s, 1);
     e.setDt(0.05 * e.criticalDt());
     for (int n = 0; n < 100000; ++n)
-      if (!e.step(false)) return e.failure();
+      if (e.step(false) != StepStatus::Ok) return e.failure();
     return std::string("no failure");
   };
   SphereSpec a;
@@ -231,7 +231,7 @@ TEST(MicroEngine, ExcessiveOverlapStopsTheStepAndNamesTheBodies) {
     s.walls = {WallSpec{}};
     const std::string f = runUntilFailure(s);
     EXPECT_NE(f.find("overlap"), std::string::npos) << f;
-    EXPECT_NE(f.find("sphere 0 and wall 0"), std::string::npos) << f;
+    EXPECT_NE(f.find("sphere 0 and wall 'wall_0'"), std::string::npos) << f;
   }
   {
     Scene s;
@@ -333,7 +333,7 @@ DepositionResult deposition(double f, double zeta, double alpha, int threads, do
   double worst = 0.0;
   for (int n = 0; n < steps; ++n) {
     const bool measure = n % 200 == 0 || n + 1 == steps;
-    if (!e.step(measure)) {
+    if (e.step(measure) != StepStatus::Ok) {
       ADD_FAILURE() << e.failure();
       break;
     }
@@ -361,7 +361,7 @@ TEST(MicroEngine, ForceLimitPlasticWorkInEngine) {
   s.walls = {w};
   Engine e(s, 1);
   e.setDt(0.05 * e.criticalDt());
-  for (int n = 0; n < 2000; ++n) ASSERT_TRUE(e.step(n == 1999)) << e.failure();
+  for (int n = 0; n < 2000; ++n) ASSERT_EQ(e.step(n == 1999), StepStatus::Ok) << e.failure();
   // ... so it sinks at (g - F_lim/m): with the elastic overlap F_lim / k the
   // plastic overlap is the rest of the sinking, its work F_lim x that.
   const double overlap = 0.01 - e.body(0).position_m.z();
@@ -405,7 +405,7 @@ Oblique obliqueImpact(double skin_ratio) {
   s.spheres = {fixed, moving};
   Engine e(s, 1);
   e.setDt(0.05 * e.criticalDt());
-  for (int n = 0; n < 4000; ++n) EXPECT_TRUE(e.step(false)) << e.failure();
+  for (int n = 0; n < 4000; ++n) EXPECT_EQ(e.step(false), StepStatus::Ok) << e.failure();
   return {e.body(1), e.neighbourRebuilds()};
 }
 }  // namespace

@@ -37,7 +37,7 @@ std::string scene(const std::string& spheres_extra = "", const std::string& run_
            {"point_m": [0.11, 0, 0], "normal": [-1, 0, 0], "material": "rock"},
            {"point_m": [0, 0, 0], "normal": [0, 1, 0], "material": "rock"},
            {"point_m": [0, 0.11, 0], "normal": [0, -1, 0], "material": "rock"},
-           {"point_m": [0, 0, 0.16], "normal": [0, 0, -1], "material": "rock", "velocity_m_s": [0, 0, -0.2]}],
+           {"name": "lid", "point_m": [0, 0, 0.16], "normal": [0, 0, -1], "material": "rock", "velocity_m_s": [0, 0, -0.2]}],
  "run": {"duration_s": 0.1, "output_interval_s": 0.01)" + run_extra + R"(}})";
   return s;
 }
@@ -59,8 +59,12 @@ TEST(MicroSceneCli, ValidSceneRunsAndWritesResults) {
   EXPECT_EQ(dims[1], 28u);
   EXPECT_EQ(h5.dims("/bodies/radius_m"), (std::vector<std::size_t>{28}));
   const auto n = h5.dims("/series/time_s")[0];
-  EXPECT_EQ(h5.dims("/series/wall_5_force_N"), (std::vector<std::size_t>{n, 3}));
-  const auto lid = h5.read("/series/wall_5_position_m");
+  // walls' series go under their names (unnamed ones: wall_<index>)
+  EXPECT_EQ(h5.dims("/series/walls/lid/force_N"), (std::vector<std::size_t>{n, 3}));
+  EXPECT_EQ(h5.dims("/series/walls/wall_0/force_N"), (std::vector<std::size_t>{n, 3}));
+  const auto lid = h5.read("/series/walls/lid/position_m");
+  EXPECT_NEAR(h5.read("/series/walls/lid/displacement_m")[3 * (n - 1) + 2], -0.2 * h5.read("/series/time_s")[n - 1],
+              1e-12);
   EXPECT_NEAR(lid[3 * (n - 1) + 2], 0.16 - 0.2 * h5.read("/series/time_s")[n - 1], 1e-12);
   EXPECT_TRUE(h5.has("/series/balance_rel_error"));
   EXPECT_TRUE(h5.has("/blocks/orientation"));
@@ -165,7 +169,7 @@ TEST(MicroSceneCli, SameCaseSameThreadsGivesIdenticalArrays) {
       ASSERT_EQ(r.exit_code, 0) << r.output;
       gabion::bridge::H5Reader h5(out / "result.h5");
       std::vector<double> all;
-      for (const char* d : {"/bodies/position_m", "/bodies/velocity_m_s", "/series/total_J", "/series/wall_0_force_N"}) {
+      for (const char* d : {"/bodies/position_m", "/bodies/velocity_m_s", "/series/total_J", "/series/walls/wall_0/force_N"}) {
         const auto v = h5.read(d);
         all.insert(all.end(), v.begin(), v.end());
       }

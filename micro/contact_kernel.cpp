@@ -1,0 +1,288 @@
+#include "micro/contact_kernel.hpp"
+
+#include <algorithm>
+#include <cmath>
+
+#if defined(__AVX512F__) && defined(__AVX512VL__)
+#include <immintrin.h>
+#endif
+
+namespace gabion::micro {
+
+// ---------------------------------------------------------------------------
+// The contact law on the touching pairs of the Verlet list, vectorised, one
+// chunk of at most kChunk touching pairs at a time (the scan of the list
+// fills the chunk): a scalar merge takes each pair's history from the last
+// step's contact set (both in list order, so this is one forward walk); a
+// branch-free SIMD pass evaluates the laws of micro/contact.hpp and
+// bridge/laws/contact_*.hpp, written out with selects instead of branches,
+// into small per-pair buffers; a scalar pass adds the forces to the bodies in
+// pair order (a body can appear twice in a SIMD chunk, so this part cannot be
+// vectorised; its order keeps the sums deterministic) and appends the
+// touching pairs to this step's contact set. History is read and written
+// sequentially: no gathers or scatters on arrays as long as the list. The
+// rare features (F_lim, viscous damping), the stored energy and a single
+// material are compile-time switches, so a case pays only for what it uses.
+
+
+namespace {
+/// What the kernel reads: the particles, the list's partners, the laws.
+struct KernelIn {
+  const Particles& p;
+  const std::uint32_t* nbr;
+  const MaterialLaws& laws;
+  double dt, ratio;
+};
+/// The last step's contact set of a partition (read, with the merge cursor)
+/// and this step's (appended to; room for the chunk is made by the caller).
+struct KernelHistory {
+  const ContactSet* last;
+  std::size_t cursor = 0;
+  ContactSet* next;
+};
+/// Where forces go: the global arrays for particles of the partition's own
+/// range (below own_end), the partition's buffer for partners beyond it.
+struct KernelOut {
+  double *FX, *FY, *FZ, *TX, *TY, *TZ;
+  double *BFX, *BFY, *BFZ, *BTX, *BTY, *BTZ;
+  std::uint32_t own_end;
+  ContactEnergy* energy;
+  std::size_t contacts = 0;
+  std::uint32_t hi = 0;  // largest particle index written to the buffer
+  bool failed = false;
+  std::uint32_t fail_i = 0, fail_j = 0;
+  double fail_ratio = 0.0;
+};
+
+template <bool kMeasure, bool kViscous, bool kPlastic, bool kUniform>
+void touchingPairs(const KernelIn& in, const std::uint32_t* ci, const std::uint32_t* ck, std::size_t nq,
+                   KernelHistory& h, KernelOut& out) {
+  const Particles& P = in.p;
+  const double *__restrict X = P.x.data(), *__restrict Y = P.y.data(), *__restrict Z = P.z.data(),
+               *__restrict R = P.r.data();
+  const double *__restrict VX = P.vx.data(), *__restrict VY = P.vy.data(), *__restrict VZ = P.vz.data();
+  const double *__restrict WX = P.wx.data(), *__restrict WY = P.wy.data(), *__restrict WZ = P.wz.data(),
+               *__restrict IM = P.inv_body_mass.data();
+  const std::uint32_t* __restrict MAT = P.mat.data();
+  const std::uint32_t* __restrict NBR = in.nbr;
+  const MaterialLaws& laws = in.laws;
+  const double *__restrict KN = laws.kn.data(), *__restrict FLIM = laws.flim.data(), *__restrict KS = laws.ks.data(),
+               *__restrict MU_KS = laws.mu_ks.data(), *__restrict ZETA = laws.zeta.data();
+  const std::size_t nmat = laws.nmat, law0 = laws.law0;
+  const double dt = in.dt, ratio = in.ratio;
+  alignas(64) double bfx[kChunk], bfy[kChunk], bfz[kChunk];
+  alignas(64) double bix[kChunk], biy[kChunk], biz[kChunk];
+  alignas(64) double bjx[kChunk], bjy[kChunk], bjz[kChunk];
+  alignas(64) double bon[kChunk];  // 1 for a pair that touches
+  // per-pair history: the last step's on entry (zero for a new contact), this step's on exit
+  alignas(64) double hux[kChunk], huy[kChunk], huz[kChunk], hpl[kChunk], hvi[kChunk];
+  double friction = 0.0, plastic_w = 0.0, viscous_w = 0.0, elastic = 0.0;
+  {
+    const ContactSet& last = *h.last;
+    std::size_t p = h.cursor;
+    for (std::size_t q = 0; q < nq; ++q) {
+      const std::uint32_t k = ck[q];
+      while (p < last.n && last.k[p] < k) ++p;
+      if (p < last.n && last.k[p] == k) {
+        hux[q] = last.ux[p], huy[q] = last.uy[p], huz[q] = last.uz[p];
+        if constexpr (kPlastic) hpl[q] = last.plastic[p];
+        if constexpr (kViscous) hvi[q] = last.viscous[p];
+      } else {
+        hux[q] = huy[q] = huz[q] = 0.0;
+        if constexpr (kPlastic) hpl[q] = 0.0;
+        if constexpr (kViscous) hvi[q] = 0.0;
+      }
+    }
+    h.cursor = p;
+  }
+  {
+    // energies and counts: vector sums (their order is fixed by the chunk, so
+    // runs repeat bit for bit)
+    double active_n = 0.0, bad = 0.0;
+#pragma omp simd reduction(+ : friction, plastic_w, viscous_w, elastic, active_n, bad)
+    for (std::size_t q = 0; q < nq; ++q) {
+      const std::uint32_t i = ci[q], j = NBR[ck[q]];
+      const double ex = X[j] - X[i], ey = Y[j] - Y[i], ez = Z[j] - Z[i];
+      const double d = std::sqrt(ex * ex + ey * ey + ez * ez);
+      const double ri = R[i], rj = R[j];
+      const double overlap = ri + rj - d;
+      // Pass 1 found d < ri + rj; rounding may still give overlap <= 0: such a
+      // pair does nothing (no force, history stamp unchanged).
+      const bool act = overlap > 0.0;
+      const double on = act ? 1.0 : 0.0;
+      const double inv = d > 0.0 ? 1.0 / d : 0.0;
+      const double nx = d > 0.0 ? ex * inv : 0.0, ny = d > 0.0 ? ey * inv : 0.0, nz = d > 0.0 ? ez * inv : 1.0;
+      bad += act && overlap > ratio * std::min(ri, rj) ? 1.0 : 0.0;
+      const double li = ri - 0.5 * overlap, lj = rj - 0.5 * overlap;
+      // velocity of the contact point on j relative to the one on i
+      const double ax = lj * WX[j] + li * WX[i], ay = lj * WY[j] + li * WY[i], az = lj * WZ[j] + li * WZ[i];
+      const double vx = VX[j] - VX[i] - (ay * nz - az * ny), vy = VY[j] - VY[i] - (az * nx - ax * nz),
+                   vz = VZ[j] - VZ[i] - (ax * ny - ay * nx);
+      const std::size_t L = kUniform ? law0 : MAT[i] * nmat + MAT[j];
+      const double ks = KS[L];
+      double ux = hux[q], uy = huy[q], uz = huz[q], pl = 0.0, vi = 0.0;
+      if constexpr (kPlastic) pl = hpl[q];
+      if constexpr (kViscous) vi = hvi[q];
+      const LaneContact c = laneContact<kMeasure, kViscous, kPlastic>(
+          nx, ny, nz, overlap, vx, vy, vz, KN[L], ks, MU_KS[L], kPlastic ? FLIM[L] : 0.0, kViscous ? ZETA[L] : 0.0,
+          IM[i] + IM[j], dt, ux, uy, uz, pl, vi);
+      if constexpr (kPlastic) plastic_w += act ? c.plastic_J : 0.0;
+      if constexpr (kViscous) viscous_w += act ? c.viscous_J : 0.0;
+      friction += act ? c.friction_J : 0.0;
+      if constexpr (kMeasure) elastic += act ? c.elastic_J : 0.0;
+      // (a pair that does not touch is not appended to the contact set below)
+      hux[q] = ux, huy[q] = uy, huz[q] = uz;
+      if constexpr (kPlastic) hpl[q] = pl;
+      if constexpr (kViscous) hvi[q] = vi;
+      const double fx = on * c.fx, fy = on * c.fy, fz = on * c.fz;
+      const double cx = ny * fz - nz * fy, cy = nz * fx - nx * fz, cz = nx * fy - ny * fx;
+      bfx[q] = fx, bfy[q] = fy, bfz[q] = fz;
+      bix[q] = li * cx, biy[q] = li * cy, biz[q] = li * cz;
+      bjx[q] = lj * cx, bjy[q] = lj * cy, bjz[q] = lj * cz;
+      bon[q] = on;
+      active_n += on;
+    }
+    double *__restrict FX = out.FX, *__restrict FY = out.FY, *__restrict FZ = out.FZ;
+    double *__restrict TX = out.TX, *__restrict TY = out.TY, *__restrict TZ = out.TZ;
+    std::uint32_t hi = out.hi;
+    ContactSet& next = *h.next;
+    std::size_t nn = next.n;
+    std::uint32_t* __restrict NK = next.k.data();
+    double *__restrict NUX = next.ux.data(), *__restrict NUY = next.uy.data(), *__restrict NUZ = next.uz.data();
+    double *__restrict NPL = next.plastic.data(), *__restrict NVI = next.viscous.data();
+    const std::uint32_t own_end = out.own_end;
+    // This step's contact set: the touching pairs' history, in list order
+    // (with AVX-512, eight pairs at a time by compress-stores: the scalar
+    // appends were a third of the stores of the force loop below).
+#if defined(__AVX512F__) && defined(__AVX512VL__)
+    for (std::size_t q = 0; q < nq; q += 8) {
+      const std::size_t n = std::min<std::size_t>(8, nq - q);
+      const auto valid = static_cast<__mmask8>((1u << n) - 1u);
+      const __mmask8 on =
+          _mm512_mask_cmp_pd_mask(valid, _mm512_maskz_load_pd(valid, bon + q), _mm512_setzero_pd(), _CMP_GT_OQ);
+      _mm256_mask_compressstoreu_epi32(NK + nn, on, _mm256_maskz_loadu_epi32(valid, ck + q));
+      _mm512_mask_compressstoreu_pd(NUX + nn, on, _mm512_maskz_load_pd(valid, hux + q));
+      _mm512_mask_compressstoreu_pd(NUY + nn, on, _mm512_maskz_load_pd(valid, huy + q));
+      _mm512_mask_compressstoreu_pd(NUZ + nn, on, _mm512_maskz_load_pd(valid, huz + q));
+      if constexpr (kPlastic) _mm512_mask_compressstoreu_pd(NPL + nn, on, _mm512_maskz_load_pd(valid, hpl + q));
+      if constexpr (kViscous) _mm512_mask_compressstoreu_pd(NVI + nn, on, _mm512_maskz_load_pd(valid, hvi + q));
+      nn += static_cast<std::size_t>(__builtin_popcount(on));
+    }
+#else
+    for (std::size_t q = 0; q < nq; ++q) {
+      // (overwritten by the next pair if this one does not touch)
+      NK[nn] = ck[q], NUX[nn] = hux[q], NUY[nn] = huy[q], NUZ[nn] = huz[q];
+      if constexpr (kPlastic) NPL[nn] = hpl[q];
+      if constexpr (kViscous) NVI[nn] = hvi[q];
+      nn += bon[q] > 0.0 ? 1 : 0;
+    }
+#endif
+    for (std::size_t q = 0; q < nq; ++q) {
+      const std::uint32_t i = ci[q], j = NBR[ck[q]];
+      const bool mine = j < own_end;
+      hi = mine ? hi : std::max(hi, j);
+      double *fjx = mine ? FX : out.BFX, *fjy = mine ? FY : out.BFY, *fjz = mine ? FZ : out.BFZ;
+      double *tjx = mine ? TX : out.BTX, *tjy = mine ? TY : out.BTY, *tjz = mine ? TZ : out.BTZ;
+      FX[i] += bfx[q], FY[i] += bfy[q], FZ[i] += bfz[q];
+      fjx[j] -= bfx[q], fjy[j] -= bfy[q], fjz[j] -= bfz[q];
+      TX[i] += bix[q], TY[i] += biy[q], TZ[i] += biz[q];
+      tjx[j] += bjx[q], tjy[j] += bjy[q], tjz[j] += bjz[q];
+    }
+    next.n = nn;
+    out.hi = hi;
+    out.contacts += static_cast<std::size_t>(active_n);
+    if (bad > 0.0 && !out.failed) {  // rare: name the pair of the chunk that overlaps most
+      // (the largest ratio, not a re-test of the limit: a scalar re-evaluation
+      // may round differently from the vector loop, and the failure must not
+      // get lost)
+      out.failed = true, out.fail_ratio = -1.0;
+      for (std::size_t q = 0; q < nq; ++q) {
+        const std::uint32_t i = ci[q], j = NBR[ck[q]];
+        const double ex = X[j] - X[i], ey = Y[j] - Y[i], ez = Z[j] - Z[i];
+        const double overlap = R[i] + R[j] - std::sqrt(ex * ex + ey * ey + ez * ez);
+        const double r = overlap / std::min(R[i], R[j]);
+        if (r > out.fail_ratio) out.fail_i = i, out.fail_j = j, out.fail_ratio = r;
+      }
+    }
+  }
+  out.energy->friction_J += friction;
+  out.energy->plastic_J += plastic_w;
+  out.energy->viscous_J += viscous_w;
+  out.energy->elastic_J += elastic;
+}
+
+using TouchingPairsFn = void (*)(const KernelIn&, const std::uint32_t*, const std::uint32_t*, std::size_t,
+                                 KernelHistory&, KernelOut&);
+template <bool kMeasure, bool kViscous>
+constexpr TouchingPairsFn kPlasticUniform[4] = {
+    touchingPairs<kMeasure, kViscous, false, false>, touchingPairs<kMeasure, kViscous, false, true>,
+    touchingPairs<kMeasure, kViscous, true, false>, touchingPairs<kMeasure, kViscous, true, true>};
+TouchingPairsFn touchingPairsFor(bool measure, bool viscous, bool plastic, bool uniform) {
+  const int v = (plastic ? 2 : 0) + (uniform ? 1 : 0);
+  if (measure) return viscous ? kPlasticUniform<true, true>[v] : kPlasticUniform<true, false>[v];
+  return viscous ? kPlasticUniform<false, true>[v] : kPlasticUniform<false, false>[v];
+}
+}  // namespace
+
+void contactPartition(Particles& p, const NeighbourList& list, const MaterialLaws& laws, double dt,
+                      double max_overlap_ratio, std::uint32_t r0, std::uint32_t r1, int hcur, bool measure,
+                      WorkerScratch& s) {
+  s.energy = ContactEnergy{};
+  s.contacts = 0;
+  s.failed = false;
+  s.lo = static_cast<std::uint32_t>(p.size());
+  s.hi = 0;
+  for (auto* v : {&p.fx, &p.fy, &p.fz, &p.tx, &p.ty, &p.tz}) std::fill(v->begin() + r0, v->begin() + r1, 0.0);
+  const double* __restrict const X = p.x.data();
+  const double* __restrict const Y = p.y.data();
+  const double* __restrict const Z = p.z.data();
+  const double* __restrict const R = p.r.data();
+
+  // The scan (branch-free, cache friendly) collects the touching list
+  // entries of this partition's rows into a chunk; each full chunk goes
+  // through the contact law (touchingPairs).
+  const KernelIn in{p, list.nbr.data(), laws, dt, max_overlap_ratio};
+  // The last partition has no partner beyond its range and no buffer (empty vectors).
+  KernelOut out;
+  out.FX = p.fx.data(), out.FY = p.fy.data(), out.FZ = p.fz.data();
+  out.TX = p.tx.data(), out.TY = p.ty.data(), out.TZ = p.tz.data();
+  out.BFX = s.fx.data(), out.BFY = s.fy.data(), out.BFZ = s.fz.data();
+  out.BTX = s.tx.data(), out.BTY = s.ty.data(), out.BTZ = s.tz.data();
+  out.own_end = r1;
+  out.energy = &s.energy;
+  ContactSet& next = s.sets[hcur ^ 1];
+  next.n = 0;
+  KernelHistory hist{&s.sets[hcur], 0, &next};
+  const TouchingPairsFn law = touchingPairsFor(measure, laws.any_viscous, laws.any_plastic, laws.uniform);
+  std::uint32_t* __restrict const ti = s.touch_i.data();
+  std::uint32_t* __restrict const tk = s.touch_k.data();
+  std::size_t m = 0;
+  // Evaluates the first nq collected pairs and keeps the rest for the next chunk.
+  const auto flush = [&](std::size_t nq) {
+    next.ensure(next.n + nq, laws.any_plastic, laws.any_viscous);
+    law(in, ti, tk, nq, hist, out);
+    std::copy(ti + nq, ti + m, ti);
+    std::copy(tk + nq, tk + m, tk);
+    m -= nq;
+  };
+  const std::uint32_t* __restrict const NBR = list.nbr.data();
+  const std::uint32_t* __restrict const ROW = list.row_begin.data();
+  for (std::uint32_t i = r0; i < r1; ++i) {
+    const double xi = X[i], yi = Y[i], zi = Z[i], ri = R[i];
+    const std::uint32_t kb = ROW[i], ke = ROW[i + 1];
+    for (std::uint32_t k = kb; k < ke; ++k) {  // the buffers hold kChunk + the longest row
+      const std::uint32_t j = NBR[k];
+      const double ex = X[j] - xi, ey = Y[j] - yi, ez = Z[j] - zi, rs = ri + R[j];
+      ti[m] = i;
+      tk[m] = k;
+      m += (ex * ex + ey * ey + ez * ez < rs * rs) ? 1 : 0;
+    }
+    while (m >= kChunk) flush(kChunk);  // leaves fewer than kChunk, so the next row fits
+  }
+  if (m > 0) flush(m);
+  s.contacts += out.contacts;
+  if (out.failed) s.failed = true, s.fail_i = out.fail_i, s.fail_j = out.fail_j, s.fail_ratio = out.fail_ratio;
+  if (out.hi >= r1) s.lo = r1, s.hi = out.hi;  // the band of its buffer that the partition wrote
+}
+
+}  // namespace gabion::micro

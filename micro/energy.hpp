@@ -1,0 +1,51 @@
+#pragma once
+/// \file
+/// The energy ledger of the fine DEM: dissipations and the work of moving
+/// walls accumulate every step; the stored terms (kinetic, potential,
+/// elastic) are taken on measuring steps. The balance
+/// E = kinetic + gravity + elastic + dissipated - wall work is constant in
+/// an exact integration; its relative drift is reported, and stored energy
+/// far above all the energy ever supplied is a runaway (docs/micro.md).
+namespace gabion::micro {
+
+/// Energy terms of the whole system (J). balance_rel_error is
+/// (E(t) - E(0)) / scale with E = kinetic + gravity + elastic + dissipated - wall work.
+struct EnergyTotals {
+  double kinetic_translational_J = 0.0;
+  double kinetic_rotational_J = 0.0;
+  double gravity_potential_J = 0.0;   ///< -sum m g.x (zero at the origin)
+  double elastic_contact_J = 0.0;     ///< normal + shear springs of all contacts
+  double elastic_link_J = 0.0;        ///< links (micro/links.hpp)
+  double friction_dissipation_J = 0.0;
+  double plastic_dissipation_J = 0.0; ///< F_lim normal cap
+  double local_damping_dissipation_J = 0.0;
+  double viscous_damping_dissipation_J = 0.0;
+  double link_rupture_dissipation_J = 0.0;  ///< energy held by links when they broke
+  double wall_work_J = 0.0;           ///< work done by moving walls on the bodies
+  double total_J = 0.0;               ///< E above
+  double balance_rel_error = 0.0;
+};
+
+class EnergyLedger {
+ public:
+  // Running sums since the start (J).
+  double friction = 0.0, plastic = 0.0, viscous = 0.0, local = 0.0, wall_work = 0.0, link_rupture = 0.0;
+  // Stored terms of the current measuring step (J).
+  double elastic_contact = 0.0, elastic_link = 0.0, ke_t = 0.0, ke_r = 0.0, pe = 0.0;
+
+  /// Closes a measuring step: fills totals() and the balance. Returns false
+  /// when the stored energy exceeds runaway_factor x the energy supplied.
+  bool close(double runaway_factor);
+  const EnergyTotals& totals() const { return totals_; }
+  /// The stored (kinetic + elastic) energy and the energy supplied of the
+  /// last close(), for a runaway message.
+  double stored() const { return stored_; }
+  double supplied() const { return supplied_; }
+
+ private:
+  EnergyTotals totals_;
+  double e0_ = 0.0, scale0_ = 0.0, pe0_ = 0.0, stored_ = 0.0, supplied_ = 0.0;
+  bool have_e0_ = false;
+};
+
+}  // namespace gabion::micro

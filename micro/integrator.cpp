@@ -1,0 +1,112 @@
+#include "micro/integrator.hpp"
+
+#include <algorithm>
+#include <cmath>
+
+#include "bridge/laws/contact_local_damping.hpp"
+#include "micro/rigid_body.hpp"
+
+namespace gabion::micro {
+
+namespace {
+// The free spheres of one worker's range in one pass over their arrays
+// (translation and rotation of the three components, branch-free so that the
+// loop vectorises; SoA arrays, no aliasing between them): each array is read
+// once per step. Also the largest squared displacement since the last list
+// build; block members are placed afterwards and checked there.
+// One component's kick with Cundall local damping
+// (bridge/laws/contact_local_damping.hpp, written out branch-free): returns
+// the new velocity and adds the damping work to `local`.
+[[gnu::always_inline]] inline double dampedKick(double F, double v0, double inv_m, double alpha, double dt,
+                                                double& local) {
+  const double sgn = static_cast<double>(v0 > 0.0) - static_cast<double>(v0 < 0.0);
+  const double Fd = -alpha * std::fabs(F) * sgn;
+  const double v1 = v0 + dt * inv_m * (F + Fd);
+  local -= Fd * (v0 + v1) * 0.5 * dt;
+  return v1;
+}
+
+template <bool kMeasure>
+SphereSums sphereLoop(Particles& p, std::size_t b, std::size_t e, double dt, const Vec3& g) {
+  double *__restrict X = p.x.data(), *__restrict Y = p.y.data(), *__restrict Z = p.z.data();
+  double *__restrict VX = p.vx.data(), *__restrict VY = p.vy.data(), *__restrict VZ = p.vz.data();
+  double *__restrict WX = p.wx.data(), *__restrict WY = p.wy.data(), *__restrict WZ = p.wz.data();
+  const double *__restrict FX = p.fx.data(), *__restrict FY = p.fy.data(), *__restrict FZ = p.fz.data();
+  const double *__restrict TX = p.tx.data(), *__restrict TY = p.ty.data(), *__restrict TZ = p.tz.data();
+  const double *__restrict M = p.mass.data(), *__restrict IM = p.inv_mass.data(), *__restrict II = p.inv_inertia.data(),
+               *__restrict AL = p.alpha.data();
+  const double *__restrict X0 = p.x0.data(), *__restrict Y0 = p.y0.data(), *__restrict Z0 = p.z0.data();
+  const double gx = g.x(), gy = g.y(), gz = g.z();
+  double local = 0.0, ke_t = 0.0, ke_r = 0.0, pe = 0.0, finite = 0.0, max_d2 = 0.0;
+#pragma omp simd reduction(+ : local, ke_t, ke_r, pe, finite) reduction(max : max_d2)
+  for (std::size_t i = b; i < e; ++i) {
+    const double m = M[i], im = IM[i], ii = II[i], al = AL[i];
+    const double vx = dampedKick(FX[i] + m * gx, VX[i], im, al, dt, local);
+    const double vy = dampedKick(FY[i] + m * gy, VY[i], im, al, dt, local);
+    const double vz = dampedKick(FZ[i] + m * gz, VZ[i], im, al, dt, local);
+    const double wx = dampedKick(TX[i], WX[i], ii, al, dt, local);
+    const double wy = dampedKick(TY[i], WY[i], ii, al, dt, local);
+    const double wz = dampedKick(TZ[i], WZ[i], ii, al, dt, local);
+    const double x0 = X[i], y0 = Y[i], z0 = Z[i];
+    const double x1 = x0 + dt * vx, y1 = y0 + dt * vy, z1 = z0 + dt * vz;
+    if (kMeasure) {
+      ke_t += 0.5 * m * (vx * vx + vy * vy + vz * vz);
+      pe -= m * (gx * 0.5 * (x0 + x1) + gy * 0.5 * (y0 + y1) + gz * 0.5 * (z0 + z1));
+      ke_r += ii > 0.0 ? 0.5 * (wx * wx + wy * wy + wz * wz) / ii : 0.0;
+    }
+    VX[i] = vx, VY[i] = vy, VZ[i] = vz, WX[i] = wx, WY[i] = wy, WZ[i] = wz;
+    X[i] = x1, Y[i] = y1, Z[i] = z1;
+    finite += x1 + y1 + z1 + vx + vy + vz + wx + wy + wz;
+    const double ex = x1 - X0[i], ey = y1 - Y0[i], ez = z1 - Z0[i];
+    max_d2 = std::max(max_d2, ex * ex + ey * ey + ez * ez);
+  }
+  return {local, ke_t, ke_r, pe, finite, max_d2};
+}
+}  // namespace
+
+SphereSums integrateSpheres(Particles& p, std::size_t b, std::size_t e, double dt, const Vec3& g, bool measure) {
+  return measure ? sphereLoop<true>(p, b, e, dt, g) : sphereLoop<false>(p, b, e, dt, g);
+}
+
+SphereSums integrateBlock(RigidBlock& b, Particles& p, double dt, const Vec3& g, bool measure) {
+  SphereSums s;
+  if (b.fixed) return s;
+  Vec3 F = b.mass * g, T = Vec3::Zero();
+  for (const std::uint32_t id : b.ids) {
+    const std::uint32_t i = p.slot[id];
+    const Vec3 f(p.fx[i], p.fy[i], p.fz[i]);
+    F += f;
+    T += Vec3(p.x[i] - b.x.x(), p.y[i] - b.x.y(), p.z[i] - b.x.z()).cross(f) + Vec3(p.tx[i], p.ty[i], p.tz[i]);
+  }
+  const bridge::LocalDampingParams ld{b.alpha};
+  Vec3 Fd, Td;
+  for (int c = 0; c < 3; ++c) {
+    Fd[c] = bridge::locallyDampedForce(ld, F[c], b.v[c]) - F[c];
+    Td[c] = bridge::locallyDampedForce(ld, T[c], b.omega[c]) - T[c];
+  }
+  const Vec3 v0 = b.v, w0 = b.omega, x0 = b.x;
+  b.v += dt * b.inv_mass * (F + Fd);
+  b.L += dt * (T + Td);
+  b.x += dt * b.v;
+  freeRotate(b.q, b.L, b.inertia, dt);
+  b.omega = angularVelocityWorld(b.q, b.L, b.inertia);
+  s.local = -(Fd.dot(v0 + b.v) + Td.dot(w0 + b.omega)) * 0.5 * dt;
+  if (measure) {
+    s.ke_t = 0.5 * b.mass * b.v.squaredNorm();
+    s.ke_r = 0.5 * b.L.dot(b.omega);
+    s.pe = -b.mass * g.dot(0.5 * (x0 + b.x));
+  }
+  s.finite = b.x.sum() + b.v.sum() + b.L.sum();
+  for (std::size_t k = 0; k < b.ids.size(); ++k) {
+    const std::uint32_t i = p.slot[b.ids[k]];
+    const Vec3 arm = b.q * b.offsets[k];
+    const Vec3 vm = b.v + b.omega.cross(arm);
+    p.x[i] = b.x.x() + arm.x(), p.y[i] = b.x.y() + arm.y(), p.z[i] = b.x.z() + arm.z();
+    p.vx[i] = vm.x(), p.vy[i] = vm.y(), p.vz[i] = vm.z();
+    p.wx[i] = b.omega.x(), p.wy[i] = b.omega.y(), p.wz[i] = b.omega.z();
+    s.max_d2 = std::max(s.max_d2, Vec3(p.x[i] - p.x0[i], p.y[i] - p.y0[i], p.z[i] - p.z0[i]).squaredNorm());
+  }
+  return s;
+}
+
+}  // namespace gabion::micro

@@ -1,0 +1,104 @@
+#include "micro/links.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+
+namespace gabion::micro {
+
+Links::Links(const std::vector<LinkSpec>& specs, std::size_t particles) : particles_(particles) {
+  for (const LinkSpec& s : specs) {
+    a_.push_back(static_cast<std::uint32_t>(s.a));
+    b_.push_back(static_cast<std::uint32_t>(s.b));
+    law_.push_back(s.law);
+  }
+  const std::size_t n = a_.size();
+  broken_.assign(n, 0);
+  for (auto* v : {&fx_, &fy_, &fz_, &tension_}) v->assign(n, 0.0);
+  // Incidence by particle id, links in increasing order at each node.
+  std::vector<std::uint32_t> count(particles + 1, 0);
+  for (std::size_t l = 0; l < n; ++l) ++count[a_[l] + 1], ++count[b_[l] + 1];
+  std::vector<std::uint32_t> start(particles + 1, 0);
+  for (std::size_t id = 0; id < particles; ++id) start[id + 1] = start[id] + count[id + 1];
+  std::vector<std::uint32_t> link(2 * n);
+  std::vector<double> sign(2 * n);
+  std::vector<std::uint32_t> fill(start.begin(), start.end() - 1);
+  for (std::size_t l = 0; l < n; ++l) {
+    link[fill[a_[l]]] = static_cast<std::uint32_t>(l), sign[fill[a_[l]]++] = 1.0;
+    link[fill[b_[l]]] = static_cast<std::uint32_t>(l), sign[fill[b_[l]]++] = -1.0;
+  }
+  node_begin_.push_back(0);
+  for (std::size_t id = 0; id < particles; ++id) {
+    if (start[id + 1] == start[id]) continue;
+    node_id_.push_back(static_cast<std::uint32_t>(id));
+    for (std::uint32_t q = start[id]; q < start[id + 1]; ++q) node_link_.push_back(link[q]), node_sign_.push_back(sign[q]);
+    node_begin_.push_back(static_cast<std::uint32_t>(node_link_.size()));
+  }
+}
+
+ExcludedPairs Links::excludedPairs() const {
+  ExcludedPairs out;
+  if (empty()) return out;
+  const std::size_t particles = particles_;
+  out.begin.assign(particles + 1, 0);
+  std::vector<std::pair<std::uint32_t, std::uint32_t>> pairs;
+  for (std::size_t l = 0; l < size(); ++l) pairs.emplace_back(a_[l], b_[l]), pairs.emplace_back(b_[l], a_[l]);
+  std::sort(pairs.begin(), pairs.end());
+  pairs.erase(std::unique(pairs.begin(), pairs.end()), pairs.end());
+  for (const auto& [x, y] : pairs) ++out.begin[x + 1], out.ids.push_back(y);
+  for (std::size_t id = 0; id < particles; ++id) out.begin[id + 1] += out.begin[id];
+  return out;
+}
+
+double Links::stiffnessAt(std::uint32_t id) const {
+  const auto it = std::lower_bound(node_id_.begin(), node_id_.end(), id);
+  if (it == node_id_.end() || *it != id) return 0.0;
+  const auto k = static_cast<std::size_t>(it - node_id_.begin());
+  double sum = 0.0;
+  for (std::uint32_t q = node_begin_[k]; q < node_begin_[k + 1]; ++q) sum += law_[node_link_[q]].stiffness_N_m;
+  return sum;
+}
+
+void Links::evaluate(const Particles& p, std::size_t l0, std::size_t l1, double time_s, bool measure,
+                     WorkerScratch& s) {
+  double elastic = 0.0, rupture = 0.0;
+  for (std::size_t l = l0; l < l1; ++l) {
+    if (broken_[l]) continue;
+    const std::uint32_t i = p.slot[a_[l]], j = p.slot[b_[l]];
+    const double ex = p.x[j] - p.x[i], ey = p.y[j] - p.y[i], ez = p.z[j] - p.z[i];
+    const double length = std::sqrt(ex * ex + ey * ey + ez * ez);
+    const bridge::LinkResponse r = bridge::linearLinkResponse(law_[l], length);
+    if (r.breaks) {
+      // The energy the link held is lost with it.
+      bridge::LinearLinkParams intact = law_[l];
+      intact.rupture_strain = std::numeric_limits<double>::infinity();
+      rupture += bridge::linearLinkResponse(intact, length).elastic_J;
+      broken_[l] = 1;
+      fx_[l] = fy_[l] = fz_[l] = tension_[l] = 0.0;
+      s.link_events.push_back({time_s, l, Vec3(p.x[i] + 0.5 * ex, p.y[i] + 0.5 * ey, p.z[i] + 0.5 * ez)});
+      continue;
+    }
+    // Tension pulls a towards b.
+    const double scale = length > 0.0 ? r.force_N / length : 0.0;
+    fx_[l] = scale * ex, fy_[l] = scale * ey, fz_[l] = scale * ez;
+    tension_[l] = r.force_N;
+    if (measure) elastic += r.elastic_J;
+  }
+  s.link_elastic += elastic;
+  s.link_rupture += rupture;
+}
+
+void Links::apply(Particles& p, std::size_t k0, std::size_t k1) const {
+  for (std::size_t k = k0; k < k1; ++k) {
+    const std::uint32_t i = p.slot[node_id_[k]];
+    double fx = 0.0, fy = 0.0, fz = 0.0;
+    for (std::uint32_t q = node_begin_[k]; q < node_begin_[k + 1]; ++q) {
+      const std::uint32_t l = node_link_[q];
+      const double sg = node_sign_[q];
+      fx += sg * fx_[l], fy += sg * fy_[l], fz += sg * fz_[l];
+    }
+    p.fx[i] += fx, p.fy[i] += fy, p.fz[i] += fz;
+  }
+}
+
+}  // namespace gabion::micro

@@ -1,0 +1,65 @@
+#pragma once
+/// \file
+/// The link stage of the fine DEM: pairs of spheres joined by a force law of
+/// their distance only (remote interactions: the wires of the netting), with
+/// per-link state and a broken flag, keyed by stable ids so that re-sorting
+/// the particles never changes a link's partners. Linked particles never
+/// touch through the contact law (their pair is excluded from the neighbour
+/// list). Forces are computed per link (workers take ranges of links), then
+/// summed per particle over its links in a fixed order (workers take ranges
+/// of particles): parallel, and the same for any thread count. A link whose
+/// law says it broke stops acting for good, and its event (time, link,
+/// position) is recorded once.
+#include <cstdint>
+#include <vector>
+
+#include "bridge/laws/link_linear.hpp"
+#include "micro/neighbour_grid.hpp"
+#include "micro/particles.hpp"
+#include "micro/scene.hpp"
+#include "micro/worker_scratch.hpp"
+
+namespace gabion::micro {
+
+class Links {
+ public:
+  Links() = default;
+  /// The links of a scene; sphere k has stable id k. `particles`: how many
+  /// particles there are (ids 0 .. particles-1).
+  Links(const std::vector<LinkSpec>& specs, std::size_t particles);
+
+  std::size_t size() const { return a_.size(); }
+  bool empty() const { return a_.empty(); }
+  /// Pairs that the contact law leaves alone (the linked ones).
+  ExcludedPairs excludedPairs() const;
+  /// Sum of the stiffnesses of the links at particle `id` (N/m), for the critical step.
+  double stiffnessAt(std::uint32_t id) const;
+
+  /// Pass 1, links [l0, l1): forces of this step from the current positions;
+  /// a link that breaks is marked, its stored energy counted as dissipated,
+  /// and its event appended to s.link_events. Stored energy into
+  /// s.link_elastic when `measure`.
+  void evaluate(const Particles& p, std::size_t l0, std::size_t l1, double time_s, bool measure, WorkerScratch& s);
+  /// Pass 2, linked particles [k0, k1) of nodeCount(): adds their links' forces.
+  void apply(Particles& p, std::size_t k0, std::size_t k1) const;
+  std::size_t nodeCount() const { return node_id_.size(); }
+
+  bool broken(std::size_t l) const { return broken_[l] != 0; }
+  std::uint32_t idA(std::size_t l) const { return a_[l]; }
+  std::uint32_t idB(std::size_t l) const { return b_[l]; }
+  /// Tension of link l at the last step (N; < 0 in compression, 0 once broken).
+  double tension(std::size_t l) const { return tension_[l]; }
+
+ private:
+  std::size_t particles_ = 0;
+  std::vector<std::uint32_t> a_, b_;  // stable ids
+  std::vector<bridge::LinearLinkParams> law_;
+  std::vector<std::uint8_t> broken_;
+  std::vector<double> fx_, fy_, fz_, tension_;  // force on a (N) at this step; -f on b
+  // incidence: node k is particle id node_id_[k]; its links are
+  // node_link_[node_begin_[k] .. node_begin_[k + 1]), with the sign of the force on it
+  std::vector<std::uint32_t> node_id_, node_begin_, node_link_;
+  std::vector<double> node_sign_;
+};
+
+}  // namespace gabion::micro

@@ -1,0 +1,217 @@
+#include "micro/neighbour_grid.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+
+namespace gabion::micro {
+
+int NeighbourGrid::assignClasses(Particles& p) {
+  const std::size_t n = p.size();
+  std::vector<double> radii(p.r.begin(), p.r.end());
+  std::sort(radii.begin(), radii.end());
+  radii.erase(std::unique(radii.begin(), radii.end()), radii.end());
+  // Class c holds radii in [lo_c, kClassRatio lo_c]; lo_c is the smallest
+  // radius above the previous class.
+  std::vector<double> class_lo;
+  class_rmax_.clear();
+  for (const double r : radii) {
+    if (class_lo.empty() || r > kClassRatio * class_lo.back()) {
+      class_lo.push_back(r);
+      class_rmax_.push_back(r);
+    }
+    class_rmax_.back() = r;
+  }
+  double sum = 0.0;
+  std::size_t finest = 0;
+  for (std::size_t i = 0; i < n; ++i) {
+    const auto c = static_cast<std::size_t>(std::upper_bound(class_lo.begin(), class_lo.end(), p.r[i]) -
+                                            class_lo.begin()) - 1;
+    p.size_class[i] = static_cast<std::uint8_t>(c);
+    if (c == 0) sum += p.r[i], ++finest;
+  }
+  finest_mean_r_ = finest > 0 ? sum / static_cast<double>(finest) : 0.0;
+  grids_.resize(class_rmax_.size());
+  return classCount();
+}
+
+std::uint32_t NeighbourGrid::Grid::cellOf(double x, double y, double z) const {
+  const double pos[3] = {x, y, z};
+  std::size_t c[3];
+  for (int a = 0; a < 3; ++a) {
+    const double s = (pos[a] - lo[a]) * inv_h;
+    // (clamped: a particle of a smaller class lies inside this grid's box;
+    // the clamp keeps a rounding at the far face inside too)
+    c[a] = s <= 0.0 ? 0 : std::min(ncells[a] - 1, static_cast<std::size_t>(s));
+  }
+  return static_cast<std::uint32_t>(base + ((c[slow] + 1) * pm + (c[mid] + 1)) * pf + (c[fast] + 1));
+}
+
+std::vector<std::uint32_t> NeighbourGrid::sortOrder(const Particles& p, double skin, std::size_t nblocks,
+                                                    const ForBlocks& for_blocks) {
+  const std::size_t n = p.size(), nclass = grids_.size();
+  const auto blockBegin = [&](std::size_t b) { return n * b / nblocks; };
+  // Bounding box and count of each class, per block of particles, then joined.
+  struct Box {
+    double lo[3], hi[3];
+    std::size_t count;
+  };
+  const double inf = std::numeric_limits<double>::infinity();
+  const Box empty{{inf, inf, inf}, {-inf, -inf, -inf}, 0};
+  std::vector<Box> boxes(nblocks * nclass, empty);
+  for_blocks(nblocks, [&](std::size_t b) {
+    Box* const mine = boxes.data() + b * nclass;
+    for (std::size_t i = blockBegin(b); i < blockBegin(b + 1); ++i) {
+      Box& box = mine[p.size_class[i]];
+      const double q[3] = {p.x[i], p.y[i], p.z[i]};
+      for (int a = 0; a < 3; ++a) box.lo[a] = std::min(box.lo[a], q[a]), box.hi[a] = std::max(box.hi[a], q[a]);
+      ++box.count;
+    }
+  });
+  // Grid c covers classes 0 .. c (they all search it).
+  Box cover = empty;
+  std::size_t cells = 0;
+  for (std::size_t c = 0; c < nclass; ++c) {
+    for (std::size_t b = 0; b < nblocks; ++b) {
+      const Box& box = boxes[b * nclass + c];
+      for (int a = 0; a < 3; ++a) cover.lo[a] = std::min(cover.lo[a], box.lo[a]), cover.hi[a] = std::max(cover.hi[a], box.hi[a]);
+      cover.count += box.count;
+    }
+    Grid& g = grids_[c];
+    double h = 2.0 * class_rmax_[c] + skin;
+    if (cover.count == 0) {  // no particle so far: a one-cell grid
+      for (int a = 0; a < 3; ++a) g.lo[a] = 0.0, g.ncells[a] = 1;
+    } else {
+      for (;;) {  // at most a few cells per particle (scattered clouds)
+        std::size_t total = 1;
+        for (int a = 0; a < 3; ++a) {
+          g.lo[a] = cover.lo[a];
+          g.ncells[a] = static_cast<std::size_t>((cover.hi[a] - cover.lo[a]) / h) + 1;
+          total *= g.ncells[a];
+        }
+        if (total <= 4 * cover.count + 64) break;
+        h *= 1.26;
+      }
+    }
+    g.inv_h = 1.0 / h;
+    // The axis with the most cells varies slowest, so that row partitions
+    // (contiguous runs of cells) cut the grid across its smallest
+    // cross-section and share the fewest particles.
+    g.slow = static_cast<int>(std::max_element(g.ncells, g.ncells + 3) - g.ncells);
+    g.fast = g.slow == 0 ? 1 : 0;
+    g.mid = 3 - g.slow - g.fast;
+    g.pf = g.ncells[g.fast] + 2;
+    g.pm = g.ncells[g.mid] + 2;
+    g.count = g.pf * g.pm * (g.ncells[g.slow] + 2);
+    g.base = cells;
+    cells += g.count;
+  }
+  std::vector<std::uint32_t> cell(n);
+  for_blocks(nblocks, [&](std::size_t b) {
+    for (std::size_t i = blockBegin(b); i < blockBegin(b + 1); ++i)
+      cell[i] = grids_[p.size_class[i]].cellOf(p.x[i], p.y[i], p.z[i]);
+  });
+  // Counting sort by global cell (classes in order, then cells).
+  cell_start_.assign(cells + 2, 0);
+  for (std::size_t i = 0; i < n; ++i) ++cell_start_[cell[i] + 1];
+  for (std::size_t c = 0; c + 1 < cell_start_.size(); ++c) cell_start_[c + 1] += cell_start_[c];
+  std::vector<std::uint32_t> order(n);
+  {
+    std::vector<std::uint32_t> fill(cell_start_.begin(), cell_start_.end() - 1);
+    for (std::size_t i = 0; i < n; ++i) order[fill[cell[i]]++] = static_cast<std::uint32_t>(i);
+  }
+  cell_.resize(n);
+  for (std::size_t k = 0; k < n; ++k) cell_[k] = cell[order[k]];
+  return order;
+}
+
+void NeighbourGrid::buildList(const Particles& p, double skin, const ExcludedPairs& excluded, std::size_t nblocks,
+                              const ForBlocks& for_blocks, NeighbourList& out) {
+  const std::size_t n = p.size(), nclass = grids_.size();
+  const auto blockBegin = [&](std::size_t b) { return n * b / nblocks; };
+  out.row_begin.assign(n + 1, 0);
+  list_blocks_.resize(nblocks);
+  for_blocks(nblocks, [&](std::size_t blk) {
+    // With one block the list itself is written (no second copy in memory).
+    std::vector<std::uint32_t>& list = nblocks == 1 ? out.nbr : list_blocks_[blk];
+    std::size_t len = 0;
+    const double *__restrict X = p.x.data(), *__restrict Y = p.y.data(), *__restrict Z = p.z.data(),
+                 *__restrict R = p.r.data(), *__restrict IMB = p.inv_body_mass.data();
+    const std::int32_t* __restrict BODY = p.body.data();
+    const std::uint8_t* __restrict GRP = p.group.data();
+    const std::uint32_t* __restrict START = cell_start_.data();
+    // Appends the particles of [jb, je) within reach of i that may touch it,
+    // branch-free (the test decides whether the write is kept).
+    const auto scan = [&](std::size_t i, std::uint32_t jb, std::uint32_t je) {
+      if (jb >= je) return;
+      if (list.size() < len + (je - jb))  // grows by a quarter (the list is the largest array)
+        list.resize(std::max<std::size_t>(len + (je - jb), list.size() + list.size() / 4 + 1024));
+      const double xi = X[i], yi = Y[i], zi = Z[i], ri = R[i] + skin;
+      const std::int32_t bi = BODY[i];
+      const bool free_i = IMB[i] > 0.0;
+      const std::uint32_t mask_i = p.group_mask[GRP[i]];
+      std::uint32_t* __restrict o = list.data() + len;
+      std::size_t cnt = 0;
+      for (std::uint32_t j = jb; j < je; ++j) {
+        const double ex = X[j] - xi, ey = Y[j] - yi, ez = Z[j] - zi, reach = ri + R[j];
+        const bool near = ex * ex + ey * ey + ez * ez < reach * reach;
+        const bool allowed = (bi < 0 || BODY[j] != bi) && (free_i || IMB[j] > 0.0) && ((mask_i >> GRP[j]) & 1u);
+        o[cnt] = j;
+        cnt += static_cast<std::size_t>(near & allowed);
+      }
+      len += cnt;
+    };
+    for (std::size_t i = blockBegin(blk); i < blockBegin(blk + 1); ++i) {
+      out.row_begin[i] = static_cast<std::uint32_t>(len);  // local offset, made global below
+      const std::size_t c = p.size_class[i];
+      const Grid& own = grids_[c];
+      // Own class: a partner j > i lies in a cell at or after i's: the rest
+      // of its own row along the fast axis and the rows (mid+1) and
+      // (slow+1, mid-1 .. mid+1); each row of three cells is one run.
+      const std::size_t cell = cell_[i];
+      const std::size_t row_offset[5] = {0, own.pf, own.pf * own.pm - own.pf, own.pf * own.pm,
+                                         own.pf * own.pm + own.pf};
+      for (std::size_t r = 0; r < 5; ++r) {
+        const std::size_t centre = cell + row_offset[r];
+        scan(i, r == 0 ? static_cast<std::uint32_t>(i + 1) : START[centre - 1], START[centre + 2]);
+      }
+      // Larger classes: the 3 x 3 rows of three cells around i in each grid.
+      for (std::size_t d = c + 1; d < nclass; ++d) {
+        const Grid& g = grids_[d];
+        const std::size_t centre = g.cellOf(X[i], Y[i], Z[i]);
+        for (std::size_t ds = 0; ds < 3; ++ds)
+          for (std::size_t dm = 0; dm < 3; ++dm) {
+            const std::size_t mid = centre + ds * g.pf * g.pm + dm * g.pf - g.pf * g.pm - g.pf;
+            scan(i, START[mid - 1], START[mid + 2]);
+          }
+      }
+      // Linked pairs never touch: drop them from the row (rare rows only).
+      if (!excluded.empty()) {
+        const std::uint32_t a = p.id[i];
+        const auto eb = excluded.ids.begin() + excluded.begin[a], ee = excluded.ids.begin() + excluded.begin[a + 1];
+        if (eb != ee) {
+          std::uint32_t* row = list.data() + out.row_begin[i];
+          const std::size_t count = len - out.row_begin[i];
+          std::size_t kept = 0;
+          for (std::size_t q = 0; q < count; ++q)
+            if (!std::binary_search(eb, ee, p.id[row[q]])) row[kept++] = row[q];
+          len = out.row_begin[i] + kept;
+        }
+      }
+    }
+    list.resize(len);
+  });
+  if (nblocks > 1) {
+    std::vector<std::size_t> base(nblocks + 1, 0);
+    for (std::size_t b = 0; b < nblocks; ++b) base[b + 1] = base[b] + list_blocks_[b].size();
+    out.nbr.resize(base[nblocks]);
+    for_blocks(nblocks, [&](std::size_t b) {
+      const auto shift = static_cast<std::uint32_t>(base[b]);
+      for (std::size_t i = blockBegin(b); i < blockBegin(b + 1); ++i) out.row_begin[i] += shift;
+      std::copy(list_blocks_[b].begin(), list_blocks_[b].end(), out.nbr.begin() + static_cast<long>(base[b]));
+    });
+  }
+  out.row_begin[n] = static_cast<std::uint32_t>(out.nbr.size());
+}
+
+}  // namespace gabion::micro

@@ -1,0 +1,90 @@
+#pragma once
+/// \file
+/// The particle store of the fine DEM: every sphere that takes part in
+/// contact detection (free spheres and the member spheres of rigid blocks),
+/// as structure-of-arrays. The fields are declared once, in
+/// forEachStateField() and forEachScratchField(); that list drives growth
+/// (resize) and the re-sort into cell order (permute). Every particle has a
+/// stable id (its input order: free spheres, then block members) that
+/// survives the re-sort: `slot[id]` is its current index.
+#include <cstddef>
+#include <cstdint>
+#include <vector>
+
+namespace gabion::micro {
+
+/// Contact groups: a particle belongs to one group 0 .. kGroupCount-1; two
+/// particles touch only if each one's group is in the other's mask
+/// (Particles::group_mask). Block members never touch their own block, and
+/// particles joined by a link never touch each other (micro/links.hpp).
+constexpr int kGroupCount = 32;
+
+struct Particles {
+  // --- state: moves with the particle when the store is re-sorted
+  std::vector<double> x, y, z;     ///< centre (m)
+  std::vector<double> vx, vy, vz;  ///< velocity (m/s)
+  std::vector<double> wx, wy, wz;  ///< angular velocity (rad/s)
+  std::vector<double> r;           ///< radius (m)
+  std::vector<double> inv_body_mass;  ///< 1/m of the owning body (1/kg); 0: fixed (contact damping, pairs)
+  std::vector<double> mass, inv_mass, inv_inertia;  ///< free spheres only (else 0): the integrator's
+  std::vector<double> alpha;       ///< Cundall local damping of free spheres (-)
+  std::vector<std::int32_t> body;  ///< owning block, -1 for a free sphere
+  std::vector<std::uint32_t> mat;  ///< material (32-bit: the vector kernels gather it)
+  std::vector<std::uint32_t> id;   ///< stable id
+  std::vector<std::uint8_t> group; ///< contact group (0 .. kGroupCount-1)
+  std::vector<std::uint8_t> size_class;  ///< size class of the neighbour grid (micro/neighbour_grid.hpp)
+
+  // --- scratch: recomputed, not carried through a re-sort
+  std::vector<double> fx, fy, fz;  ///< force of this step (N)
+  std::vector<double> tx, ty, tz;  ///< torque about the centre (N m)
+  std::vector<double> x0, y0, z0;  ///< centre at the last neighbour-list build (m)
+
+  /// id -> current index (not permuted: rewritten by permute()).
+  std::vector<std::uint32_t> slot;
+  /// Group g touches group h iff bit h of group_mask[g] is set (symmetric).
+  std::uint32_t group_mask[kGroupCount];
+
+  Particles() {
+    for (auto& m : group_mask) m = ~0u;
+  }
+
+  std::size_t size() const { return x.size(); }
+
+  /// Calls f(vector) for every state field (the one list of them).
+  template <class F>
+  void forEachStateField(F&& f) {
+    for (auto* v : {&x, &y, &z, &vx, &vy, &vz, &wx, &wy, &wz, &r, &inv_body_mass, &mass, &inv_mass, &inv_inertia,
+                    &alpha})
+      f(*v);
+    f(body);
+    f(mat);
+    f(id);
+    f(group);
+    f(size_class);
+  }
+  /// Calls f(vector) for every scratch field.
+  template <class F>
+  void forEachScratchField(F&& f) {
+    for (auto* v : {&fx, &fy, &fz, &tx, &ty, &tz, &x0, &y0, &z0}) f(*v);
+  }
+
+  /// n particles, all fields zero, stable ids 0 .. n-1 in place.
+  void resize(std::size_t n) {
+    const auto zero = [n](auto& v) { v.assign(n, {}); };
+    forEachStateField(zero);
+    forEachScratchField(zero);
+    body.assign(n, -1);
+    slot.resize(n);
+    for (std::size_t k = 0; k < n; ++k) id[k] = slot[k] = static_cast<std::uint32_t>(k);
+  }
+
+  /// Whether particles i and j may touch (groups; not the same block; at
+  /// least one of them moves).
+  bool mayTouch(std::size_t i, std::size_t j) const {
+    if (body[i] >= 0 && body[i] == body[j]) return false;
+    if (((group_mask[group[i]] >> group[j]) & 1u) == 0) return false;
+    return inv_body_mass[i] > 0.0 || inv_body_mass[j] > 0.0;
+  }
+};
+
+}  // namespace gabion::micro

@@ -1,0 +1,241 @@
+#include "micro/walls.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+
+namespace gabion::micro {
+
+void StampedHistory::resize(std::size_t m) {
+  for (auto* v : {&ux, &uy, &uz, &plastic, &viscous}) v->assign(m, 0.0);
+  stamp.assign(m, std::numeric_limits<std::int64_t>::min() / 2);
+}
+
+namespace {
+constexpr double kPi = 3.14159265358979323846;
+
+// Displacement of a velocity table from 0 to t: the integral of the
+// piecewise-linear velocity (the last value holds after the table).
+Vec3 tableDisplacement(const WallProgram& p, double t) {
+  const std::vector<double>& T = p.table_time_s;
+  const std::vector<Vec3>& V = p.table_velocity_m_s;
+  Vec3 d = Vec3::Zero();
+  for (std::size_t k = 0; k + 1 < T.size(); ++k) {
+    if (t <= T[k]) return d;
+    const double span = T[k + 1] - T[k], s = std::min(t, T[k + 1]) - T[k];
+    d += V[k] * s + 0.5 * (V[k + 1] - V[k]) * (s * s / span);
+  }
+  return t > T.back() ? Vec3(d + V.back() * (t - T.back())) : d;
+}
+}  // namespace
+
+Vec3 programDisplacement(const WallProgram& p, double t0, double t1) {
+  using K = WallProgram::Kind;
+  switch (p.kind) {
+    case K::Fixed:
+    case K::Servo: return Vec3::Zero();
+    case K::Velocity: return p.velocity_m_s * (t1 - t0);
+    case K::VelocityTable: return tableDisplacement(p, t1) - tableDisplacement(p, t0);
+    case K::Sinusoid: {
+      const double w = 2.0 * kPi * p.frequency_hz;
+      // sin a - sin b = 2 cos((a + b) / 2) sin((a - b) / 2): no cancellation for a small step
+      const double a = w * t1 + p.phase_rad, b = w * t0 + p.phase_rad;
+      return p.direction * (p.amplitude_m * 2.0 * std::cos(0.5 * (a + b)) * std::sin(0.5 * (a - b)));
+    }
+  }
+  return Vec3::Zero();
+}
+
+Wall::Wall(const WallSpec& spec)
+    : name(spec.name), n(spec.normal), mat(spec.material), program(spec.program), bounded(spec.bounded),
+      origin(spec.point_m), position(spec.point_m), force_position(spec.point_m), at_rebuild(spec.point_m) {
+  if (bounded) {
+    u = spec.axis_u;
+    v = n.cross(u);
+    half_u = spec.half_u_m;
+    half_v = spec.half_v_m;
+  }
+}
+
+void Wall::plan(double t, double dt) {
+  if (program.kind == WallProgram::Kind::Servo) {
+    // Velocity along the normal from the force error, at most max_speed:
+    // a wall that feels too little force moves towards the bodies.
+    const double speed = std::clamp(program.gain_m_s_N * (program.target_force_N - normalForce()),
+                                    -program.max_speed_m_s, program.max_speed_m_s);
+    velocity = speed * n;
+    step_displacement = velocity * dt;
+    return;
+  }
+  step_displacement = programDisplacement(program, t, t + dt);
+  velocity = step_displacement / dt;
+}
+
+void wallCandidates(const Particles& p, std::vector<Wall>& walls, double skin, std::size_t nblocks,
+                    const ForBlocks& for_blocks) {
+  const std::size_t n = p.size(), nwalls = walls.size();
+  const auto blockBegin = [&](std::size_t b) { return n * b / nblocks; };
+  std::vector<std::vector<std::uint32_t>> lists(nblocks * nwalls);
+  for_blocks(nblocks, [&](std::size_t b) {
+    for (std::size_t wi = 0; wi < nwalls; ++wi) {
+      const Wall& w = walls[wi];
+      const Vec3& q = w.position;
+      // the wall may move half a skin before the next build
+      const double lim_u = w.bounded ? w.half_u + skin : std::numeric_limits<double>::infinity();
+      const double lim_v = w.bounded ? w.half_v + skin : std::numeric_limits<double>::infinity();
+      std::vector<std::uint32_t>& out = lists[b * nwalls + wi];
+      for (std::size_t i = blockBegin(b); i < blockBegin(b + 1); ++i) {
+        if (p.inv_body_mass[i] == 0.0) continue;
+        const Vec3 d(p.x[i] - q.x(), p.y[i] - q.y(), p.z[i] - q.z());
+        const double dist = d.dot(w.n);
+        if (dist >= p.r[i] + skin) continue;
+        if (w.bounded && (dist < -skin || std::fabs(d.dot(w.u)) > lim_u || std::fabs(d.dot(w.v)) > lim_v)) continue;
+        out.push_back(static_cast<std::uint32_t>(i));
+      }
+    }
+  });
+  for (std::size_t wi = 0; wi < nwalls; ++wi) {
+    Wall& w = walls[wi];
+    w.cand.clear();
+    for (std::size_t b = 0; b < nblocks; ++b)
+      w.cand.insert(w.cand.end(), lists[b * nwalls + wi].begin(), lists[b * nwalls + wi].end());
+    w.hist.resize(w.cand.size());
+    w.at_rebuild = w.position;
+  }
+}
+
+namespace {
+/// One wall's contacts with the candidates [k0, k1) of its list, one SIMD
+/// lane per candidate (a particle is at most once in a wall's list, so the
+/// force writes do not collide): the same law as the pairs (laneContact),
+/// the history per candidate with the step it last touched.
+struct WallLanes {
+  Particles& p;
+  const MaterialLaws& laws;
+  std::size_t wall_mat;
+  double dt, ratio;
+};
+struct WallSums {
+  double fx = 0.0, fy = 0.0, fz = 0.0, work = 0.0;  // force on the wall (N), work of its motion (J)
+  double friction = 0.0, plastic = 0.0, viscous = 0.0, elastic = 0.0, contacts = 0.0, bad = 0.0;
+};
+template <bool kMeasure, bool kViscous, bool kPlastic>
+WallSums wallLanes(const WallLanes& a, const Wall& w, std::size_t k0, std::size_t k1, std::int64_t step,
+                   StampedHistory& h) {
+  const std::uint32_t* __restrict cand = w.cand.data();
+  const Vec3 &point = w.position, &normal = w.n, &velocity = w.velocity;
+  const std::int64_t last = step - 1;
+  double *__restrict HUX = h.ux.data(), *__restrict HUY = h.uy.data(), *__restrict HUZ = h.uz.data(),
+         *__restrict HPL = h.plastic.data(), *__restrict HVI = h.viscous.data();
+  std::int64_t* __restrict STAMP = h.stamp.data();
+  // A bounded wall acts on a particle whose centre is in front of it and
+  // over its rectangle; an infinite one on every candidate (a particle
+  // behind it has tunnelled: its overlap stops the run).
+  const double inf = std::numeric_limits<double>::infinity();
+  const double lim_u = w.bounded ? w.half_u : inf, lim_v = w.bounded ? w.half_v : inf;
+  const double min_dist = w.bounded ? 0.0 : -inf;
+  const double ux_ = w.u.x(), uy_ = w.u.y(), uz_ = w.u.z(), vx_ = w.v.x(), vy_ = w.v.y(), vz_ = w.v.z();
+  Particles& P = a.p;
+  const double *__restrict X = P.x.data(), *__restrict Y = P.y.data(), *__restrict Z = P.z.data(),
+               *__restrict R = P.r.data();
+  const double *__restrict VX = P.vx.data(), *__restrict VY = P.vy.data(), *__restrict VZ = P.vz.data();
+  const double *__restrict WX = P.wx.data(), *__restrict WY = P.wy.data(), *__restrict WZ = P.wz.data(),
+               *__restrict IM = P.inv_body_mass.data();
+  const std::uint32_t* __restrict MAT = P.mat.data();
+  double *__restrict FX = P.fx.data(), *__restrict FY = P.fy.data(), *__restrict FZ = P.fz.data();
+  double *__restrict TX = P.tx.data(), *__restrict TY = P.ty.data(), *__restrict TZ = P.tz.data();
+  const MaterialLaws& laws = a.laws;
+  const double px = point.x(), py = point.y(), pz = point.z();
+  const double wnx = normal.x(), wny = normal.y(), wnz = normal.z();
+  const double nx = -wnx, ny = -wny, nz = -wnz;  // from the particle to the wall
+  const double wvx = velocity.x(), wvy = velocity.y(), wvz = velocity.z();
+  const double dt = a.dt, ratio = a.ratio;
+  double sfx = 0.0, sfy = 0.0, sfz = 0.0, work = 0.0, fr = 0.0, pw = 0.0, vw = 0.0, el = 0.0, on_n = 0.0, bad = 0.0;
+#pragma omp simd reduction(+ : sfx, sfy, sfz, work, fr, pw, vw, el, on_n, bad)
+  for (std::size_t k = k0; k < k1; ++k) {
+    const std::uint32_t i = cand[k];
+    const double dist = (X[i] - px) * wnx + (Y[i] - py) * wny + (Z[i] - pz) * wnz;
+    const double du = (X[i] - px) * ux_ + (Y[i] - py) * uy_ + (Z[i] - pz) * uz_;
+    const double dv = (X[i] - px) * vx_ + (Y[i] - py) * vy_ + (Z[i] - pz) * vz_;
+    const double overlap = R[i] - dist;
+    const bool act = overlap > 0.0 && dist > min_dist && std::fabs(du) <= lim_u && std::fabs(dv) <= lim_v;
+    bad += act && overlap > ratio * R[i] ? 1.0 : 0.0;
+    const double li = dist;
+    // velocity of the wall's contact point relative to the particle's
+    const double vx = wvx - VX[i] - li * (WY[i] * nz - WZ[i] * ny), vy = wvy - VY[i] - li * (WZ[i] * nx - WX[i] * nz),
+                 vz = wvz - VZ[i] - li * (WX[i] * ny - WY[i] * nx);
+    const bool had = STAMP[k] == last;  // touched at the last step: its history goes on
+    double ux = had ? HUX[k] : 0.0, uy = had ? HUY[k] : 0.0, uz = had ? HUZ[k] : 0.0, pl = 0.0, vi = 0.0;
+    if constexpr (kPlastic) pl = had ? HPL[k] : 0.0;
+    if constexpr (kViscous) vi = had ? HVI[k] : 0.0;
+    const std::size_t L = MAT[i] * laws.nmat + a.wall_mat;
+    const LaneContact c = laneContact<kMeasure, kViscous, kPlastic>(
+        nx, ny, nz, overlap, vx, vy, vz, laws.kn[L], laws.ks[L], laws.mu_ks[L], kPlastic ? laws.flim[L] : 0.0,
+        kViscous ? laws.zeta[L] : 0.0, IM[i], dt, ux, uy, uz, pl, vi);
+    HUX[k] = act ? ux : HUX[k], HUY[k] = act ? uy : HUY[k], HUZ[k] = act ? uz : HUZ[k];
+    if constexpr (kPlastic) HPL[k] = act ? pl : HPL[k];
+    if constexpr (kViscous) HVI[k] = act ? vi : HVI[k];
+    STAMP[k] = act ? step : STAMP[k];
+    const double fx = act ? c.fx : 0.0, fy = act ? c.fy : 0.0, fz = act ? c.fz : 0.0;
+    FX[i] += fx, FY[i] += fy, FZ[i] += fz;
+    TX[i] += li * (ny * fz - nz * fy), TY[i] += li * (nz * fx - nx * fz), TZ[i] += li * (nx * fy - ny * fx);
+    sfx -= fx, sfy -= fy, sfz -= fz;
+    work += (fx * wvx + fy * wvy + fz * wvz) * dt;
+    fr += act ? c.friction_J : 0.0;
+    if constexpr (kPlastic) pw += act ? c.plastic_J : 0.0;
+    if constexpr (kViscous) vw += act ? c.viscous_J : 0.0;
+    if constexpr (kMeasure) el += act ? c.elastic_J : 0.0;
+    on_n += act ? 1.0 : 0.0;
+  }
+  return {sfx, sfy, sfz, work, fr, pw, vw, el, on_n, bad};
+}
+using WallLanesFn = WallSums (*)(const WallLanes&, const Wall&, std::size_t, std::size_t, std::int64_t,
+                                 StampedHistory&);
+WallLanesFn wallLanesFor(bool measure, bool viscous, bool plastic) {
+  static constexpr WallLanesFn fns[8] = {wallLanes<false, false, false>, wallLanes<false, false, true>,
+                                         wallLanes<false, true, false>,  wallLanes<false, true, true>,
+                                         wallLanes<true, false, false>,  wallLanes<true, false, true>,
+                                         wallLanes<true, true, false>,   wallLanes<true, true, true>};
+  return fns[(measure ? 4 : 0) + (viscous ? 2 : 0) + (plastic ? 1 : 0)];
+}
+}  // namespace
+
+void wallPartition(Particles& p, std::vector<Wall>& walls, const MaterialLaws& laws, double dt,
+                   double max_overlap_ratio, std::int64_t step, std::uint32_t b, std::uint32_t e, bool measure,
+                   WorkerScratch& s) {
+  s.wall_force.assign(walls.size(), Vec3::Zero());
+  s.wall_energy = ContactEnergy{};
+  s.wall_work = 0.0;
+  s.wall_contacts = 0;
+  s.wall_failed = false;
+  const WallLanesFn lanes = wallLanesFor(measure, laws.any_viscous, laws.any_plastic);
+  WallLanes in{p, laws, 0, dt, max_overlap_ratio};
+  for (std::size_t wi = 0; wi < walls.size(); ++wi) {
+    Wall& w = walls[wi];
+    in.wall_mat = static_cast<std::size_t>(w.mat);
+    // candidates are in particle order
+    const auto k0 = static_cast<std::size_t>(std::lower_bound(w.cand.begin(), w.cand.end(), b) - w.cand.begin());
+    const auto k1 = static_cast<std::size_t>(std::lower_bound(w.cand.begin(), w.cand.end(), e) - w.cand.begin());
+    const WallSums sum = lanes(in, w, k0, k1, step, w.hist);
+    s.wall_force[wi] = Vec3(sum.fx, sum.fy, sum.fz);
+    s.wall_work += sum.work;
+    s.wall_energy.friction_J += sum.friction;
+    s.wall_energy.plastic_J += sum.plastic;
+    s.wall_energy.viscous_J += sum.viscous;
+    s.wall_energy.elastic_J += sum.elastic;
+    s.wall_contacts += static_cast<std::size_t>(sum.contacts);
+    if (sum.bad > 0.0 && !s.wall_failed) {  // rare: name the candidate that overlaps most
+      s.wall_failed = true;
+      s.wall_fail_wall = wi;
+      s.wall_fail_ratio = -std::numeric_limits<double>::infinity();
+      for (std::size_t k = k0; k < k1; ++k) {
+        const std::uint32_t i = w.cand[k];
+        const Vec3 d(p.x[i] - w.position.x(), p.y[i] - w.position.y(), p.z[i] - w.position.z());
+        const double r = (p.r[i] - d.dot(w.n)) / p.r[i];
+        if (r > s.wall_fail_ratio) s.wall_fail_i = i, s.wall_fail_ratio = r;
+      }
+    }
+  }
+}
+
+}  // namespace gabion::micro

@@ -1,0 +1,83 @@
+#pragma once
+/// \file
+/// What each worker of the engine's parallel stages keeps for itself
+/// between and within steps: its partition's contact sets and force buffer,
+/// its share of the wall contacts, link forces and integration sums, and the
+/// first failure it saw. Partial results are reduced in worker order, so a
+/// run repeats bit for bit for a given thread count.
+#include <cstdint>
+#include <string>
+#include <vector>
+
+#include "micro/contact.hpp"
+#include "micro/scene.hpp"
+
+namespace gabion::micro {
+
+/// Touching pairs evaluated together by the vectorised contact law.
+constexpr std::size_t kChunk = 128;
+
+/// The contacts of one partition of the neighbour list that touched at one
+/// step, in list order: the list index k of the pair and its history (shear
+/// spring, plastic overlap, dashpot force). Only touching pairs have an
+/// entry; a pair absent from the last step's set starts from a zero history.
+struct ContactSet {
+  std::vector<std::uint32_t> k;
+  std::vector<double> ux, uy, uz, plastic, viscous;  // plastic/viscous: only when a material uses them
+  std::size_t n = 0;
+  /// Room for m contacts (n is unchanged). Sizes grow by a quarter: the
+  /// count changes slowly from step to step, and two sets per partition are
+  /// kept, so a doubling would waste memory for the whole run.
+  void ensure(std::size_t m, bool with_plastic, bool with_viscous) {
+    if (k.size() >= m) return;
+    const std::size_t size = std::max(m, k.size() + k.size() / 4 + kChunk);
+    k.resize(size);
+    for (auto* v : {&ux, &uy, &uz}) v->resize(size);
+    if (with_plastic) plastic.resize(size);
+    if (with_viscous) viscous.resize(size);
+  }
+};
+
+/// A worker's sums over its free spheres in the integration.
+struct SphereSums {
+  double local = 0.0, ke_t = 0.0, ke_r = 0.0, pe = 0.0, finite = 0.0, max_d2 = 0.0;
+};
+
+/// A link that broke at this step (micro/links.hpp).
+struct LinkEvent {
+  double time_s = 0.0;
+  std::size_t link = 0;
+  Vec3 position_m = Vec3::Zero();  ///< midpoint of its two particles
+};
+
+struct WorkerScratch {
+  // contact kernel: the force buffer for partners beyond the particles of
+  // its partition (none for the last partition) and the band [lo, hi] of it
+  // written; the contact sets (the last step's and this step's); a chunk of
+  // touching pairs (+ one list row)
+  std::vector<double> fx, fy, fz, tx, ty, tz;
+  std::uint32_t lo = 0, hi = 0;
+  ContactSet sets[2];
+  std::vector<std::uint32_t> touch_i, touch_k;
+  ContactEnergy energy;
+  std::size_t contacts = 0;
+  bool failed = false;
+  std::uint32_t fail_i = 0, fail_j = 0;
+  double fail_ratio = 0.0;
+  // walls: the contacts of this worker's particle range
+  std::vector<Vec3> wall_force;  // per wall, force exerted on it (N)
+  ContactEnergy wall_energy;
+  double wall_work = 0.0;
+  std::size_t wall_contacts = 0;
+  bool wall_failed = false;  // the candidate that overlaps most: particle, wall, overlap / radius
+  std::uint32_t wall_fail_i = 0;
+  std::size_t wall_fail_wall = 0;
+  double wall_fail_ratio = 0.0;
+  // links of this worker's range
+  double link_elastic = 0.0, link_rupture = 0.0;
+  std::vector<LinkEvent> link_events;
+  // integration of the free spheres of its partition
+  SphereSums spheres;
+};
+
+}  // namespace gabion::micro
