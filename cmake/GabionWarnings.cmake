@@ -13,6 +13,9 @@ if(GABION_NATIVE)
   check_cxx_compiler_flag(-march=native GABION_HAS_MARCH_NATIVE)
   if(GABION_HAS_MARCH_NATIVE)
     target_compile_options(gabion_options INTERFACE -march=native)
+    # (tests that pin bit patterns need to know: the compiler fuses
+    # multiply-adds where the CPU has them, so native bits depend on the CPU)
+    target_compile_definitions(gabion_options INTERFACE GABION_NATIVE_BUILD=1)
     # GCC 12 reports Eigen's AVX-512 intrinsics (avx512fintrin.h, _mm512_undefined)
     # as "used uninitialized" once inlined into our code: a false positive of
     # that header. The portable CI build (GABION_NATIVE=OFF, -Werror) keeps

@@ -59,7 +59,7 @@ Collision headOn(double r1, double r2, double zeta, double k2 = 1e5) {
   for (int k = 0; k < 3; ++k) {
     SphereSpec f;
     f.radius_m = r1;
-    f.center_m = Vec3(1.0 + 0.1 * k, 1.0, 1.0);
+    f.center_m = Vec3(10.0 + 0.1 * k, 10.0, 10.0);
     f.fixed = true;
     s.spheres.push_back(f);
   }
@@ -80,8 +80,11 @@ Collision headOn(double r1, double r2, double zeta, double k2 = 1e5) {
   return c;
 }
 
+// Equal radii; 1.9 r1 (same size class as r1) and 2.1 r1 (the next class:
+// found through the larger class's grid); a sphere 200 times larger (1:200,
+// a netting node against a boulder).
 TEST(MicroEngine, HeadOnElasticContactDurationAndRestitution) {
-  for (const double r2 : {0.01, 0.05}) {
+  for (const double r2 : {0.01, 0.019, 0.021, 0.05, 2.0}) {
     const double m1 = sphereMass(0.01), m2 = sphereMass(r2);
     const double mstar = m1 * m2 / (m1 + m2);
     const Collision c = headOn(0.01, r2, 0.0);

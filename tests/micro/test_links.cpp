@@ -1,0 +1,197 @@
+// The link stage and contact groups: a chain's analytic frequency, partners
+// that survive the re-sort, rupture recorded once, pairs that never touch.
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <random>
+
+#include "micro/engine.hpp"
+
+namespace {
+
+using gabion::micro::Engine;
+using gabion::micro::LinkSpec;
+using gabion::micro::Material;
+using gabion::micro::Scene;
+using gabion::micro::SphereSpec;
+using gabion::micro::StepStatus;
+using gabion::micro::Vec3;
+constexpr double kPi = 3.14159265358979323846;
+
+Material rock() {
+  Material m;
+  m.name = "rock";
+  m.density_kg_m3 = 2500;
+  m.normal_stiffness_N_m = 1e5;
+  m.shear_stiffness_N_m = 2.5e4;
+  m.friction = 0.5;
+  return m;
+}
+
+SphereSpec sphere(const Vec3& c, double r, bool fixed = false) {
+  SphereSpec s;
+  s.center_m = c;
+  s.radius_m = r;
+  s.fixed = fixed;
+  return s;
+}
+
+LinkSpec link(std::size_t a, std::size_t b, double k, double rest, double rupture = INFINITY) {
+  LinkSpec l;
+  l.a = a;
+  l.b = b;
+  l.law.stiffness_N_m = k;
+  l.law.rest_length_m = rest;
+  l.law.rupture_strain = rupture;
+  return l;
+}
+
+// N free masses between two fixed ends, joined by springs k: the lowest
+// longitudinal mode has omega_1 = 2 sqrt(k / m) sin(pi / (2 (N + 1))). The
+// chain starts in that mode's shape at rest; the middle mass crosses its rest
+// position every half period. Leapfrog's period error is (omega dt)^2 / 24 ~ 2e-4 here.
+TEST(MicroLinks, ChainOscillatesAtItsAnalyticFrequency) {
+  constexpr int N = 5;
+  const double k = 1e3, L0 = 0.05, r = 0.005, amp = 1e-3;
+  Scene s;
+  s.gravity_m_s2.setZero();
+  s.materials = {rock()};
+  s.spheres.push_back(sphere(Vec3(0, 0, 0), r, true));
+  for (int j = 1; j <= N; ++j)
+    s.spheres.push_back(sphere(Vec3(j * L0 + amp * std::sin(j * kPi / (N + 1)), 0, 0), r));
+  s.spheres.push_back(sphere(Vec3((N + 1) * L0, 0, 0), r, true));
+  for (int j = 0; j <= N; ++j) s.links.push_back(link(j, j + 1, k, L0));
+  Engine e(s, 1);
+  const double m = 2500.0 * 4.0 / 3.0 * kPi * r * r * r;
+  const double omega = 2.0 * std::sqrt(k / m) * std::sin(kPi / (2.0 * (N + 1)));
+  e.setDt(2.0 * kPi / omega / 400.0);
+  ASSERT_LT(e.dt(), e.criticalDt());
+  const int mid = (N + 1) / 2;
+  double last = e.body(mid).position_m.x() - mid * L0, first_cross = -1.0, last_cross = -1.0;
+  int crossings = 0;
+  while (crossings < 9) {
+    ASSERT_EQ(e.step(false), StepStatus::Ok) << e.failure();
+    const double u = e.body(mid).position_m.x() - mid * L0;
+    if ((u > 0) != (last > 0)) {
+      // linear interpolation of the crossing time
+      const double t = e.time() - e.dt() * u / (u - last);
+      if (crossings == 0) first_cross = t;
+      last_cross = t;
+      ++crossings;
+    }
+    last = u;
+  }
+  const double period = 2.0 * (last_cross - first_cross) / (crossings - 1);
+  EXPECT_NEAR(period, 2.0 * kPi / omega, 1e-3 * 2.0 * kPi / omega);
+  EXPECT_EQ(e.contactCount(), 0u);  // linked neighbours never touch through the contact law
+}
+
+// A gas of spheres in a box with random links: the re-sorts at each list
+// rebuild move the particles in memory, but every link keeps its partners.
+// The tension of each link, computed by the engine at a step, equals
+// k (|x_b - x_a| - L0) from the positions of the spheres the link names,
+// taken by their input index before that step.
+TEST(MicroLinks, ResortingKeepsEveryLinksPartners) {
+  Scene s;
+  s.gravity_m_s2.setZero();
+  s.materials = {rock()};
+  std::mt19937 rng(7);
+  std::uniform_real_distribution<double> jitter(-0.002, 0.002), vel(-0.5, 0.5);
+  for (int i = 0; i < 300; ++i) {  // a jittered lattice, 0.04 m apart
+    const Vec3 c(0.03 + 0.04 * (i % 7), 0.03 + 0.04 * ((i / 7) % 7), 0.02 + 0.04 * (i / 49));
+    SphereSpec sp = sphere(c + Vec3(jitter(rng), jitter(rng), jitter(rng)), i % 10 == 0 ? 0.008 : 0.003);
+    sp.velocity_m_s = Vec3(vel(rng), vel(rng), vel(rng));
+    s.spheres.push_back(sp);
+  }
+  std::uniform_int_distribution<std::size_t> pick(0, 299);
+  for (int l = 0; l < 60; ++l) {
+    const std::size_t a = pick(rng), b = (a + 1 + pick(rng) % 298) % 300;
+    s.links.push_back(link(a, b, 10.0, 0.1));
+  }
+  for (int f = 0; f < 3; ++f) {  // a closed box
+    gabion::micro::WallSpec lo, hi;
+    lo.normal = Vec3::Unit(f);
+    hi.point_m = Vec3::Constant(0.3);
+    hi.normal = -Vec3::Unit(f);
+    s.walls.push_back(lo);
+    s.walls.push_back(hi);
+  }
+  Engine e(s, 2);
+  e.setDt(0.2 * e.criticalDt());
+  for (int n = 0; n < 3000; ++n) {
+    std::vector<Vec3> x(300);
+    for (std::size_t i = 0; i < 300; ++i) x[i] = e.body(i).position_m;
+    ASSERT_EQ(e.step(false), StepStatus::Ok) << e.failure();
+    if (n % 100 != 99) continue;
+    for (std::size_t l = 0; l < e.linkCount(); ++l) {
+      const auto [a, b] = e.linkEnds(l);
+      ASSERT_EQ(a, s.links[l].a);
+      ASSERT_EQ(b, s.links[l].b);
+      EXPECT_NEAR(e.linkTension(l), 10.0 * ((x[b] - x[a]).norm() - 0.1), 1e-12) << "link " << l;
+    }
+  }
+  EXPECT_GE(e.neighbourRebuilds(), 3u);
+  EXPECT_EQ(e.sizeClassCount(), 2);
+}
+
+// Two spheres fly apart on a link that breaks at 10 % strain: once broken it
+// stops acting (the spheres then move at constant velocity), its event is
+// recorded once (time, link, midpoint), and the energy it held is counted as
+// dissipated (the balance holds).
+TEST(MicroLinks, BrokenLinkStopsActingAndIsRecordedOnce) {
+  Scene s;
+  s.gravity_m_s2.setZero();
+  s.materials = {rock()};
+  SphereSpec a = sphere(Vec3(0, 0, 0), 0.005), b = sphere(Vec3(0.05, 0, 0), 0.005);
+  a.velocity_m_s = Vec3(-1, 0, 0);
+  b.velocity_m_s = Vec3(1, 0, 0);
+  s.spheres = {a, b};
+  s.links = {link(0, 1, 50.0, 0.05, 0.1)};
+  Engine e(s, 1);
+  e.setDt(0.05 * e.criticalDt());
+  while (!e.linkBroken(0)) {
+    ASSERT_EQ(e.step(true), StepStatus::Ok) << e.failure();
+    ASSERT_LT(e.time(), 1.0) << "the link never broke";
+  }
+  ASSERT_EQ(e.linkEvents().size(), 1u);
+  const auto ev = e.linkEvents()[0];
+  EXPECT_EQ(ev.link, 0u);
+  EXPECT_NEAR(ev.time_s, e.time() - e.dt(), 1e-12);
+  EXPECT_NEAR(ev.position_m.x(), 0.025, 1e-9);  // symmetric: the midpoint stays put
+  const Vec3 v = e.body(1).velocity_m_s;
+  for (int n = 0; n < 1000; ++n) ASSERT_EQ(e.step(n == 999), StepStatus::Ok);
+  EXPECT_EQ(e.body(1).velocity_m_s, v);
+  EXPECT_EQ(e.linkTension(0), 0.0);
+  EXPECT_EQ(e.linkEvents().size(), 1u);
+  EXPECT_GT(e.energy().link_rupture_dissipation_J, 0.0);
+  EXPECT_LT(std::fabs(e.energy().balance_rel_error), 1e-3);
+}
+
+// Overlapping spheres in a pair of groups that never touch, and an
+// overlapping linked pair (the link at its rest length): no force at all.
+// The same pair in touching groups is pushed apart (the control).
+TEST(MicroLinks, ExcludedPairsFeelNoForce) {
+  for (const bool excluded : {true, false}) {
+    Scene s;
+    s.gravity_m_s2.setZero();
+    s.materials = {rock()};
+    SphereSpec a = sphere(Vec3(0, 0, 0), 0.01), b = sphere(Vec3(0.017, 0, 0), 0.01);
+    a.group = 1;
+    b.group = 2;
+    s.spheres = {a, b, sphere(Vec3(1, 0, 0), 0.01), sphere(Vec3(1.017, 0, 0), 0.01)};
+    s.links = {link(2, 3, 1e3, (s.spheres[3].center_m - s.spheres[2].center_m).norm())};
+    if (excluded) s.no_contact_groups = {{1, 2}};
+    Engine e(s, 1);
+    e.setDt(0.1 * e.criticalDt());
+    for (int n = 0; n < 100; ++n) ASSERT_EQ(e.step(false), StepStatus::Ok);
+    EXPECT_EQ(e.body(2).velocity_m_s.norm(), 0.0);  // the linked pair never touches
+    if (excluded) {
+      EXPECT_EQ(e.body(0).velocity_m_s.norm(), 0.0);
+      EXPECT_EQ(e.contactCount(), 0u);
+    } else {
+      EXPECT_LT(e.body(0).velocity_m_s.x(), 0.0);
+    }
+  }
+}
+
+}  // namespace

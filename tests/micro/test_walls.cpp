@@ -1,0 +1,172 @@
+// Programmed walls against their programs' closed forms: the integrated
+// motion, a change of time step, the force servo, bounded plates.
+#include <gtest/gtest.h>
+
+#include <cmath>
+
+#include "micro/engine.hpp"
+#include "micro/walls.hpp"
+#include "bridge/errors.hpp"
+
+namespace {
+
+using gabion::micro::Engine;
+using gabion::micro::Material;
+using gabion::micro::Scene;
+using gabion::micro::SphereSpec;
+using gabion::micro::StepStatus;
+using gabion::micro::Vec3;
+using gabion::micro::WallProgram;
+using gabion::micro::WallSpec;
+constexpr double kPi = 3.14159265358979323846;
+
+Material rock(double local_damping = 0.0) {
+  Material m;
+  m.name = "rock";
+  m.density_kg_m3 = 2500;
+  m.normal_stiffness_N_m = 1e5;
+  m.shear_stiffness_N_m = 2.5e4;
+  m.friction = 0.5;
+  m.local_damping = local_damping;
+  return m;
+}
+
+SphereSpec sphere(const Vec3& c, double r = 0.01) {
+  SphereSpec s;
+  s.center_m = c;
+  s.radius_m = r;
+  return s;
+}
+
+WallSpec floorWall(const std::string& name, const WallProgram& program) {
+  WallSpec w;
+  w.name = name;
+  w.point_m = Vec3::Zero();
+  w.normal = Vec3::UnitZ();
+  w.program = program;
+  return w;
+}
+
+// A ball on a plate vibrating vertically (0.5 mm at 20 Hz: peak acceleration
+// 7.9 m/s^2 < g, so the ball stays on it). The plate's position after 10^5
+// steps, with the step changed by a factor 0.37 half-way, equals the
+// program's closed form to round-off: each step adds the exact displacement
+// of the program over that step (sum of 10^5 increments of at most 1e-6 m:
+// error ~ 1e5 x 1e-16 x 5e-4 m ~ 1e-14 m; the bound is 1e-12 m).
+TEST(MicroWalls, VibratingPlateFollowsItsProgramThroughAChangeOfTimeStep) {
+  WallProgram vib;
+  vib.kind = WallProgram::Kind::Sinusoid;
+  vib.direction = Vec3::UnitZ();
+  vib.amplitude_m = 5e-4;
+  vib.frequency_hz = 20.0;
+  vib.phase_rad = 0.3;
+  Scene s;
+  s.materials = {rock(0.1)};
+  s.spheres = {sphere(Vec3(0, 0, 0.0099))};
+  s.walls = {floorWall("plate", vib)};
+  Engine e(s, 1);
+  e.setDt(0.05 * e.criticalDt());
+  const double w = 2.0 * kPi * vib.frequency_hz;
+  for (int n = 0; n < 100000; ++n) {
+    if (n == 50000) e.setDt(0.37 * e.dt());
+    ASSERT_EQ(e.step(n % 1000 == 0), StepStatus::Ok) << e.failure();
+  }
+  // wallPosition: the point when the last force was evaluated, at t - dt
+  const double t = e.time() - e.dt();
+  const double expected = vib.amplitude_m * (std::sin(w * t + vib.phase_rad) - std::sin(vib.phase_rad));
+  EXPECT_NEAR(e.wallPosition(0).z(), expected, 1e-12);
+  EXPECT_EQ(e.wallPosition(0).x(), 0.0);
+  // the ball rides on the plate: its centre stays within a radius of it
+  EXPECT_NEAR(e.body(0).position_m.z() - e.wallPosition(0).z(), 0.01, 1e-3);
+  EXPECT_LT(std::fabs(e.energy().balance_rel_error), 1e-2);
+}
+
+// A loading-unloading table: v(t) piecewise linear; the displacement is its
+// integral (piecewise quadratic), here checked at the end of each segment.
+TEST(MicroWalls, VelocityTableDisplacementIsItsIntegral) {
+  WallProgram table;
+  table.kind = WallProgram::Kind::VelocityTable;
+  table.table_time_s = {0.0, 0.01, 0.02, 0.03};
+  table.table_velocity_m_s = {Vec3(0, 0, 0), Vec3(0, 0, -0.1), Vec3(0, 0, -0.1), Vec3(0, 0, 0.1)};
+  const auto D = [&](double t) { return gabion::micro::programDisplacement(table, 0.0, t).z(); };
+  EXPECT_NEAR(D(0.01), -0.5e-3, 1e-15);
+  EXPECT_NEAR(D(0.02), -1.5e-3, 1e-15);
+  EXPECT_NEAR(D(0.03), -1.5e-3, 1e-15);          // ramps -0.1 -> 0.1: no net displacement
+  EXPECT_NEAR(D(0.04), -1.5e-3 + 1e-3, 1e-15);   // the last velocity holds
+  // additive over any split of the interval
+  EXPECT_NEAR(gabion::micro::programDisplacement(table, 0.0, 0.017).z() +
+                  gabion::micro::programDisplacement(table, 0.017, 0.035).z(),
+              D(0.035), 1e-16);
+
+  Scene s;
+  s.materials = {rock()};
+  s.gravity_m_s2.setZero();
+  s.spheres = {sphere(Vec3(1, 1, 1))};
+  s.walls = {floorWall("lid", table)};
+  Engine e(s, 1);
+  e.setDt(1e-5);
+  while (e.time() < 0.04 - 1e-12) ASSERT_EQ(e.step(false), StepStatus::Ok);
+  EXPECT_NEAR(e.wallPosition(0).z(), D(e.time() - e.dt()), 1e-12);
+}
+
+// A servo lid presses a sphere on a fixed floor: the normal force on the lid
+// reaches the target and holds it within 1 % (an elastic sample, damped).
+TEST(MicroWalls, ServoHoldsTheTargetForceOnAnElasticSample) {
+  WallProgram servo;
+  servo.kind = WallProgram::Kind::Servo;
+  servo.target_force_N = 20.0;
+  servo.max_speed_m_s = 0.05;
+  servo.gain_m_s_N = 2e-3;
+  Scene s;
+  s.materials = {rock(0.3)};
+  s.gravity_m_s2.setZero();
+  s.spheres = {sphere(Vec3(0, 0, 0.01))};
+  WallSpec lid = floorWall("lid", servo);
+  lid.point_m = Vec3(0, 0, 0.021);  // 1 mm above the sphere
+  lid.normal = -Vec3::UnitZ();
+  s.walls = {floorWall("floor", WallProgram{}), lid};
+  Engine e(s, 1);
+  e.setDt(0.1 * e.criticalDt());
+  while (e.time() < 0.3) ASSERT_EQ(e.step(false), StepStatus::Ok) << e.failure();
+  const double lid_force = -e.wallForce(1).dot(-Vec3::UnitZ());
+  EXPECT_NEAR(lid_force, 20.0, 0.2);
+  EXPECT_NEAR(e.wallForce(0).z(), -20.0, 0.2);  // the floor carries the same
+  // and the lid has come down by the gap plus the two overlaps (k = 1e5 N/m each)
+  EXPECT_NEAR(e.wallPosition(1).z(), 0.021 - 1e-3 - 2.0 * 20.0 / 1e5, 4e-6);
+}
+
+// A plate of 0.1 x 0.1 m: a sphere dropped over it comes to rest on it; one
+// dropped beside it falls past.
+TEST(MicroWalls, BoundedPlateHoldsWhatIsAboveItOnly) {
+  Scene s;
+  s.materials = {rock(0.3)};
+  s.spheres = {sphere(Vec3(0.02, -0.03, 0.02)), sphere(Vec3(0.08, 0.0, 0.02))};
+  WallSpec plate = floorWall("plate", WallProgram{});
+  plate.bounded = true;
+  plate.axis_u = Vec3::UnitX();
+  plate.half_u_m = 0.05;
+  plate.half_v_m = 0.05;
+  s.walls = {plate};
+  Engine e(s, 1);
+  e.setDt(0.2 * e.criticalDt());
+  while (e.time() < 0.3) ASSERT_EQ(e.step(false), StepStatus::Ok) << e.failure();
+  EXPECT_NEAR(e.body(0).position_m.z(), 0.01, 1e-3);
+  EXPECT_LT(e.body(1).position_m.z(), -0.2);
+  const double weight = 2500.0 * 4.0 / 3.0 * kPi * 1e-6 * 9.81;
+  EXPECT_NEAR(e.wallForce(0).z(), -weight, 1e-3 * weight);
+}
+
+TEST(MicroWalls, WallsAreFoundByName) {
+  Scene s;
+  s.materials = {rock()};
+  s.spheres = {sphere(Vec3(0, 0, 1))};
+  s.walls = {floorWall("", WallProgram{}), floorWall("lid", WallProgram{})};
+  Engine e(s, 1);
+  EXPECT_EQ(e.wallName(0), "wall_0");
+  EXPECT_EQ(e.wallIndex("lid"), 1u);
+  EXPECT_EQ(e.wallIndex("none"), 2u);
+  s.walls[0].name = "lid";
+  EXPECT_THROW(Engine(s, 1), gabion::bridge::InputError);
+}
+
+}  // namespace
