@@ -145,16 +145,34 @@ json material(const PipelineCase& c, double friction) {
   return m;
 }
 
-json wall(const Eigen::Vector3d& p, const Eigen::Vector3d& n, const Eigen::Vector3d& v = Eigen::Vector3d::Zero()) {
-  json w = {{"point_m", {p.x(), p.y(), p.z()}}, {"normal", {n.x(), n.y(), n.z()}}, {"material", "wall"}};
+json wall(const std::string& name, const Eigen::Vector3d& p, const Eigen::Vector3d& n,
+          const Eigen::Vector3d& v = Eigen::Vector3d::Zero()) {
+  json w = {
+      {"name", name}, {"point_m", {p.x(), p.y(), p.z()}}, {"normal", {n.x(), n.y(), n.z()}}, {"material", "wall"}};
   if (v.squaredNorm() > 0) w["velocity_m_s"] = {v.x(), v.y(), v.z()};
   return w;
 }
 
-/// The four lateral walls and the floor of the cell (indices 0..4).
+/// The lateral walls of the cell, each with its inward normal; the CC test
+/// reads their series by these names.
+struct LateralWall {
+  const char* name;
+  Eigen::Vector3d normal;
+};
+const LateralWall kLateralWalls[4] = {
+    {"x_minus", {1, 0, 0}}, {"x_plus", {-1, 0, 0}}, {"y_minus", {0, 1, 0}}, {"y_plus", {0, -1, 0}}};
+constexpr const char* kLid = "lid";
+
+/// The floor and the four lateral walls of the cell (named, so the results
+/// are read by name: docs/pipeline.md).
 json cellWalls(double a) {
-  return json::array({wall({0, 0, 0}, {0, 0, 1}), wall({0, 0, 0}, {1, 0, 0}), wall({a, 0, 0}, {-1, 0, 0}),
-                      wall({0, 0, 0}, {0, 1, 0}), wall({0, a, 0}, {0, -1, 0})});
+  json walls = json::array({wall("z_minus", {0, 0, 0}, {0, 0, 1})});
+  for (const auto& w : kLateralWalls) {
+    // A wall facing -x or -y sits at the far side of the cell.
+    const Eigen::Vector3d p(w.normal.x() < 0 ? a : 0.0, w.normal.y() < 0 ? a : 0.0, 0.0);
+    walls.push_back(wall(w.name, p, w.normal));
+  }
+  return walls;
 }
 
 json microScene(const PipelineCase& c, const std::vector<Eigen::Vector3d>& centers, const std::vector<double>& radii,
@@ -186,13 +204,6 @@ std::vector<Eigen::Vector3d> frame(const bridge::H5Reader& h5, const std::string
   return out;
 }
 
-std::vector<Eigen::Vector3d> series3(const bridge::H5Reader& h5, const std::string& ds) {
-  const auto v = h5.read(ds);
-  std::vector<Eigen::Vector3d> out(v.size() / 3);
-  for (std::size_t i = 0; i < out.size(); ++i) out[i] = Eigen::Vector3d(v[3 * i], v[3 * i + 1], v[3 * i + 2]);
-  return out;
-}
-
 std::string fmt(double x, int digits = 4) {
   std::ostringstream os;
   os << std::setprecision(digits) << x;
@@ -207,12 +218,13 @@ struct CcCurves {
 };
 
 CcCurves ccCurves(const PipelineCase& c, const fs::path& h5file, double height_m) {
-  const bridge::H5Reader h5(h5file);
-  const auto lid_p = series3(h5, "/series/wall_5_position_m");
-  const auto lid_f = series3(h5, "/series/wall_5_force_N");
-  std::vector<std::vector<Eigen::Vector3d>> side(4);
-  for (int w = 1; w <= 4; ++w) side[w - 1] = series3(h5, "/series/wall_" + std::to_string(w) + "_force_N");
-  const Eigen::Vector3d side_normal[4] = {{1, 0, 0}, {-1, 0, 0}, {0, 1, 0}, {0, -1, 0}};
+  const bridge::WallSeries lid = bridge::readWallSeriesH5(h5file, kLid);
+  const std::vector<Eigen::Vector3d>& lid_p = lid.position_m;
+  const std::vector<Eigen::Vector3d>& lid_f = lid.force_N;
+  std::vector<std::vector<Eigen::Vector3d>> side;
+  for (const auto& w : kLateralWalls) side.push_back(bridge::readWallSeriesH5(h5file, w.name).force_N);
+  for (const auto& f : side)
+    if (f.size() != lid_f.size()) throw std::logic_error("pipeline: the CC walls' series differ in length");
 
   // The bodies push the lid up (+z) while it moves down: the force on the
   // lid along +z is the axial force.
@@ -228,10 +240,10 @@ CcCurves ccCurves(const PipelineCase& c, const fs::path& h5file, double height_m
   CcCurves out;
   out.seating_m = lid_p.front().z() - lid_p[first].z();
   const double scale = c.edge_m / height_m;  // shortening of a cube cell of edge a at the same strain
-  out.axial.source = h5file.string() + " (wall 5)";
+  out.axial.source = lid.source;
   out.axial.x_name = "displacement_m";
   out.axial.y_name = "force_N";
-  out.lateral.source = h5file.string() + " (walls 1-4 against wall 5)";
+  out.lateral.source = h5file.string() + " (walls x_minus, x_plus, y_minus, y_plus against the lid)";
   out.lateral.x_name = "axial_force_N";
   out.lateral.y_name = "lateral_force_N";
   std::vector<std::pair<double, double>> lateral;
@@ -240,7 +252,7 @@ CcCurves ccCurves(const PipelineCase& c, const fs::path& h5file, double height_m
     out.axial.y.push_back(lid_f[i].z());
     double s = 0.0;
     // The bodies push each lateral wall outwards, against its inward normal.
-    for (int w = 0; w < 4; ++w) s += -side[w][i].dot(side_normal[w]);
+    for (std::size_t w = 0; w < 4; ++w) s += -side[w][i].dot(kLateralWalls[w].normal);
     lateral.emplace_back(lid_f[i].z(), 0.25 * s);
   }
   // The lateral law is a proportionality: order the points by axial force so
@@ -297,10 +309,10 @@ bridge::RunOutcome runStages(const JsonDocument& doc, const bridge::RunContext& 
   for (std::size_t i = 0; i < n; ++i) top = std::max(top, settled[i].z() + packing.radii_m[i]);
   const double porosity = 1.0 - solid / (a * a * top);
 
-  // 3. CC test: the lid (wall 5) comes down on the settled grains.
+  // 3. CC test: the lid comes down on the settled grains.
   const double duration = c.strain * top / c.lid_velocity_m_s;
   json walls = cellWalls(a);
-  walls.push_back(wall({0, 0, top}, {0, 0, -1}, {0, 0, -c.lid_velocity_m_s}));
+  walls.push_back(wall(kLid, {0, 0, top}, {0, 0, -1}, {0, 0, -c.lid_velocity_m_s}));
   const fs::path cc_dir = ctx.outdir / "2_compression";
   JsonDocument cc_doc = stageCase(cc_dir, microScene(c, settled, packing.radii_m, walls, duration, duration / c.samples, c.friction));
   runStage("confined compression (micro.scene)", "micro.scene", cc_doc, ctx, cc_dir);

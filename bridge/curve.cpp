@@ -1,5 +1,7 @@
 #include "bridge/curve.hpp"
 
+#include <H5Cpp.h>
+
 #include <cerrno>
 #include <cmath>
 #include <cstdlib>
@@ -16,6 +18,10 @@ namespace gabion::bridge {
 namespace fs = std::filesystem;
 
 namespace {
+
+// micro.scene results keep one group per named wall here (docs/formats.md).
+constexpr const char* kWallsGroup = "/series/walls";
+constexpr const char* kSceneFormat = "gabion.micro.scene/2";
 
 std::string trim(const std::string& s) {
   const auto b = s.find_first_not_of(" \t\r\n");
@@ -194,31 +200,99 @@ Curve readCurveH5(const fs::path& file, const std::string& x_dataset, const std:
   return c;
 }
 
-Curve readWallCurveH5(const fs::path& file, int wall, const Vec3& direction, const CurveRequest& request) {
-  H5Reader h5(file);
-  const std::string pos = "/series/wall_" + std::to_string(wall) + "_position_m";
-  const std::string force = "/series/wall_" + std::to_string(wall) + "_force_N";
-  for (const auto& ds : {pos, force}) {
-    if (!h5.has(ds)) throw InputError(file.string(), ds, "no such dataset (wall " + std::to_string(wall) + ")");
-    const auto d = h5.dims(ds);
-    if (d.size() != 2 || d[1] != 3) throw InputError(file.string(), ds, "must be an (n, 3) dataset");
+bool isWallName(const std::string& name) {
+  return !name.empty() && name.find_first_not_of("abcdefghijklmnopqrstuvwxyzABCDEFGHIJKLMNOPQRSTUVWXYZ0123456789_-") ==
+                              std::string::npos;
+}
+
+std::vector<std::string> wallNamesH5(const fs::path& file) {
+  const H5Reader h5(file);  // the file's own errors (missing, not HDF5) come from here
+  if (!h5.has(kWallsGroup)) return {};
+  // H5Reader addresses datasets only; the wall names are the groups' names.
+  std::vector<std::string> names;
+  try {
+    const H5::H5File f(file.string(), H5F_ACC_RDONLY);
+    const H5::Group g = f.openGroup(kWallsGroup);
+    for (hsize_t i = 0; i < g.getNumObjs(); ++i) names.push_back(g.getObjnameByIdx(i));
+  } catch (const H5::Exception& e) {
+    throw InputError(file.string(), kWallsGroup, "cannot list the walls: " + e.getDetailMsg());
   }
+  return names;
+}
+
+WallSeries readWallSeriesH5(const fs::path& file, const std::string& wall) {
+  const H5Reader h5(file);
+  const std::string name = file.string();
+  const std::string walls = kWallsGroup;
+  const std::string group = walls + "/" + wall;
+  if (!isWallName(wall))
+    throw InputError(name, group, "'" + wall + "' is not a wall name (letters, digits, '_' and '-')");
+  const std::string format = h5.attribute("/", "format");
+  const std::string redo = "run the micro case again with this build (docs/formats.md)";
+  if (!h5.has(group)) {
+    const std::string missing = "wall '" + wall + "' not found: ";
+    if (h5.has(walls)) {
+      std::string have;
+      for (const auto& w : wallNamesH5(file)) have += (have.empty() ? "" : ", ") + w;
+      throw InputError(name, group, "no wall named '" + wall + "' in this file (its walls: " + have + ")");
+    }
+    // gabion.micro.scene/1 wrote /series/wall_<i>_force_N by index: say so
+    // rather than "no such dataset".
+    if (format == "gabion.micro.scene/1" || h5.has("/series/wall_0_force_N"))
+      throw InputError(name, group,
+                       missing +
+                           "the file has the index-based wall layout of gabion.micro.scene/1 "
+                           "(/series/wall_<i>_force_N) and no " +
+                           walls + " group, which " + kSceneFormat + " writes with one group per wall name; " + redo);
+    if (format == kSceneFormat)
+      throw InputError(name, group, missing + "the file has no " + walls + " group (the micro case has no walls)");
+    throw InputError(name, group,
+                     missing + "the file has no " + walls + " group: not a " + kSceneFormat + " result (" +
+                         (format.empty() ? std::string("no format attribute") : "format '" + format + "'") + ")");
+  }
+  if (format.rfind("gabion.micro.scene/", 0) == 0 && format != kSceneFormat)
+    throw InputError(name, group,
+                     "the file's format is '" + format + "', this build reads " + kSceneFormat + "; " + redo);
+  WallSeries s;
+  s.source = name + ":" + group;
+  std::size_t n = 0;
+  bool first = true;
+  for (const auto& [field, out] : {std::pair<const char*, std::vector<Vec3>*>{"force_N", &s.force_N},
+                                   {"position_m", &s.position_m},
+                                   {"displacement_m", &s.displacement_m}}) {
+    const std::string ds = group + "/" + field;
+    if (!h5.has(ds))
+      throw InputError(name, ds,
+                       "wall '" + wall + "' has no " + field + " series (a " + kSceneFormat +
+                           " wall has force_N, position_m and displacement_m)");
+    const auto d = h5.dims(ds);
+    if (d.size() != 2 || d[1] != 3) throw InputError(name, ds, "must be an (n, 3) dataset");
+    if (!first && d[0] != n)
+      throw InputError(name, ds,
+                       "has " + std::to_string(d[0]) + " rows, force_N has " + std::to_string(n) +
+                           " (the series of a wall share /series/time_s)");
+    n = d[0];
+    first = false;
+    const auto v = h5.read(ds);
+    out->reserve(n);
+    for (std::size_t i = 0; i < n; ++i) out->emplace_back(v[3 * i], v[3 * i + 1], v[3 * i + 2]);
+  }
+  return s;
+}
+
+Curve readWallCurveH5(const fs::path& file, const std::string& wall, const Vec3& direction,
+                      const CurveRequest& request) {
   const double norm = direction.norm();
-  if (!(norm > 0.0)) throw InputError(file.string(), pos, "wall direction must be a non-zero vector");
+  if (!(norm > 0.0)) throw InputError(file.string(), "", "wall direction must be a non-zero vector");
   const Vec3 d = direction / norm;
-  const auto p = h5.read(pos), f = h5.read(force);
-  if (p.size() != f.size()) throw InputError(file.string(), force, "position and force have different lengths");
+  const WallSeries w = readWallSeriesH5(file, wall);
   Curve c;
-  c.source = file.string() + ":" + pos + "," + force;
+  c.source = w.source;
   c.x_name = request.x_name;
   c.y_name = request.y_name;
-  const std::size_t n = p.size() / 3;
-  for (std::size_t i = 0; i < n; ++i) {
-    const Vec3 pi(p[3 * i], p[3 * i + 1], p[3 * i + 2]);
-    const Vec3 p0(p[0], p[1], p[2]);
-    const Vec3 fi(f[3 * i], f[3 * i + 1], f[3 * i + 2]);
-    c.x.push_back((pi - p0).dot(d));
-    c.y.push_back(-fi.dot(d));
+  for (std::size_t i = 0; i < w.force_N.size(); ++i) {
+    c.x.push_back(w.displacement_m[i].dot(d));
+    c.y.push_back(-w.force_N[i].dot(d));
   }
   validateCurve(c, request, {});
   return c;

@@ -53,12 +53,38 @@ Curve readCurveCsv(const std::filesystem::path& file, const CurveRequest& reques
 Curve readCurveH5(const std::filesystem::path& file, const std::string& x_dataset, const std::string& y_dataset,
                   const CurveRequest& request);
 
-/// Reads the force-displacement curve of wall `wall` from today's micro.scene layout:
-/// `/series/wall_<i>_position_m` and `/series/wall_<i>_force_N`, both (n, 3).
+/// The series of one named wall of a micro.scene result (`gabion.micro.scene/2`),
+/// one vector per series time.
+struct WallSeries {
+  std::string source;                ///< "file:/series/walls/<name>" (for messages)
+  std::vector<Vec3> force_N;         ///< force the bodies exert on the wall (N)
+  std::vector<Vec3> position_m;      ///< the wall's point when that force was evaluated (m)
+  std::vector<Vec3> displacement_m;  ///< position_m minus the initial point (m)
+};
+
+/// True for a wall name micro.scene accepts (it names an HDF5 group): not empty,
+/// letters, digits, '_' and '-' only.
+bool isWallName(const std::string& name);
+
+/// Reads `/series/walls/<wall>/{force_N, position_m, displacement_m}`, each (n, 3),
+/// of a micro.scene result. Throws InputError naming the file and the wall when
+/// the wall is not in the file (the message lists the walls that are), when the
+/// file has the index-based layout of `gabion.micro.scene/1`
+/// (`/series/wall_<i>_force_N`, refused: run the micro case again), when its
+/// `format` attribute names another micro.scene version, or when a dataset is
+/// missing or not (n, 3) with the same n as the others. docs/formats.md.
+WallSeries readWallSeriesH5(const std::filesystem::path& file, const std::string& wall);
+
+/// The names of the walls of a micro.scene result (the groups under `/series/walls`,
+/// sorted by name); empty when the file has none.
+std::vector<std::string> wallNamesH5(const std::filesystem::path& file);
+
+/// The force-displacement curve of the wall named `wall` (readWallSeriesH5):
 /// displacement_m = (p(t) - p(0)) . d and force_N = -F(t) . d, with `direction` the
 /// unit vector d along which the wall is driven and F the force the bodies exert on
 /// the wall, so that a wall pressing into a packing gives a positive curve.
-Curve readWallCurveH5(const std::filesystem::path& file, int wall, const Vec3& direction, const CurveRequest& request);
+Curve readWallCurveH5(const std::filesystem::path& file, const std::string& wall, const Vec3& direction,
+                      const CurveRequest& request);
 
 /// Validates x/y of a curve (finite, order, length, spread); errors name c.source and
 /// the line of the bad point, taken from `lines` (one per point; empty: 1-based index),

@@ -15,6 +15,27 @@ fs::path caseDirectory(const bridge::JsonDocument& doc) {
   return fs::path(doc.file()).parent_path();
 }
 
+WallCurve readWallCurve(const JsonReader& w) {
+  if (w.has("index")) {
+    // Cases written for gabion.micro.scene/1 named walls by their position in
+    // the micro case's "walls"; an unnamed wall is now "wall_<index>".
+    const auto it = w.value().find("index");
+    const bool count = it->is_number_integer() && it->get<long long>() >= 0;
+    const std::string unnamed = count ? "wall_" + std::to_string(it->get<long long>()) : "wall_<index>";
+    w.fail("index",
+           "walls are read by name, not index: give \"name\", the wall's \"name\" in the micro case "
+           "(e.g. \"lid\"; an unnamed wall is \"" +
+               unnamed + "\")");
+  }
+  WallCurve c;
+  c.name = w.string("name");
+  if (!bridge::isWallName(c.name))
+    w.fail("name", "a wall name uses letters, digits, '_' and '-' only (as in the micro case)");
+  c.direction = w.vec3("direction");
+  if (!(c.direction.norm() > 0.0)) w.fail("direction", "must be a non-zero vector");
+  return c;
+}
+
 CurveSource readCurveSource(const JsonReader& r, const CurveDefaults& d, std::size_t index, const fs::path& base_dir) {
   CurveSource s;
   s.pointer = r.pointer();
@@ -39,9 +60,7 @@ CurveSource readCurveSource(const JsonReader& r, const CurveDefaults& d, std::si
   if (auto w = r.optionalObject("wall")) {
     if (r.has("x_dataset") || r.has("y_dataset")) r.fail("wall", "give either \"wall\" or datasets, not both");
     s.kind = CurveSource::Kind::H5Wall;
-    s.wall = static_cast<int>(w->integer("index", 0));
-    s.direction = w->vec3("direction");
-    if (!(s.direction.norm() > 0.0)) w->fail("direction", "must be a non-zero vector");
+    s.wall = readWallCurve(*w);
     if (!d.condition_key.empty() && !s.condition) r.fail(d.condition_key, "required for a wall curve");
     return s;
   }
@@ -59,7 +78,7 @@ bridge::Curve loadCurve(const CurveSource& s) {
     case CurveSource::Kind::H5Datasets:
       return bridge::readCurveH5(s.file, s.x_dataset, s.y_dataset, s.request);
     case CurveSource::Kind::H5Wall:
-      return bridge::readWallCurveH5(s.file, s.wall, s.direction, s.request);
+      return bridge::readWallCurveH5(s.file, s.wall.name, s.wall.direction, s.request);
   }
   return {};
 }

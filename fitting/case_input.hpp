@@ -16,13 +16,23 @@
 
 namespace gabion::fitting {
 
+/// A named wall of a micro.scene result and the direction it is driven in
+/// (bridge::readWallCurveH5).
+struct WallCurve {
+  std::string name;                 ///< the wall's "name" in the micro case (unnamed: "wall_<index>")
+  bridge::Vec3 direction{0, 0, 1};  ///< driving direction (non-zero)
+};
+
+/// Reads a "wall": {"name", "direction"} object. An "index" key (the layout of
+/// gabion.micro.scene/1) is refused with a message that says to name the wall.
+WallCurve readWallCurve(const bridge::JsonReader& w);
+
 /// Where one curve comes from (a case's "curves" entry).
 struct CurveSource {
   std::filesystem::path file;  ///< resolved against the case file's folder
   enum class Kind { Csv, H5Datasets, H5Wall } kind = Kind::Csv;
   std::string x_dataset, y_dataset;  ///< H5Datasets
-  int wall = 0;                      ///< H5Wall: wall index i of /series/wall_<i>_...
-  bridge::Vec3 direction{0, 0, 1};   ///< H5Wall: driving direction
+  WallCurve wall;                    ///< H5Wall: /series/walls/<name>/...
   bridge::CurveRequest request;
   std::string replicate;            ///< replicate label
   std::optional<double> condition;  ///< normal force (N) or velocity (m/s) when given in the case
@@ -39,7 +49,7 @@ struct CurveDefaults {
 };
 
 /// Reads one "curves" entry: {"file", "path", "replicate", "x_column", "y_column",
-/// "x_dataset", "y_dataset", "wall": {"index", "direction"}, <condition key>, "min_points"}.
+/// "x_dataset", "y_dataset", "wall": {"name", "direction"}, <condition key>, "min_points"}.
 CurveSource readCurveSource(const bridge::JsonReader& r, const CurveDefaults& d, std::size_t index,
                             const std::filesystem::path& base_dir);
 /// Reads the curve (throws InputError naming file, line and column).

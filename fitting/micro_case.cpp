@@ -31,8 +31,7 @@ struct MicroParameter {
 /// How the model curve is read from the micro run's result.h5.
 struct ModelCurve {
   bool wall = false;
-  int wall_index = 0;
-  bridge::Vec3 direction{0, 0, 1};
+  WallCurve wall_curve;  ///< when `wall`
   std::string x_dataset, y_dataset;
 };
 
@@ -111,9 +110,7 @@ MicroCase readMicroCase(const bridge::JsonDocument& doc) {
   const JsonReader m = root.object("model_curve");
   if (auto w = m.optionalObject("wall")) {
     c.model.wall = true;
-    c.model.wall_index = static_cast<int>(w->integer("index", 0));
-    c.model.direction = w->vec3("direction");
-    if (!(c.model.direction.norm() > 0.0)) w->fail("direction", "must be a non-zero vector");
+    c.model.wall_curve = readWallCurve(*w);
     if (m.has("x_dataset") || m.has("y_dataset")) m.fail("wall", "give either \"wall\" or datasets, not both");
   } else {
     c.model.x_dataset = m.string("x_dataset", "/curves/axial/displacement_m");
@@ -150,7 +147,7 @@ bridge::Curve readModelCurve(const fs::path& h5, const ModelCurve& m) {
   bridge::CurveRequest req;
   req.min_points = 3;
   req.path = bridge::CurvePath::Cyclic;  // a DEM wall may jitter back by round-off; interpolation checks below
-  return m.wall ? bridge::readWallCurveH5(h5, m.wall_index, m.direction, req)
+  return m.wall ? bridge::readWallCurveH5(h5, m.wall_curve.name, m.wall_curve.direction, req)
                 : bridge::readCurveH5(h5, m.x_dataset, m.y_dataset, req);
 }
 

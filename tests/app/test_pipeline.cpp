@@ -5,6 +5,8 @@
 #include <gtest/gtest.h>
 
 #include <fstream>
+#include <string>
+#include <vector>
 
 #include "bridge/law_file.hpp"
 #include "tests/support/run_gabion.hpp"
@@ -33,6 +35,11 @@ TEST(Pipeline, DefaultCaseRunsEndToEnd) {
 
   const auto s = readJson(out / "summary.json");
   EXPECT_EQ(s.at("status"), "ok");
+  // The CC scene names its walls; the curves are read by those names.
+  const auto cc = readJson(out / "2_compression/case.json");
+  std::vector<std::string> walls;
+  for (const auto& w : cc.at("walls")) walls.push_back(w.at("name"));
+  EXPECT_EQ(walls, (std::vector<std::string>{"z_minus", "x_minus", "x_plus", "y_minus", "y_plus", "lid"}));
   // A settled random packing of spheres in a box: looser than the densest
   // random packing (porosity 0.36) and denser than the loose cloud (0.75).
   const double porosity = s.at("cell").at("settled_porosity").get<double>();

@@ -8,6 +8,7 @@
 #include <fstream>
 
 #include "bridge/curve.hpp"
+#include "bridge/errors.hpp"
 #include "bridge/json_reader.hpp"
 #include "fitting/cases.hpp"
 #include "fitting/law_fit.hpp"
@@ -42,7 +43,7 @@ bridge::Curve microWallCurve(double k_n, double f_lim, const fs::path& dir) {
   const auto& scene = kindNamed(micro::caseKinds(), "micro.scene");
   const auto outcome = scene.run(doc, ctx);
   EXPECT_EQ(outcome.status, bridge::RunOutcome::Status::Ok) << outcome.message;
-  return bridge::readWallCurveH5(dir / "result.h5", 1, bridge::Vec3(0, 0, -1), bridge::CurveRequest{});
+  return bridge::readWallCurveH5(dir / "result.h5", "lid", bridge::Vec3(0, 0, -1), bridge::CurveRequest{});
 }
 
 TEST(MicroFit, LawFittedFromMicroCurveReproducesIt) {
@@ -69,6 +70,17 @@ TEST(MicroFit, LawFittedFromMicroCurveReproducesIt) {
   const double rms = std::sqrt(sum / static_cast<double>(model.size()));
   EXPECT_LT(r.best().nrms, 0.01);
   EXPECT_LT(rms, 1.5 * r.best().nrms) << "reported " << r.best().nrms;
+
+  // The run's walls are read by name; another name is an input error that
+  // names the file, the wall asked for and the walls the run has.
+  try {
+    bridge::readWallCurveH5(dir / "result.h5", "roof", bridge::Vec3(0, 0, -1), bridge::CurveRequest{});
+    ADD_FAILURE() << "no error for a wall the run does not have";
+  } catch (const bridge::InputError& e) {
+    EXPECT_EQ(e.file(), (dir / "result.h5").string());
+    EXPECT_NE(e.message().find("no wall named 'roof'"), std::string::npos) << e.what();
+    EXPECT_NE(e.message().find("lid, z_minus"), std::string::npos) << e.what();
+  }
 }
 
 json microFitCase(const fs::path& lab) {
@@ -79,7 +91,7 @@ json microFitCase(const fs::path& lab) {
           {"parameters",
            {{{"name", "k_n"}, {"set", "materials.grain.normal_stiffness_N_m"}, {"bounds", {2e4, 5e5}}},
             {{"name", "F_lim"}, {"set", "materials.grain.normal_force_limit_N"}, {"bounds", {5.0, 60.0}}}}},
-          {"model_curve", {{"wall", {{"index", 1}, {"direction", {0, 0, -1}}}}}},
+          {"model_curve", {{"wall", {{"name", "lid"}, {"direction", {0, 0, -1}}}}}},
           {"curves", {{{"file", lab.string()}}}},
           {"objective", {{"grid_points", 60}}},
           {"search", {{"initial_samples", 6}, {"starts", 2}, {"local_max_evaluations", 40}, {"xtol_rel", 1e-4}}}};
@@ -97,6 +109,25 @@ json runFitMicro(const json& c, const fs::path& out, int threads = 1) {
   const auto outcome = kind.run(run_doc, ctx);
   EXPECT_EQ(outcome.status, bridge::RunOutcome::Status::Ok) << outcome.message;
   return outcome.results.at("fit_micro");
+}
+
+TEST(MicroFit, WallIsNamedNotIndexed) {
+  const auto dir = testing::scratchDir("micro_wall_index");
+  const auto& kind = kindNamed(caseKinds(), "fit.micro");
+  json c = microFitCase(fs::path(GABION_SOURCE_DIR) / "cases/data/fit/micro_wall_lab.csv");
+  kind.check(bridge::JsonDocument(c, (dir / "case.json").string()));
+  // A case of the index-based layout (gabion.micro.scene/1) is told to name the wall.
+  c["model_curve"]["wall"] = {{"index", 1}, {"direction", {0, 0, -1}}};
+  try {
+    kind.check(bridge::JsonDocument(c, (dir / "case.json").string()));
+    ADD_FAILURE() << "an index was accepted";
+  } catch (const bridge::InputError& e) {
+    EXPECT_EQ(e.pointer(), "/model_curve/wall/index");
+    EXPECT_NE(e.message().find("by name"), std::string::npos) << e.what();
+    EXPECT_NE(e.message().find("\"wall_1\""), std::string::npos) << e.what();
+  }
+  c["model_curve"]["wall"] = {{"name", "the lid"}, {"direction", {0, 0, -1}}};
+  EXPECT_THROW(kind.check(bridge::JsonDocument(c, (dir / "case.json").string())), bridge::InputError);
 }
 
 TEST(MicroFit, RecoversContactParametersOfASyntheticLabCurve) {
