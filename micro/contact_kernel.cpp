@@ -152,20 +152,25 @@ void touchingPairs(const KernelIn& in, const std::uint32_t* ci, const std::uint3
     double *__restrict NPL = next.plastic.data(), *__restrict NVI = next.viscous.data();
     const std::uint32_t own_end = out.own_end;
     // This step's contact set: the touching pairs' history, in list order
-    // (with AVX-512, eight pairs at a time by compress-stores: the scalar
-    // appends were a third of the stores of the force loop below).
+    // (with AVX-512, eight pairs at a time: compressed in a register, then
+    // stored whole; the next group overwrites the tail. A compress straight
+    // to memory is microcoded and slow on some cores. The scalar appends
+    // were a third of the stores of the force loop below.)
 #if defined(__AVX512F__) && defined(__AVX512VL__)
     for (std::size_t q = 0; q < nq; q += 8) {
       const std::size_t n = std::min<std::size_t>(8, nq - q);
       const auto valid = static_cast<__mmask8>((1u << n) - 1u);
       const __mmask8 on =
           _mm512_mask_cmp_pd_mask(valid, _mm512_maskz_load_pd(valid, bon + q), _mm512_setzero_pd(), _CMP_GT_OQ);
-      _mm256_mask_compressstoreu_epi32(NK + nn, on, _mm256_maskz_loadu_epi32(valid, ck + q));
-      _mm512_mask_compressstoreu_pd(NUX + nn, on, _mm512_maskz_load_pd(valid, hux + q));
-      _mm512_mask_compressstoreu_pd(NUY + nn, on, _mm512_maskz_load_pd(valid, huy + q));
-      _mm512_mask_compressstoreu_pd(NUZ + nn, on, _mm512_maskz_load_pd(valid, huz + q));
-      if constexpr (kPlastic) _mm512_mask_compressstoreu_pd(NPL + nn, on, _mm512_maskz_load_pd(valid, hpl + q));
-      if constexpr (kViscous) _mm512_mask_compressstoreu_pd(NVI + nn, on, _mm512_maskz_load_pd(valid, hvi + q));
+      _mm256_storeu_si256(reinterpret_cast<__m256i*>(NK + nn),
+                          _mm256_maskz_compress_epi32(on, _mm256_maskz_loadu_epi32(valid, ck + q)));
+      _mm512_storeu_pd(NUX + nn, _mm512_maskz_compress_pd(on, _mm512_maskz_load_pd(valid, hux + q)));
+      _mm512_storeu_pd(NUY + nn, _mm512_maskz_compress_pd(on, _mm512_maskz_load_pd(valid, huy + q)));
+      _mm512_storeu_pd(NUZ + nn, _mm512_maskz_compress_pd(on, _mm512_maskz_load_pd(valid, huz + q)));
+      if constexpr (kPlastic)
+        _mm512_storeu_pd(NPL + nn, _mm512_maskz_compress_pd(on, _mm512_maskz_load_pd(valid, hpl + q)));
+      if constexpr (kViscous)
+        _mm512_storeu_pd(NVI + nn, _mm512_maskz_compress_pd(on, _mm512_maskz_load_pd(valid, hvi + q)));
       nn += static_cast<std::size_t>(__builtin_popcount(on));
     }
 #else
@@ -259,7 +264,7 @@ void contactPartition(Particles& p, const NeighbourList& list, const MaterialLaw
   std::size_t m = 0;
   // Evaluates the first nq collected pairs and keeps the rest for the next chunk.
   const auto flush = [&](std::size_t nq) {
-    next.ensure(next.n + nq, laws.any_plastic, laws.any_viscous);
+    next.ensure(next.n + nq + 8, laws.any_plastic, laws.any_viscous);  // (+ 8: whole-vector stores)
     law(in, ti, tk, nq, hist, out);
     std::copy(ti + nq, ti + m, ti);
     std::copy(tk + nq, tk + m, tk);
