@@ -119,7 +119,7 @@ struct WallSums {
   double fx = 0.0, fy = 0.0, fz = 0.0, work = 0.0;  // force on the wall (N), work of its motion (J)
   double friction = 0.0, plastic = 0.0, viscous = 0.0, elastic = 0.0, contacts = 0.0, bad = 0.0;
 };
-template <bool kMeasure, bool kViscous, bool kPlastic>
+template <bool kMeasure, bool kViscous, bool kPlastic, bool kBounded>
 WallSums wallLanes(const WallLanes& a, const Wall& w, std::size_t k0, std::size_t k1, std::int64_t step,
                    StampedHistory& h) {
   const std::uint32_t* __restrict cand = w.cand.data();
@@ -155,10 +155,13 @@ WallSums wallLanes(const WallLanes& a, const Wall& w, std::size_t k0, std::size_
   for (std::size_t k = k0; k < k1; ++k) {
     const std::uint32_t i = cand[k];
     const double dist = (X[i] - px) * wnx + (Y[i] - py) * wny + (Z[i] - pz) * wnz;
-    const double du = (X[i] - px) * ux_ + (Y[i] - py) * uy_ + (Z[i] - pz) * uz_;
-    const double dv = (X[i] - px) * vx_ + (Y[i] - py) * vy_ + (Z[i] - pz) * vz_;
     const double overlap = R[i] - dist;
-    const bool act = overlap > 0.0 && dist > min_dist && std::fabs(du) <= lim_u && std::fabs(dv) <= lim_v;
+    bool act = overlap > 0.0;
+    if constexpr (kBounded) {
+      const double du = (X[i] - px) * ux_ + (Y[i] - py) * uy_ + (Z[i] - pz) * uz_;
+      const double dv = (X[i] - px) * vx_ + (Y[i] - py) * vy_ + (Z[i] - pz) * vz_;
+      act = act && dist > min_dist && std::fabs(du) <= lim_u && std::fabs(dv) <= lim_v;
+    }
     bad += act && overlap > ratio * R[i] ? 1.0 : 0.0;
     const double li = dist;
     // velocity of the wall's contact point relative to the particle's
@@ -191,11 +194,13 @@ WallSums wallLanes(const WallLanes& a, const Wall& w, std::size_t k0, std::size_
 }
 using WallLanesFn = WallSums (*)(const WallLanes&, const Wall&, std::size_t, std::size_t, std::int64_t,
                                  StampedHistory&);
+template <bool kBounded>
 WallLanesFn wallLanesFor(bool measure, bool viscous, bool plastic) {
-  static constexpr WallLanesFn fns[8] = {wallLanes<false, false, false>, wallLanes<false, false, true>,
-                                         wallLanes<false, true, false>,  wallLanes<false, true, true>,
-                                         wallLanes<true, false, false>,  wallLanes<true, false, true>,
-                                         wallLanes<true, true, false>,   wallLanes<true, true, true>};
+  static constexpr WallLanesFn fns[8] = {
+      wallLanes<false, false, false, kBounded>, wallLanes<false, false, true, kBounded>,
+      wallLanes<false, true, false, kBounded>,  wallLanes<false, true, true, kBounded>,
+      wallLanes<true, false, false, kBounded>,  wallLanes<true, false, true, kBounded>,
+      wallLanes<true, true, false, kBounded>,   wallLanes<true, true, true, kBounded>};
   return fns[(measure ? 4 : 0) + (viscous ? 2 : 0) + (plastic ? 1 : 0)];
 }
 }  // namespace
@@ -208,7 +213,9 @@ void wallPartition(Particles& p, std::vector<Wall>& walls, const MaterialLaws& l
   s.wall_work = 0.0;
   s.wall_contacts = 0;
   s.wall_failed = false;
-  const WallLanesFn lanes = wallLanesFor(measure, laws.any_viscous, laws.any_plastic);
+  // (an infinite wall skips the rectangle test: a compile-time switch)
+  const WallLanesFn infinite = wallLanesFor<false>(measure, laws.any_viscous, laws.any_plastic);
+  const WallLanesFn bounded = wallLanesFor<true>(measure, laws.any_viscous, laws.any_plastic);
   WallLanes in{p, laws, 0, dt, max_overlap_ratio};
   for (std::size_t wi = 0; wi < walls.size(); ++wi) {
     Wall& w = walls[wi];
@@ -216,7 +223,7 @@ void wallPartition(Particles& p, std::vector<Wall>& walls, const MaterialLaws& l
     // candidates are in particle order
     const auto k0 = static_cast<std::size_t>(std::lower_bound(w.cand.begin(), w.cand.end(), b) - w.cand.begin());
     const auto k1 = static_cast<std::size_t>(std::lower_bound(w.cand.begin(), w.cand.end(), e) - w.cand.begin());
-    const WallSums sum = lanes(in, w, k0, k1, step, w.hist);
+    const WallSums sum = (w.bounded ? bounded : infinite)(in, w, k0, k1, step, w.hist);
     s.wall_force[wi] = Vec3(sum.fx, sum.fy, sum.fz);
     s.wall_work += sum.work;
     s.wall_energy.friction_J += sum.friction;
