@@ -21,6 +21,7 @@ all positions from the same generator; no initial spin.
 Contact law and damping are those of the settling scene (generate.py):
 k_n = 1e5 N/m, k_t = 2.5e4 N/m, friction 0.5, Gabion viscous damping ratio
 0.2155 (restitution 0.5); density 2500 kg/m3. dt = 0.15 sqrt(m_4mm / k_n).
+Gabion's overlap stop is raised to 1 x the smaller radius (see write_gabion).
 
 Standard library only. Same seed -> byte-identical files.
 """
@@ -154,8 +155,13 @@ def write_gabion(path, pts, vel, side, steps, dt):
             }
         },
     }
+    # max_overlap_ratio 1 (the largest Gabion accepts, default 0.5): k_n is the
+    # same for every size, so a 70 mm sphere (3.6 kg) landing at 0.5 m/s on a
+    # 4 mm sphere lying on the floor presses it in by more than half its radius
+    # (LIGGGHTS, which has no such stop, shows 0.5 of the radius at step ~1170
+    # and more after; Gabion's default limit stops the run there).
     tail = {"walls": walls,
-            "run": {"duration_s": duration, "dt_s": dt, "output_interval_s": duration}}
+            "run": {"duration_s": duration, "dt_s": dt, "output_interval_s": duration, "max_overlap_ratio": 1.0}}
     with open(path, "w") as f:
         # One sphere per line keeps the file readable and diffable.
         f.write("{\n")
