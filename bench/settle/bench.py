@@ -68,14 +68,21 @@ def loadavg():
 
 
 def cpu_model():
+    """"AMD EPYC (family 25, model 17)": the name alone does not tell Zen 4 from Zen 5."""
+    fields = {}
     try:
         with open("/proc/cpuinfo") as f:
             for line in f:
-                if line.startswith("model name"):
-                    return line.split(":", 1)[1].strip()
+                if not line.strip():
+                    break
+                k, _, v = line.partition(":")
+                fields[k.strip()] = v.strip()
     except OSError:
         pass
-    return "unknown"
+    name = fields.get("model name", "unknown")
+    if "cpu family" in fields and "model" in fields:
+        name += f" (family {fields['cpu family']}, model {fields['model']})"
+    return name
 
 
 def run_measured(cmd, cwd, env, stdout_path, stderr_path, timeout_s):
