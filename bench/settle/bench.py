@@ -1,21 +1,31 @@
 #!/usr/bin/env python3
-"""Settling benchmark: Gabion against LIGGGHTS and Yade on the same scene.
+"""Settling benchmark: Gabion against LIGGGHTS, Yade and the ceiling kernel.
 
-Called by bench/settle/run.sh (see there and docs/performance.md). For each N
-it generates the scene (generate.py, seeded), runs every engine that is
-installed, one after the other, and prints one table:
+Called by bench/settle/run.sh (see there and docs/performance.md). Two scenes:
+
+  settle  N monodisperse spheres settling into an open box (generate.py,
+          shared/reference/bench-settle.md), for each N given;
+  mixed   22,020 spheres of radius 4, 18 and 70 mm in a closed box
+          (generate_mixed.py), Gabion and LIGGGHTS only.
+
+For each scene it generates the input (seeded), runs every engine that is
+installed in turn (round-robin with --repeat) and prints one table per scene:
 
   engine, threads, N, steps, loop wall time, body-steps/s, body-steps/s per
-  core, ratio to LIGGGHTS and to Yade (same N), peak memory (max RSS) and
-  memory per body, the load average before the run, the share of its cores
-  the process got, body-steps per CPU-second of the loop (from a second,
-  1-step run that measures the start-up), and the mean sphere height and
-  translational kinetic energy at the end (physics sanity).
+  core, ratios (to LIGGGHTS, Yade and the ceiling kernel at the same N; in the
+  mixed scene to the best LIGGGHTS setting and to the engine's own settling
+  speed), peak memory (max RSS) and memory per body, the load average before
+  the run, the share of its cores the process got, body-steps per CPU-second
+  of the loop (from a second, 1-step run that measures the start-up), and the
+  mean height, translational kinetic energy and contact count at the end
+  (physics sanity).
 
 The loop time of each engine covers the time steps only:
   Gabion   summary.json results.step_loop_wall_time_s (timed inside the run)
   LIGGGHTS the "Loop time of ..." line printed after `run` (LIGGGHTS' own timer)
   Yade     time.perf_counter() around O.run(steps, True) in yade_settle.py
+  ceiling  the "loop_time" line of ../shared/reference/ceiling/sol.cpp (a
+           steady clock around its step loop), built here into bench/work/ceiling
 Peak memory: "Maximum resident set size" of /usr/bin/time -v (GNU time), or,
 if that is not installed, the ru_maxrss that os.wait4 returns for the child
 (the same kernel counter GNU time reads).
@@ -58,14 +68,21 @@ def loadavg():
 
 
 def cpu_model():
+    """"AMD EPYC (family 25, model 17)": the name alone does not tell Zen 4 from Zen 5."""
+    fields = {}
     try:
         with open("/proc/cpuinfo") as f:
             for line in f:
-                if line.startswith("model name"):
-                    return line.split(":", 1)[1].strip()
+                if not line.strip():
+                    break
+                k, _, v = line.partition(":")
+                fields[k.strip()] = v.strip()
     except OSError:
         pass
-    return "unknown"
+    name = fields.get("model name", "unknown")
+    if "cpu family" in fields and "model" in fields:
+        name += f" (family {fields['cpu family']}, model {fields['model']})"
+    return name
 
 
 def run_measured(cmd, cwd, env, stdout_path, stderr_path, timeout_s):
@@ -122,6 +139,20 @@ def tail(path, n=15):
     except OSError:
         return ""
 
+INSTALL_HINT["ceiling"] = ("the kernel's sources in the repository's sibling shared/reference/ceiling (sol.cpp, "
+                           "gen.py) and g++ with OpenMP; or pass --ceiling-dir PATH")
+
+GRAVITY_M_S2 = 9.81
+SETTLE_DT_S = 4.0e-5
+SETTLE_SPHERE_MASS_KG = 2500.0 * 4.0 / 3.0 * math.pi * 0.010 ** 3
+# The ceiling kernel's compile lines, as in shared/reference/ceiling/README.md.
+CEILING_FLAGS = ["-O3", "-march=native", "-fno-math-errno", "-fno-trapping-math"]
+CEILING_BUILDS = {"sol": CEILING_FLAGS + ["-fopenmp-simd"], "sol_omp": CEILING_FLAGS + ["-fopenmp"]}
+# A LIGGGHTS neighbour setting whose list-based sphere-sphere contact count is
+# below this share of the count found geometrically in its final state misses
+# contacts (LIGGGHTS 3.8's `neighbor ... multi` finds none).
+CONTACTS_FOUND_SHARE = 0.99
+
 
 # ---------------------------------------------------------------- engines
 
@@ -141,7 +172,7 @@ def gabion_available(binary):
 
 def run_gabion(binary, scene, threads, rundir, timeout_s):
     outdir = os.path.join(rundir, "out")
-    duration = repr(scene["steps"] * 4.0e-5)
+    duration = repr(scene["steps"] * scene["dt_s"])
     cmd = [binary, "run", scene["gabion_case"], "-o", outdir, "--threads", str(threads), "-q",
            "--set", f"run.duration_s={duration}", "--set", f"run.output_interval_s={duration}"]
     env = dict(os.environ, OMP_NUM_THREADS=str(threads))
@@ -163,7 +194,9 @@ def run_gabion(binary, scene, threads, rundir, timeout_s):
     res["loop_s"] = float(loop)
     res["steps"] = int(steps)
     res["status"] = s.get("status")
-    res["profile"] = s.get("profile")
+    res["profile"] = s.get("profile") or r.get("profile")
+    contacts = r.get("contacts", s.get("contacts"))
+    res["contacts"] = int(contacts) if contacts is not None else None
     mz, ket = gabion_sanity(s, scene)
     res["mean_z_m"] = mz
     res["ke_t_J"] = ket
@@ -171,26 +204,52 @@ def run_gabion(binary, scene, threads, rundir, timeout_s):
 
 
 def gabion_sanity(summary, scene):
-    """Mean height and translational kinetic energy at the end of a Gabion run.
+    """Centre-of-mass height and translational kinetic energy at the end of a Gabion run.
 
     Both come from the energy terms of summary.json: kinetic_translational_J,
-    and gravity_potential_J = -sum m g.x (zero at the origin), which for N equal
-    spheres under g = 9.81 m/s2 along -z is N m g mean(z)."""
+    and gravity_potential_J = -sum m g.x (zero at the origin), which under
+    g = 9.81 m/s2 along -z is M g z_cm (M the total mass); for N equal spheres
+    z_cm is their mean height."""
     energy = summary.get("energy") or summary.get("results", {}).get("energy") or {}
     ket = energy.get("kinetic_translational_J")
     ket = float(ket) if ket is not None else None
     mz = None
     pe = energy.get("gravity_potential_J")
     if pe is not None:
-        mass = 2500.0 * 4.0 / 3.0 * math.pi * 0.010 ** 3
-        mz = float(pe) / (scene["n"] * mass * 9.81)
+        mz = float(pe) / (scene["total_mass_kg"] * GRAVITY_M_S2)
     return mz, ket
 
 
-def run_liggghts(binary, scene, rundir, timeout_s):
-    cmd = [binary, "-in", os.path.join(HERE, "in.settle"), "-log", "none", "-echo", "none",
-           "-var", "datafile", scene["liggghts_data"], "-var", "side", repr(scene["side_m"]),
-           "-var", "steps", str(scene["steps"])]
+def parse_neigh(spec):
+    """LIGGGHTS neighbour setting "STYLE:SKIN[:BINSIZE]" -> (style, skin m, binsize m; 0 = default)."""
+    parts = spec.split(":")
+    if len(parts) not in (2, 3) or parts[0] not in ("bin", "multi"):
+        raise ValueError(f"LIGGGHTS neighbour setting '{spec}': expected bin|multi:SKIN[:BINSIZE] (metres)")
+    skin = float(parts[1])
+    binsize = float(parts[2]) if len(parts) == 3 else 0.0
+    if skin <= 0 or binsize < 0:
+        raise ValueError(f"LIGGGHTS neighbour setting '{spec}': skin must be > 0, binsize >= 0")
+    return parts[0], skin, binsize
+
+
+def neigh_words(spec):
+    style, skin, binsize = parse_neigh(spec)
+    s = f"{style}, skin {skin * 1e3:g} mm"
+    return s + (f", binsize {binsize * 1e3:g} mm" if binsize > 0 else "")
+
+
+def run_liggghts(binary, scene, rundir, timeout_s, neigh=None):
+    if scene["name"] == "settle":
+        cmd = [binary, "-in", os.path.join(HERE, "in.settle"), "-log", "none", "-echo", "none",
+               "-var", "datafile", scene["liggghts_data"], "-var", "side", repr(scene["side_m"]),
+               "-var", "steps", str(scene["steps"])]
+    else:
+        style, skin, binsize = parse_neigh(neigh)
+        cmd = [binary, "-in", os.path.join(HERE, "in.mixed"), "-log", "none", "-echo", "none",
+               "-var", "datafile", scene["liggghts_data"], "-var", "side", repr(scene["side_m"]),
+               "-var", "steps", str(scene["steps"]), "-var", "dt", repr(scene["dt_s"]),
+               "-var", "skin", repr(skin), "-var", "neighstyle", style, "-var", "binsize", repr(binsize),
+               "-var", "dumpfile", os.path.join(rundir, "final.dump")]
     env = dict(os.environ, OMP_NUM_THREADS="1")
     stdout_path = os.path.join(rundir, "stdout.txt")
     rc, rss, elapsed, how, cpu = run_measured(cmd, rundir, env, stdout_path, os.path.join(rundir, "stderr.txt"),
@@ -200,6 +259,7 @@ def run_liggghts(binary, scene, rundir, timeout_s):
         text = f.read()
     m = re.search(r"Loop time of ([\d.eE+-]+) on (\d+) procs for (\d+) steps with (\d+) atoms", text)
     r = re.search(r"BENCH_RESULT mean_z_m (\S+) kinetic_translational_J (\S+) kinetic_rotational_J (\S+)", text)
+    c = re.search(r"BENCH_CONTACTS pair (\S+) wall (\S+)", text)
     if rc != 0 or not m or not r:
         res["error"] = (f"exit code {rc}{TIMED_OUT if rc == 124 else ''}, loop line {'found' if m else 'missing'}\n"
                         + tail(stdout_path) + "\n" + tail(os.path.join(rundir, "stderr.txt")))
@@ -211,7 +271,63 @@ def run_liggghts(binary, scene, rundir, timeout_s):
     res["steps"] = int(m.group(3))
     res["mean_z_m"] = float(r.group(1))
     res["ke_t_J"] = float(r.group(2))
+    if c:
+        res["contacts_pair"] = int(round(float(c.group(1))))
+        res["contacts_wall"] = int(round(float(c.group(2))))
+        res["contacts"] = res["contacts_pair"] + res["contacts_wall"]
+    dump = os.path.join(rundir, "final.dump")
+    if scene["name"] == "mixed" and os.path.exists(dump):
+        pairs, walls = count_contacts_dump(dump, scene["side_m"])
+        res["contacts_geom_pair"] = pairs
+        res["contacts_geom"] = pairs + walls
+        res["finds_contacts"] = ("contacts_pair" in res
+                                 and res["contacts_pair"] >= CONTACTS_FOUND_SHARE * pairs)
     return res
+
+
+def count_contacts_dump(path, side):
+    """Sphere-sphere and sphere-wall contacts (d < r_i + r_j; coordinate < r from
+    one of the six walls of the cube [0, side]^3) in a LIGGGHTS dump whose
+    ATOMS lines are "id type radius x y z", found geometrically with a hash
+    grid: independent of the engine's neighbour list."""
+    pts = []
+    with open(path) as f:
+        lines = f.read().splitlines()
+    start = next(i for i, s in enumerate(lines) if s.startswith("ITEM: ATOMS"))
+    cols = lines[start].split()[2:]
+    ir, ix, iy, iz = cols.index("radius"), cols.index("x"), cols.index("y"), cols.index("z")
+    for s in lines[start + 1:]:
+        v = s.split()
+        if len(v) == len(cols):
+            pts.append((float(v[ix]), float(v[iy]), float(v[iz]), float(v[ir])))
+    cell = 0.02
+    grid = {}
+    for q, (x, y, z, r) in enumerate(pts):
+        for key in _cells((x, y, z), r, cell):
+            grid.setdefault(key, []).append(q)
+    pairs = 0
+    walls = 0
+    for q, (x, y, z, r) in enumerate(pts):
+        seen = set()
+        for key in _cells((x, y, z), r, cell):
+            for p in grid[key]:
+                if p <= q or p in seen:
+                    continue
+                seen.add(p)
+                px, py, pz, pr = pts[p]
+                d = r + pr
+                if (px - x) ** 2 + (py - y) ** 2 + (pz - z) ** 2 < d * d:
+                    pairs += 1
+        for c in (x, y, z):
+            walls += (c < r) + (c > side - r)
+    return pairs, walls
+
+
+def _cells(c, reach, cell):
+    lo = [int(math.floor((c[k] - reach) / cell)) for k in range(3)]
+    hi = [int(math.floor((c[k] + reach) / cell)) for k in range(3)]
+    return [(i, j, k) for i in range(lo[0], hi[0] + 1) for j in range(lo[1], hi[1] + 1)
+            for k in range(lo[2], hi[2] + 1)]
 
 
 def run_yade(binary, scene, rundir, timeout_s):
@@ -233,72 +349,123 @@ def run_yade(binary, scene, rundir, timeout_s):
     res["mean_z_m"] = y["mean_z_m"]
     res["ke_t_J"] = y["kinetic_translational_J"]
     res["yade_contact_kn"] = y["contact_kn_N_m"]
+    if y.get("real_contacts") is not None:
+        res["contacts"] = int(y["real_contacts"])
     return res
 
 
-# ---------------------------------------------------------------- table
+def build_ceiling(src_dir, bindir):
+    """Builds the ceiling kernel (sol.cpp) twice with its README's compile lines.
+
+    Returns ({"sol": path, "sol_omp": path, "cmds": [...], "compiler": ...}, None)
+    or (None, why). A build is reused while sol.cpp and the command are unchanged."""
+    src = os.path.join(src_dir, "sol.cpp")
+    gen = os.path.join(src_dir, "gen.py")
+    for p in (src, gen):
+        if not os.path.exists(p):
+            return None, f"no {p}"
+    cxx = shutil.which("g++")
+    if not cxx:
+        return None, "no g++ on PATH"
+    os.makedirs(bindir, exist_ok=True)
+    out = {"cmds": [], "source": os.path.abspath(src)}
+    try:
+        out["compiler"] = subprocess.run([cxx, "--version"], capture_output=True, text=True).stdout.splitlines()[0]
+    except (OSError, IndexError):
+        out["compiler"] = "g++"
+    for name, flags in CEILING_BUILDS.items():
+        exe = os.path.join(bindir, name)
+        cmd = ["g++"] + flags + ["-o", exe, src]
+        stamp = exe + ".cmd"
+        out["cmds"].append(" ".join(["g++"] + flags + ["-o", name, "sol.cpp"]))
+        fresh = (os.path.exists(exe) and os.path.exists(stamp) and os.path.getmtime(exe) >= os.path.getmtime(src))
+        if fresh:
+            with open(stamp) as f:
+                fresh = f.read() == " ".join(cmd)
+        if not fresh:
+            log(f"building the ceiling kernel: {' '.join(cmd)}")
+            p = subprocess.run(cmd, capture_output=True, text=True)
+            if p.returncode != 0:
+                return None, f"{' '.join(cmd)} failed:\n{p.stderr[-2000:]}"
+            with open(stamp, "w") as f:
+                f.write(" ".join(cmd))
+        out[name] = exe
+    out["gen"] = gen
+    return out, None
+
+
+def ceiling_gen_cloud(ceiling, n, side, bindir):
+    """The kernel's own cloud (its gen.py, run in bindir): spheres_N.txt."""
+    path = os.path.join(bindir, f"spheres_{n}.txt")
+    stamp = path + ".side"
+    if not (os.path.exists(path) and os.path.exists(stamp) and os.path.getmtime(path) >= os.path.getmtime(ceiling["gen"])
+            and open(stamp).read() == repr(side)):
+        subprocess.run([sys.executable, ceiling["gen"], str(n), repr(side)], cwd=bindir, check=True,
+                       stdout=subprocess.DEVNULL)
+        with open(stamp, "w") as f:
+            f.write(repr(side))
+    with open(path) as f:
+        zs = [float(s.split()[2]) for s in f if s.strip()]
+    return path, (sum(zs) / len(zs) if zs else float("nan")), len(zs)
+
+
+def run_ceiling(ceiling, scene, threads, rundir, timeout_s, cloud):
+    exe = ceiling["sol"] if threads == 1 else ceiling["sol_omp"]
+    spheres = scene["spheres"] if cloud == "ours" else scene["ceiling_gen_spheres"]
+    cmd = [exe, spheres, repr(scene["side_m"]), "--steps", str(scene["steps"])]
+    env = dict(os.environ, OMP_NUM_THREADS=str(threads))
+    stdout_path = os.path.join(rundir, "stdout.txt")
+    rc, rss, elapsed, how, cpu = run_measured(cmd, rundir, env, stdout_path, os.path.join(rundir, "stderr.txt"),
+                                         timeout_s)
+    res = {"cmd": cmd, "rc": rc, "rss_kB": rss, "rss_how": how, "elapsed_s": elapsed, "cpu_s": cpu}
+    with open(stdout_path, errors="replace") as f:
+        text = f.read()
+    h = re.search(r"N=(\d+) L=\S+ threads=(\d+)", text)
+    m = re.search(r"loop_time ([\d.eE+-]+) s", text)
+    r = re.search(r"final: KE (\S+) J\s+KErot (\S+) J\s+PE (\S+) J.*contacts pp (\d+) \(direct search (\d+)\)\s+pw (\d+)",
+                  text)
+    if rc != 0 or not m or not r or not h:
+        res["error"] = (f"exit code {rc}{TIMED_OUT if rc == 124 else ''}, loop line {'found' if m else 'missing'}\n"
+                        + tail(stdout_path) + "\n" + tail(os.path.join(rundir, "stderr.txt")))
+        return res
+    if int(h.group(1)) != scene["n"] or int(h.group(2)) != threads:
+        res["error"] = f"the kernel ran N={h.group(1)} on {h.group(2)} threads, expected N={scene['n']} on {threads}"
+        return res
+    res["loop_s"] = float(m.group(1))
+    res["steps"] = scene["steps"]
+    res["ke_t_J"] = float(r.group(1))
+    res["mean_z_m"] = float(r.group(3)) / (scene["total_mass_kg"] * GRAVITY_M_S2)
+    res["contacts"] = int(r.group(4)) + int(r.group(6))
+    res["contacts_geom_pair"] = int(r.group(5))
+    return res
+
+
+# ---------------------------------------------------------------- tables
 
 
 def fmt(v, spec, none="-"):
     return none if v is None or (isinstance(v, float) and math.isnan(v)) else format(v, spec)
 
 
-def render(info):
-    """The table and its notes (markdown) from the collected results."""
-    # Ratios against the one-thread peers at the same N.
-    ref = {(r["engine"], r["n"]): r["n"] * r["steps"] / r["loop_s"] for r in info["rows"] if r["threads"] == 1}
-    head = ("| engine | threads | N | steps | loop s | M body-steps/s | per core | x LIGGGHTS | x Yade | "
-            "max RSS MB | kB/body | load | CPU share | M body-steps/CPU-s | mean z m | KE J |")
-    lines = [head, "|" + "---|" * (head.count("|") - 1)]
-    for r in info["rows"]:
-        bsps = r["n"] * r["steps"] / r["loop_s"]
-        lig = ref.get(("liggghts", r["n"]))
-        yad = ref.get(("yade", r["n"]))
-        rss = r["rss_kB"]
-        share = r["cpu_s"] / (r["elapsed_s"] * r["threads"]) if r.get("cpu_s") is not None else None
-        cpu_rate = (r["n"] * (r["steps"] - 1) / r["loop_cpu_s"]) if r.get("loop_cpu_s", 0) > 0 else None
-        lines.append(
-            f"| {r['engine']} | {r['threads']} | {r['n']} | {r['steps']} | {r['loop_s']:.3f} | {bsps / 1e6:.2f} | "
-            f"{bsps / r['threads'] / 1e6:.2f} | {fmt(bsps / lig if lig else None, '.2f')} | "
-            f"{fmt(bsps / yad if yad else None, '.2f')} | {fmt(rss / 1024 if rss else None, '.1f')} | "
-            f"{fmt(rss / r['n'] if rss else None, '.2f')} | {r['load1']:.2f} | {fmt(share, '.2f')} | "
-            f"{fmt(cpu_rate / 1e6 if cpu_rate else None, '.2f')} | "
-            f"{fmt(r.get('mean_z_m'), '.4f')} | "
-            f"{fmt(r.get('ke_t_J'), '.3g')} |")
-    # Memory per extra body between the smallest and the largest N (removes
-    # the fixed cost of the executable, libraries and, for Yade, Python).
-    marg = []
-    ns = sorted(set(r["n"] for r in info["rows"]))
-    if len(ns) >= 2:
-        for key in sorted(set((r["engine"], r["threads"]) for r in info["rows"])):
-            by_n = {r["n"]: r["rss_kB"] for r in info["rows"] if (r["engine"], r["threads"]) == key and r["rss_kB"]}
-            if ns[0] in by_n and ns[-1] in by_n:
-                per = (by_n[ns[-1]] - by_n[ns[0]]) * 1024.0 / (ns[-1] - ns[0])
-                marg.append(f"{key[0]} ({key[1]} thread{'s' if key[1] > 1 else ''}): {per:.0f} bytes/body")
+def bsps_of(r):
+    return r["n"] * r["steps"] / r["loop_s"]
 
-    out = []
-    out.append(f"Settling benchmark, {info['date']}; {info.get('machine', 'machine ?')}; "
-               f"steps = {info['steps']}, dt = 4e-5 s, seed = {info['seed']}, best of {info.get('repeat', 1)}")
-    out.append("")
-    out.extend(lines)
-    out.append("")
-    how = info["rows"][0]["rss_how"] if info["rows"] and info["rows"][0]["rss_how"] else "n/a"
-    z0 = ", ".join(f"N={n}: {z:.4f} m" for n, z in info.get("initial_mean_z_m", {}).items())
-    out.append(
-        "loop s: wall time of the time-step loop only (Gabion summary.json step_loop_wall_time_s; LIGGGHTS "
-        "'Loop time'; Yade time around O.run). per core = body-steps/s / threads. x LIGGGHTS, x Yade: "
-        "body-steps/s over the one-thread peer at the same N. max RSS: peak resident memory of the whole "
-        f"process ({how}); kB/body = max RSS / N. load: 1-minute load average just before the run. "
-        "CPU share: CPU time of the whole process / (its wall time x threads), below 1 when it waited for a "
-        "core (other jobs running). M body-steps/CPU-s: N x (steps - 1) / (CPU time of the run - CPU time of "
-        "the same run with 1 step), i.e. per CPU-second of the loop: less sensitive to other jobs than the "
-        "wall time; with 2 threads it counts both threads' CPU, waiting included. mean z, KE: mean sphere "
-        f"centre height and translational kinetic energy after the last step (initial mean z: {z0}).")
-    if marg:
-        out.append(f"Memory per extra body (max RSS difference between N={ns[0]} and N={ns[-1]}): "
-                   + "; ".join(marg) + ".")
+
+def label_of(r):
+    if r.get("label"):
+        return r["label"]
+    return r["engine"]
+
+
+def cpu_columns(r):
+    share = r["cpu_s"] / (r["elapsed_s"] * r["threads"]) if r.get("cpu_s") is not None else None
+    cpu_rate = (r["n"] * (r["steps"] - 1) / r["loop_cpu_s"]) if r.get("loop_cpu_s", 0) > 0 else None
+    return share, cpu_rate
+
+
+def stage_line(rows, prefix):
     stages = []
-    for r in info["rows"]:
+    for r in rows:
         prof = r.get("profile")
         if r["engine"] != "gabion" or not prof:
             continue
@@ -312,15 +479,244 @@ def render(info):
             if r["threads"] > 1 and busy.get(name):
                 item += " (" + ", ".join(f"{b:.2f}" for b in busy[name]) + ")"
             parts.append(item)
-        stages.append(f"N={r['n']} {r['threads']}t: " + ", ".join(parts))
-    if stages:
-        out.append("Gabion stages, s (summary.json `profile` of the runs above; with threads, each partition's "
-                   "busy time in brackets): " + "; ".join(stages) + ".")
+        total = sum(wall.get(k, 0.0) for k in ("neighbours", "contacts", "walls", "integrate", "energy"))
+        if total > 0 and "neighbours" in wall:
+            parts.append(f"neighbours {100.0 * wall['neighbours'] / total:.0f} % of the stages")
+        stages.append(f"{prefix}N={r['n']} {r['threads']}t: " + ", ".join(parts))
+    if not stages:
+        return None
+    return ("Gabion stages, s (summary.json `profile` of the runs above; with threads, each partition's "
+            "busy time in brackets): " + "; ".join(stages) + ".")
+
+
+def render_settle(info, rows):
+    # Ratios against the one-thread peers and against the ceiling kernel on
+    # the same cloud with the same threads, at the same N.
+    ref = {(r["engine"], r["n"]): bsps_of(r) for r in rows
+           if r["threads"] == 1 and r["engine"] in ("liggghts", "yade")}
+    ceil = {(r["n"], r["threads"]): bsps_of(r) for r in rows
+            if r["engine"] == "ceiling" and r.get("variant", "ours") == "ours"}
+    head = ("| engine | threads | N | steps | loop s | M body-steps/s | per core | x LIGGGHTS | x ceiling | x Yade | "
+            "max RSS MB | kB/body | load | CPU share | M body-steps/CPU-s | mean z m | KE J | contacts |")
+    lines = [head, "|" + "---|" * (head.count("|") - 1)]
+    for r in rows:
+        bsps = bsps_of(r)
+        lig = ref.get(("liggghts", r["n"]))
+        yad = ref.get(("yade", r["n"]))
+        cei = ceil.get((r["n"], r["threads"]))
+        rss = r["rss_kB"]
+        share, cpu_rate = cpu_columns(r)
+        lines.append(
+            f"| {label_of(r)} | {r['threads']} | {r['n']} | {r['steps']} | {r['loop_s']:.3f} | {bsps / 1e6:.2f} | "
+            f"{bsps / r['threads'] / 1e6:.2f} | {fmt(bsps / lig if lig else None, '.2f')} | "
+            f"{fmt(bsps / cei if cei else None, '.2f')} | "
+            f"{fmt(bsps / yad if yad else None, '.2f')} | {fmt(rss / 1024 if rss else None, '.1f')} | "
+            f"{fmt(rss / r['n'] if rss else None, '.2f')} | {r['load1']:.2f} | {fmt(share, '.2f')} | "
+            f"{fmt(cpu_rate / 1e6 if cpu_rate else None, '.2f')} | "
+            f"{fmt(r.get('mean_z_m'), '.4f')} | "
+            f"{fmt(r.get('ke_t_J'), '.3g')} | {fmt(r.get('contacts'), 'd')} |")
+    # Memory per extra body between the smallest and the largest N (removes
+    # the fixed cost of the executable, libraries and, for Yade, Python).
+    marg = []
+    ns = sorted(set(r["n"] for r in rows))
+    if len(ns) >= 2:
+        for key in sorted(set((label_of(r), r["threads"]) for r in rows)):
+            by_n = {r["n"]: r["rss_kB"] for r in rows if (label_of(r), r["threads"]) == key and r["rss_kB"]}
+            if ns[0] in by_n and ns[-1] in by_n:
+                per = (by_n[ns[-1]] - by_n[ns[0]]) * 1024.0 / (ns[-1] - ns[0])
+                marg.append(f"{key[0]} ({key[1]} thread{'s' if key[1] > 1 else ''}): {per:.0f} bytes/body")
+
+    out = []
+    out.append(f"Settling benchmark, {info['date']}; {info.get('machine', 'machine ?')}; "
+               f"steps = {info['steps']}, dt = 4e-5 s, seed = {info['seed']}, best of {info.get('repeat', 1)}")
+    out.append("")
+    out.extend(lines)
+    out.append("")
+    how = rows[0]["rss_how"] if rows and rows[0]["rss_how"] else "n/a"
+    z0 = ", ".join(f"N={n}: {z:.4f} m" for n, z in info.get("initial_mean_z_m", {}).items())
+    out.append(
+        "loop s: wall time of the time-step loop only (Gabion summary.json step_loop_wall_time_s; LIGGGHTS "
+        "'Loop time'; Yade time around O.run; ceiling kernel its loop_time line). per core = body-steps/s / "
+        "threads. x LIGGGHTS, x Yade: body-steps/s over the one-thread peer at the same N. x ceiling: over the "
+        "ceiling kernel on the same cloud, same N and same threads. max RSS: peak resident memory of the whole "
+        f"process ({how}); kB/body = max RSS / N. load: 1-minute load average just before the run. "
+        "CPU share: CPU time of the whole process / (its wall time x threads), below 1 when it waited for a "
+        "core (other jobs running). M body-steps/CPU-s: N x (steps - 1) / (CPU time of the run - CPU time of "
+        "the same run with 1 step), i.e. per CPU-second of the loop: less sensitive to other jobs than the "
+        "wall time; with 2 threads it counts both threads' CPU, waiting included. mean z, KE: mean sphere "
+        f"centre height and translational kinetic energy after the last step (initial mean z: {z0}). "
+        "contacts: touching sphere-sphere + sphere-wall pairs after the last step (Gabion summary.json "
+        "`contacts`; LIGGGHTS compute contact/atom / 2 + spheres closer than their radius to a wall; ceiling "
+        "its `contacts pp` + `pw`; Yade real interactions).")
+    cinfo = info.get("ceiling")
+    if cinfo and any(r["engine"] == "ceiling" for r in rows):
+        gen = cinfo.get("gen_clouds", {})
+        gz = ", ".join(f"N={n}: {g['initial_mean_z_m']:.4f} m" for n, g in gen.items())
+        out.append(
+            f"ceiling: the single-purpose kernel {cinfo['source']} (not a general engine: one radius, one "
+            f"material), built here with `{cinfo['cmds'][0]}` (1 thread) and `{cinfo['cmds'][1]}` (threads > 1, "
+            f"OMP_NUM_THREADS) ({cinfo.get('compiler', 'g++')}); same contact law and dissipation as Gabion's "
+            "(restitution 0.5 through the reduced mass, a wall of infinite mass), 0.2 R skin. Row `ceiling` "
+            "reads the same cloud as the other engines (settle_N.spheres); its own gen.py is the same random "
+            "sequential addition with another seed (generate.py --seed 12345 reproduces gen.py's file to "
+            "5e-10 m: a different cloud of the same statistics)"
+            + (f"; row `ceiling (gen.py cloud)` runs it on that cloud (initial mean z {gz})." if gen else "."))
+    if marg:
+        out.append(f"Memory per extra body (max RSS difference between N={ns[0]} and N={ns[-1]}): "
+                   + "; ".join(marg) + ".")
+    st = stage_line(rows, "")
+    if st:
+        out.append(st)
+    # Scaling with threads and the issue's targets for Gabion.
+    scal = []
+    for lab in sorted(set(label_of(r) for r in rows if r["engine"] in ("gabion", "ceiling"))):
+        for n in ns:
+            by_t = {r["threads"]: bsps_of(r) for r in rows if label_of(r) == lab and r["n"] == n}
+            for t in sorted(by_t):
+                if t > 1 and 1 in by_t:
+                    scal.append(f"{lab} N={n}: {by_t[t] / by_t[1]:.2f}x on {t} threads")
+    if scal:
+        out.append("Threads over one thread: " + "; ".join(scal) + ".")
+    targ = []
+    for n in ns:
+        g1 = next((bsps_of(r) for r in rows if r["engine"] == "gabion" and r["n"] == n and r["threads"] == 1), None)
+        if g1 is None:
+            continue
+        c1 = ceil.get((n, 1))
+        lig = ref.get(("liggghts", n))
+        g2 = next((bsps_of(r) for r in rows if r["engine"] == "gabion" and r["n"] == n and r["threads"] == 2), None)
+        items = []
+        if c1:
+            items.append(f"ceiling / Gabion {c1 / g1:.2f} (target <= 1.3: {'met' if c1 / g1 <= 1.3 else 'not met'})")
+        if lig:
+            items.append(f"x LIGGGHTS {g1 / lig:.2f} (target >= 3: {'met' if g1 / lig >= 3 else 'not met'})")
+        if g2:
+            items.append(f"2 threads / 1 {g2 / g1:.2f} (target >= 1.6: {'met' if g2 / g1 >= 1.6 else 'not met'})")
+        if items:
+            targ.append(f"N={n}: " + ", ".join(items))
+    if targ:
+        out.append("Targets, Gabion on one thread: " + "; ".join(targ) + ".")
+    return out
+
+
+def liggghts_zeta(m_a, m_b=None, gamma_n=1883.0, kn=1.0e5):
+    """LIGGGHTS hooke/stiffness damping as a fraction of critical: gamma_n m* / (2 sqrt(k_n m*))."""
+    ms = m_a if m_b is None else m_a * m_b / (m_a + m_b)
+    return gamma_n * math.sqrt(ms / kn) / 2.0
+
+
+def render_mixed(info, rows):
+    mi = info["mixed"]
+    valid = [r for r in rows if r["engine"] == "liggghts" and r.get("finds_contacts")]
+    best = min(valid, key=lambda r: r["loop_s"]) if valid else None
+    settle_rows = [r for r in info["rows"] if r.get("scene", "settle") == "settle"
+                   and r.get("variant") in (None, "ours")]
+    n_mono = max((r["n"] for r in settle_rows), default=None)
+    mono = {(r["engine"], r["threads"]): bsps_of(r) for r in settle_rows if r["n"] == n_mono}
+    head = ("| engine | neighbour setting | threads | N | steps | loop s | M body-steps/s | per core | x LIGGGHTS | "
+            "x mono | max RSS MB | load | CPU share | M body-steps/CPU-s | COM z m | KE J | contacts | "
+            "contacts (geometric) |")
+    lines = [head, "|" + "---|" * (head.count("|") - 1)]
+    for r in rows:
+        bsps = bsps_of(r)
+        if r["engine"] == "liggghts":
+            setting = neigh_words(r["variant"]) + (" (best)" if r is best else "")
+            if r.get("finds_contacts") is False:
+                setting += " (misses contacts)"
+        else:
+            setting = "default Verlet skin (0.2 x mean grid radius)"
+        lig = bsps_of(best) if best else None
+        mo = mono.get((r["engine"], r["threads"]))
+        share, cpu_rate = cpu_columns(r)
+        rss = r["rss_kB"]
+        geom = r.get("contacts_geom")
+        lines.append(
+            f"| {r['engine']} | {setting} | {r['threads']} | {r['n']} | {r['steps']} | {r['loop_s']:.3f} | "
+            f"{bsps / 1e6:.2f} | {bsps / r['threads'] / 1e6:.2f} | {fmt(bsps / lig if lig else None, '.2f')} | "
+            f"{fmt(bsps / mo if mo else None, '.2f')} | {fmt(rss / 1024 if rss else None, '.1f')} | "
+            f"{r['load1']:.2f} | {fmt(share, '.2f')} | {fmt(cpu_rate / 1e6 if cpu_rate else None, '.2f')} | "
+            f"{fmt(r.get('mean_z_m'), '.4f')} | {fmt(r.get('ke_t_J'), '.3g')} | {fmt(r.get('contacts'), 'd')} | "
+            f"{fmt(geom, 'd')} |")
+    rho = mi["density_kg_m3"]
+    mass = {c["radius_m"]: rho * 4.0 / 3.0 * math.pi * c["radius_m"] ** 3 for c in mi["classes"]}
+    rs = sorted(mass)
+    zetas = ", ".join([f"{rs[0] * 1e3:g}-{rs[0] * 1e3:g} mm {liggghts_zeta(mass[rs[0]], mass[rs[0]]):.3f}",
+                       f"{rs[1] * 1e3:g}-{rs[1] * 1e3:g} mm {liggghts_zeta(mass[rs[1]], mass[rs[1]]):.3f}",
+                       f"{rs[2] * 1e3:g}-{rs[2] * 1e3:g} mm {liggghts_zeta(mass[rs[2]], mass[rs[2]]):.2f}",
+                       f"{rs[0] * 1e3:g} mm-wall {liggghts_zeta(mass[rs[0]]):.3f}",
+                       f"{rs[2] * 1e3:g} mm-wall {liggghts_zeta(mass[rs[2]]):.2f}"])
+    classes = ", ".join(f"{c['count']:,} of radius {c['radius_m'] * 1e3:g} mm" for c in mi["classes"])
+    out = []
+    out.append(f"Mixed-size scene, {info['date']}; {info.get('machine', 'machine ?')}; steps = {mi['steps']}, "
+               f"dt = {mi['dt_s']:.5g} s, seed = {mi['seed']}, best of {info.get('repeat', 1)}")
+    out.append("")
+    out.extend(lines)
+    out.append("")
+    out.append(
+        f"Scene (generate_mixed.py): {classes} ({mi['n']:,} spheres, density {rho:g} kg/m3) in a closed cube "
+        f"of side L = {mi['side_m']:.4f} m (six walls; solid fraction {mi['solid_fraction']:g} of its volume), "
+        f"random sequential addition, largest first, gap {mi['gap_m'] * 1e3:g} mm; initial speeds uniform in "
+        f"[0, {mi['max_speed_m_s']:g}] m/s in uniform directions (initial translational KE "
+        f"{mi['initial_kinetic_translational_J']:.3g} J, centre-of-mass height {mi['initial_com_z_m']:.4f} m); "
+        f"gravity; k_n = 1e5 N/m, k_t = 2.5e4 N/m, friction 0.5; dt = 0.15 sqrt(m_4mm / k_n) = "
+        f"{mi['dt_s']:.5g} s, {mi['steps']} steps ({mi['steps'] * mi['dt_s']:.4g} s).")
+    out.append(
+        "Damping, as in the settling scene: Gabion viscous_damping_ratio 0.2155 of the critical damping of "
+        "each contact's reduced mass (restitution 0.5 for every pair); LIGGGHTS hooke/stiffness gamma_n = "
+        "1883 1/s times the reduced mass, i.e. a fraction of critical that grows with the mass: "
+        f"{zetas} (restitution 0.5 only for two 10 mm spheres). The end states therefore differ a little.")
+    out.append(
+        "neighbour setting (LIGGGHTS): `neighbor SKIN bin|multi` with `neigh_modify delay 0 binsize B` (no "
+        "binsize: LIGGGHTS' default, half the largest cutoff). contacts: touching sphere-sphere + sphere-wall "
+        "pairs after the last step (Gabion summary.json `contacts`; LIGGGHTS compute contact/atom / 2, which "
+        "walks its neighbour list, + spheres closer than their radius to a wall). contacts (geometric): the "
+        "same count done by bench.py from LIGGGHTS' final positions (write_dump), without its neighbour list; "
+        f"a setting whose list count of sphere-sphere contacts is below {CONTACTS_FOUND_SHARE:.0%} of it "
+        "misses contacts. x LIGGGHTS: over the fastest LIGGGHTS setting that finds the contacts (best). "
+        + (f"x mono: body-steps/s over the same engine's, same threads, in the settling scene at N = {n_mono} "
+           "of this invocation. " if n_mono else "x mono: needs --scene both (settling and mixed in one run). ")
+        + "COM z: height of the centre of mass (Gabion: gravity potential / (M g)); KE: translational kinetic "
+        "energy. Other columns as in the settling table.")
+    st = stage_line(rows, "mixed ")
+    if st:
+        out.append(st)
+    targ = []
+    for r in rows:
+        if r["engine"] != "gabion":
+            continue
+        items = []
+        if best:
+            x = bsps_of(r) / bsps_of(best)
+            items.append(f"x LIGGGHTS {x:.2f} (target >= 3: {'met' if x >= 3 else 'not met'})")
+        mo = mono.get(("gabion", r["threads"]))
+        if mo:
+            x = mo / bsps_of(r)
+            items.append(f"settling / mixed body-steps/s {x:.2f} (target <= 1.5: {'met' if x <= 1.5 else 'not met'})")
+        if items:
+            targ.append(f"{r['threads']} thread{'s' if r['threads'] > 1 else ''}: " + ", ".join(items))
+    if targ:
+        out.append("Targets, Gabion: " + "; ".join(targ) + ".")
+    return out
+
+
+def render(info):
+    """The tables and their notes (markdown) from the collected results."""
+    rows = info["rows"]
+    settle = [r for r in rows if r.get("scene", "settle") == "settle"]
+    mixed = [r for r in rows if r.get("scene") == "mixed"]
+    out = []
+    if settle or not mixed:
+        out.extend(render_settle(info, settle))
+    if mixed and info.get("mixed"):
+        if out:
+            out.append("")
+        out.extend(render_mixed(info, mixed))
     for item in info.get("skipped", []):
         e, why = (item["engine"], item["why"]) if isinstance(item, dict) else item
-        out.append(f"Skipped {e}: {why}. Install: {INSTALL_HINT[e]}")
-    starved = [f"{r['engine']} N={r['n']} {r['threads']}t ({r['cpu_s'] / (r['elapsed_s'] * r['threads']):.2f})"
-               for r in info["rows"] if r.get("cpu_s") is not None and r["elapsed_s"] > 2.0
+        out.append(f"Skipped {e}: {why}." + (f" Install: {INSTALL_HINT[e]}" if e in INSTALL_HINT else ""))
+    starved = [f"{label_of(r)} {r.get('scene', 'settle')} N={r['n']} {r['threads']}t "
+               f"({r['cpu_s'] / (r['elapsed_s'] * r['threads']):.2f})"
+               for r in rows if r.get("cpu_s") is not None and r["elapsed_s"] > 2.0
                and r["cpu_s"] / (r["elapsed_s"] * r["threads"]) < 0.85]
     if starved:
         out.append("WARNING: these runs had less than 85 % of their cores (CPU share): " + ", ".join(starved) +
@@ -329,20 +725,106 @@ def render(info):
     return "\n".join(out)
 
 
+# ---------------------------------------------------------------- run
+
+
+# LIGGGHTS neighbour settings of the mixed scene. A sweep of 5,000 steps
+# (skin 0.8 to 24 mm, binsize default / 50 / 35 / 24 mm, CPU seconds of one
+# run each) put the fastest at a skin of 4-8 mm with a binsize of 35 mm
+# (7.2-7.4 s), the default binsize 3-6 % slower, 24 mm bins 30-40 % slower,
+# skins of 12 mm and more slower again (pair time grows), 0.8 mm (Gabion's
+# 0.2 x mean radius) about 3x slower in 500-step runs (a rebuild every ~40 steps, each
+# binning with bins of half the 70 mm spheres' cutoff). The defaults run the
+# contenders, the skin Gabion uses, and multi.
+DEFAULT_LIGGGHTS_NEIGH = "bin:0.0008,bin:0.008,bin:0.004:0.035,bin:0.008:0.035,multi:0.008"
+
+
+def settle_scene(n, steps, seed, workdir):
+    subprocess.run([sys.executable, os.path.join(HERE, "generate.py"), str(n), "--steps", str(steps),
+                    "--seed", str(seed), "--outdir", workdir], check=True, stdout=subprocess.DEVNULL)
+    base = os.path.join(workdir, f"settle_{n}")
+    with open(base + ".meta.json") as f:
+        meta = json.load(f)
+    log(f"scene settle N={n}: L={meta['side_m']:g} m, cloud height {meta['cloud_height_m']:.4f} m, "
+        f"initial mean z {meta['initial_mean_z_m']:.4f} m")
+    return {"name": "settle", "n": n, "steps": steps, "dt_s": SETTLE_DT_S, "side_m": meta["side_m"],
+            "gabion_case": base + ".gabion.json", "liggghts_data": base + ".data", "spheres": base + ".spheres",
+            "initial_mean_z_m": meta["initial_mean_z_m"], "total_mass_kg": n * SETTLE_SPHERE_MASS_KG}
+
+
+def mixed_scene(steps, seed, workdir):
+    subprocess.run([sys.executable, os.path.join(HERE, "generate_mixed.py"), "--steps", str(steps),
+                    "--seed", str(seed), "--outdir", workdir], check=True, stdout=subprocess.DEVNULL)
+    base = os.path.join(workdir, "mixed")
+    with open(base + ".meta.json") as f:
+        meta = json.load(f)
+    log(f"scene mixed N={meta['n']}: cube L={meta['side_m']:.4f} m, dt={meta['dt_s']:.5g} s, "
+        f"initial centre-of-mass height {meta['initial_com_z_m']:.4f} m")
+    return {"name": "mixed", "n": meta["n"], "steps": steps, "dt_s": meta["dt_s"], "side_m": meta["side_m"],
+            "gabion_case": base + ".gabion.json", "liggghts_data": base + ".data",
+            "initial_mean_z_m": meta["initial_com_z_m"], "total_mass_kg": meta["total_mass_kg"], "meta": meta}
+
+
+def run_job(available, scene, job, rundir, timeout_s):
+    e, t, v = job
+    if e == "gabion":
+        return run_gabion(available[e], scene, t, rundir, timeout_s)
+    if e == "liggghts":
+        return run_liggghts(available[e], scene, rundir, timeout_s, v)
+    if e == "ceiling":
+        return run_ceiling(available[e], scene, t, rundir, timeout_s, v)
+    return run_yade(available[e], scene, rundir, timeout_s)
+
+
+def job_label(job):
+    e, t, v = job
+    if e == "ceiling" and v == "gen":
+        return "ceiling (gen.py cloud)"
+    return e
+
+
+def job_dir(scene, job, repeat_index):
+    e, t, v = job
+    name = e
+    if v and not (e == "ceiling" and v == "ours"):
+        name += "-" + re.sub(r"[^A-Za-z0-9.]+", "-", v)
+    prefix = "mixed_" if scene["name"] == "mixed" else ""
+    return f"{prefix}{name}_N{scene['n']}_t{t}" + (f"_r{repeat_index}" if repeat_index else "")
+
+
 def main():
     ap = argparse.ArgumentParser(
-        description="Settling benchmark: Gabion, LIGGGHTS and Yade on the same scene (docs/performance.md).")
-    ap.add_argument("n", nargs="*", type=int, default=[5000, 20000], help="numbers of spheres (default 5000 20000)")
-    ap.add_argument("--steps", type=int, default=10000, help="time steps, dt = 4e-5 s (default 10000)")
+        description="Settling benchmark and mixed-size scene: Gabion, LIGGGHTS, Yade and the ceiling kernel "
+                    "(docs/performance.md).")
+    ap.add_argument("n", nargs="*", type=int, default=[5000, 20000],
+                    help="numbers of spheres of the settling scene (default 5000 20000)")
+    ap.add_argument("--scene", choices=("settle", "mixed", "both"), default="settle",
+                    help="settle: the settling scene for each N; mixed: the mixed-size scene (22,020 spheres of "
+                         "4, 18 and 70 mm); both: both, so that the mixed table gives each engine's ratio to its "
+                         "settling speed (default settle)")
+    ap.add_argument("--steps", type=int, default=None,
+                    help="time steps of every scene (default: settle 10000 of 4e-5 s, mixed 5000)")
     ap.add_argument("--seed", type=int, default=20261122, help="scene seed (default 20261122)")
-    ap.add_argument("--engines", default="liggghts,yade,gabion",
-                    help="comma list of engines to run, in this order (default liggghts,yade,gabion)")
+    ap.add_argument("--engines", default="liggghts,yade,ceiling,gabion",
+                    help="comma list of engines to run, in this order (default liggghts,yade,ceiling,gabion; "
+                         "the mixed scene runs gabion and liggghts only)")
     ap.add_argument("--gabion", default=os.environ.get("GABION_BINARY", os.path.join(REPO, "build", "gabion")),
                     help="gabion binary (default $GABION_BINARY or build/gabion)")
-    ap.add_argument("--gabion-threads", default="1,2", help="comma list of Gabion thread counts (default 1,2)")
+    ap.add_argument("--gabion-threads", default="1,2",
+                    help="comma list of thread counts of Gabion and the ceiling kernel (default 1,2)")
     ap.add_argument("--liggghts", default=shutil.which("liggghts") or "",
                     help="LIGGGHTS binary (default: liggghts on PATH)")
+    ap.add_argument("--liggghts-neigh", default=DEFAULT_LIGGGHTS_NEIGH,
+                    help="mixed scene: comma list of LIGGGHTS neighbour settings STYLE:SKIN[:BINSIZE] (metres; "
+                         "STYLE bin or multi; no BINSIZE: LIGGGHTS' default), each run as a row; the fastest "
+                         f"that finds the contacts gives the ratio (default {DEFAULT_LIGGGHTS_NEIGH})")
     ap.add_argument("--yade", default=shutil.which("yade") or "", help="Yade binary (default: yade on PATH)")
+    ap.add_argument("--ceiling-dir", default=os.path.join(REPO, "..", "shared", "reference", "ceiling"),
+                    help="the ceiling kernel's sources, sol.cpp and gen.py (default: the repository's sibling "
+                         "shared/reference/ceiling); built into bench/work/ceiling")
+    ap.add_argument("--ceiling-clouds", default="ours,gen",
+                    help="clouds the ceiling kernel runs on: ours (the settling scene's, as the other engines) "
+                         "and/or gen (the kernel's own gen.py cloud, another seed) (default ours,gen)")
     ap.add_argument("--repeat", type=int, default=1,
                     help="runs of each engine; the fastest loop is reported (default 1)")
     ap.add_argument("--no-baseline", action="store_true",
@@ -358,27 +840,51 @@ def main():
         with open(a.report) as f:
             print(render(json.load(f)))
         return 0
-    if a.steps < 1 or a.repeat < 1 or any(n < 1 for n in a.n):
+    if (a.steps is not None and a.steps < 1) or a.repeat < 1 or any(n < 1 for n in a.n):
         ap.error("N, --steps and --repeat must be >= 1")
     engines = [e.strip() for e in a.engines.split(",") if e.strip()]
     for e in engines:
-        if e not in ("gabion", "liggghts", "yade"):
-            ap.error(f"unknown engine '{e}' (gabion, liggghts, yade)")
+        if e not in ("gabion", "liggghts", "yade", "ceiling"):
+            ap.error(f"unknown engine '{e}' (gabion, liggghts, yade, ceiling)")
     gthreads = [int(t) for t in a.gabion_threads.split(",") if t.strip()]
+    neighs = [s.strip() for s in a.liggghts_neigh.split(",") if s.strip()]
+    try:
+        for s in neighs:
+            parse_neigh(s)
+    except ValueError as err:
+        ap.error(str(err))
+    clouds = [c.strip() for c in a.ceiling_clouds.split(",") if c.strip()]
+    if any(c not in ("ours", "gen") for c in clouds) or not clouds:
+        ap.error("--ceiling-clouds: a comma list of ours, gen")
+    do_settle = a.scene in ("settle", "both")
+    do_mixed = a.scene in ("mixed", "both")
+    settle_steps = a.steps if a.steps is not None else 10000
+    mixed_steps = a.steps if a.steps is not None else 5000
 
     os.makedirs(a.workdir, exist_ok=True)
     stamp = datetime.datetime.now(datetime.timezone.utc).strftime("%Y-%m-%d %H:%M UTC")
     log(f"settling benchmark, {stamp}")
     log(f"machine: {cpu_model()}, {os.cpu_count()} logical CPUs; load average {loadavg()}")
-    log(f"N = {a.n}, steps = {a.steps}, dt = 4e-5 s, seed = {a.seed}, repeat = {a.repeat}")
+    log(f"scene {a.scene}: settle N = {a.n if do_settle else '-'}, steps = {settle_steps if do_settle else '-'}; "
+        f"mixed steps = {mixed_steps if do_mixed else '-'}; seed = {a.seed}, repeat = {a.repeat}")
 
     skipped = []
     available = {}
+    ceiling_info = None
     for e in engines:
         if e == "gabion":
             ok, why = gabion_available(os.path.abspath(a.gabion) if a.gabion else "")
             if ok:
                 available[e] = os.path.abspath(a.gabion)
+            else:
+                skipped.append((e, why))
+        elif e == "ceiling":
+            if not do_settle:
+                continue
+            ceiling_info, why = build_ceiling(os.path.abspath(a.ceiling_dir),
+                                              os.path.join(REPO, "bench", "work", "ceiling"))
+            if ceiling_info:
+                available[e] = ceiling_info
             else:
                 skipped.append((e, why))
         else:
@@ -389,92 +895,119 @@ def main():
                 skipped.append((e, f"no executable at {b}" if b else "not installed"))
     for e, why in skipped:
         log(f"SKIP {e}: {why}. Install: {INSTALL_HINT[e]}")
+    if do_mixed and any(e in engines and e in available for e in ("yade", "ceiling")):
+        log("note: the mixed scene runs Gabion and LIGGGHTS only (Yade's script and the ceiling kernel are "
+            "for the settling scene)")
     if not os.access(GNU_TIME, os.X_OK):
         log("note: /usr/bin/time not found (Debian package `time`); peak memory from os.wait4 ru_maxrss instead")
 
-    jobs = []
-    for n in a.n:
+    def jobs_for(scene_name):
+        out = []
         for e in engines:
             if e not in available:
                 continue
-            for t in (gthreads if e == "gabion" else [1]):
-                jobs.append((n, e, t))
-    total = len(jobs) * a.repeat
+            if e == "gabion":
+                out += [(e, t, None) for t in gthreads]
+            elif e == "liggghts":
+                out += [(e, 1, None)] if scene_name == "settle" else [(e, 1, v) for v in neighs]
+            elif scene_name != "settle":
+                continue
+            elif e == "yade":
+                out.append((e, 1, None))
+            else:
+                out += [(e, t, c) for c in clouds for t in gthreads]
+        return out
+
+    plan = ([("settle", n) for n in a.n] if do_settle else []) + ([("mixed", None)] if do_mixed else [])
+    total = sum(len(jobs_for(name)) for name, _ in plan) * a.repeat
 
     rows = []
     failures = 0
     k = 0
     scenes = {}
-    for n in a.n:
+    for name, n in plan:
         t0 = time.perf_counter()
-        subprocess.run([sys.executable, os.path.join(HERE, "generate.py"), str(n), "--steps", str(a.steps),
-                        "--seed", str(a.seed), "--outdir", a.workdir], check=True, stdout=subprocess.DEVNULL)
-        base = os.path.join(a.workdir, f"settle_{n}")
-        with open(base + ".meta.json") as f:
-            meta = json.load(f)
-        scenes[n] = {"n": n, "steps": a.steps, "side_m": meta["side_m"], "gabion_case": base + ".gabion.json",
-                     "liggghts_data": base + ".data", "spheres": base + ".spheres",
-                     "initial_mean_z_m": meta["initial_mean_z_m"]}
-        log(f"scene N={n}: L={meta['side_m']:g} m, cloud height {meta['cloud_height_m']:.4f} m, "
-            f"initial mean z {meta['initial_mean_z_m']:.4f} m (generated in {time.perf_counter() - t0:.1f} s)")
+        if name == "settle":
+            scene = settle_scene(n, settle_steps, a.seed, a.workdir)
+            if "ceiling" in available and "gen" in clouds:
+                path, z0, count = ceiling_gen_cloud(available["ceiling"], n, scene["side_m"],
+                                                    os.path.join(REPO, "bench", "work", "ceiling"))
+                scene["ceiling_gen_spheres"] = path
+                ceiling_info.setdefault("gen_clouds", {})[str(n)] = {"path": path, "initial_mean_z_m": z0,
+                                                                     "n": count}
+                log(f"    the ceiling kernel's own cloud (gen.py): {count} spheres, initial mean z {z0:.4f} m")
+        else:
+            scene = mixed_scene(mixed_steps, a.seed, a.workdir)
+        log(f"    (scene written in {time.perf_counter() - t0:.1f} s)")
+        scenes[(name, scene["n"])] = scene
         # Round-robin: with --repeat R the engines run in turn R times, so that
         # a drift of the machine's speed hits all of them alike; the best run
         # of each is kept.
-        jobs_n = [j for j in jobs if j[0] == n]
-        bests = {j: None for j in jobs_n}
+        jobs = jobs_for(name)
+        bests = {j: None for j in jobs}
         for r in range(a.repeat):
-            for (jn, e, t) in jobs_n:
+            for job in jobs:
+                e, t, v = job
                 k += 1
-                rundir = os.path.join(a.workdir, f"{e}_N{n}_t{t}" + (f"_r{r + 1}" if a.repeat > 1 else ""))
+                rundir = os.path.join(a.workdir, job_dir(scene, job, r + 1 if a.repeat > 1 else 0))
                 shutil.rmtree(rundir, ignore_errors=True)
                 os.makedirs(rundir)
                 la = loadavg()
-                log(f"[{k}/{total}] {e} N={n} threads={t} steps={a.steps} (load {la[0]:.2f}) ...")
-                if e == "gabion":
-                    res = run_gabion(available[e], scenes[n], t, rundir, a.timeout)
-                elif e == "liggghts":
-                    res = run_liggghts(available[e], scenes[n], rundir, a.timeout)
-                else:
-                    res = run_yade(available[e], scenes[n], rundir, a.timeout)
+                what = job_label(job) + (f" [{neigh_words(v)}]" if e == "liggghts" and v else "")
+                log(f"[{k}/{total}] {name} {what} N={scene['n']} threads={t} steps={scene['steps']} "
+                    f"(load {la[0]:.2f}) ...")
+                res = run_job(available, scene, job, rundir, a.timeout)
                 res["load1"] = la[0]
+                if "error" not in res and res["steps"] != scene["steps"]:
+                    res["error"] = f"ran {res['steps']} steps, expected {scene['steps']}"
                 if "error" in res:
                     failures += 1
                     log(f"    FAILED ({res['elapsed_s']:.1f} s): {res['error']}\n    outputs in {rundir}")
                     continue
-                bsps = n * res["steps"] / res["loop_s"]
+                bsps = scene["n"] * res["steps"] / res["loop_s"]
+                extra = ""
+                if res.get("contacts") is not None:
+                    extra = f", contacts {res['contacts']}"
+                    if res.get("contacts_geom") is not None:
+                        extra += f" (geometric {res['contacts_geom']})"
                 log(f"    loop {res['loop_s']:.2f} s ({bsps / 1e6:.2f} M body-steps/s), whole run "
-                    f"{res['elapsed_s']:.1f} s, max RSS {fmt(res['rss_kB'], '.0f')} kB")
-                if bests[(jn, e, t)] is None or res["loop_s"] < bests[(jn, e, t)]["loop_s"]:
-                    bests[(jn, e, t)] = res
-        for (jn, e, t) in jobs_n:
-            best = bests[(jn, e, t)]
-            if best is not None and not a.no_baseline and a.steps > 1:
+                    f"{res['elapsed_s']:.1f} s, max RSS {fmt(res['rss_kB'], '.0f')} kB{extra}")
+                if bests[job] is None or res["loop_s"] < bests[job]["loop_s"]:
+                    bests[job] = res
+        for job in jobs:
+            e, t, v = job
+            best = bests[job]
+            if best is not None and not a.no_baseline and scene["steps"] > 1:
                 # The same run with 1 step: its CPU time is the start-up and
                 # output; the difference is the CPU time of steps - 1 steps,
                 # which other jobs on the machine disturb much less than the
                 # wall time.
-                rundir = os.path.join(a.workdir, f"{e}_N{n}_t{t}_1step")
+                rundir = os.path.join(a.workdir, job_dir(scene, job, 0) + "_1step")
                 shutil.rmtree(rundir, ignore_errors=True)
                 os.makedirs(rundir)
-                one = dict(scenes[n], steps=1)
-                if e == "gabion":
-                    b = run_gabion(available[e], one, t, rundir, a.timeout)
-                elif e == "liggghts":
-                    b = run_liggghts(available[e], one, rundir, a.timeout)
-                else:
-                    b = run_yade(available[e], one, rundir, a.timeout)
+                b = run_job(available, dict(scene, steps=1), job, rundir, a.timeout)
                 if "error" in b or b.get("cpu_s") is None or best.get("cpu_s") is None:
-                    log(f"    1-step baseline failed: {b.get('error', 'no CPU time')}")
+                    log(f"    1-step baseline of {job_label(job)} failed: {b.get('error', 'no CPU time')}")
                 else:
                     best["loop_cpu_s"] = best["cpu_s"] - b["cpu_s"]
-                    log(f"    1-step baseline: CPU {b['cpu_s']:.2f} s; loop CPU {best['loop_cpu_s']:.2f} s")
+                    log(f"    1-step baseline of {job_label(job)} t={t}: CPU {b['cpu_s']:.2f} s; "
+                        f"loop CPU {best['loop_cpu_s']:.2f} s")
             if best is not None:
-                best.update({"engine": e, "n": n, "threads": t})
+                best.update({"engine": e, "n": scene["n"], "threads": t, "scene": name, "variant": v,
+                             "label": job_label(job)})
                 rows.append(best)
 
-    info = {"date": stamp, "machine": f"{cpu_model()}, {os.cpu_count()} logical CPUs", "steps": a.steps,
-            "seed": a.seed, "repeat": a.repeat, "rows": rows, "skipped": skipped,
-            "initial_mean_z_m": {str(n): scenes[n]["initial_mean_z_m"] for n in scenes}}
+    info = {"date": stamp, "machine": f"{cpu_model()}, {os.cpu_count()} logical CPUs", "steps": settle_steps,
+            "seed": a.seed, "repeat": a.repeat, "rows": rows, "skipped": skipped, "scene": a.scene,
+            "initial_mean_z_m": {str(s["n"]): s["initial_mean_z_m"] for s in scenes.values()
+                                 if s["name"] == "settle"},
+            "command": "bench/settle/run.sh " + " ".join(sys.argv[1:])}
+    if ceiling_info:
+        info["ceiling"] = {k: v for k, v in ceiling_info.items() if k not in ("sol", "sol_omp", "gen")}
+    mixed = [s for s in scenes.values() if s["name"] == "mixed"]
+    if mixed:
+        info["mixed"] = mixed[0]["meta"]
+        info["mixed"]["steps"] = mixed[0]["steps"]
     text = render(info)
     log("")
     log(text)
