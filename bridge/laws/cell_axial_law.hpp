@@ -2,8 +2,11 @@
 /// \file
 /// The macro cell law in one direction: force against shortening of a cell
 /// (confined compression, Bertrand et al. 2006 Fig. 12 and Sec. 4), with
-/// plastic memory. Used between x-neighbours, for the boulder-face impact law,
-/// and by the fitting to evaluate model curves. A pure function of value types.
+/// plastic memory. The macro model uses it for its axial, lateral and ground
+/// links and for the boulder-face impact law; the fitting evaluates model
+/// curves with it. The return mapping itself is the elastic-plastic spring of
+/// elastic_plastic.hpp, shared with the fine DEM's F_lim cap; this header maps
+/// the law's parameters onto it.
 ///
 /// Convention: u is the shortening (compression positive, m); F >= 0 is the
 /// compressive force (N). The cell carries no tension: a cell is a contact
@@ -16,6 +19,8 @@
 /// - bilinear: linear isotropic hardening; after yield the loading tangent is
 ///   k_h (< k): the yield force grows as F_y + H u_p with H = k k_h / (k - k_h).
 ///   Unloading and reloading are elastic with k.
+#include "bridge/laws/elastic_plastic.hpp"
+
 namespace gabion::bridge {
 
 enum class AxialModel { ElasticPerfectlyPlastic, Bilinear };
@@ -28,29 +33,28 @@ struct AxialLawParams {
   double hardening_stiffness_N_m = 0.0;   ///< post-yield tangent k_h, bilinear only (N/m), 0 <= k_h < k
 };
 
-/// Result of one evaluation: the force and the updated plastic shortening.
-struct AxialResponse {
-  double force_N = 0.0;
-  double plastic_m = 0.0;
-};
+/// The law as the elastic-plastic spring of elastic_plastic.hpp (the same
+/// return mapping as the fine DEM's F_lim cap): no hardening for
+/// elastic_perfectly_plastic, H = k k_h / (k - k_h) for bilinear.
+inline ElasticPlasticParams axialSpring(const AxialLawParams& p) {
+  if (p.model == AxialModel::Bilinear)
+    return hardeningSpring(p.stiffness_N_m, p.yield_force_N, p.hardening_stiffness_N_m);
+  return {p.stiffness_N_m, p.yield_force_N, 0.0, 0.0};
+}
+
+/// Result of one evaluation: the force (N), the updated plastic shortening
+/// (m) and the plastic work of the update (J).
+using AxialResponse = ElasticPlasticResponse;
 
 /// Force for shortening `u_m` given the plastic shortening `plastic_m` carried
 /// from the previous evaluation (return mapping; exact for any step size).
 inline AxialResponse axialResponse(const AxialLawParams& p, double u_m, double plastic_m) {
-  const double k = p.stiffness_N_m;
-  const double H = p.model == AxialModel::Bilinear ? k * p.hardening_stiffness_N_m / (k - p.hardening_stiffness_N_m) : 0.0;
-  const double trial = k * (u_m - plastic_m);
-  if (trial <= 0.0) return {0.0, plastic_m};  // separated: no tension
-  const double yield = p.yield_force_N + H * plastic_m;
-  if (trial <= yield) return {trial, plastic_m};
-  // Plastic: F = yield(u_p') = k (u - u_p'), solved for u_p'.
-  const double up = (k * u_m - p.yield_force_N) / (k + H);
-  return {k * (u_m - up), up};
+  return elasticPlasticResponse(axialSpring(p), u_m, plastic_m);
 }
 
 /// Elastic energy stored at force F (J).
 inline double axialElasticEnergy(const AxialLawParams& p, double force_N) {
-  return 0.5 * force_N * force_N / p.stiffness_N_m;
+  return elasticPlasticEnergy(axialSpring(p), force_N);
 }
 
 }  // namespace gabion::bridge

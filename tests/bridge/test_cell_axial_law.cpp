@@ -12,11 +12,16 @@ TEST(CellAxialLaw, ElasticPerfectlyPlasticCycle) {
   auto r = axialResponse(p, 0.005, up);  // elastic
   EXPECT_DOUBLE_EQ(r.force_N, 5e3);
   r = axialResponse(p, 0.03, r.plastic_m);  // plateau: u_p = 0.03 - 0.01
-  EXPECT_DOUBLE_EQ(r.force_N, 1e4);
+  // the return mapping puts a perfectly plastic force exactly on F_y
+  EXPECT_EQ(r.force_N, 1e4);
   EXPECT_DOUBLE_EQ(r.plastic_m, 0.02);
+  EXPECT_DOUBLE_EQ(r.plastic_work_J, 1e4 * 0.02);
   up = r.plastic_m;
-  r = axialResponse(p, 0.025, up);  // unloading with k from u_p
-  EXPECT_DOUBLE_EQ(r.force_N, 5e3);
+  // Unloading with k from u_p. u_p = u - F_y / k carries the rounding of u
+  // (0.03 is not a binary fraction): k (u - u_p) is 5 kN to a few ulps.
+  r = axialResponse(p, 0.025, up);
+  EXPECT_NEAR(r.force_N, 5e3, 1e-14 * 5e3);
+  EXPECT_EQ(r.plastic_work_J, 0.0);
   r = axialResponse(p, 0.015, up);  // below u_p: separated, no tension
   EXPECT_DOUBLE_EQ(r.force_N, 0.0);
   EXPECT_DOUBLE_EQ(r.plastic_m, 0.02);

@@ -3,7 +3,7 @@
 
 #include <cmath>
 
-#include "bridge/laws/contact_local_damping.hpp"
+#include "bridge/laws/contact_damping.hpp"
 #include "bridge/laws/contact_normal.hpp"
 #include "bridge/laws/contact_tangential.hpp"
 #include "micro/contact.hpp"
@@ -23,7 +23,7 @@ TEST(ContactNormalLaw, ForceLimitCycleDissipatesAnalyticPlasticWork) {
   double plastic = 0.0, work = 0.0, dissipated = 0.0, f_prev = 0.0, d_prev = 0.0;
   const auto go = [&](double d) {
     const auto r = bridge::normalContactForce(p, d, plastic);
-    plastic = r.plastic_overlap_m;
+    plastic = r.plastic_m;
     dissipated += r.plastic_work_J;
     work += 0.5 * (f_prev + r.force_N) * (d - d_prev);  // trapezoid of the force-overlap curve
     f_prev = r.force_N;
@@ -53,22 +53,18 @@ TEST(ContactNormalLaw, NoForceLimitIsLinear) {
 // Shear spring: elastic below the Coulomb limit; sliding dissipates the
 // released spring energy; the history keeps its length when rotated.
 TEST(ContactTangentialLaw, CoulombLimitAndDissipation) {
-  const bridge::TangentialContactParams p{1e4, 0.5};
-  double u[3] = {0, 0, 0};
-  const double du[3] = {1e-3, 0, 0};
-  EXPECT_EQ(bridge::coulombShearUpdate(p, 100.0, u, du), 0.0);  // |F| = 10 N < 50 N
-  EXPECT_DOUBLE_EQ(u[0], 1e-3);
-  const double big[3] = {9e-3, 0, 0};  // trial 100 N > 50 N
-  const double d = bridge::coulombShearUpdate(p, 100.0, u, big);
-  EXPECT_NEAR(u[0] * p.stiffness_N_m, 50.0, 1e-12);
+  const auto p = bridge::shearSpring({1e4, 0.5});
+  const auto stick = bridge::coulombShearUpdate(p, 100.0, {0, 0, 0}, {1e-3, 0, 0});
+  EXPECT_EQ(stick.friction_work_J, 0.0);  // |F| = 10 N < 50 N
+  EXPECT_DOUBLE_EQ(stick.u.x, 1e-3);
+  const auto slide = bridge::coulombShearUpdate(p, 100.0, stick.u, {9e-3, 0, 0});  // trial 100 N > 50 N
+  EXPECT_NEAR(slide.u.x * p.stiffness_N_m, 50.0, 1e-12);
   // work k_s (u_old + u_new) du / 2 = 1e4 (1e-3 + 5e-3) 9e-3 / 2 = 0.27 J, less
   // the stored change k_s (5e-3^2 - 1e-3^2) / 2 = 0.12 J
-  EXPECT_NEAR(d, 0.15, 1e-12);
-  double w[3] = {3e-3, 0, 4e-3};
-  const double n[3] = {0, 0, 1};
-  bridge::rotateShearIntoPlane(w, n);
-  EXPECT_NEAR(w[0], 5e-3, 1e-15);
-  EXPECT_NEAR(w[2], 0.0, 1e-18);
+  EXPECT_NEAR(slide.friction_work_J, 0.15, 1e-12);
+  const auto w = bridge::rotateShearIntoPlane({3e-3, 0, 4e-3}, {0, 0, 1});
+  EXPECT_NEAR(w.x, 5e-3, 1e-15);
+  EXPECT_NEAR(w.z, 0.0, 1e-18);
 }
 
 TEST(ContactLocalDamping, ReducesForceAgainstVelocity) {
