@@ -8,16 +8,16 @@ namespace gabion::macro {
 
 namespace {
 
-// bridge::axialResponse with the law's coefficients precomputed (the same
-// return mapping, no division in the loop). Returns the force (N); updates
-// the plastic shortening `up` (m).
-inline double lawForce(const Structure::AxialCoeffs& c, double u, double& up) {
-  const double trial = c.k * (u - up);
-  if (trial <= 0.0) return 0.0;  // separated: no tension
-  const double yield = c.fy + c.H * up;
-  if (trial <= yield) return trial;
-  up = (c.k * u - c.fy) * c.inv_k_H;
-  return c.k * (u - up);
+// One link's cell law (bridge::elasticPlasticResponse, the return mapping
+// shared with the fine DEM's F_lim cap): the force (N) for compression `u`
+// (m), with the plastic memory `up` (m) updated and the plastic work and the
+// stored elastic energy added to the stage's sums (J).
+inline double linkLaw(const bridge::ElasticPlasticParams& law, double u, double& up, double& plastic, double& elastic) {
+  const auto r = bridge::elasticPlasticResponse(law, u, up);
+  up = r.plastic_m;
+  plastic += r.plastic_work_J;
+  elastic += bridge::elasticPlasticEnergy(law, r.force_N);
+  return r.force_N;
 }
 
 }  // namespace
@@ -147,13 +147,6 @@ void Model::clearForces() {
   elastic_acc_ = 0.0;
 }
 
-double Model::plasticWork(int law, double before_m, double after_m) const {
-  // Exact plastic work of the return mapping: the force follows the yield
-  // force F_y + H u_p while u_p grows from `before` to `after`.
-  const auto& c = s_.axial_coeffs[static_cast<std::size_t>(law)];
-  return (c.fy + 0.5 * c.H * (before_m + after_m)) * (after_m - before_m);
-}
-
 // x-neighbours and the back wall: the cell law in compression, no tension.
 void Model::computeAxialForces(double dt) {
   // Local sums: the loop's stores to the force arrays cannot alias them.
@@ -165,16 +158,9 @@ void Model::computeAxialForces(double dt) {
     const int bi = L.b[l];
     const auto b = static_cast<std::size_t>(bi);
     const double shortening = ux_[a] - (bi >= 0 ? ux_[b] : 0.0);
-    const auto& law = s_.axial_coeffs[static_cast<std::size_t>(L.law[l])];
-    const double up = axial_plastic_[l];
-    double up_new = up;
-    const double F = lawForce(law, shortening, up_new);
-    if (up_new != up) {
-      plastic += plasticWork(L.law[l], up, up_new);
-      axial_plastic_[l] = up_new;
-    }
+    const double F =
+        linkLaw(s_.axial_springs[static_cast<std::size_t>(L.law[l])], shortening, axial_plastic_[l], plastic, elastic);
     axial_force_[l] = F;
-    elastic += F * F * law.half_inv_k;
     fx_[a] -= F;
     cell_axial_[a] += 0.5 * F;
     if (bi >= 0) {
@@ -231,16 +217,9 @@ void Model::computeBoulderContacts() {
       continue;
     }
     const double indent = R - d;
-    const double up = front_plastic_[el];
-    if (indent <= up) continue;  // inside the dent left by an earlier impact: no force
-    const auto& law = s_.axial_coeffs[static_cast<std::size_t>(F.law[el])];
-    double up_new = up;
-    const double f = lawForce(law, indent, up_new);
-    if (up_new != up) {
-      plastic += plasticWork(F.law[el], up, up_new);
-      front_plastic_[el] = up_new;
-    }
-    elastic += f * f * law.half_inv_k;
+    if (indent <= front_plastic_[el]) continue;  // inside the dent left by an earlier impact: no force
+    const double f =
+        linkLaw(s_.axial_springs[static_cast<std::size_t>(F.law[el])], indent, front_plastic_[el], plastic, elastic);
     const double nx = dx / d, ny = dy / d, nz = dz / d;  // from the cube to the centre
     bforce_ += f * Vec3(nx, ny, nz);
     fx_[node] -= f * nx;
@@ -286,16 +265,9 @@ void Model::computeLateralForces(double dt) {
     auto& fn = y ? fy_ : fz_;
     auto& vo = y ? vz_ : vy_;
     auto& fo = y ? fz_ : fy_;
-    const auto& law = s_.axial_coeffs[static_cast<std::size_t>(L.law[l])];
-    const double up = lat_plastic_[l];
-    double up_new = up;
-    const double fnorm = lawForce(law, un[a] - un[b], up_new);
-    if (up_new != up) {
-      plastic += plasticWork(L.law[l], up, up_new);
-      lat_plastic_[l] = up_new;
-    }
+    const double fnorm =
+        linkLaw(s_.axial_springs[static_cast<std::size_t>(L.law[l])], un[a] - un[b], lat_plastic_[l], plastic, elastic);
     lat_force_[l] = fnorm;
-    elastic += fnorm * fnorm * law.half_inv_k;
     fn[a] -= fnorm;
     fn[b] += fnorm;
     normal += fnorm;
@@ -328,16 +300,9 @@ void Model::computeGroundForces(double dt) {
       fx_[i] -= gnd_ftx_[l];
       continue;
     }
-    const auto& law = s_.axial_coeffs[static_cast<std::size_t>(G.law[l])];
-    const double up = gnd_plastic_[l];
-    double up_new = up;
-    const double fz = lawForce(law, -uz_[i], up_new);
-    if (up_new != up) {
-      plastic += plasticWork(G.law[l], up, up_new);
-      gnd_plastic_[l] = up_new;
-    }
+    const double fz =
+        linkLaw(s_.axial_springs[static_cast<std::size_t>(G.law[l])], -uz_[i], gnd_plastic_[l], plastic, elastic);
     gnd_force_[l] = fz;
-    elastic += fz * fz * law.half_inv_k;
     fz_[i] += fz;
     normal += fz;
     friction += frictionUpdate2d(fp, normal, dt * vx_[i], dt * vy_[i], gnd_ftx_[l], gnd_fty_[l]);

@@ -87,6 +87,14 @@ class Model {
   const std::vector<double>& axialPlastic() const { return axial_plastic_; }
   /// Plastic indentation of each front element (m).
   const std::vector<double>& frontPlastic() const { return front_plastic_; }
+  /// Normal spring force and plastic shortening of each lateral link (3-D only;
+  /// Structure::lateral order) (N, m).
+  const std::vector<double>& lateralForce() const { return lat_force_; }
+  const std::vector<double>& lateralPlastic() const { return lat_plastic_; }
+  /// Force and plastic sinking of each ground link's normal spring (3-D only;
+  /// Structure::ground order) (N, m).
+  const std::vector<double>& groundForce() const { return gnd_force_; }
+  const std::vector<double>& groundPlastic() const { return gnd_plastic_; }
 
   const Vec3& boulderPosition() const { return bpos_; }
   /// Boulder centre where the last step evaluated the forces, x(n) (m).
@@ -109,8 +117,6 @@ class Model {
   void computeGroundForces(double dt);
   void integrate(double dt, double damping_rate_1_s);
   StepStatus checkState();
-
-  double plasticWork(int law, double before_m, double after_m) const;
 
   Structure s_;
   Kinematics kin_;

@@ -9,11 +9,6 @@ namespace gabion::macro {
 using bridge::AxialLawParams;
 using bridge::AxialModel;
 
-double hardeningModulus(const AxialLawParams& p) {
-  if (p.model != AxialModel::Bilinear) return 0.0;
-  return p.stiffness_N_m * p.hardening_stiffness_N_m / (p.stiffness_N_m - p.hardening_stiffness_N_m);
-}
-
 AxialLawParams seriesAxialLaw(const AxialLawParams& a, const AxialLawParams& b) {
   auto series = [](double x, double y) { return x + y > 0.0 ? 2.0 * x * y / (x + y) : 0.0; };
   AxialLawParams p;
@@ -49,9 +44,7 @@ int internAxial(Structure& s, const AxialLawParams& p) {
       return static_cast<int>(i);
   }
   s.axial_laws.push_back(p);
-  const double H = hardeningModulus(p);
-  s.axial_hardening_N_m.push_back(H);
-  s.axial_coeffs.push_back({p.stiffness_N_m, p.yield_force_N, H, 1.0 / (p.stiffness_N_m + H), 0.5 / p.stiffness_N_m});
+  s.axial_springs.push_back(bridge::axialSpring(p));
   return static_cast<int>(s.axial_laws.size() - 1);
 }
 

@@ -69,16 +69,9 @@ struct Structure {
 
   /// Law tables, indexed by the links below.
   std::vector<bridge::AxialLawParams> axial_laws;
-  std::vector<double> axial_hardening_N_m;  ///< per axial law: H of the bilinear law (0 for EPP)
-  /// The hot coefficients of each axial law, precomputed for the step loop.
-  struct AxialCoeffs {
-    double k;           ///< stiffness (N/m)
-    double fy;          ///< first yield force (N)
-    double H;           ///< hardening modulus (N/m), 0 for EPP
-    double inv_k_H;     ///< 1 / (k + H) (m/N)
-    double half_inv_k;  ///< 1 / (2 k) for the elastic energy (m/N)
-  };
-  std::vector<AxialCoeffs> axial_coeffs;
+  /// Each axial law as the elastic-plastic spring its links evaluate
+  /// (bridge::axialSpring, hardening precomputed for the step loop).
+  std::vector<bridge::ElasticPlasticParams> axial_springs;
   std::vector<bridge::FrictionParams> friction_laws;
   std::vector<double> friction_half_inv_k;  ///< per friction law: 1 / (2 k_t) (m/N)
 
@@ -124,7 +117,5 @@ Structure buildStructure(const StructureSpec& spec, const bridge::LawFile& laws)
 bridge::AxialLawParams seriesAxialLaw(const bridge::AxialLawParams& a, const bridge::AxialLawParams& b);
 /// Half a cell against a rigid wall: stiffness and hardening doubled, the same yield force.
 bridge::AxialLawParams halfCellLaw(const bridge::AxialLawParams& a);
-/// H = k k_h / (k - k_h) of the bilinear law (N/m), 0 for elastic-perfectly-plastic.
-double hardeningModulus(const bridge::AxialLawParams& p);
 
 }  // namespace gabion::macro
