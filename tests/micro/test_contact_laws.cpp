@@ -1,4 +1,7 @@
-// The contact laws of bridge/laws/contact_*.hpp against closed-form answers.
+// The contact laws of bridge/laws/contact_*.hpp against closed-form answers,
+// called one by one and composed by micro::laneContact (the form the kernels
+// run). tests/micro/test_law_equivalence.cpp checks that every path gives
+// the same numbers.
 #include <gtest/gtest.h>
 
 #include <cmath>
@@ -73,6 +76,86 @@ TEST(ContactLocalDamping, ReducesForceAgainstVelocity) {
   EXPECT_DOUBLE_EQ(bridge::locallyDampedForce(p, 10.0, -1.0), 12.0);
   EXPECT_DOUBLE_EQ(bridge::locallyDampedForce(p, -10.0, 1.0), -12.0);
   EXPECT_DOUBLE_EQ(bridge::locallyDampedForce(p, 10.0, 0.0), 10.0);
+}
+
+// Two bodies meeting head-on along x through laneContact (normal spring and
+// dashpot), leapfrog with the dashpot on the half-step velocity as in the
+// engine: the restitution coefficient of the linear spring-dashpot,
+// exp(-pi zeta / sqrt(1 - zeta^2)) (the dashpot acts, unclipped, until the
+// overlap returns to zero), to the integrator's O(dt) error (1e-5 at
+// 20,000 steps per half period).
+class ContactRestitution : public ::testing::TestWithParam<double> {};
+
+TEST_P(ContactRestitution, MatchesTheSpringDashpotSolution) {
+  const double zeta = GetParam(), kn = 1e5, m1 = 0.02, m2 = 0.05, v0 = 0.5;
+  const double inv_mass_sum = 1.0 / m1 + 1.0 / m2;
+  const double omega = std::sqrt(kn * inv_mass_sum), dt = M_PI / omega / 20000.0;
+  double x1 = 0.0, x2 = 1e-9, v1 = v0, v2 = 0.0;  // body 2 (j) is hit by body 1 (i); gap of 1 nm
+  double ux = 0.0, uy = 0.0, uz = 0.0, plastic = 0.0, viscous = 0.0;
+  bool touched = false;
+  for (int step = 0; step < 200000; ++step) {
+    const double overlap = x1 - x2;  // radii absorbed in the positions: contact when x1 > x2
+    if (touched && overlap <= 0.0) break;
+    double f = 0.0;
+    if (overlap > 0.0) {
+      touched = true;
+      const auto c = micro::laneContact<false, true, false>(1, 0, 0, overlap, v2 - v1, 0, 0, kn, 1e4, 0.0, 0.0, zeta,
+                                                            inv_mass_sum, dt, ux, uy, uz, plastic, viscous);
+      f = c.fx;  // force on i
+    }
+    v1 += dt * f / m1, v2 -= dt * f / m2;
+    x1 += dt * v1, x2 += dt * v2;
+  }
+  ASSERT_TRUE(touched);
+  const double analytic = std::exp(-M_PI * zeta / std::sqrt(1.0 - zeta * zeta));
+  EXPECT_NEAR((v2 - v1) / v0, analytic, 1e-4) << "zeta " << zeta;
+  // momentum is exchanged, not created
+  EXPECT_NEAR(m1 * v1 + m2 * v2, m1 * v0, 1e-12 * m1 * v0);
+}
+
+INSTANTIATE_TEST_SUITE_P(Zeta, ContactRestitution, ::testing::Values(0.0, 0.1, 0.3, 0.6));
+
+// Steady sliding through laneContact: the tangential force settles on the
+// Coulomb limit f F_n along the slip, and each step dissipates f F_n times
+// the slip of the step.
+TEST(ContactTangentialLaw, SteadySlidingAtTheCoulombLimit) {
+  const double kn = 1e5, ks = 2.5e4, f = 0.5, overlap = 4e-4, vt = 0.2, dt = 1e-5;
+  const double fn = kn * overlap;
+  double ux = 0.0, uy = 0.0, uz = 0.0, plastic = 0.0, viscous = 0.0;
+  micro::LaneContact c{};
+  for (int step = 0; step < 1000; ++step)  // 2 mm of slip: well past the spring's reach of 0.8 mm
+    c = micro::laneContact<true, false, false>(0, 0, 1, overlap, vt, 0, 0, kn, ks, f / ks, 0.0, 0.0, 1.0, dt, ux, uy,
+                                               uz, plastic, viscous);
+  EXPECT_NEAR(c.fx, f * fn, 1e-12 * f * fn);  // drags i along with the partner
+  EXPECT_EQ(c.fy, 0.0);
+  EXPECT_DOUBLE_EQ(c.fz, -fn);
+  EXPECT_NEAR(c.friction_J, f * fn * vt * dt, 1e-12 * f * fn * vt * dt);
+  EXPECT_NEAR(c.elastic_J, 0.5 * fn * fn / kn + 0.5 * (f * fn) * (f * fn) / ks, 1e-12 * c.elastic_J);
+}
+
+// The F_lim plateau through laneContact: while the overlap grows past
+// F_lim / k_n the elastic force stays exactly F_lim and the plastic work is
+// F_lim times the plastic overlap; unloading is elastic from delta_p.
+TEST(ContactNormalLaw, ForceLimitPlateauThroughLaneContact) {
+  const double kn = 1e5, flim = 40.0, dmax = 1e-3;
+  double ux = 0.0, uy = 0.0, uz = 0.0, plastic = 0.0, viscous = 0.0, work = 0.0;
+  for (int k = 1; k <= 1000; ++k) {
+    const double d = dmax * k / 1000;
+    const auto c = micro::laneContact<false, false, true>(0, 0, 1, d, 0, 0, 0, kn, 1e4, 0.0, flim, 0.0, 1.0, 1e-5, ux,
+                                                          uy, uz, plastic, viscous);
+    work += c.plastic_J;
+    if (kn * d > flim) {
+      EXPECT_EQ(c.elastic_normal_N, flim) << d;
+    } else {
+      EXPECT_NEAR(c.elastic_normal_N, kn * d, 1e-12 * flim);
+    }
+  }
+  EXPECT_NEAR(plastic, dmax - flim / kn, 1e-18);
+  EXPECT_NEAR(work, flim * (dmax - flim / kn), 1e-12 * flim * dmax);
+  const auto back = micro::laneContact<false, false, true>(0, 0, 1, plastic + 1e-4, 0, 0, 0, kn, 1e4, 0.0, flim, 0.0,
+                                                           1.0, 1e-5, ux, uy, uz, plastic, viscous);
+  EXPECT_NEAR(back.elastic_normal_N, 10.0, 1e-9);
+  EXPECT_EQ(back.plastic_J, 0.0);
 }
 
 // Mixing rule: a material with itself keeps its values; two materials give
