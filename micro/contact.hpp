@@ -59,8 +59,8 @@ struct LaneContact {
 
 /// One contact, the laws of bridge/laws composed, branch-free (the laws are
 /// selects, not branches) so that the vectorised kernels run it one SIMD lane
-/// per contact: the particle-pair kernel and the wall kernel of
-/// micro/engine.cpp, and evaluateContact for the scalar path. n: unit normal
+/// per contact: the particle-pair kernel (micro/contact_kernel.cpp) and the
+/// wall kernel (micro/walls.cpp), and evaluateContact for the scalar path. n: unit normal
 /// from i to j; overlap_m (> 0 for a contact that acts); v*: velocity of j's
 /// contact point relative to i's; kn, ks, mu_ks = friction / ks, flim, zeta:
 /// the pair's law; inv_mass_sum: 1/m_i + 1/m_j; ux, uy, uz, plastic, viscous:
