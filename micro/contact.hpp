@@ -59,15 +59,15 @@ struct LaneContact {
 
 /// One contact, the laws of bridge/laws composed, branch-free (the laws are
 /// selects, not branches) so that the vectorised kernels run it one SIMD lane
-/// per contact: the particle-pair kernel (micro/contact_kernel.cpp) and the
-/// wall kernel (micro/walls.cpp), and evaluateContact for the scalar path. n: unit normal
-/// from i to j; overlap_m (> 0 for a contact that acts); v*: velocity of j's
-/// contact point relative to i's; kn, ks, mu_ks = friction / ks, flim, zeta:
-/// the pair's law; inv_mass_sum: 1/m_i + 1/m_j; ux, uy, uz, plastic, viscous:
-/// the contact history, updated. F_lim, viscous damping and the stored energy
-/// are compile-time switches (a case pays only for what it uses; without
-/// F_lim the spring has no cap and no plastic memory, without viscous
-/// damping the dashpot history is left alone). Force on i:
+/// per contact: the particle-pair kernel (micro/contact_kernel.cpp), the wall
+/// kernel (micro/walls.cpp), and evaluateContact for the scalar path.
+/// n: unit normal from i to j; overlap (> 0 for a contact that acts); v*:
+/// velocity of j's contact point relative to i's; kn, ks, mu_ks = friction /
+/// ks, flim, zeta: the pair's law; inv_mass_sum: 1/m_i + 1/m_j; ux, uy, uz,
+/// plastic, viscous: the contact history, updated. F_lim, viscous damping and
+/// the stored energy are compile-time switches (a case pays only for what it
+/// uses; without F_lim the spring has no cap and no plastic memory, without
+/// viscous damping the dashpot history is left alone). Force on i:
 /// -(F_n + F_v) n + k_s u. tests/micro/test_law_equivalence.cpp checks that
 /// this, called alone or in a SIMD loop, evaluateContact and the bridge laws
 /// called one by one agree.
@@ -78,11 +78,10 @@ template <bool kMeasure, bool kViscous, bool kPlastic>
                                                       double& ux, double& uy, double& uz, double& plastic,
                                                       double& viscous) {
   const bridge::Xyz n{nx, ny, nz}, v{vx, vy, vz};
-  const bridge::ElasticPlasticParams spring =
-      bridge::normalSpring({kn, kPlastic ? flim : std::numeric_limits<double>::infinity()});
+  const bridge::NormalContactParams normal_law{kn, kPlastic ? flim : std::numeric_limits<double>::infinity()};
   const bridge::ShearSpring shear{ks, mu_ks};
   LaneContact out{};
-  const auto normal = bridge::elasticPlasticResponse</*kHardening=*/false>(spring, overlap, kPlastic ? plastic : 0.0);
+  const auto normal = bridge::normalContactForce(normal_law, overlap, kPlastic ? plastic : 0.0);
   if constexpr (kPlastic) {
     plastic = normal.plastic_m;
     out.plastic_J = normal.plastic_work_J;
@@ -100,7 +99,7 @@ template <bool kMeasure, bool kViscous, bool kPlastic>
   out.friction_J = slip.friction_work_J;
   if constexpr (kMeasure)
     out.elastic_J =
-        bridge::elasticPlasticEnergy(spring, normal.force_N) + bridge::tangentialElasticEnergy(shear, slip.u);
+        bridge::normalElasticEnergy(normal_law, normal.force_N) + bridge::tangentialElasticEnergy(shear, slip.u);
   out.fx = -fn * nx + ks * ux, out.fy = -fn * ny + ks * uy, out.fz = -fn * nz + ks * uz;
   out.elastic_normal_N = normal.force_N;
   return out;

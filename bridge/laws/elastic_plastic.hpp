@@ -28,9 +28,9 @@
 namespace gabion::bridge {
 
 /// Parameters of the spring. `hardening_N_m` and `tangent_ratio` describe
-/// the same hardening and must agree (tangent_ratio = H / (k + H)); both are
-/// kept so that the hot loops neither divide nor recompute them. The
-/// perfectly plastic spring (both 0) is the default.
+/// the same hardening and must agree (tangent_ratio = H / (k + H), built by
+/// hardeningSpring); both are kept so that the hot loops do not recompute
+/// the ratio. The perfectly plastic spring (both 0) is the default.
 struct ElasticPlasticParams {
   double stiffness_N_m = 0.0;                                      ///< k (N/m), > 0
   double yield_force_N = std::numeric_limits<double>::infinity();  ///< first yield F_y (N), >= 0; infinity: elastic
