@@ -3,7 +3,7 @@
 #include <algorithm>
 #include <cmath>
 
-#include "bridge/laws/contact_local_damping.hpp"
+#include "bridge/laws/contact_damping.hpp"
 #include "micro/rigid_body.hpp"
 
 namespace gabion::micro {
@@ -15,12 +15,11 @@ namespace {
 // once per step. Also the largest squared displacement since the last list
 // build; block members are placed afterwards and checked there.
 // One component's kick with Cundall local damping
-// (bridge/laws/contact_local_damping.hpp, written out branch-free): returns
-// the new velocity and adds the damping work to `local`.
+// (bridge::localDampingForce, branch-free): returns the new velocity and
+// adds the damping work to `local`.
 [[gnu::always_inline]] inline double dampedKick(double F, double v0, double inv_m, double alpha, double dt,
                                                 double& local) {
-  const double sgn = static_cast<double>(v0 > 0.0) - static_cast<double>(v0 < 0.0);
-  const double Fd = -alpha * std::fabs(F) * sgn;
+  const double Fd = bridge::localDampingForce({alpha}, F, v0);
   const double v1 = v0 + dt * inv_m * (F + Fd);
   local -= Fd * (v0 + v1) * 0.5 * dt;
   return v1;
