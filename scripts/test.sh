@@ -3,5 +3,6 @@
 set -euo pipefail
 cd "$(dirname "$0")/.."
 ./scripts/deps.sh
+./scripts/check_format.sh  # the sources stay formatted with .clang-format
 dir=$(./scripts/build.sh | tail -n 1)
 ctest --test-dir "$dir" --output-on-failure -j "$(nproc)"
