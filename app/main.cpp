@@ -1,8 +1,8 @@
 // The `gabion` command line: run or check a case, print the version.
 // Exit codes: 0 ok, 1 internal error, 2 bad input, 3 numerical failure.
-#include <CLI/CLI.hpp>
 #include <unistd.h>
 
+#include <CLI/CLI.hpp>
 #include <chrono>
 #include <cstdio>
 #include <filesystem>

@@ -8,8 +8,8 @@
 
 #include <algorithm>
 #include <chrono>
-#include <ctime>
 #include <cstdio>
+#include <ctime>
 #include <filesystem>
 #include <nlohmann/json.hpp>
 #include <string>
@@ -96,10 +96,11 @@ void sweep(const std::string& law, int threads, int points) {
   const auto out = macro::runSweepCase(doc, ctx);
   const double wall = seconds(t0);
   const double cpu = static_cast<double>(std::clock() - c0) / CLOCKS_PER_SEC;  // all threads
-  std::printf("sweep: %d points (10x10x10 wall, 0.2 s each), %d threads: %.1f s wall (%.1f points/s), %.1f s CPU "
-              "(all threads), failed %s, max balance error %.2e, files in %s\n",
-              nm * nv, threads, wall, nm * nv / wall, cpu, out.results.at("failed_points").dump().c_str(),
-              out.results.at("balance_rel_error").get<double>(), ctx.outdir.string().c_str());
+  std::printf(
+      "sweep: %d points (10x10x10 wall, 0.2 s each), %d threads: %.1f s wall (%.1f points/s), %.1f s CPU "
+      "(all threads), failed %s, max balance error %.2e, files in %s\n",
+      nm * nv, threads, wall, nm * nv / wall, cpu, out.results.at("failed_points").dump().c_str(),
+      out.results.at("balance_rel_error").get<double>(), ctx.outdir.string().c_str());
 }
 
 }  // namespace

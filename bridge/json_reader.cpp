@@ -43,11 +43,16 @@ std::string typeName(const Json& v) {
 
 const char* checkText(Check check) {
   switch (check) {
-    case Check::Finite: return "must be a finite number";
-    case Check::Positive: return "must be > 0";
-    case Check::NonNegative: return "must be >= 0";
-    case Check::Fraction: return "must be in [0, 1]";
-    case Check::UnitOpen: return "must be in [0, 1)";
+    case Check::Finite:
+      return "must be a finite number";
+    case Check::Positive:
+      return "must be > 0";
+    case Check::NonNegative:
+      return "must be >= 0";
+    case Check::Fraction:
+      return "must be in [0, 1]";
+    case Check::UnitOpen:
+      return "must be in [0, 1)";
   }
   return "invalid";
 }
@@ -55,11 +60,16 @@ const char* checkText(Check check) {
 bool satisfies(double x, Check check) {
   if (!std::isfinite(x)) return false;
   switch (check) {
-    case Check::Finite: return true;
-    case Check::Positive: return x > 0.0;
-    case Check::NonNegative: return x >= 0.0;
-    case Check::Fraction: return x >= 0.0 && x <= 1.0;
-    case Check::UnitOpen: return x >= 0.0 && x < 1.0;
+    case Check::Finite:
+      return true;
+    case Check::Positive:
+      return x > 0.0;
+    case Check::NonNegative:
+      return x >= 0.0;
+    case Check::Fraction:
+      return x >= 0.0 && x <= 1.0;
+    case Check::UnitOpen:
+      return x >= 0.0 && x < 1.0;
   }
   return false;
 }
@@ -110,7 +120,9 @@ JsonDocument::JsonDocument(Json value, std::string file) : state_(std::make_shar
   state_->file = std::move(file);
 }
 
-JsonReader JsonDocument::root() const { return JsonReader(&state_->value, "", state_); }
+JsonReader JsonDocument::root() const {
+  return JsonReader(&state_->value, "", state_);
+}
 
 void JsonDocument::applySet(const std::string& assignment) {
   const auto eq = assignment.find('=');
@@ -137,8 +149,7 @@ void JsonDocument::applySet(const std::string& assignment) {
     const bool last = i + 1 == parts.size();
     if (node->is_object()) {
       ptr += "/" + escapePointerToken(part);
-      if (!last && !node->contains(part))
-        throw InputError(state_->file, ptr, "--set: no such object in the case");
+      if (!last && !node->contains(part)) throw InputError(state_->file, ptr, "--set: no such object in the case");
       node = &(*node)[part];
     } else if (node->is_array()) {
       std::size_t idx = 0;
@@ -181,7 +192,9 @@ void JsonDocument::releaseValue() const {
 JsonReader::JsonReader(const Json* node, std::string pointer, std::shared_ptr<JsonDocument::State> state)
     : node_(node), pointer_(std::move(pointer)), state_(std::move(state)) {}
 
-std::string JsonReader::pointer(const std::string& key) const { return pointer_ + "/" + escapePointerToken(key); }
+std::string JsonReader::pointer(const std::string& key) const {
+  return pointer_ + "/" + escapePointerToken(key);
+}
 
 void JsonReader::fail(const std::string& key, const std::string& message) const {
   throw InputError(state_->file, pointer(key), message);
@@ -191,7 +204,9 @@ void JsonReader::failHere(const std::string& message) const {
   throw InputError(state_->file, pointer_.empty() ? "/" : pointer_, message);
 }
 
-bool JsonReader::has(const std::string& key) const { return node_->is_object() && node_->contains(key); }
+bool JsonReader::has(const std::string& key) const {
+  return node_->is_object() && node_->contains(key);
+}
 
 const Json* JsonReader::find(const std::string& key) const {
   if (!node_->is_object()) failHere("expected an object, got " + typeName(*node_));
@@ -269,7 +284,9 @@ bool JsonReader::boolean(const std::string& key) const {
   return v.get<bool>();
 }
 
-bool JsonReader::boolean(const std::string& key, bool fallback) const { return has(key) ? boolean(key) : fallback; }
+bool JsonReader::boolean(const std::string& key, bool fallback) const {
+  return has(key) ? boolean(key) : fallback;
+}
 
 Vec3 JsonReader::vec3(const std::string& key) const {
   const Json& v = required(key);
@@ -283,7 +300,9 @@ Vec3 JsonReader::vec3(const std::string& key) const {
   return out;
 }
 
-Vec3 JsonReader::vec3(const std::string& key, const Vec3& fallback) const { return has(key) ? vec3(key) : fallback; }
+Vec3 JsonReader::vec3(const std::string& key, const Vec3& fallback) const {
+  return has(key) ? vec3(key) : fallback;
+}
 
 std::vector<double> JsonReader::numbers(const std::string& key, Check check, std::size_t min_size) const {
   const Json& v = required(key);

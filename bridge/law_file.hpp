@@ -20,18 +20,18 @@ struct LateralLaw {
 
 /// Inter-cell interface: Coulomb friction with a tangential spring.
 struct InterfaceLaw {
-  double friction = 0.5;                 ///< Coulomb coefficient (dimensionless)
-  double tangential_stiffness_N_m = 0.0; ///< (N/m)
+  double friction = 0.5;                  ///< Coulomb coefficient (dimensionless)
+  double tangential_stiffness_N_m = 0.0;  ///< (N/m)
 };
 
 /// The laws of one cell material.
 struct CellMaterial {
-  double edge_m = 0.5;     ///< cell edge (m)
-  double mass_kg = 0.0;    ///< cell mass (kg)
-  AxialLawParams axial;    ///< confined compression between x-neighbours
+  double edge_m = 0.5;   ///< cell edge (m)
+  double mass_kg = 0.0;  ///< cell mass (kg)
+  AxialLawParams axial;  ///< confined compression between x-neighbours
   LateralLaw lateral;
   InterfaceLaw interface;
-  AxialLawParams impact;   ///< boulder against the front face
+  AxialLawParams impact;                                 ///< boulder against the front face
   nlohmann::json provenance = nlohmann::json::object();  ///< what it was fitted from, how, error; "status" is required
 };
 

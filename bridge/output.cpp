@@ -16,12 +16,15 @@ namespace fs = std::filesystem;
 
 namespace {
 
-fs::path partPath(const fs::path& p) { return fs::path(p.string() + ".part"); }
+fs::path partPath(const fs::path& p) {
+  return fs::path(p.string() + ".part");
+}
 
 void renameInto(const fs::path& part, const fs::path& final_path) {
   std::error_code ec;
   fs::rename(part, final_path, ec);
-  if (ec) throw std::runtime_error("cannot rename " + part.string() + " to " + final_path.string() + ": " + ec.message());
+  if (ec)
+    throw std::runtime_error("cannot rename " + part.string() + " to " + final_path.string() + ": " + ec.message());
 }
 
 // Creates every missing group of "/a/b/dataset" and returns the parent path.
@@ -315,7 +318,8 @@ void writeXdmfPoints(const fs::path& xdmf_path, const std::string& h5_name, cons
         x << slab(t, f.components, f.dataset);
       } else {
         x << "     <DataItem Dimensions=\"" << points << (f.components == 3 ? " 3" : "")
-          << "\" NumberType=\"Float\" Precision=\"8\" Format=\"HDF\">" << h5_name << ":" << f.dataset << "</DataItem>\n";
+          << "\" NumberType=\"Float\" Precision=\"8\" Format=\"HDF\">" << h5_name << ":" << f.dataset
+          << "</DataItem>\n";
       }
       x << "    </Attribute>\n";
     }

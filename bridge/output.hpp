@@ -79,10 +79,10 @@ class H5Reader {
 /// One point-cloud attribute for an XDMF file: a time-major HDF5 dataset of
 /// shape (times, points, components) or, when `per_time` is false, (points).
 struct XdmfField {
-  std::string name;       ///< name shown in ParaView
-  std::string dataset;    ///< HDF5 dataset path
-  int components = 1;     ///< 1 (scalar) or 3 (vector)
-  bool per_time = true;   ///< false for constant fields such as radius
+  std::string name;      ///< name shown in ParaView
+  std::string dataset;   ///< HDF5 dataset path
+  int components = 1;    ///< 1 (scalar) or 3 (vector)
+  bool per_time = true;  ///< false for constant fields such as radius
 };
 
 /// Writes an XDMF 2 file that lets ParaView open a time series of point

@@ -12,16 +12,16 @@ namespace gabion::bridge {
 /// One data series of a chart.
 struct PlotSeries {
   enum class Style { Line, Markers, LineMarkers };
-  std::string label;           ///< legend text (empty: not in the legend)
-  std::vector<double> x, y;    ///< same length; non-finite points are skipped
+  std::string label;         ///< legend text (empty: not in the legend)
+  std::vector<double> x, y;  ///< same length; non-finite points are skipped
   Style style = Style::Line;
-  int color_rgb = -1;          ///< 0xRRGGBB, or -1: the palette colour of the series' index
+  int color_rgb = -1;  ///< 0xRRGGBB, or -1: the palette colour of the series' index
 };
 
 /// A 2-D chart.
 struct PlotSpec {
   std::string title;
-  std::string x_label;         ///< with unit, e.g. "displacement (m)"
+  std::string x_label;  ///< with unit, e.g. "displacement (m)"
   std::string y_label;
   std::vector<PlotSeries> series;
   int width_px = 900;

@@ -42,11 +42,11 @@ class Progress {
 
 /// What a run gets from the command line.
 struct RunContext {
-  std::filesystem::path outdir;                  ///< existing output folder
+  std::filesystem::path outdir;                   ///< existing output folder
   std::optional<std::filesystem::path> law_file;  ///< --law override (macro cases)
-  int threads = 1;                               ///< --threads
-  bool progress = false;                         ///< show a progress line
-  std::filesystem::path case_file;               ///< for provenance and messages
+  int threads = 1;                                ///< --threads
+  bool progress = false;                          ///< show a progress line
+  std::filesystem::path case_file;                ///< for provenance and messages
   /// The kind may free the case document's parsed value once it has read it
   /// (JsonDocument::releaseValue; a large particle case would otherwise keep
   /// its DOM beside the engine). The caller then keeps its own copy.
@@ -57,7 +57,7 @@ struct RunContext {
 struct RunOutcome {
   enum class Status { Ok, NumericalFailure };
   Status status = Status::Ok;
-  std::string message;    ///< why it failed (step, time, bodies)
+  std::string message;  ///< why it failed (step, time, bodies)
   /// A short account for the person at the terminal (e.g. where the time
   /// went), printed by the app after the list of result files unless
   /// --quiet; everything in it is also in `results`. Empty: nothing.

@@ -3,8 +3,8 @@
 #include <algorithm>
 #include <atomic>
 #include <chrono>
-#include <condition_variable>
 #include <cmath>
+#include <condition_variable>
 #include <fstream>
 #include <limits>
 #include <mutex>
@@ -131,8 +131,8 @@ struct Loop {
   fs::path scratch_root;
   bridge::Progress* progress = nullptr;
   std::mutex mutex;
-  std::condition_variable finished;              // an in-flight evaluation ended
-  std::set<std::vector<double>> in_flight;       // points being evaluated now
+  std::condition_variable finished;         // an in-flight evaluation ended
+  std::set<std::vector<double>> in_flight;  // points being evaluated now
   long long fresh = 0, reused = 0, failed = 0, done = 0, planned = 0;
   bool interrupted = false;
 

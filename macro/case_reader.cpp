@@ -15,8 +15,7 @@ using bridge::JsonReader;
 namespace {
 
 int readInt(const JsonReader& r, const std::string& key, double v, int minimum) {
-  if (v != std::floor(v) || v < minimum || v > 1e6)
-    r.fail(key, "expected integers >= " + std::to_string(minimum));
+  if (v != std::floor(v) || v < minimum || v > 1e6) r.fail(key, "expected integers >= " + std::to_string(minimum));
   return static_cast<int>(v);
 }
 
@@ -33,8 +32,9 @@ StructureSpec readStructure(const JsonReader& st) {
       st.fail("front_offset_cells", "expected one offset per z layer (" + std::to_string(s.nz) + ")");
     for (double o : off) {
       const int v = readInt(st, "front_offset_cells", o, 0);
-      if (v >= s.nx) st.fail("front_offset_cells", "an offset must leave at least one cell in the layer (< " +
-                                                       std::to_string(s.nx) + ")");
+      if (v >= s.nx)
+        st.fail("front_offset_cells",
+                "an offset must leave at least one cell in the layer (< " + std::to_string(s.nx) + ")");
       s.front_offset_cells.push_back(v);
     }
   }

@@ -19,20 +19,20 @@ namespace gabion::macro {
 /// A macro.impact case, read and validated.
 struct ImpactCase {
   bridge::LawFile laws;
-  std::string law_source;               ///< "embedded" or the law file's path
+  std::string law_source;  ///< "embedded" or the law file's path
   StructureSpec structure;
-  std::vector<BoulderSpec> impacts;     ///< at least one
-  std::vector<bool> aim_given;          ///< per impact: aim point from the case (else the default aim)
+  std::vector<BoulderSpec> impacts;  ///< at least one
+  std::vector<bool> aim_given;       ///< per impact: aim point from the case (else the default aim)
   RunSettings run;
 };
 
 /// One sweep axis: values in the order given.
 struct SweepSpec {
-  std::vector<double> velocity_m_s;     ///< speeds along the boulder's direction; empty: the case's
-  std::vector<double> mass_kg;          ///< boulder masses at the case's diameter; empty: the case's
+  std::vector<double> velocity_m_s;                    ///< speeds along the boulder's direction; empty: the case's
+  std::vector<double> mass_kg;                         ///< boulder masses at the case's diameter; empty: the case's
   std::vector<std::pair<double, double>> aim_point_m;  ///< (y, z); empty: the case's aim
-  std::vector<std::array<int, 3>> cells;              ///< structure sizes (x, y, z); empty: the case's
-  bool chart = true;                    ///< write the design charts
+  std::vector<std::array<int, 3>> cells;               ///< structure sizes (x, y, z); empty: the case's
+  bool chart = true;                                   ///< write the design charts
 };
 
 /// Reads the laws, structure, boulder and run of a macro case. `law_override`

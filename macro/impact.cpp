@@ -85,8 +85,8 @@ ImpactResult runImpact(Model& model, const BoulderSpec& boulder, const RunSettin
     // The step evaluated forces at x(n), t(n) = time - dt.
     const double t = model.time_s() - dt - t0;
     const Energy& e = model.energy();
-    const double e_now = e.kinetic_J + e.elastic_J + (e.plastic_J - e_before.plastic_J) +
-                         (e.friction_J - e_before.friction_J);
+    const double e_now =
+        e.kinetic_J + e.elastic_J + (e.plastic_J - e_before.plastic_J) + (e.friction_J - e_before.friction_J);
     if (k == 0) e_ref = e_now;
     const double bal = std::abs(e_now - e_ref) / e_ref;
     res.balance_rel_error = std::max(res.balance_rel_error, bal);
@@ -193,7 +193,8 @@ ImpactResult runImpact(Model& model, const BoulderSpec& boulder, const RunSettin
   model.removeBoulder();
   if (run.relax && res.ok) {
     res.relaxed = true;
-    res.relax_steps = relax(model, dt, run.relax_max_steps, run.relax_tolerance * res.input_energy_J, res.relax_converged);
+    res.relax_steps =
+        relax(model, dt, run.relax_max_steps, run.relax_tolerance * res.input_energy_J, res.relax_converged);
     res.residual_back_face_displacement_m = maxOver(s.back_nodes, model.ux());
     res.residual_front_face_displacement_m = maxOver(s.front.node, model.ux());
   }

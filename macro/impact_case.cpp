@@ -137,7 +137,9 @@ json toJson(const ImpactResult& r) {
   return j;
 }
 
-void checkImpactCase(const JsonDocument& doc) { prepare(doc, std::nullopt); }
+void checkImpactCase(const JsonDocument& doc) {
+  prepare(doc, std::nullopt);
+}
 
 bridge::RunOutcome runImpactCase(const JsonDocument& doc, const bridge::RunContext& ctx) {
   Prepared p = prepare(doc, ctx.law_file);
@@ -178,13 +180,10 @@ bridge::RunOutcome runImpactCase(const JsonDocument& doc, const bridge::RunConte
   for (const auto& x : results) worst = std::max(worst, x.balance_rel_error);
   r["balance_rel_error"] = worst;
   r["kinematics"] = p.c.run.kinematics == Kinematics::ThreeD ? "3d" : "x-only";
-  r["structure"] = {{"cells", {s.nx, s.ny, s.nz}},
-                    {"nodes", s.nodeCount()},
-                    {"edge_m", s.edge_m},
-                    {"materials", s.material_names},
-                    {"axial_links", s.axial.a.size()},
-                    {"lateral_links", s.lateral.a.size()},
-                    {"front_elements", s.front.node.size()}};
+  r["structure"] = {
+      {"cells", {s.nx, s.ny, s.nz}},          {"nodes", s.nodeCount()},          {"edge_m", s.edge_m},
+      {"materials", s.material_names},        {"axial_links", s.axial.a.size()}, {"lateral_links", s.lateral.a.size()},
+      {"front_elements", s.front.node.size()}};
   r["laws"] = {{"source", p.c.law_source}, {"file", bridge::toJson(p.c.laws)}};
   return out;
 }

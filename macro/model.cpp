@@ -271,8 +271,7 @@ void Model::computeLateralForces(double dt) {
     fn[a] -= fnorm;
     fn[b] += fnorm;
     normal += fnorm;
-    friction +=
-        frictionUpdate2d(fp, normal, dt * (vx_[a] - vx_[b]), dt * (vo[a] - vo[b]), lat_ftx_[l], lat_fto_[l]);
+    friction += frictionUpdate2d(fp, normal, dt * (vx_[a] - vx_[b]), dt * (vo[a] - vo[b]), lat_ftx_[l], lat_fto_[l]);
     elastic += 0.5 * (lat_ftx_[l] * lat_ftx_[l] + lat_fto_[l] * lat_fto_[l]) / fp.tangential_stiffness_N_m;
     fx_[a] -= lat_ftx_[l];
     fx_[b] += lat_ftx_[l];

@@ -138,7 +138,8 @@ class Model {
     bool present = false;
     double radius_m = 0.0, mass_kg = 0.0;
   } boulder_;
-  Vec3 bpos_ = Vec3::Zero(), bpos_force_ = Vec3::Zero(), bvel_ = Vec3::Zero(), bvel_full_ = Vec3::Zero(), bforce_ = Vec3::Zero();
+  Vec3 bpos_ = Vec3::Zero(), bpos_force_ = Vec3::Zero(), bvel_ = Vec3::Zero(), bvel_full_ = Vec3::Zero(),
+       bforce_ = Vec3::Zero();
   double max_indent_ = 0.0;
   int n_contacts_ = 0;
   bool perforated_ = false;

@@ -123,15 +123,15 @@ Structure buildStructure(const StructureSpec& spec, const bridge::LawFile& laws)
         s.material.push_back(materialIndex(name));
       }
   if (!spec.material.cells.empty() && explicit_next != spec.material.cells.size())
-    throw std::invalid_argument("the material list has " + std::to_string(spec.material.cells.size()) +
-                                " names for " + std::to_string(explicit_next) + " cells");
+    throw std::invalid_argument("the material list has " + std::to_string(spec.material.cells.size()) + " names for " +
+                                std::to_string(explicit_next) + " cells");
 
   s.edge_m = s.materials.front().edge_m;
   for (std::size_t m = 0; m < s.materials.size(); ++m)
     if (std::abs(s.materials[m].edge_m - s.edge_m) > 1e-12 * s.edge_m)
       throw std::invalid_argument("material '" + s.material_names[m] + "' has edge_m " +
-                                  std::to_string(s.materials[m].edge_m) + " but '" + s.material_names[0] +
-                                  "' has " + std::to_string(s.edge_m) + ": the grid needs one cell size");
+                                  std::to_string(s.materials[m].edge_m) + " but '" + s.material_names[0] + "' has " +
+                                  std::to_string(s.edge_m) + ": the grid needs one cell size");
   const double e = s.edge_m;
   const std::size_t n = s.gi.size();
   for (std::size_t q = 0; q < n; ++q) {
@@ -179,9 +179,10 @@ Structure buildStructure(const StructureSpec& spec, const bridge::LawFile& laws)
       for (int kk = 0; kk < s.nz; ++kk)
         if (const int c = s.nodeAt(i, j, kk); c >= 0) column += s.mass_kg[static_cast<std::size_t>(c)];
       const double mu = spec.support.ground_friction_coefficient >= 0.0 ? spec.support.ground_friction_coefficient
-                                                                      : ma.interface.friction;
-      const double kt = spec.support.ground_tangential_stiffness_N_m > 0.0 ? spec.support.ground_tangential_stiffness_N_m
-                                                                          : ma.interface.tangential_stiffness_N_m;
+                                                                        : ma.interface.friction;
+      const double kt = spec.support.ground_tangential_stiffness_N_m > 0.0
+                            ? spec.support.ground_tangential_stiffness_N_m
+                            : ma.interface.tangential_stiffness_N_m;
       s.ground.node.push_back(a);
       s.ground.law.push_back(internAxial(s, halfCellLaw(ma.axial)));
       s.ground.friction.push_back(internFriction(s, {mu, kt}));

@@ -24,26 +24,26 @@ enum class Kinematics { XOnly, ThreeD };
 /// by an explicit list, one name per cell in node order (x fastest, then y,
 /// then z; only cells that exist).
 struct MaterialRule {
-  std::string front;                ///< rule: material of the front layer
-  std::string core;                 ///< rule: material of the other cells
-  int front_depth_cells = 1;        ///< rule: depth of the front layer (cells)
-  std::vector<std::string> cells;   ///< explicit list (used when not empty)
+  std::string front;               ///< rule: material of the front layer
+  std::string core;                ///< rule: material of the other cells
+  int front_depth_cells = 1;       ///< rule: depth of the front layer (cells)
+  std::vector<std::string> cells;  ///< explicit list (used when not empty)
 };
 
 /// Supports of the structure.
 struct SupportSpec {
-  bool fixed_back = true;           ///< a rigid wall behind the back face
-  bool ground_friction = false;     ///< Coulomb friction of the base cells on the ground
-  double ground_friction_coefficient = -1.0;  ///< mu on the ground; < 0: the cell's interface friction
+  bool fixed_back = true;                         ///< a rigid wall behind the back face
+  bool ground_friction = false;                   ///< Coulomb friction of the base cells on the ground
+  double ground_friction_coefficient = -1.0;      ///< mu on the ground; < 0: the cell's interface friction
   double ground_tangential_stiffness_N_m = -1.0;  ///< k_t on the ground (N/m); < 0: the cell's interface value
-  double gravity_m_s2 = 9.81;       ///< sets the ground normal force (weight of the column), m/s^2
+  double gravity_m_s2 = 9.81;                     ///< sets the ground normal force (weight of the column), m/s^2
 };
 
 /// The layout of a structure.
 struct StructureSpec {
-  int nx = 1, ny = 1, nz = 1;               ///< cell counts: depth, width, height
-  std::vector<int> front_offset_cells;      ///< per z layer: cells removed at the front (stepped face); empty = 0
-  MaterialRule material;                    ///< material per cell (empty names: the law file's only material)
+  int nx = 1, ny = 1, nz = 1;           ///< cell counts: depth, width, height
+  std::vector<int> front_offset_cells;  ///< per z layer: cells removed at the front (stepped face); empty = 0
+  MaterialRule material;                ///< material per cell (empty names: the law file's only material)
   SupportSpec support;
 };
 
@@ -54,18 +54,18 @@ constexpr int kWall = -1;
 /// their laws, built from a layout and a law file. Structure-of-arrays; all
 /// handles are indices. The mutable state lives in Model.
 struct Structure {
-  double edge_m = 0.5;                      ///< cell edge (m), common to all materials
+  double edge_m = 0.5;  ///< cell edge (m), common to all materials
   int nx = 0, ny = 0, nz = 0;
-  std::vector<int> front_offset_cells;      ///< per z layer
+  std::vector<int> front_offset_cells;  ///< per z layer
 
   // Nodes (cells), x fastest then y then z.
-  std::vector<int> gi, gj, gk;              ///< grid indices
-  std::vector<double> x0, y0, z0;           ///< undeformed node position (m)
+  std::vector<int> gi, gj, gk;     ///< grid indices
+  std::vector<double> x0, y0, z0;  ///< undeformed node position (m)
   std::vector<double> mass_kg, inv_mass;
-  std::vector<int> material;                ///< index into material_names / materials
+  std::vector<int> material;  ///< index into material_names / materials
   std::vector<std::string> material_names;
   std::vector<bridge::CellMaterial> materials;
-  std::vector<double> reaction_coefficient; ///< per node: lateral reaction coefficient of its material
+  std::vector<double> reaction_coefficient;  ///< per node: lateral reaction coefficient of its material
 
   /// Law tables, indexed by the links below.
   std::vector<bridge::AxialLawParams> axial_laws;
@@ -98,12 +98,12 @@ struct Structure {
     std::vector<int> node, law;               ///< law: the impact law of the node's material
     std::vector<double> x_min, y_min, z_min;  ///< undeformed cube corner (m); the cube is edge_m wide
   } front;
-  std::vector<int> back_nodes;              ///< the back cell of each row
+  std::vector<int> back_nodes;  ///< the back cell of each row
 
   std::size_t nodeCount() const { return mass_kg.size(); }
   /// Node index of grid cell (i, j, k), or -1 where there is no cell.
   int nodeAt(int i, int j, int k) const;
-  std::vector<int> node_of;                 ///< grid index -> node (-1: none)
+  std::vector<int> node_of;  ///< grid index -> node (-1: none)
 };
 
 /// Builds the structure; throws std::invalid_argument with a message naming

@@ -123,7 +123,9 @@ std::string csvQuote(const std::string& s) {
 
 }  // namespace
 
-void checkSweepCase(const JsonDocument& doc) { plan(doc, std::nullopt); }
+void checkSweepCase(const JsonDocument& doc) {
+  plan(doc, std::nullopt);
+}
 
 bridge::RunOutcome runSweepCase(const JsonDocument& doc, const bridge::RunContext& ctx) {
   const Plan p = plan(doc, ctx.law_file);
@@ -170,14 +172,26 @@ bridge::RunOutcome runSweepCase(const JsonDocument& doc, const bridge::RunContex
     if (!r.ok) ++failed;
     const double nan = std::nan("");
     auto val = [&](double v) { return r.ok ? v : nan; };
-    const double row[17] = {static_cast<double>(i), pt.velocity_m_s, pt.mass_kg, pt.aim_y_m, pt.aim_z_m,
-                            static_cast<double>(size[0]), static_cast<double>(size[1]), static_cast<double>(size[2]),
-                            pt.energy_J, r.ok ? 0.0 : 1.0, val(r.peak_force_N), val(r.max_penetration_m),
-                            val(r.contact_duration_s), val(r.rebound_velocity_m_s), val(r.max_back_face_displacement_m),
-                            val(r.plastic_J), val(r.friction_J)};
+    const double row[17] = {static_cast<double>(i),
+                            pt.velocity_m_s,
+                            pt.mass_kg,
+                            pt.aim_y_m,
+                            pt.aim_z_m,
+                            static_cast<double>(size[0]),
+                            static_cast<double>(size[1]),
+                            static_cast<double>(size[2]),
+                            pt.energy_J,
+                            r.ok ? 0.0 : 1.0,
+                            val(r.peak_force_N),
+                            val(r.max_penetration_m),
+                            val(r.contact_duration_s),
+                            val(r.rebound_velocity_m_s),
+                            val(r.max_back_face_displacement_m),
+                            val(r.plastic_J),
+                            val(r.friction_J)};
     for (std::size_t c = 0; c < 17; ++c) cols[c].push_back(row[c]);
-    csv << i << ',' << pt.velocity_m_s << ',' << pt.mass_kg << ',' << pt.aim_y_m << ',' << pt.aim_z_m << ','
-        << size[0] << ',' << size[1] << ',' << size[2] << ',' << pt.energy_J << ',' << (r.ok ? "ok" : "failed");
+    csv << i << ',' << pt.velocity_m_s << ',' << pt.mass_kg << ',' << pt.aim_y_m << ',' << pt.aim_z_m << ',' << size[0]
+        << ',' << size[1] << ',' << size[2] << ',' << pt.energy_J << ',' << (r.ok ? "ok" : "failed");
     if (r.ok) {
       csv << ',' << r.peak_force_N << ',' << r.max_penetration_m << ',' << r.contact_duration_s << ','
           << r.rebound_velocity_m_s << ',' << r.max_back_face_displacement_m << ',' << r.plastic_J << ','
@@ -193,11 +207,25 @@ bridge::RunOutcome runSweepCase(const JsonDocument& doc, const bridge::RunContex
   }
   bridge::writeTextAtomic(ctx.outdir / "sweep.csv", csv.str());
   {
-    static const char* names[17] = {"index", "velocity_m_s", "mass_kg", "aim_y_m", "aim_z_m", "cells_x", "cells_y",
-                                    "cells_z", "impact_energy_J", "failed", "peak_force_N", "max_penetration_m",
-                                    "contact_duration_s", "rebound_velocity_m_s", "max_back_face_displacement_m",
-                                    "plastic_energy_J", "friction_energy_J"};
-    static const char* units[17] = {"", "m/s", "kg", "m", "m", "", "", "", "J", "", "N", "m", "s", "m/s", "m", "J", "J"};
+    static const char* names[17] = {"index",
+                                    "velocity_m_s",
+                                    "mass_kg",
+                                    "aim_y_m",
+                                    "aim_z_m",
+                                    "cells_x",
+                                    "cells_y",
+                                    "cells_z",
+                                    "impact_energy_J",
+                                    "failed",
+                                    "peak_force_N",
+                                    "max_penetration_m",
+                                    "contact_duration_s",
+                                    "rebound_velocity_m_s",
+                                    "max_back_face_displacement_m",
+                                    "plastic_energy_J",
+                                    "friction_energy_J"};
+    static const char* units[17] = {"", "m/s", "kg", "m", "m",   "",  "",  "", "J",
+                                    "", "N",   "m",  "s", "m/s", "m", "J", "J"};
     bridge::H5Writer h5(ctx.outdir / "result.h5");
     h5.attribute("/", "format", "gabion.macro.sweep/1");
     for (std::size_t c = 0; c < 17; ++c) h5.write(std::string("/table/") + names[c], cols[c], units[c]);

@@ -72,8 +72,8 @@ std::string timingReport(const Engine& engine, double loop_s, double body_steps_
   std::ostringstream r;
   r.setf(std::ios::fixed);
   r.precision(2);
-  r << "step loop: " << engine.steps() << " steps in " << loop_s << " s, " << body_steps_per_s / 1e6 << " M body-steps/s, "
-    << threads << (threads == 1 ? " thread, " : " threads, ") << engine.neighbourRebuilds()
+  r << "step loop: " << engine.steps() << " steps in " << loop_s << " s, " << body_steps_per_s / 1e6
+    << " M body-steps/s, " << threads << (threads == 1 ? " thread, " : " threads, ") << engine.neighbourRebuilds()
     << " neighbour rebuilds\n";
   r << "  stage          wall s   share" << (threads > 1 ? "   busiest/mean partition" : "") << "\n";
   double staged = 0.0;
@@ -133,9 +133,10 @@ bridge::RunOutcome runScene(const bridge::JsonDocument& doc, const bridge::RunCo
   std::vector<double> snap_t, row(3 * nb), row_q(4 * nblk);
   const auto snapshot = [&](double t) {
     snap_t.push_back(t);
-    const std::pair<const char*, Vec3 BodyState::*> fields[3] = {{"position_m", &BodyState::position_m},
-                                                                 {"velocity_m_s", &BodyState::velocity_m_s},
-                                                                 {"angular_velocity_rad_s", &BodyState::angular_velocity_rad_s}};
+    const std::pair<const char*, Vec3 BodyState::*> fields[3] = {
+        {"position_m", &BodyState::position_m},
+        {"velocity_m_s", &BodyState::velocity_m_s},
+        {"angular_velocity_rad_s", &BodyState::angular_velocity_rad_s}};
     const char* units[3] = {"m", "m/s", "rad/s"};
     for (int f = 0; f < 3; ++f) {
       for (std::size_t b = 0; b < nb; ++b) {
@@ -269,9 +270,8 @@ bridge::RunOutcome runScene(const bridge::JsonDocument& doc, const bridge::RunCo
 }  // namespace
 
 std::vector<bridge::CaseKind> caseKinds() {
-  return {{"micro.scene",
-           "fine DEM of explicit spheres, rigid multi-sphere blocks and planar walls (docs/micro.md)", checkScene,
-           runScene}};
+  return {{"micro.scene", "fine DEM of explicit spheres, rigid multi-sphere blocks and planar walls (docs/micro.md)",
+           checkScene, runScene}};
 }
 
 }  // namespace gabion::micro

@@ -24,7 +24,6 @@ namespace gabion::micro {
 // rare features (F_lim, viscous damping), the stored energy and a single
 // material are compile-time switches, so a case pays only for what it uses.
 
-
 namespace {
 /// What the kernel reads: the particles, the list's partners, the laws.
 struct KernelIn {
@@ -58,9 +57,8 @@ template <bool kMeasure, bool kViscous, bool kPlastic, bool kUniform>
 void touchingPairs(const KernelIn& in, const std::uint32_t* ci, const std::uint32_t* ck, std::size_t nq,
                    KernelHistory& h, KernelOut& out) {
   const Particles& P = in.p;
-  const double *__restrict X = P.x.data(), *__restrict Y = P.y.data(), *__restrict Z = P.z.data(),
-               *__restrict R = P.r.data();
-  const double *__restrict VX = P.vx.data(), *__restrict VY = P.vy.data(), *__restrict VZ = P.vz.data();
+  const double* __restrict X = P.x.data(), * __restrict Y = P.y.data(), * __restrict Z = P.z.data(), * __restrict R = P.r.data();
+  const double* __restrict VX = P.vx.data(), * __restrict VY = P.vy.data(), * __restrict VZ = P.vz.data();
   const double *__restrict WX = P.wx.data(), *__restrict WY = P.wy.data(), *__restrict WZ = P.wz.data(),
                *__restrict IM = P.inv_body_mass.data();
   const std::uint32_t* __restrict MAT = P.mat.data();
@@ -142,14 +140,14 @@ void touchingPairs(const KernelIn& in, const std::uint32_t* ci, const std::uint3
       bon[q] = on;
       active_n += on;
     }
-    double *__restrict FX = out.FX, *__restrict FY = out.FY, *__restrict FZ = out.FZ;
-    double *__restrict TX = out.TX, *__restrict TY = out.TY, *__restrict TZ = out.TZ;
+    double* __restrict FX = out.FX, * __restrict FY = out.FY, * __restrict FZ = out.FZ;
+    double* __restrict TX = out.TX, * __restrict TY = out.TY, * __restrict TZ = out.TZ;
     std::uint32_t hi = out.hi;
     ContactSet& next = *h.next;
     std::size_t nn = next.n;
     std::uint32_t* __restrict NK = next.k.data();
-    double *__restrict NUX = next.ux.data(), *__restrict NUY = next.uy.data(), *__restrict NUZ = next.uz.data();
-    double *__restrict NPL = next.plastic.data(), *__restrict NVI = next.viscous.data();
+    double* __restrict NUX = next.ux.data(), * __restrict NUY = next.uy.data(), * __restrict NUZ = next.uz.data();
+    double* __restrict NPL = next.plastic.data(), * __restrict NVI = next.viscous.data();
     const std::uint32_t own_end = out.own_end;
     // This step's contact set: the touching pairs' history, in list order
     // (with AVX-512, eight pairs at a time: compressed in a register, then

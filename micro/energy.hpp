@@ -13,16 +13,16 @@ namespace gabion::micro {
 struct EnergyTotals {
   double kinetic_translational_J = 0.0;
   double kinetic_rotational_J = 0.0;
-  double gravity_potential_J = 0.0;   ///< -sum m g.x (zero at the origin)
-  double elastic_contact_J = 0.0;     ///< normal + shear springs of all contacts
-  double elastic_link_J = 0.0;        ///< links (micro/links.hpp)
+  double gravity_potential_J = 0.0;  ///< -sum m g.x (zero at the origin)
+  double elastic_contact_J = 0.0;    ///< normal + shear springs of all contacts
+  double elastic_link_J = 0.0;       ///< links (micro/links.hpp)
   double friction_dissipation_J = 0.0;
-  double plastic_dissipation_J = 0.0; ///< F_lim normal cap
+  double plastic_dissipation_J = 0.0;  ///< F_lim normal cap
   double local_damping_dissipation_J = 0.0;
   double viscous_damping_dissipation_J = 0.0;
   double link_rupture_dissipation_J = 0.0;  ///< energy held by links when they broke
-  double wall_work_J = 0.0;           ///< work done by moving walls on the bodies
-  double total_J = 0.0;               ///< E above
+  double wall_work_J = 0.0;                 ///< work done by moving walls on the bodies
+  double total_J = 0.0;                     ///< E above
   double balance_rel_error = 0.0;
 };
 

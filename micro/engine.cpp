@@ -28,8 +28,7 @@ std::vector<MassProperties> blockMassProperties(const Scene& scene) {
 double criticalStep(const Scene& scene, const std::vector<MassProperties>& block_props) {
   // stiffness of the links at each sphere
   std::vector<double> k_link(scene.spheres.size(), 0.0);
-  for (const LinkSpec& l : scene.links)
-    k_link[l.a] += l.law.stiffness_N_m, k_link[l.b] += l.law.stiffness_N_m;
+  for (const LinkSpec& l : scene.links) k_link[l.a] += l.law.stiffness_N_m, k_link[l.b] += l.law.stiffness_N_m;
   const std::size_t nmat = scene.materials.size();
   std::vector<PairLaw> laws(nmat * nmat);
   for (std::size_t a = 0; a < nmat; ++a)
@@ -62,7 +61,8 @@ double criticalStep(const Scene& scene, const std::vector<MassProperties>& block
     const std::vector<Vec3> offsets = principalFrameOffsets(props, spec.member_centers_m);
     const auto m = static_cast<std::size_t>(spec.material);
     double lever = 0.0;
-    for (std::size_t k = 0; k < offsets.size(); ++k) lever = std::max(lever, offsets[k].norm() + spec.member_radii_m[k]);
+    for (std::size_t k = 0; k < offsets.size(); ++k)
+      lever = std::max(lever, offsets[k].norm() + spec.member_radii_m[k]);
     dt = std::min({dt, std::sqrt(props.mass_kg / kn_max[m]),
                    std::sqrt(props.principal_moments_kg_m2.minCoeff() / (k_max[m] * lever * lever))});
   }
@@ -70,7 +70,9 @@ double criticalStep(const Scene& scene, const std::vector<MassProperties>& block
 }
 }  // namespace
 
-double criticalTimeStep(const Scene& scene) { return criticalStep(scene, blockMassProperties(scene)); }
+double criticalTimeStep(const Scene& scene) {
+  return criticalStep(scene, blockMassProperties(scene));
+}
 
 Engine::Engine(const Scene& scene, int threads) {
   validateScene(scene);
@@ -152,8 +154,7 @@ Engine::Engine(const Scene& scene, int threads) {
   links_ = Links(scene.links, p_.size());
   excluded_ = links_.excludedPairs();
 
-  const bool one_material =
-      std::all_of(p_.mat.begin(), p_.mat.end(), [&](std::uint32_t m) { return m == p_.mat[0]; });
+  const bool one_material = std::all_of(p_.mat.begin(), p_.mat.end(), [&](std::uint32_t m) { return m == p_.mat[0]; });
   laws_.setUniform(one_material, p_.mat[0]);
 
   // Size classes; the skin is a fraction of the smallest class's mean radius.
@@ -166,8 +167,8 @@ Engine::Engine(const Scene& scene, int threads) {
   scratch_.resize(static_cast<std::size_t>(pool_->size()));
   profile_.partition_busy_s.resize(scratch_.size());
   for (std::size_t t = 0; t + 1 < scratch_.size(); ++t)  // partners beyond partition t's particles
-    for (auto* v : {&scratch_[t].fx, &scratch_[t].fy, &scratch_[t].fz, &scratch_[t].tx, &scratch_[t].ty,
-                    &scratch_[t].tz})
+    for (auto* v :
+         {&scratch_[t].fx, &scratch_[t].fy, &scratch_[t].fz, &scratch_[t].tx, &scratch_[t].ty, &scratch_[t].tz})
       v->assign(p_.size(), 0.0);
 }
 
@@ -440,7 +441,10 @@ void Engine::partitionWallCandidates() {
     std::uint32_t first = wall_part_[t - 1], past = static_cast<std::uint32_t>(n);
     while (first < past) {
       const std::uint32_t mid = first + (past - first) / 2;
-      if (below(mid) * workers >= total * t) past = mid; else first = mid + 1;
+      if (below(mid) * workers >= total * t)
+        past = mid;
+      else
+        first = mid + 1;
     }
     wall_part_[t] = first;
   }
@@ -664,15 +668,25 @@ double Engine::bodyRadius(std::size_t b) const {
   return std::cbrt(3.0 * blocks_[b - sphere_count_].volume / (4.0 * 3.14159265358979323846));
 }
 
-std::size_t Engine::bodyCount() const { return sphere_count_ + blocks_.size(); }
-std::size_t Engine::blockCount() const { return blocks_.size(); }
-std::size_t Engine::wallCount() const { return walls_.size(); }
+std::size_t Engine::bodyCount() const {
+  return sphere_count_ + blocks_.size();
+}
+std::size_t Engine::blockCount() const {
+  return blocks_.size();
+}
+std::size_t Engine::wallCount() const {
+  return walls_.size();
+}
 std::size_t Engine::wallIndex(const std::string& name) const {
   for (std::size_t w = 0; w < walls_.size(); ++w)
     if (walls_[w].name == name) return w;
   return walls_.size();
 }
-Vec3 Engine::wallForce(std::size_t w) const { return walls_[w].force_N; }
-Vec3 Engine::wallPosition(std::size_t w) const { return walls_[w].force_position; }
+Vec3 Engine::wallForce(std::size_t w) const {
+  return walls_[w].force_N;
+}
+Vec3 Engine::wallPosition(std::size_t w) const {
+  return walls_[w].force_position;
+}
 
 }  // namespace gabion::micro

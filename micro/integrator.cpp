@@ -27,14 +27,14 @@ namespace {
 
 template <bool kMeasure>
 SphereSums sphereLoop(Particles& p, std::size_t b, std::size_t e, double dt, const Vec3& g) {
-  double *__restrict X = p.x.data(), *__restrict Y = p.y.data(), *__restrict Z = p.z.data();
-  double *__restrict VX = p.vx.data(), *__restrict VY = p.vy.data(), *__restrict VZ = p.vz.data();
-  double *__restrict WX = p.wx.data(), *__restrict WY = p.wy.data(), *__restrict WZ = p.wz.data();
-  const double *__restrict FX = p.fx.data(), *__restrict FY = p.fy.data(), *__restrict FZ = p.fz.data();
-  const double *__restrict TX = p.tx.data(), *__restrict TY = p.ty.data(), *__restrict TZ = p.tz.data();
+  double* __restrict X = p.x.data(), * __restrict Y = p.y.data(), * __restrict Z = p.z.data();
+  double* __restrict VX = p.vx.data(), * __restrict VY = p.vy.data(), * __restrict VZ = p.vz.data();
+  double* __restrict WX = p.wx.data(), * __restrict WY = p.wy.data(), * __restrict WZ = p.wz.data();
+  const double* __restrict FX = p.fx.data(), * __restrict FY = p.fy.data(), * __restrict FZ = p.fz.data();
+  const double* __restrict TX = p.tx.data(), * __restrict TY = p.ty.data(), * __restrict TZ = p.tz.data();
   const double *__restrict M = p.mass.data(), *__restrict IM = p.inv_mass.data(), *__restrict II = p.inv_inertia.data(),
                *__restrict AL = p.alpha.data();
-  const double *__restrict X0 = p.x0.data(), *__restrict Y0 = p.y0.data(), *__restrict Z0 = p.z0.data();
+  const double* __restrict X0 = p.x0.data(), * __restrict Y0 = p.y0.data(), * __restrict Z0 = p.z0.data();
   const double gx = g.x(), gy = g.y(), gz = g.z();
   double local = 0.0, ke_t = 0.0, ke_r = 0.0, pe = 0.0, finite = 0.0, max_d2 = 0.0;
 #pragma omp simd reduction(+ : local, ke_t, ke_r, pe, finite) reduction(max : max_d2)

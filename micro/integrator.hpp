@@ -24,8 +24,8 @@ struct RigidBlock {
   Vec3 x = Vec3::Zero(), v = Vec3::Zero(), L = Vec3::Zero(), omega = Vec3::Zero();
   Eigen::Quaterniond q = Eigen::Quaterniond::Identity();               ///< principal -> world
   Eigen::Quaterniond principal_axes = Eigen::Quaterniond::Identity();  ///< principal -> input body frame
-  std::vector<Vec3> offsets;        ///< member centres in the principal frame (m)
-  std::vector<std::uint32_t> ids;   ///< stable ids of the members
+  std::vector<Vec3> offsets;                                           ///< member centres in the principal frame (m)
+  std::vector<std::uint32_t> ids;                                      ///< stable ids of the members
   bool fixed = false;
 };
 

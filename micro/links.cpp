@@ -31,7 +31,8 @@ Links::Links(const std::vector<LinkSpec>& specs, std::size_t particles) : partic
   for (std::size_t id = 0; id < particles; ++id) {
     if (start[id + 1] == start[id]) continue;
     node_id_.push_back(static_cast<std::uint32_t>(id));
-    for (std::uint32_t q = start[id]; q < start[id + 1]; ++q) node_link_.push_back(link[q]), node_sign_.push_back(sign[q]);
+    for (std::uint32_t q = start[id]; q < start[id + 1]; ++q)
+      node_link_.push_back(link[q]), node_sign_.push_back(sign[q]);
     node_begin_.push_back(static_cast<std::uint32_t>(node_link_.size()));
   }
 }

@@ -15,11 +15,11 @@ namespace gabion::micro {
 
 struct MaterialLaws {
   std::size_t nmat = 0;
-  std::vector<PairLaw> pair;  ///< nmat x nmat, row-major
+  std::vector<PairLaw> pair;                      ///< nmat x nmat, row-major
   std::vector<double> kn, flim, ks, mu_ks, zeta;  ///< per pair; mu_ks = friction / k_s (m/N)
-  bool any_plastic = false;   ///< a finite F_lim
-  bool any_viscous = false;   ///< viscous contact damping
-  bool uniform = false;       ///< every particle has one material: the kernels read law0 instead of gathering
+  bool any_plastic = false;                       ///< a finite F_lim
+  bool any_viscous = false;                       ///< viscous contact damping
+  bool uniform = false;  ///< every particle has one material: the kernels read law0 instead of gathering
   std::uint32_t law0 = 0;
 
   explicit MaterialLaws(const std::vector<Material>& materials = {}) : nmat(materials.size()) {

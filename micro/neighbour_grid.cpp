@@ -25,8 +25,8 @@ int NeighbourGrid::assignClasses(Particles& p) {
   double sum = 0.0;
   std::size_t finest = 0;
   for (std::size_t i = 0; i < n; ++i) {
-    const auto c = static_cast<std::size_t>(std::upper_bound(class_lo.begin(), class_lo.end(), p.r[i]) -
-                                            class_lo.begin()) - 1;
+    const auto c =
+        static_cast<std::size_t>(std::upper_bound(class_lo.begin(), class_lo.end(), p.r[i]) - class_lo.begin()) - 1;
     p.size_class[i] = static_cast<std::uint8_t>(c);
     if (c == 0) sum += p.r[i], ++finest;
   }
@@ -74,7 +74,8 @@ std::vector<std::uint32_t> NeighbourGrid::sortOrder(const Particles& p, double s
   for (std::size_t c = 0; c < nclass; ++c) {
     for (std::size_t b = 0; b < nblocks; ++b) {
       const Box& box = boxes[b * nclass + c];
-      for (int a = 0; a < 3; ++a) cover.lo[a] = std::min(cover.lo[a], box.lo[a]), cover.hi[a] = std::max(cover.hi[a], box.hi[a]);
+      for (int a = 0; a < 3; ++a)
+        cover.lo[a] = std::min(cover.lo[a], box.lo[a]), cover.hi[a] = std::max(cover.hi[a], box.hi[a]);
       cover.count += box.count;
     }
     Grid& g = grids_[c];
@@ -129,7 +130,8 @@ void NeighbourGrid::buildList(const Particles& p, double skin, const ExcludedPai
                               const ForBlocks& for_blocks, NeighbourList& out) {
   const std::size_t n = p.size(), nclass = grids_.size();
   const auto blockBegin = [&](std::size_t b) { return n * b / nblocks; };
-  const bool groups = std::any_of(std::begin(p.group_mask), std::end(p.group_mask), [](std::uint32_t m) { return m != ~0u; });
+  const bool groups =
+      std::any_of(std::begin(p.group_mask), std::end(p.group_mask), [](std::uint32_t m) { return m != ~0u; });
   out.row_begin.assign(n + 1, 0);
   list_blocks_.resize(nblocks);
   for_blocks(nblocks, [&](std::size_t blk) {

@@ -23,16 +23,15 @@ struct Grid {
     return (static_cast<long long>(c.x()) * 73856093LL) ^ (static_cast<long long>(c.y()) * 19349663LL) ^
            (static_cast<long long>(c.z()) * 83492791LL);
   }
-  Eigen::Vector3i cellOf(const Eigen::Vector3d& p) const {
-    return ((p - origin) / h).array().floor().cast<int>();
-  }
+  Eigen::Vector3i cellOf(const Eigen::Vector3d& p) const { return ((p - origin) / h).array().floor().cast<int>(); }
 };
 
 }  // namespace
 
 Packing randomPacking(const PackingSpec& spec) {
   const Eigen::Vector3d size = spec.box_max_m - spec.box_min_m;
-  if (!(size.array() > 0).all() || !size.allFinite()) throw std::invalid_argument("packing box must have positive size");
+  if (!(size.array() > 0).all() || !size.allFinite())
+    throw std::invalid_argument("packing box must have positive size");
   if (!(spec.mean_radius_m > 0)) throw std::invalid_argument("mean radius must be > 0");
   if (!(spec.radius_std_rel >= 0 && spec.radius_std_rel < 0.5))
     throw std::invalid_argument("radius_std_rel must be in [0, 0.5)");
@@ -57,14 +56,15 @@ Packing randomPacking(const PackingSpec& spec) {
   while (solid < target) {
     if (need_radius) {
       double z = 0.0;
-      do z = gauss(rng); while (std::abs(z) > 2.0);
+      do z = gauss(rng);
+      while (std::abs(z) > 2.0);
       radius = spec.mean_radius_m * (1.0 + spec.radius_std_rel * z);
       need_radius = false;
     }
     if (++attempts > spec.max_attempts) {
       std::ostringstream os;
-      os << "random packing reached solid fraction " << solid / box_volume << " of " << spec.solid_fraction
-         << " after " << spec.max_attempts << " attempts";
+      os << "random packing reached solid fraction " << solid / box_volume << " of " << spec.solid_fraction << " after "
+         << spec.max_attempts << " attempts";
       throw std::runtime_error(os.str());
     }
     const double margin = radius + spec.min_gap_m;

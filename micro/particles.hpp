@@ -21,18 +21,18 @@ constexpr int kGroupCount = 32;
 
 struct Particles {
   // --- state: moves with the particle when the store is re-sorted
-  std::vector<double> x, y, z;     ///< centre (m)
-  std::vector<double> vx, vy, vz;  ///< velocity (m/s)
-  std::vector<double> wx, wy, wz;  ///< angular velocity (rad/s)
-  std::vector<double> r;           ///< radius (m)
+  std::vector<double> x, y, z;        ///< centre (m)
+  std::vector<double> vx, vy, vz;     ///< velocity (m/s)
+  std::vector<double> wx, wy, wz;     ///< angular velocity (rad/s)
+  std::vector<double> r;              ///< radius (m)
   std::vector<double> inv_body_mass;  ///< 1/m of the owning body (1/kg); 0: fixed (contact damping, pairs)
   std::vector<double> mass, inv_mass, inv_inertia;  ///< free spheres only (else 0): the integrator's
-  std::vector<double> alpha;       ///< Cundall local damping of free spheres (-)
-  std::vector<std::int32_t> body;  ///< owning block, -1 for a free sphere
-  std::vector<std::uint32_t> mat;  ///< material (32-bit: the vector kernels gather it)
-  std::vector<std::uint32_t> id;   ///< stable id
-  std::vector<std::uint8_t> group; ///< contact group (0 .. kGroupCount-1)
-  std::vector<std::uint8_t> size_class;  ///< size class of the neighbour grid (micro/neighbour_grid.hpp)
+  std::vector<double> alpha;                        ///< Cundall local damping of free spheres (-)
+  std::vector<std::int32_t> body;                   ///< owning block, -1 for a free sphere
+  std::vector<std::uint32_t> mat;                   ///< material (32-bit: the vector kernels gather it)
+  std::vector<std::uint32_t> id;                    ///< stable id
+  std::vector<std::uint8_t> group;                  ///< contact group (0 .. kGroupCount-1)
+  std::vector<std::uint8_t> size_class;             ///< size class of the neighbour grid (micro/neighbour_grid.hpp)
 
   // --- scratch: recomputed, not carried through a re-sort
   std::vector<double> fx, fy, fz;  ///< force of this step (N)
@@ -53,8 +53,8 @@ struct Particles {
   /// Calls f(vector) for every state field (the one list of them).
   template <class F>
   void forEachStateField(F&& f) {
-    for (auto* v : {&x, &y, &z, &vx, &vy, &vz, &wx, &wy, &wz, &r, &inv_body_mass, &mass, &inv_mass, &inv_inertia,
-                    &alpha})
+    for (auto* v :
+         {&x, &y, &z, &vx, &vy, &vz, &wx, &wy, &wz, &r, &inv_body_mass, &mass, &inv_mass, &inv_inertia, &alpha})
       f(*v);
     f(body);
     f(mat);

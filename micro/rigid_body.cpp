@@ -1,5 +1,6 @@
 #include "micro/rigid_body.hpp"
 
+#include <Eigen/Eigenvalues>
 #include <algorithm>
 #include <array>
 #include <cmath>
@@ -7,8 +8,6 @@
 #include <queue>
 #include <stdexcept>
 #include <string>
-
-#include <Eigen/Eigenvalues>
 
 namespace gabion::micro {
 namespace {
@@ -31,16 +30,16 @@ using Slice6 = std::array<double, 6>;  // A, Sy, Sz, Syy, Szz, Syz (m^2 .. m^4)
 Slice6 arcAntiderivative(double cy, double cz, double r, double t) {
   const double s = std::sin(t), c = std::cos(t);
   const double s2 = 2.0 * s * c, c2 = c * c - s * s, s4 = 2.0 * s2 * c2;
-  const double Ic = s, Is = -c;                       // int cos, int sin
-  const double Icc = 0.5 * t + 0.25 * s2;             // int cos^2
-  const double Iss = 0.5 * t - 0.25 * s2;             // int sin^2
-  const double Iccc = s - s * s * s / 3.0;            // int cos^3
-  const double Isss = -c + c * c * c / 3.0;           // int sin^3
+  const double Ic = s, Is = -c;                            // int cos, int sin
+  const double Icc = 0.5 * t + 0.25 * s2;                  // int cos^2
+  const double Iss = 0.5 * t - 0.25 * s2;                  // int sin^2
+  const double Iccc = s - s * s * s / 3.0;                 // int cos^3
+  const double Isss = -c + c * c * c / 3.0;                // int sin^3
   const double Icccc = 0.375 * t + 0.25 * s2 + s4 / 32.0;  // int cos^4
   const double Issss = 0.375 * t - 0.25 * s2 + s4 / 32.0;  // int sin^4
-  const double Isc = 0.5 * s * s;                     // int sin cos
-  const double Iscc = -c * c * c / 3.0;               // int sin cos^2
-  const double Isccc = -c * c * c * c / 4.0;          // int sin cos^3
+  const double Isc = 0.5 * s * s;                          // int sin cos
+  const double Iscc = -c * c * c / 3.0;                    // int sin cos^2
+  const double Isccc = -c * c * c * c / 4.0;               // int sin cos^3
   const double r2 = r * r, r3 = r2 * r;
   Slice6 F;
   F[0] = 0.5 * (r2 * t + r * cy * Ic + r * cz * Is);
@@ -49,8 +48,8 @@ Slice6 arcAntiderivative(double cy, double cz, double r, double t) {
   F[3] = r / 3.0 * (cy * cy * cy * Ic + 3.0 * cy * cy * r * Icc + 3.0 * cy * r2 * Iccc + r3 * Icccc);
   F[4] = r / 3.0 * (cz * cz * cz * Is + 3.0 * cz * cz * r * Iss + 3.0 * cz * r2 * Isss + r3 * Issss);
   F[5] = 0.5 * r *
-         (cy * cy * cz * Ic + cy * cy * r * Isc + 2.0 * cy * cz * r * Icc + 2.0 * cy * r2 * Iscc +
-          r2 * cz * Iccc + r3 * Isccc);
+         (cy * cy * cz * Ic + cy * cy * r * Isc + 2.0 * cy * cz * r * Icc + 2.0 * cy * r2 * Iscc + r2 * cz * Iccc +
+          r3 * Isccc);
   return F;
 }
 
@@ -258,13 +257,12 @@ void requireFinite(double v, const std::string& what) {
 
 }  // namespace
 
-MassProperties clusterMassProperties(const std::vector<Eigen::Vector3d>& centers,
-                                     const std::vector<double>& radii, double density_kg_m3,
-                                     double rel_tol) {
+MassProperties clusterMassProperties(const std::vector<Eigen::Vector3d>& centers, const std::vector<double>& radii,
+                                     double density_kg_m3, double rel_tol) {
   if (centers.empty()) throw std::invalid_argument("clusterMassProperties: no spheres");
   if (centers.size() != radii.size())
-    throw std::invalid_argument("clusterMassProperties: " + std::to_string(centers.size()) +
-                                " centres but " + std::to_string(radii.size()) + " radii");
+    throw std::invalid_argument("clusterMassProperties: " + std::to_string(centers.size()) + " centres but " +
+                                std::to_string(radii.size()) + " radii");
   requireFinite(density_kg_m3, "clusterMassProperties: density");
   if (density_kg_m3 <= 0.0) throw std::invalid_argument("clusterMassProperties: density must be > 0");
   if (!(rel_tol >= 1e-12 && rel_tol <= 0.1))
@@ -399,8 +397,7 @@ MassProperties clusterMassProperties(const std::vector<Eigen::Vector3d>& centers
       for (int k = 0; k < kComponents; ++k) done = done && error[k] <= t[kGroup[k]];
       if (done) break;
       if (static_cast<int>(queue.size()) >= kMaxSegments || queue.top().b - queue.top().a < min_width)
-        throw std::runtime_error("clusterMassProperties: rel_tol " + std::to_string(rel_tol) +
-                                 " not reached");
+        throw std::runtime_error("clusterMassProperties: rel_tol " + std::to_string(rel_tol) + " not reached");
       const Segment worst = queue.top();
       queue.pop();
       const double m = 0.5 * (worst.a + worst.b);
@@ -472,8 +469,7 @@ void requirePositiveInertia(const Eigen::Vector3d& I) {
 
 }  // namespace
 
-void freeRotate(Eigen::Quaterniond& q, const Eigen::Vector3d& L_world, const Eigen::Vector3d& I_principal,
-                double dt) {
+void freeRotate(Eigen::Quaterniond& q, const Eigen::Vector3d& L_world, const Eigen::Vector3d& I_principal, double dt) {
   requirePositiveInertia(I_principal);
   const double Imax = I_principal.maxCoeff(), Imin = I_principal.minCoeff();
   if (Imax - Imin <= 1e-12 * Imax) {

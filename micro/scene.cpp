@@ -149,8 +149,8 @@ Scene parseScene(const JsonReader& root) {
     const JsonReader& r = wall_readers[k];
     WallSpec w;
     w.name = r.string("name", "wall_" + std::to_string(k));
-    if (w.name.empty() || w.name.find_first_not_of("abcdefghijklmnopqrstuvwxyzABCDEFGHIJKLMNOPQRSTUVWXYZ0123456789_-") !=
-                              std::string::npos)
+    if (w.name.empty() || w.name.find_first_not_of(
+                              "abcdefghijklmnopqrstuvwxyzABCDEFGHIJKLMNOPQRSTUVWXYZ0123456789_-") != std::string::npos)
       r.fail("name", "a wall name uses letters, digits, '_' and '-' only (it names the wall's series)");
     for (std::size_t q = 0; q < k; ++q)
       if (s.walls[q].name == w.name) r.fail("name", "wall name '" + w.name + "' is used by wall " + std::to_string(q));
@@ -167,7 +167,8 @@ Scene parseScene(const JsonReader& root) {
     if (const auto e = r.optionalObject("extent")) {
       w.bounded = true;
       w.axis_u = unitVector(*e, "axis_u");
-      if (std::fabs(w.axis_u.dot(w.normal)) > 1e-9) e->fail("axis_u", "must lie in the wall's plane (normal to `normal`)");
+      if (std::fabs(w.axis_u.dot(w.normal)) > 1e-9)
+        e->fail("axis_u", "must lie in the wall's plane (normal to `normal`)");
       const auto half = e->numbers("half_lengths_m", Check::Positive, 2);
       if (half.size() != 2) e->fail("half_lengths_m", "expected 2 numbers [along axis_u, along normal x axis_u]");
       w.half_u_m = half[0], w.half_v_m = half[1];
@@ -198,8 +199,8 @@ Scene parseScene(const JsonReader& root) {
   if (root.has("no_contact_groups")) {
     const nlohmann::json& pairs = root.raw("no_contact_groups");
     const auto bad = [&] {
-      root.fail("no_contact_groups", "expected an array of [group, group] pairs of integers 0 .. " +
-                                         std::to_string(kMaxGroup));
+      root.fail("no_contact_groups",
+                "expected an array of [group, group] pairs of integers 0 .. " + std::to_string(kMaxGroup));
     };
     if (!pairs.is_array()) bad();
     for (const auto& p : pairs) {
@@ -308,8 +309,7 @@ void validateScene(const Scene& s, const std::string& file) {
     using K = WallProgram::Kind;
     if (p.kind == K::Velocity && !finite(p.velocity_m_s)) fail(m + "velocity_m_s", "must be finite");
     if (p.kind == K::VelocityTable) {
-      if (p.table_time_s.empty() || p.table_time_s[0] != 0.0 ||
-          p.table_time_s.size() != p.table_velocity_m_s.size())
+      if (p.table_time_s.empty() || p.table_time_s[0] != 0.0 || p.table_time_s.size() != p.table_velocity_m_s.size())
         fail(m + "time_s", "a table starts at t = 0 and has one velocity per time");
       for (std::size_t q = 1; q < p.table_time_s.size(); ++q)
         if (!(p.table_time_s[q] > p.table_time_s[q - 1])) fail(m + "time_s", "times must increase strictly");
@@ -317,9 +317,9 @@ void validateScene(const Scene& s, const std::string& file) {
     if (p.kind == K::Sinusoid && !(p.amplitude_m > 0.0 && p.frequency_hz > 0.0 && std::isfinite(p.phase_rad) &&
                                    std::fabs(p.direction.norm() - 1.0) < 1e-9))
       fail(m + "amplitude_m", "a sinusoid needs amplitude > 0, frequency > 0 and a unit direction");
-    if (p.kind == K::Servo && !(p.target_force_N >= 0.0 && p.max_speed_m_s > 0.0 && p.gain_m_s_N > 0.0 &&
-                                std::isfinite(p.target_force_N) && std::isfinite(p.max_speed_m_s) &&
-                                std::isfinite(p.gain_m_s_N)))
+    if (p.kind == K::Servo &&
+        !(p.target_force_N >= 0.0 && p.max_speed_m_s > 0.0 && p.gain_m_s_N > 0.0 && std::isfinite(p.target_force_N) &&
+          std::isfinite(p.max_speed_m_s) && std::isfinite(p.gain_m_s_N)))
       fail(m + "gain_m_s_N", "a servo needs target_force_N >= 0, max_speed_m_s > 0 and gain_m_s_N > 0");
     if (w.bounded && !(w.half_u_m > 0.0 && w.half_v_m > 0.0 && std::fabs(w.axis_u.norm() - 1.0) < 1e-9 &&
                        std::fabs(w.axis_u.dot(w.normal)) < 1e-9))

@@ -27,8 +27,8 @@ struct Material {
   double shear_stiffness_N_m = 0.0;   ///< k_s (N/m), > 0
   double friction = 0.0;              ///< Coulomb f (-), >= 0
   double normal_force_limit_N = std::numeric_limits<double>::infinity();  ///< F_lim (N); absent: elastic
-  double local_damping = 0.0;         ///< Cundall alpha (-), in [0, 1)
-  double viscous_damping_ratio = 0.0; ///< zeta, fraction of critical (-), in [0, 1)
+  double local_damping = 0.0;                                             ///< Cundall alpha (-), in [0, 1)
+  double viscous_damping_ratio = 0.0;                                     ///< zeta, fraction of critical (-), in [0, 1)
 };
 
 /// A free sphere.
@@ -48,10 +48,10 @@ struct BlockSpec {
   std::vector<Vec3> member_centers_m;
   std::vector<double> member_radii_m;
   int material = 0;
-  Vec3 position_m = Vec3::Zero();  ///< world position of the body-frame origin (m)
+  Vec3 position_m = Vec3::Zero();                                   ///< world position of the body-frame origin (m)
   Eigen::Quaterniond orientation = Eigen::Quaterniond::Identity();  ///< body -> world
-  Vec3 velocity_m_s = Vec3::Zero();            ///< of the centre of mass
-  Vec3 angular_velocity_rad_s = Vec3::Zero();  ///< world frame
+  Vec3 velocity_m_s = Vec3::Zero();                                 ///< of the centre of mass
+  Vec3 angular_velocity_rad_s = Vec3::Zero();                       ///< world frame
   bool fixed = false;
   int group = 0;  ///< contact group of its member spheres, 0 .. 31
 };
@@ -70,21 +70,22 @@ struct WallProgram {
   enum class Kind {
     Fixed,          ///< never moves
     Velocity,       ///< constant velocity `velocity_m_s`
-    VelocityTable,  ///< velocity piecewise linear in time through (table_time_s, table_velocity_m_s); the last value holds after the table
+    VelocityTable,  ///< velocity piecewise linear in time through (table_time_s, table_velocity_m_s); the last value
+                    ///< holds after the table
     Sinusoid,       ///< displacement amplitude_m sin(2 pi f t + phase) - sin(phase), along `direction`
     Servo           ///< along the wall normal, speed gain x (target - measured normal force), at most max_speed
   };
   Kind kind = Kind::Fixed;
   Vec3 velocity_m_s = Vec3::Zero();
-  std::vector<double> table_time_s;         ///< strictly increasing, from 0 (s)
-  std::vector<Vec3> table_velocity_m_s;     ///< one velocity per time (m/s)
-  Vec3 direction = Vec3::UnitZ();           ///< unit vector of the sinusoid
+  std::vector<double> table_time_s;      ///< strictly increasing, from 0 (s)
+  std::vector<Vec3> table_velocity_m_s;  ///< one velocity per time (m/s)
+  Vec3 direction = Vec3::UnitZ();        ///< unit vector of the sinusoid
   double amplitude_m = 0.0;
   double frequency_hz = 0.0;
   double phase_rad = 0.0;
-  double target_force_N = 0.0;              ///< normal force the bodies exert on the wall (N), >= 0
-  double max_speed_m_s = 0.0;               ///< servo speed limit (m/s), > 0
-  double gain_m_s_N = 0.0;                  ///< servo gain (m/s per N), > 0
+  double target_force_N = 0.0;  ///< normal force the bodies exert on the wall (N), >= 0
+  double max_speed_m_s = 0.0;   ///< servo speed limit (m/s), > 0
+  double gain_m_s_N = 0.0;      ///< servo gain (m/s per N), > 0
 };
 
 /// A rigid plane; bodies stay on the side `normal` points to. Infinite, or
@@ -92,27 +93,27 @@ struct WallProgram {
 /// and along normal x axis_u: a plate acts on a particle whose centre is in
 /// front of it and projects inside the rectangle.
 struct WallSpec {
-  std::string name;                 ///< unique; names its series in the output (empty: wall_<index>)
-  Vec3 point_m = Vec3::Zero();      ///< a point of the plane at t = 0 (m)
-  Vec3 normal = Vec3::UnitZ();      ///< unit normal (normalised on input)
+  std::string name;             ///< unique; names its series in the output (empty: wall_<index>)
+  Vec3 point_m = Vec3::Zero();  ///< a point of the plane at t = 0 (m)
+  Vec3 normal = Vec3::UnitZ();  ///< unit normal (normalised on input)
   int material = 0;
   WallProgram program;
   bool bounded = false;
-  Vec3 axis_u = Vec3::UnitX();      ///< unit, in the plane (bounded walls)
+  Vec3 axis_u = Vec3::UnitX();            ///< unit, in the plane (bounded walls)
   double half_u_m = 0.0, half_v_m = 0.0;  ///< half-lengths of the rectangle (m)
 };
 
 /// Run settings (`run` object). Defaults in docs/micro.md.
 struct RunSpec {
   double duration_s = 0.0;
-  double dt_s = 0.0;                  ///< 0: dt_safety * critical
-  double dt_safety = 0.2;             ///< fraction of the critical step used when dt_s is absent
+  double dt_s = 0.0;                     ///< 0: dt_safety * critical
+  double dt_safety = 0.2;                ///< fraction of the critical step used when dt_s is absent
   bool allow_dt_above_critical = false;  ///< run a given dt_s even above the critical step
-  double output_interval_s = 0.0;     ///< body snapshots (0: duration / 100)
-  double series_interval_s = 0.0;     ///< scalar series (0: output_interval_s)
-  double max_overlap_ratio = 0.5;     ///< stop when an overlap exceeds this fraction of the smaller radius
-  double energy_runaway_factor = 10.0;  ///< stop when KE + elastic energy exceeds this times the energy scale
-  double verlet_skin_ratio = 0.2;     ///< Verlet skin / mean radius of the grid spheres
+  double output_interval_s = 0.0;        ///< body snapshots (0: duration / 100)
+  double series_interval_s = 0.0;        ///< scalar series (0: output_interval_s)
+  double max_overlap_ratio = 0.5;        ///< stop when an overlap exceeds this fraction of the smaller radius
+  double energy_runaway_factor = 10.0;   ///< stop when KE + elastic energy exceeds this times the energy scale
+  double verlet_skin_ratio = 0.2;        ///< Verlet skin / mean radius of the grid spheres
 };
 
 /// A whole scene.

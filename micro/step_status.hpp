@@ -7,18 +7,22 @@ namespace gabion::micro {
 
 enum class StepStatus {
   Ok,
-  NonFinite,       ///< a position, velocity or force became NaN or infinite
-  Overlap,         ///< a contact overlap passed run.max_overlap_ratio of the smaller radius
-  EnergyRunaway,   ///< kinetic + elastic energy grew past run.energy_runaway_factor x the energy supplied
+  NonFinite,      ///< a position, velocity or force became NaN or infinite
+  Overlap,        ///< a contact overlap passed run.max_overlap_ratio of the smaller radius
+  EnergyRunaway,  ///< kinetic + elastic energy grew past run.energy_runaway_factor x the energy supplied
 };
 
 /// A short name of the status ("ok", "non_finite", "overlap", "energy_runaway").
 inline const char* statusName(StepStatus s) {
   switch (s) {
-    case StepStatus::Ok: return "ok";
-    case StepStatus::NonFinite: return "non_finite";
-    case StepStatus::Overlap: return "overlap";
-    case StepStatus::EnergyRunaway: return "energy_runaway";
+    case StepStatus::Ok:
+      return "ok";
+    case StepStatus::NonFinite:
+      return "non_finite";
+    case StepStatus::Overlap:
+      return "overlap";
+    case StepStatus::EnergyRunaway:
+      return "energy_runaway";
   }
   return "unknown";
 }

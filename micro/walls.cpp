@@ -33,9 +33,12 @@ Vec3 programDisplacement(const WallProgram& p, double t0, double t1) {
   using K = WallProgram::Kind;
   switch (p.kind) {
     case K::Fixed:
-    case K::Servo: return Vec3::Zero();
-    case K::Velocity: return p.velocity_m_s * (t1 - t0);
-    case K::VelocityTable: return tableDisplacement(p, t1) - tableDisplacement(p, t0);
+    case K::Servo:
+      return Vec3::Zero();
+    case K::Velocity:
+      return p.velocity_m_s * (t1 - t0);
+    case K::VelocityTable:
+      return tableDisplacement(p, t1) - tableDisplacement(p, t0);
     case K::Sinusoid: {
       const double w = 2.0 * kPi * p.frequency_hz;
       // sin a - sin b = 2 cos((a + b) / 2) sin((a - b) / 2): no cancellation for a small step
@@ -47,8 +50,15 @@ Vec3 programDisplacement(const WallProgram& p, double t0, double t1) {
 }
 
 Wall::Wall(const WallSpec& spec)
-    : name(spec.name), n(spec.normal), mat(spec.material), program(spec.program), bounded(spec.bounded),
-      origin(spec.point_m), position(spec.point_m), force_position(spec.point_m), at_rebuild(spec.point_m) {
+    : name(spec.name),
+      n(spec.normal),
+      mat(spec.material),
+      program(spec.program),
+      bounded(spec.bounded),
+      origin(spec.point_m),
+      position(spec.point_m),
+      force_position(spec.point_m),
+      at_rebuild(spec.point_m) {
   if (bounded) {
     u = spec.axis_u;
     v = n.cross(u);
@@ -136,14 +146,13 @@ WallSums wallLanes(const WallLanes& a, const Wall& w, std::size_t k0, std::size_
   const double min_dist = w.bounded ? 0.0 : -inf;
   const double ux_ = w.u.x(), uy_ = w.u.y(), uz_ = w.u.z(), vx_ = w.v.x(), vy_ = w.v.y(), vz_ = w.v.z();
   Particles& P = a.p;
-  const double *__restrict X = P.x.data(), *__restrict Y = P.y.data(), *__restrict Z = P.z.data(),
-               *__restrict R = P.r.data();
-  const double *__restrict VX = P.vx.data(), *__restrict VY = P.vy.data(), *__restrict VZ = P.vz.data();
+  const double* __restrict X = P.x.data(), * __restrict Y = P.y.data(), * __restrict Z = P.z.data(), * __restrict R = P.r.data();
+  const double* __restrict VX = P.vx.data(), * __restrict VY = P.vy.data(), * __restrict VZ = P.vz.data();
   const double *__restrict WX = P.wx.data(), *__restrict WY = P.wy.data(), *__restrict WZ = P.wz.data(),
                *__restrict IM = P.inv_body_mass.data();
   const std::uint32_t* __restrict MAT = P.mat.data();
-  double *__restrict FX = P.fx.data(), *__restrict FY = P.fy.data(), *__restrict FZ = P.fz.data();
-  double *__restrict TX = P.tx.data(), *__restrict TY = P.ty.data(), *__restrict TZ = P.tz.data();
+  double* __restrict FX = P.fx.data(), * __restrict FY = P.fy.data(), * __restrict FZ = P.fz.data();
+  double* __restrict TX = P.tx.data(), * __restrict TY = P.ty.data(), * __restrict TZ = P.tz.data();
   const MaterialLaws& laws = a.laws;
   const double px = point.x(), py = point.y(), pz = point.z();
   const double wnx = normal.x(), wny = normal.y(), wnz = normal.z();

@@ -46,7 +46,8 @@ bool spinFor(Done done) {
 }  // namespace
 
 WorkerPool::WorkerPool(int threads)
-    : threads_(threads < 1 ? 1 : threads), claimed_(new std::atomic<std::uint64_t>[static_cast<std::size_t>(threads_)]) {
+    : threads_(threads < 1 ? 1 : threads),
+      claimed_(new std::atomic<std::uint64_t>[static_cast<std::size_t>(threads_)]) {
   for (int t = 0; t < threads_; ++t) claimed_[static_cast<std::size_t>(t)].store(0, std::memory_order_relaxed);
   for (int t = 1; t < threads_; ++t) workers_.emplace_back([this, t] { workerLoop(t); });
 }

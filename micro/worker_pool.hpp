@@ -48,7 +48,7 @@ class WorkerPool {
   // claimed_[t]: the last job (generation) whose partition t was claimed;
   // claiming is a compare-exchange from an older generation.
   std::unique_ptr<std::atomic<std::uint64_t>[]> claimed_;
-  std::atomic<int> pending_{0};   // partitions not finished yet
+  std::atomic<int> pending_{0};               // partitions not finished yet
   std::atomic<std::uint64_t> generation_{0};  // bumped (under mutex_) for each job
   std::atomic<bool> stop_{false};
   std::mutex mutex_;

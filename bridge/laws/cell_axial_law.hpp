@@ -28,9 +28,9 @@ enum class AxialModel { ElasticPerfectlyPlastic, Bilinear };
 /// Parameters of the axial (or impact) law.
 struct AxialLawParams {
   AxialModel model = AxialModel::ElasticPerfectlyPlastic;
-  double stiffness_N_m = 0.0;             ///< elastic stiffness k (N/m)
-  double yield_force_N = 0.0;             ///< first yield force F_y (N)
-  double hardening_stiffness_N_m = 0.0;   ///< post-yield tangent k_h, bilinear only (N/m), 0 <= k_h < k
+  double stiffness_N_m = 0.0;            ///< elastic stiffness k (N/m)
+  double yield_force_N = 0.0;            ///< first yield force F_y (N)
+  double hardening_stiffness_N_m = 0.0;  ///< post-yield tangent k_h, bilinear only (N/m), 0 <= k_h < k
 };
 
 /// The law as the elastic-plastic spring of elastic_plastic.hpp (the same

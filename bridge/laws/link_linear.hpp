@@ -12,9 +12,9 @@
 namespace gabion::bridge {
 
 struct LinearLinkParams {
-  double stiffness_N_m = 0.0;   ///< k (N/m), > 0
-  double rest_length_m = 0.0;   ///< L0 (m), > 0
-  bool tension_only = false;    ///< no force in compression
+  double stiffness_N_m = 0.0;                                       ///< k (N/m), > 0
+  double rest_length_m = 0.0;                                       ///< L0 (m), > 0
+  bool tension_only = false;                                        ///< no force in compression
   double rupture_strain = std::numeric_limits<double>::infinity();  ///< breaks above this strain (-)
 };
 

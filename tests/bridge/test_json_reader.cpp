@@ -12,7 +12,9 @@ using nlohmann::json;
 
 namespace {
 
-JsonDocument doc(const char* text) { return JsonDocument(json::parse(text), "case.json"); }
+JsonDocument doc(const char* text) {
+  return JsonDocument(json::parse(text), "case.json");
+}
 
 std::string errorOf(const std::function<void()>& f) {
   try {
@@ -77,7 +79,9 @@ TEST(JsonReader, DefaultsDoNotMarkAbsentKeys) {
 
 TEST(JsonReader, ChoiceListsOptions) {
   auto d = doc(R"({"model":"quadratic"})");
-  EXPECT_EQ(errorOf([&] { d.root().choice("model", {"linear", "bilinear"}); }),
+  EXPECT_EQ(errorOf([&] {
+              d.root().choice("model", {"linear", "bilinear"});
+            }),
             "case.json: /model: 'quadratic' is not one of 'linear', 'bilinear'");
 }
 
@@ -95,8 +99,9 @@ TEST(JsonReader, SetOverridesNestedValueAndArrayElement) {
 }
 
 TEST(JsonReader, UnreadableAndInvalidFiles) {
-  EXPECT_NE(errorOf([] { JsonDocument::load("/nonexistent/case.json"); }).find("/nonexistent/case.json: file does not exist"),
-            std::string::npos);
+  EXPECT_NE(
+      errorOf([] { JsonDocument::load("/nonexistent/case.json"); }).find("/nonexistent/case.json: file does not exist"),
+      std::string::npos);
   const std::string bad = ::testing::TempDir() + "bad.json";
   FILE* f = std::fopen(bad.c_str(), "w");
   std::fputs("{\"a\": 1,\n \"b\": }", f);

@@ -51,7 +51,10 @@ TEST(Output, AppendedRowsGrowTheFirstDimension) {
 TEST(Output, UncommittedWriterLeavesNoFile) {
   const fs::path path = fs::path(::testing::TempDir()) / "abandoned.h5";
   fs::remove(path);
-  { H5Writer w(path); w.write("/a", {1.0}); }
+  {
+    H5Writer w(path);
+    w.write("/a", {1.0});
+  }
   EXPECT_FALSE(fs::exists(path));
   EXPECT_FALSE(fs::exists(path.string() + ".part"));
 }

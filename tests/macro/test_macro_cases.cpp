@@ -86,7 +86,7 @@ TEST(MacroDefaultWall, Fig13PeakForceRisesDurationStays) {
   for (std::size_t i = 1; i < r.size(); ++i) EXPECT_GT(r[i].peak_force_N, r[i - 1].peak_force_N);
   const double force_ratio = r.back().peak_force_N / r.front().peak_force_N;
   const double duration_ratio = r.back().contact_duration_s / r.front().contact_duration_s;
-  EXPECT_GT(force_ratio, 2.0);                     // 8 -> 30 m/s: peak force more than doubles
+  EXPECT_GT(force_ratio, 2.0);                      // 8 -> 30 m/s: peak force more than doubles
   EXPECT_LT(std::abs(duration_ratio - 1.0), 0.35);  // duration within 35 %
   EXPECT_GT(force_ratio - 1.0, 3.0 * std::abs(duration_ratio - 1.0));
 }
@@ -159,7 +159,8 @@ TEST(MacroCli, ImpactOutputsSetAndLawOverride) {
 
   // A law file with twice the impact stiffness through --law: a different, stiffer answer.
   json law = readJson(kSource + "/cases/laws/illustrative.json");
-  for (auto& [name, m] : law["materials"].items()) m["impact"]["stiffness_N_m"] = 2 * m["impact"]["stiffness_N_m"].get<double>();
+  for (auto& [name, m] : law["materials"].items())
+    m["impact"]["stiffness_N_m"] = 2 * m["impact"]["stiffness_N_m"].get<double>();
   writeFile(dir / "stiff.json", law.dump());
   r = runGabion("run " + kWallCase + " -q -o " + (dir / "b").string() + " --set boulder.velocity_m_s=25 --law " +
                 (dir / "stiff.json").string());
@@ -191,8 +192,11 @@ TEST(MacroCli, SweepIsDeterministicAndRecordsFailures) {
   const auto dir = scratchDir("macro_sweep");
   json c = readJson(kSource + "/cases/macro_sweep.json");
   c["law_file"] = kSource + "/cases/laws/illustrative.json";
-  c["sweep"] = {{"velocity_m_s", {8, 20}}, {"mass_kg", {170, 400}}, {"aim_point_m", {{2.75, 1.75}, {99.0, 1.0}}},
-                {"cells", {{4, 11, 7}, {3, 7, 5}}}, {"chart", false}};
+  c["sweep"] = {{"velocity_m_s", {8, 20}},
+                {"mass_kg", {170, 400}},
+                {"aim_point_m", {{2.75, 1.75}, {99.0, 1.0}}},
+                {"cells", {{4, 11, 7}, {3, 7, 5}}},
+                {"chart", false}};
   writeFile(dir / "sweep.json", c.dump());
   std::string csv[2];
   for (int t = 0; t < 2; ++t) {
@@ -223,11 +227,27 @@ TEST(MacroCli, BadInputNamesTheField) {
   };
   const std::vector<Bad> bad = {
       {"unknown_key", [](json& c) { c["structure"]["cellz"] = 3; }, "/structure/cellz"},
-      {"negative_mass", [](json& c) { c["boulder"].erase("density_kg_m3"); c["boulder"]["mass_kg"] = -1; },
+      {"negative_mass",
+       [](json& c) {
+         c["boulder"].erase("density_kg_m3");
+         c["boulder"]["mass_kg"] = -1;
+       },
        "/boulder/mass_kg"},
-      {"bad_cells", [](json& c) { c["structure"]["cells"] = {4, 0, 7}; }, "/structure/cells"},
-      {"oblique_x_only", [](json& c) { c["boulder"]["velocity_m_s"] = {20, 5, 0}; }, "/boulder/velocity_m_s"},
-      {"aim_outside", [](json& c) { c["boulder"]["aim_point_m"] = {20, 1}; }, "/boulder/aim_point_m"},
+      {"bad_cells",
+       [](json& c) {
+         c["structure"]["cells"] = {4, 0, 7};
+       },
+       "/structure/cells"},
+      {"oblique_x_only",
+       [](json& c) {
+         c["boulder"]["velocity_m_s"] = {20, 5, 0};
+       },
+       "/boulder/velocity_m_s"},
+      {"aim_outside",
+       [](json& c) {
+         c["boulder"]["aim_point_m"] = {20, 1};
+       },
+       "/boulder/aim_point_m"},
       {"unknown_material", [](json& c) { c["structure"]["material"]["core"] = "granite"; }, "/structure"},
       {"no_laws", [](json& c) { c.erase("law_file"); }, "/law_file"},
       {"bad_kinematics", [](json& c) { c["run"]["kinematics"] = "2d"; }, "/run/kinematics"},
@@ -247,7 +267,8 @@ TEST(MacroCli, BadInputNamesTheField) {
   json law = readJson(kSource + "/cases/laws/illustrative.json");
   law["materials"]["front"]["axial"]["stiffness_N_m"] = -5;
   writeFile(dir / "bad_law.json", law.dump());
-  const auto r = runGabion("run " + kWallCase + " -q -o " + (dir / "x").string() + " --law " + (dir / "bad_law.json").string());
+  const auto r =
+      runGabion("run " + kWallCase + " -q -o " + (dir / "x").string() + " --law " + (dir / "bad_law.json").string());
   EXPECT_EQ(r.exit_code, 2) << r.output;
   EXPECT_NE(r.output.find("bad_law.json"), std::string::npos) << r.output;
   EXPECT_NE(r.output.find("/materials/front/axial/stiffness_N_m"), std::string::npos) << r.output;

@@ -105,7 +105,9 @@ TEST_P(MacroPlastic, DissipatedEnergyAndRebound) {
   EXPECT_EQ(r.contact_episodes, 1);
 }
 INSTANTIATE_TEST_SUITE_P(Laws, MacroPlastic, ::testing::Values(false, true),
-                         [](const ::testing::TestParamInfo<bool>& p) { return p.param ? "Bilinear" : "ElasticPerfectlyPlastic"; });
+                         [](const ::testing::TestParamInfo<bool>& p) {
+                           return p.param ? "Bilinear" : "ElasticPerfectlyPlastic";
+                         });
 
 // A 1-D chain pushed at its front at constant speed: the compression front
 // reaches the fixed back face after N e / c with c = e sqrt(k/m) (the long-wave
@@ -166,8 +168,7 @@ TEST(MacroSymmetry, CentredImpactIsSymmetric) {
 // More friction between cells spreads the load over more cells.
 TEST(MacroFriction, MoreFrictionLoadsMoreCells) {
   auto run = [](double mu) {
-    Structure s =
-        buildStructure(grid(3, 9, 9), oneMaterial(epp(1e7, 5e4), epp(2e7, 2e5), 183.0, 0.4, mu, 3e6));
+    Structure s = buildStructure(grid(3, 9, 9), oneMaterial(epp(1e7, 5e4), epp(2e7, 2e5), 183.0, 0.4, mu, 3e6));
     Model model(s, Kinematics::XOnly);
     return runImpact(model, boulderAt(s, 4, 4, 170.0, 20.0), quickRun(0.03, 0.1), 0, nullptr);
   };

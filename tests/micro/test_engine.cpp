@@ -31,7 +31,9 @@ Material material(double kn = 1e5, double ks = 2.5e4, double f = 0.5, double zet
   return m;
 }
 
-double sphereMass(double r) { return 2500.0 * 4.0 / 3.0 * kPi * r * r * r; }
+double sphereMass(double r) {
+  return 2500.0 * 4.0 / 3.0 * kPi * r * r * r;
+}
 
 struct Collision {
   double duration_s = 0.0, restitution = 0.0;
@@ -294,8 +296,8 @@ TEST(MicroEngine, ParallelDepositionIsRepeatableAndProfiled) {
   EXPECT_LT(a.worst, 0.01);
   using gabion::micro::StageProfile;
   ASSERT_EQ(a.profile.partition_busy_s.size(), 3u);
-  for (const int stage : {StageProfile::kNeighbours, StageProfile::kContacts, StageProfile::kWalls,
-                          StageProfile::kIntegrate}) {
+  for (const int stage :
+       {StageProfile::kNeighbours, StageProfile::kContacts, StageProfile::kWalls, StageProfile::kIntegrate}) {
     const auto k = static_cast<std::size_t>(stage);
     double busy = 0.0;
     for (const auto& p : a.profile.partition_busy_s) busy += p[k];
@@ -321,10 +323,10 @@ DepositionResult deposition(double f, double zeta, double alpha, int threads, do
   }
   const double L = 0.3;
   for (const auto& [p, n] : std::vector<std::pair<Vec3, Vec3>>{{Vec3(0, 0, 0), Vec3(0, 0, 1)},
-                                                                {Vec3(0, 0, 0), Vec3(1, 0, 0)},
-                                                                {Vec3(L, 0, 0), Vec3(-1, 0, 0)},
-                                                                {Vec3(0, 0, 0), Vec3(0, 1, 0)},
-                                                                {Vec3(0, L, 0), Vec3(0, -1, 0)}}) {
+                                                               {Vec3(0, 0, 0), Vec3(1, 0, 0)},
+                                                               {Vec3(L, 0, 0), Vec3(-1, 0, 0)},
+                                                               {Vec3(0, 0, 0), Vec3(0, 1, 0)},
+                                                               {Vec3(0, L, 0), Vec3(0, -1, 0)}}) {
     WallSpec w;
     w.point_m = p;
     w.normal = n;
@@ -370,7 +372,8 @@ TEST(MicroEngine, ForceLimitPlasticWorkInEngine) {
   const double overlap = 0.01 - e.body(0).position_m.z();
   const double plastic = overlap - m.normal_force_limit_N / 1e5;
   EXPECT_GT(plastic, 1e-3);
-  EXPECT_NEAR(e.energy().plastic_dissipation_J, m.normal_force_limit_N * plastic, 0.01 * m.normal_force_limit_N * plastic);
+  EXPECT_NEAR(e.energy().plastic_dissipation_J, m.normal_force_limit_N * plastic,
+              0.01 * m.normal_force_limit_N * plastic);
 }
 
 TEST(MicroEngine, CriticalStepOfASphere) {

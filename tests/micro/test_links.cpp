@@ -57,8 +57,7 @@ TEST(MicroLinks, ChainOscillatesAtItsAnalyticFrequency) {
   s.gravity_m_s2.setZero();
   s.materials = {rock()};
   s.spheres.push_back(sphere(Vec3(0, 0, 0), r, true));
-  for (int j = 1; j <= N; ++j)
-    s.spheres.push_back(sphere(Vec3(j * L0 + amp * std::sin(j * kPi / (N + 1)), 0, 0), r));
+  for (int j = 1; j <= N; ++j) s.spheres.push_back(sphere(Vec3(j * L0 + amp * std::sin(j * kPi / (N + 1)), 0, 0), r));
   s.spheres.push_back(sphere(Vec3((N + 1) * L0, 0, 0), r, true));
   for (int j = 0; j <= N; ++j) s.links.push_back(link(j, j + 1, k, L0));
   Engine e(s, 1);

@@ -1,8 +1,6 @@
 // Tests of micro/rigid_body: mass properties of sphere clusters against closed
 // forms, and the DLM free-rotation integrator against conservation laws and a
 // high-order reference solution.
-#include "micro/rigid_body.hpp"
-
 #include <gtest/gtest.h>
 
 #include <algorithm>
@@ -14,6 +12,8 @@
 #include <stdexcept>
 #include <vector>
 
+#include "micro/rigid_body.hpp"
+
 namespace gabion::micro {
 namespace {
 
@@ -22,11 +22,15 @@ using Eigen::Matrix3d;
 using Eigen::Quaterniond;
 using Eigen::Vector3d;
 
-double ballVolume(double r) { return 4.0 / 3.0 * kPi * r * r * r; }
+double ballVolume(double r) {
+  return 4.0 / 3.0 * kPi * r * r * r;
+}
 
 // Lens (intersection) of two equal balls of radius R at centre distance d:
 // V = pi (4R + d) (2R - d)^2 / 12 (two spherical caps of height h = R - d/2).
-double equalLensVolume(double R, double d) { return kPi * (4.0 * R + d) * (2.0 * R - d) * (2.0 * R - d) / 12.0; }
+double equalLensVolume(double R, double d) {
+  return kPi * (4.0 * R + d) * (2.0 * R - d) * (2.0 * R - d) / 12.0;
+}
 
 // Lens of two balls r1, r2 at distance d (Weisstein, "Sphere-Sphere Intersection", MathWorld):
 // V = pi (r1 + r2 - d)^2 (d^2 + 2 d r2 - 3 r2^2 + 2 d r1 + 6 r1 r2 - 3 r1^2) / (12 d).
@@ -47,8 +51,8 @@ struct LensMoments {
 };
 LensMoments equalLensMoments(double R, double d) {
   const double a = 0.5 * d;
-  auto P = [&](double u) { return R * R * u - u * u * u / 3.0; };                 // int (R^2 - u^2)
-  auto Q = [&](double u) {                                                        // int (R^2-u^2)^2
+  auto P = [&](double u) { return R * R * u - u * u * u / 3.0; };  // int (R^2 - u^2)
+  auto Q = [&](double u) {                                         // int (R^2-u^2)^2
     return R * R * R * R * u - 2.0 * R * R * u * u * u / 3.0 + std::pow(u, 5) / 5.0;
   };
   auto S = [&](double u) {  // int (u - a)^2 (R^2 - u^2) = int (u^2 - 2au + a^2)(R^2 - u^2)
@@ -59,7 +63,9 @@ LensMoments equalLensMoments(double R, double d) {
 }
 
 // Inertia relative error measure used by clusterMassProperties: Frobenius norm / trace.
-double inertiaError(const Matrix3d& J, const Matrix3d& ref) { return (J - ref).norm() / ref.trace(); }
+double inertiaError(const Matrix3d& J, const Matrix3d& ref) {
+  return (J - ref).norm() / ref.trace();
+}
 
 // ---------------------------------------------------------------- mass properties
 
@@ -90,7 +96,8 @@ TEST(ClusterMassProperties, TwoDisjointSpheresParallelAxis) {
   for (int i = 0; i < 2; ++i) {
     const double mi = i == 0 ? m1 : m2;
     const Vector3d d = c[i] - com;
-    J += 0.4 * mi * r[i] * r[i] * Matrix3d::Identity() + mi * (d.squaredNorm() * Matrix3d::Identity() - d * d.transpose());
+    J += 0.4 * mi * r[i] * r[i] * Matrix3d::Identity() +
+         mi * (d.squaredNorm() * Matrix3d::Identity() - d * d.transpose());
   }
   EXPECT_NEAR(p.mass_kg, m1 + m2, 1e-14 * (m1 + m2));
   EXPECT_LT((p.center_m - com).norm(), 1e-14);
@@ -336,8 +343,8 @@ TEST(ClusterMassProperties, TypicalBlocksAccuracyAndCost) {
       const double eJ = inertiaError(p.inertia_kg_m2, ref.inertia_kg_m2);
       EXPECT_LE(std::max({eV, eC, eJ}), 1e-4);
       std::cout << "[ info ] " << g.nx << "x" << g.ny << "x" << g.nz << (g.cut ? " cut" : "") << " s=" << g.s
-                << (jitter ? " jittered" : " lattice") << ": " << c.size() << " spheres, " << ms
-                << " ms CPU, errors V " << eV << " centre " << eC << " inertia " << eJ << "\n";
+                << (jitter ? " jittered" : " lattice") << ": " << c.size() << " spheres, " << ms << " ms CPU, errors V "
+                << eV << " centre " << eC << " inertia " << eJ << "\n";
     }
 }
 
@@ -358,8 +365,8 @@ TEST(ClusterMassProperties, SmallLensInsideAWideOverlapRangeIsNotMissed) {
 TEST(ClusterMassProperties, ContainedAndDuplicateSpheresCountOnce) {
   const double R = 0.02;
   const MassProperties one = clusterMassProperties({Vector3d::Zero()}, {R}, 1.0);
-  const MassProperties p = clusterMassProperties(
-      {Vector3d::Zero(), Vector3d::Zero(), Vector3d(0.005, 0, 0)}, {R, R, 0.01}, 1.0);
+  const MassProperties p =
+      clusterMassProperties({Vector3d::Zero(), Vector3d::Zero(), Vector3d(0.005, 0, 0)}, {R, R, 0.01}, 1.0);
   EXPECT_NEAR(p.volume_m3, one.volume_m3, 1e-15);
   EXPECT_LT(inertiaError(p.inertia_kg_m2, one.inertia_kg_m2), 1e-14);
 }
@@ -389,7 +396,8 @@ TEST(ClusterMassProperties, PrincipalFrameOffsetsRebuildTheBody) {
   // In the principal frame the same cluster has diagonal inertia and COM 0.
   const MassProperties q = clusterMassProperties(off, {0.01, 0.009, 0.008}, 2000.0, 1e-10);
   EXPECT_LT(q.center_m.norm(), 1e-10 * 0.01);
-  const double off_diag = std::abs(q.inertia_kg_m2(0, 1)) + std::abs(q.inertia_kg_m2(0, 2)) + std::abs(q.inertia_kg_m2(1, 2));
+  const double off_diag =
+      std::abs(q.inertia_kg_m2(0, 1)) + std::abs(q.inertia_kg_m2(0, 2)) + std::abs(q.inertia_kg_m2(1, 2));
   EXPECT_LT(off_diag, 1e-9 * q.inertia_kg_m2.trace());
 }
 
@@ -450,7 +458,9 @@ Quaterniond referenceRotation(Quaterniond q, const Vector3d& Lw, const Vector3d&
   return s.q.normalized();
 }
 
-double angleBetween(const Quaterniond& a, const Quaterniond& b) { return a.angularDistance(b); }
+double angleBetween(const Quaterniond& a, const Quaterniond& b) {
+  return a.angularDistance(b);
+}
 
 TEST(FreeRotate, AsymmetricBodyConservesEnergyAndMomentum) {
   // I = (1, 2, 3); |omega| ~ 1.2 rad/s; dt = period/500 -> 1e5 steps ~ 200 turns.

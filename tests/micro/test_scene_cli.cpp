@@ -7,8 +7,8 @@
 #include <nlohmann/json.hpp>
 #include <string>
 
-#include "bridge/output.hpp"
 #include "../support/run_gabion.hpp"
+#include "bridge/output.hpp"
 
 namespace {
 
@@ -22,7 +22,8 @@ std::string scene(const std::string& spheres_extra = "", const std::string& run_
                   const std::string& material_extra = "") {
   std::string s = R"({"format": "gabion.case/1", "kind": "micro.scene", "gravity_m_s2": [0, 0, -9.81],
  "materials": {"rock": {"density_kg_m3": 2500, "normal_stiffness_N_m": 1e5, "shear_stiffness_N_m": 2.5e4,
-                        "friction": 0.5, "viscous_damping_ratio": 0.1)" + material_extra + R"(}},
+                        "friction": 0.5, "viscous_damping_ratio": 0.1)" +
+                  material_extra + R"(}},
  "spheres": [)";
   for (int k = 0; k < 27; ++k) {
     const double x = 0.03 + 0.025 * (k % 3), y = 0.03 + 0.025 * ((k / 3) % 3), z = 0.02 + 0.025 * (k / 9);
@@ -38,7 +39,8 @@ std::string scene(const std::string& spheres_extra = "", const std::string& run_
            {"point_m": [0, 0, 0], "normal": [0, 1, 0], "material": "rock"},
            {"point_m": [0, 0.11, 0], "normal": [0, -1, 0], "material": "rock"},
            {"name": "lid", "point_m": [0, 0, 0.16], "normal": [0, 0, -1], "material": "rock", "velocity_m_s": [0, 0, -0.2]}],
- "run": {"duration_s": 0.1, "output_interval_s": 0.01)" + run_extra + R"(}})";
+ "run": {"duration_s": 0.1, "output_interval_s": 0.01)" +
+       run_extra + R"(}})";
   return s;
 }
 
@@ -169,7 +171,8 @@ TEST(MicroSceneCli, SameCaseSameThreadsGivesIdenticalArrays) {
       ASSERT_EQ(r.exit_code, 0) << r.output;
       gabion::bridge::H5Reader h5(out / "result.h5");
       std::vector<double> all;
-      for (const char* d : {"/bodies/position_m", "/bodies/velocity_m_s", "/series/total_J", "/series/walls/wall_0/force_N"}) {
+      for (const char* d :
+           {"/bodies/position_m", "/bodies/velocity_m_s", "/series/total_J", "/series/walls/wall_0/force_N"}) {
         const auto v = h5.read(d);
         all.insert(all.end(), v.begin(), v.end());
       }

@@ -4,9 +4,9 @@
 
 #include <cmath>
 
+#include "bridge/errors.hpp"
 #include "micro/engine.hpp"
 #include "micro/walls.hpp"
-#include "bridge/errors.hpp"
 
 namespace {
 
@@ -91,8 +91,8 @@ TEST(MicroWalls, VelocityTableDisplacementIsItsIntegral) {
   const auto D = [&](double t) { return gabion::micro::programDisplacement(table, 0.0, t).z(); };
   EXPECT_NEAR(D(0.01), -0.5e-3, 1e-15);
   EXPECT_NEAR(D(0.02), -1.5e-3, 1e-15);
-  EXPECT_NEAR(D(0.03), -1.5e-3, 1e-15);          // ramps -0.1 -> 0.1: no net displacement
-  EXPECT_NEAR(D(0.04), -1.5e-3 + 1e-3, 1e-15);   // the last velocity holds
+  EXPECT_NEAR(D(0.03), -1.5e-3, 1e-15);         // ramps -0.1 -> 0.1: no net displacement
+  EXPECT_NEAR(D(0.04), -1.5e-3 + 1e-3, 1e-15);  // the last velocity holds
   // additive over any split of the interval
   EXPECT_NEAR(gabion::micro::programDisplacement(table, 0.0, 0.017).z() +
                   gabion::micro::programDisplacement(table, 0.017, 0.035).z(),
