@@ -10,6 +10,7 @@
 #include <random>
 
 #include "micro/engine.hpp"
+#include "micro_test_util.hpp"
 
 namespace {
 
@@ -21,15 +22,7 @@ using gabion::micro::WallProgram;
 
 Scene everyStage() {
   Scene s;
-  gabion::micro::Material m;
-  m.name = "rock";
-  m.density_kg_m3 = 2500;
-  m.normal_stiffness_N_m = 1e5;
-  m.shear_stiffness_N_m = 2.5e4;
-  m.friction = 0.5;
-  m.local_damping = 0.1;
-  m.viscous_damping_ratio = 0.05;
-  s.materials = {m};
+  s.materials = {gabion::micro::test::material(1e5, 2.5e4, 0.5, 0.05, 0.1)};
   std::mt19937 rng(11);
   std::uniform_real_distribution<double> jitter(-0.001, 0.001);
   for (int i = 0; i < 400; ++i) {

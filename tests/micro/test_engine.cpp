@@ -6,6 +6,7 @@
 
 #include "micro/engine.hpp"
 #include "micro/rigid_body.hpp"
+#include "micro_test_util.hpp"
 
 namespace {
 
@@ -17,23 +18,9 @@ using gabion::micro::SphereSpec;
 using gabion::micro::StepStatus;
 using gabion::micro::Vec3;
 using gabion::micro::WallSpec;
-constexpr double kPi = 3.14159265358979323846;
-
-Material material(double kn = 1e5, double ks = 2.5e4, double f = 0.5, double zeta = 0.0, double alpha = 0.0) {
-  Material m;
-  m.name = "m";
-  m.density_kg_m3 = 2500;
-  m.normal_stiffness_N_m = kn;
-  m.shear_stiffness_N_m = ks;
-  m.friction = f;
-  m.viscous_damping_ratio = zeta;
-  m.local_damping = alpha;
-  return m;
-}
-
-double sphereMass(double r) {
-  return 2500.0 * 4.0 / 3.0 * kPi * r * r * r;
-}
+using gabion::micro::test::kPi;
+using gabion::micro::test::material;
+using gabion::micro::test::sphereMass;
 
 struct Collision {
   double duration_s = 0.0, restitution = 0.0;

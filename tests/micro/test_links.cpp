@@ -6,35 +6,19 @@
 #include <random>
 
 #include "micro/engine.hpp"
+#include "micro_test_util.hpp"
 
 namespace {
 
 using gabion::micro::Engine;
 using gabion::micro::LinkSpec;
-using gabion::micro::Material;
 using gabion::micro::Scene;
 using gabion::micro::SphereSpec;
 using gabion::micro::StepStatus;
 using gabion::micro::Vec3;
-constexpr double kPi = 3.14159265358979323846;
-
-Material rock() {
-  Material m;
-  m.name = "rock";
-  m.density_kg_m3 = 2500;
-  m.normal_stiffness_N_m = 1e5;
-  m.shear_stiffness_N_m = 2.5e4;
-  m.friction = 0.5;
-  return m;
-}
-
-SphereSpec sphere(const Vec3& c, double r, bool fixed = false) {
-  SphereSpec s;
-  s.center_m = c;
-  s.radius_m = r;
-  s.fixed = fixed;
-  return s;
-}
+using gabion::micro::test::kPi;
+using gabion::micro::test::sphere;
+const auto rock = [] { return gabion::micro::test::material(); };
 
 LinkSpec link(std::size_t a, std::size_t b, double k, double rest, double rupture = INFINITY) {
   LinkSpec l;

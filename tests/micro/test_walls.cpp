@@ -7,6 +7,7 @@
 #include "bridge/errors.hpp"
 #include "micro/engine.hpp"
 #include "micro/walls.hpp"
+#include "micro_test_util.hpp"
 
 namespace {
 
@@ -18,24 +19,14 @@ using gabion::micro::StepStatus;
 using gabion::micro::Vec3;
 using gabion::micro::WallProgram;
 using gabion::micro::WallSpec;
-constexpr double kPi = 3.14159265358979323846;
+using gabion::micro::test::kPi;
 
 Material rock(double local_damping = 0.0) {
-  Material m;
-  m.name = "rock";
-  m.density_kg_m3 = 2500;
-  m.normal_stiffness_N_m = 1e5;
-  m.shear_stiffness_N_m = 2.5e4;
-  m.friction = 0.5;
-  m.local_damping = local_damping;
-  return m;
+  return gabion::micro::test::material(1e5, 2.5e4, 0.5, 0.0, local_damping);
 }
 
 SphereSpec sphere(const Vec3& c, double r = 0.01) {
-  SphereSpec s;
-  s.center_m = c;
-  s.radius_m = r;
-  return s;
+  return gabion::micro::test::sphere(c, r);
 }
 
 WallSpec floorWall(const std::string& name, const WallProgram& program) {
