@@ -170,15 +170,27 @@ def gabion_available(binary):
     return True, ""
 
 
+def run_engine(cmd, rundir, env, timeout_s):
+    """Runs one engine in rundir (stdout.txt, stderr.txt there) with
+    run_measured; returns the result record every row starts from."""
+    rc, rss, elapsed, how, cpu = run_measured(cmd, rundir, env, os.path.join(rundir, "stdout.txt"),
+                                              os.path.join(rundir, "stderr.txt"), timeout_s)
+    return {"cmd": cmd, "rc": rc, "rss_kB": rss, "rss_how": how, "elapsed_s": elapsed, "cpu_s": cpu}
+
+
+def engine_stdout(rundir):
+    with open(os.path.join(rundir, "stdout.txt"), errors="replace") as f:
+        return f.read()
+
+
 def run_gabion(binary, scene, threads, rundir, timeout_s):
     outdir = os.path.join(rundir, "out")
     duration = repr(scene["steps"] * scene["dt_s"])
     cmd = [binary, "run", scene["gabion_case"], "-o", outdir, "--threads", str(threads), "-q",
            "--set", f"run.duration_s={duration}", "--set", f"run.output_interval_s={duration}"]
     env = dict(os.environ, OMP_NUM_THREADS=str(threads))
-    rc, rss, elapsed, how, cpu = run_measured(cmd, rundir, env, os.path.join(rundir, "stdout.txt"),
-                                         os.path.join(rundir, "stderr.txt"), timeout_s)
-    res = {"cmd": cmd, "rc": rc, "rss_kB": rss, "rss_how": how, "elapsed_s": elapsed, "cpu_s": cpu}
+    res = run_engine(cmd, rundir, env, timeout_s)
+    rc = res["rc"]
     summary_path = os.path.join(outdir, "summary.json")
     if rc != 0 or not os.path.exists(summary_path):
         res["error"] = f"exit code {rc}{TIMED_OUT if rc == 124 else ''}\n" + tail(os.path.join(rundir, "stderr.txt"))
@@ -251,18 +263,15 @@ def run_liggghts(binary, scene, rundir, timeout_s, neigh=None):
                "-var", "skin", repr(skin), "-var", "neighstyle", style, "-var", "binsize", repr(binsize),
                "-var", "dumpfile", os.path.join(rundir, "final.dump")]
     env = dict(os.environ, OMP_NUM_THREADS="1")
-    stdout_path = os.path.join(rundir, "stdout.txt")
-    rc, rss, elapsed, how, cpu = run_measured(cmd, rundir, env, stdout_path, os.path.join(rundir, "stderr.txt"),
-                                         timeout_s)
-    res = {"cmd": cmd, "rc": rc, "rss_kB": rss, "rss_how": how, "elapsed_s": elapsed, "cpu_s": cpu}
-    with open(stdout_path, errors="replace") as f:
-        text = f.read()
+    res = run_engine(cmd, rundir, env, timeout_s)
+    rc = res["rc"]
+    text = engine_stdout(rundir)
     m = re.search(r"Loop time of ([\d.eE+-]+) on (\d+) procs for (\d+) steps with (\d+) atoms", text)
     r = re.search(r"BENCH_RESULT mean_z_m (\S+) kinetic_translational_J (\S+) kinetic_rotational_J (\S+)", text)
     c = re.search(r"BENCH_CONTACTS pair (\S+) wall (\S+)", text)
     if rc != 0 or not m or not r:
         res["error"] = (f"exit code {rc}{TIMED_OUT if rc == 124 else ''}, loop line {'found' if m else 'missing'}\n"
-                        + tail(stdout_path) + "\n" + tail(os.path.join(rundir, "stderr.txt")))
+                        + tail(os.path.join(rundir, "stdout.txt")) + "\n" + tail(os.path.join(rundir, "stderr.txt")))
         return res
     if int(m.group(4)) != scene["n"]:
         res["error"] = f"LIGGGHTS ended with {m.group(4)} atoms, expected {scene['n']}"
@@ -335,9 +344,8 @@ def run_yade(binary, scene, rundir, timeout_s):
     cmd = [binary, "-j1", "-n", "-x", os.path.join(HERE, "yade_settle.py")]
     env = dict(os.environ, OMP_NUM_THREADS="1", BENCH_SPHERES=scene["spheres"], BENCH_SIDE=repr(scene["side_m"]),
                BENCH_STEPS=str(scene["steps"]), BENCH_RESULT=result_json)
-    rc, rss, elapsed, how, cpu = run_measured(cmd, rundir, env, os.path.join(rundir, "stdout.txt"),
-                                         os.path.join(rundir, "stderr.txt"), timeout_s)
-    res = {"cmd": cmd, "rc": rc, "rss_kB": rss, "rss_how": how, "elapsed_s": elapsed, "cpu_s": cpu}
+    res = run_engine(cmd, rundir, env, timeout_s)
+    rc = res["rc"]
     if rc != 0 or not os.path.exists(result_json):
         res["error"] = (f"exit code {rc}{TIMED_OUT if rc == 124 else ''}\n" + tail(os.path.join(rundir, "stdout.txt"))
                         + "\n" + tail(os.path.join(rundir, "stderr.txt")))
@@ -414,19 +422,16 @@ def run_ceiling(ceiling, scene, threads, rundir, timeout_s, cloud):
     spheres = scene["spheres"] if cloud == "ours" else scene["ceiling_gen_spheres"]
     cmd = [exe, spheres, repr(scene["side_m"]), "--steps", str(scene["steps"])]
     env = dict(os.environ, OMP_NUM_THREADS=str(threads))
-    stdout_path = os.path.join(rundir, "stdout.txt")
-    rc, rss, elapsed, how, cpu = run_measured(cmd, rundir, env, stdout_path, os.path.join(rundir, "stderr.txt"),
-                                         timeout_s)
-    res = {"cmd": cmd, "rc": rc, "rss_kB": rss, "rss_how": how, "elapsed_s": elapsed, "cpu_s": cpu}
-    with open(stdout_path, errors="replace") as f:
-        text = f.read()
+    res = run_engine(cmd, rundir, env, timeout_s)
+    rc = res["rc"]
+    text = engine_stdout(rundir)
     h = re.search(r"N=(\d+) L=\S+ threads=(\d+)", text)
     m = re.search(r"loop_time ([\d.eE+-]+) s", text)
     r = re.search(r"final: KE (\S+) J\s+KErot (\S+) J\s+PE (\S+) J.*contacts pp (\d+) \(direct search (\d+)\)\s+pw (\d+)",
                   text)
     if rc != 0 or not m or not r or not h:
         res["error"] = (f"exit code {rc}{TIMED_OUT if rc == 124 else ''}, loop line {'found' if m else 'missing'}\n"
-                        + tail(stdout_path) + "\n" + tail(os.path.join(rundir, "stderr.txt")))
+                        + tail(os.path.join(rundir, "stdout.txt")) + "\n" + tail(os.path.join(rundir, "stderr.txt")))
         return res
     if int(h.group(1)) != scene["n"] or int(h.group(2)) != threads:
         res["error"] = f"the kernel ran N={h.group(1)} on {h.group(2)} threads, expected N={scene['n']} on {threads}"
