@@ -51,15 +51,6 @@ ExcludedPairs Links::excludedPairs() const {
   return out;
 }
 
-double Links::stiffnessAt(std::uint32_t id) const {
-  const auto it = std::lower_bound(node_id_.begin(), node_id_.end(), id);
-  if (it == node_id_.end() || *it != id) return 0.0;
-  const auto k = static_cast<std::size_t>(it - node_id_.begin());
-  double sum = 0.0;
-  for (std::uint32_t q = node_begin_[k]; q < node_begin_[k + 1]; ++q) sum += law_[node_link_[q]].stiffness_N_m;
-  return sum;
-}
-
 void Links::evaluate(const Particles& p, std::size_t l0, std::size_t l1, double time_s, bool measure,
                      WorkerScratch& s) {
   double elastic = 0.0, rupture = 0.0;

@@ -32,8 +32,6 @@ class Links {
   bool empty() const { return a_.empty(); }
   /// Pairs that the contact law leaves alone (the linked ones).
   ExcludedPairs excludedPairs() const;
-  /// Sum of the stiffnesses of the links at particle `id` (N/m), for the critical step.
-  double stiffnessAt(std::uint32_t id) const;
 
   /// Pass 1, links [l0, l1): forces of this step from the current positions;
   /// a link that breaks is marked, its stored energy counted as dissipated,

@@ -11,6 +11,7 @@ namespace {
 
 using bridge::Check;
 constexpr int kMaxGroup = kGroupCount - 1;
+constexpr const char* kWallNameRule = "a wall name uses letters, digits, '_' and '-' only (it names the wall's series)";
 using bridge::JsonReader;
 
 int materialIndex(const JsonReader& r, const std::map<std::string, int>& names) {
@@ -149,11 +150,8 @@ Scene parseScene(const JsonReader& root) {
     const JsonReader& r = wall_readers[k];
     WallSpec w;
     w.name = r.string("name", "wall_" + std::to_string(k));
-    if (w.name.empty() || w.name.find_first_not_of(
-                              "abcdefghijklmnopqrstuvwxyzABCDEFGHIJKLMNOPQRSTUVWXYZ0123456789_-") != std::string::npos)
-      r.fail("name", "a wall name uses letters, digits, '_' and '-' only (it names the wall's series)");
-    for (std::size_t q = 0; q < k; ++q)
-      if (s.walls[q].name == w.name) r.fail("name", "wall name '" + w.name + "' is used by wall " + std::to_string(q));
+    // (its characters and uniqueness: validateScene, below)
+    if (w.name.empty()) r.fail("name", kWallNameRule);
     w.point_m = r.vec3("point_m");
     w.normal = unitVector(r, "normal");
     w.material = materialIndex(r, names);
@@ -298,9 +296,12 @@ void validateScene(const Scene& s, const std::string& file) {
   }
   for (std::size_t k = 0; k < s.walls.size(); ++k) {
     const WallSpec& w = s.walls[k];
+    const std::string name = wallName(s, k);
+    if (name.find_first_not_of("abcdefghijklmnopqrstuvwxyzABCDEFGHIJKLMNOPQRSTUVWXYZ0123456789_-") != std::string::npos)
+      fail(at("walls", k, "name"), kWallNameRule);
     for (std::size_t q = 0; q < k; ++q)
-      if (wallName(s, q) == wallName(s, k))
-        fail(at("walls", k, "name"), "wall name '" + wallName(s, k) + "' is used twice");
+      if (wallName(s, q) == name)
+        fail(at("walls", k, "name"), "wall name '" + name + "' is used by wall " + std::to_string(q));
     if (!finite(w.point_m)) fail(at("walls", k, "point_m"), "must be finite");
     if (!(std::fabs(w.normal.norm() - 1.0) < 1e-9)) fail(at("walls", k, "normal"), "must be a unit vector");
     material(w.material, at("walls", k, "material"));
