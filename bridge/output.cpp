@@ -167,10 +167,19 @@ void H5Writer::appendRow(const std::string& dataset, const std::vector<double>& 
 }
 
 void H5Writer::writeInts(const std::string& dataset, const std::vector<long long>& values) {
+  writeInts(dataset, values, {values.size()});
+}
+
+void H5Writer::writeInts(const std::string& dataset, const std::vector<long long>& values,
+                         const std::vector<std::size_t>& dims) {
+  std::size_t total = 1;
+  for (const std::size_t d : dims) total *= d;
+  if (total != values.size())
+    throw std::logic_error("H5Writer::writeInts " + dataset + ": the data do not have the given dimensions");
   try {
     ensureGroups(impl_->file, dataset);
-    hsize_t d = values.size();
-    H5::DataSpace space(1, &d);
+    const std::vector<hsize_t> d(dims.begin(), dims.end());
+    H5::DataSpace space(static_cast<int>(d.size()), d.data());
     H5::DataSet ds = impl_->file.createDataSet(dataset, H5::PredType::NATIVE_LLONG, space);
     if (!values.empty()) ds.write(values.data(), H5::PredType::NATIVE_LLONG);
   } catch (const H5::Exception& e) {
@@ -288,10 +297,14 @@ std::string H5Reader::attribute(const std::string& object, const std::string& na
 // ---------------------------------------------------------------- XDMF
 
 void writeXdmfPoints(const fs::path& xdmf_path, const std::string& h5_name, const std::vector<double>& times,
-                     std::size_t points, const std::string& positions, const std::vector<XdmfField>& fields) {
+                     std::size_t points, const std::string& positions, const std::vector<XdmfField>& fields,
+                     const XdmfLines& lines) {
   std::ostringstream x;
   x.precision(17);
   const std::size_t nt = times.size();
+  const bool with_lines = !lines.dataset.empty();
+  if (with_lines && (lines.dataset.size() != nt || lines.count.size() != nt))
+    throw std::logic_error("writeXdmfPoints: one line dataset and count per time are needed");
   x << "<?xml version=\"1.0\" ?>\n<!DOCTYPE Xdmf SYSTEM \"Xdmf.dtd\" []>\n<Xdmf Version=\"2.0\">\n <Domain>\n"
     << "  <Grid Name=\"bodies\" GridType=\"Collection\" CollectionType=\"Temporal\">\n";
   auto slab = [&](std::size_t t, int comps, const std::string& ds) {
@@ -305,9 +318,14 @@ void writeXdmfPoints(const fs::path& xdmf_path, const std::string& h5_name, cons
     return s.str();
   };
   for (std::size_t t = 0; t < nt; ++t) {
-    x << "   <Grid Name=\"t" << t << "\" GridType=\"Uniform\">\n"
-      << "    <Time Value=\"" << times[t] << "\"/>\n"
-      << "    <Topology TopologyType=\"Polyvertex\" NumberOfElements=\"" << points << "\"/>\n"
+    // With lines, each time is a spatial collection of the points and the
+    // lines between them (same geometry); ParaView shows both.
+    if (with_lines)
+      x << "   <Grid Name=\"t" << t << "\" GridType=\"Collection\" CollectionType=\"Spatial\">\n"
+        << "    <Time Value=\"" << times[t] << "\"/>\n";
+    x << "   <Grid Name=\"" << (with_lines ? "points" : "t" + std::to_string(t)) << "\" GridType=\"Uniform\">\n";
+    if (!with_lines) x << "    <Time Value=\"" << times[t] << "\"/>\n";
+    x << "    <Topology TopologyType=\"Polyvertex\" NumberOfElements=\"" << points << "\"/>\n"
       << "    <Geometry GeometryType=\"XYZ\">\n"
       << slab(t, 3, positions) << "    </Geometry>\n";
     for (const auto& f : fields) {
@@ -324,6 +342,17 @@ void writeXdmfPoints(const fs::path& xdmf_path, const std::string& h5_name, cons
       x << "    </Attribute>\n";
     }
     x << "   </Grid>\n";
+    if (!with_lines) continue;
+    x << "   <Grid Name=\"" << lines.name << "\" GridType=\"Uniform\">\n"
+      << "    <Topology TopologyType=\"Polyline\" NodesPerElement=\"2\" NumberOfElements=\"" << lines.count[t]
+      << "\">\n"
+      << "     <DataItem Dimensions=\"" << lines.count[t] << " 2\" NumberType=\"Int\" Precision=\"8\" Format=\"HDF\">"
+      << h5_name << ":" << lines.dataset[t] << "</DataItem>\n"
+      << "    </Topology>\n"
+      << "    <Geometry GeometryType=\"XYZ\">\n"
+      << slab(t, 3, positions) << "    </Geometry>\n"
+      << "   </Grid>\n"
+      << "   </Grid>\n";
   }
   x << "  </Grid>\n </Domain>\n</Xdmf>\n";
   writeTextAtomic(xdmf_path, x.str());

@@ -41,6 +41,8 @@ class H5Writer {
                  const std::string& unit = "");
   /// A 1-D integer dataset.
   void writeInts(const std::string& dataset, const std::vector<long long>& values);
+  /// An N-D integer dataset in row-major order.
+  void writeInts(const std::string& dataset, const std::vector<long long>& values, const std::vector<std::size_t>& dims);
   /// A string attribute on the root group or on an existing object.
   void attribute(const std::string& object, const std::string& name, const std::string& value);
   /// Closes the file and renames it to its final name.
@@ -85,11 +87,21 @@ struct XdmfField {
   bool per_time = true;  ///< false for constant fields such as radius
 };
 
+/// Line segments between the points, shown over them (the links of a
+/// netting): for each time, an integer (count, 2) dataset of point indices.
+/// Segments that are not in a time's dataset are not drawn at that time.
+struct XdmfLines {
+  std::string name = "links";
+  std::vector<std::string> dataset;  ///< per time (several times may share one)
+  std::vector<std::size_t> count;    ///< segments per time
+};
+
 /// Writes an XDMF 2 file that lets ParaView open a time series of point
 /// clouds stored in `h5_name` (relative to the XDMF file): positions from the
-/// (times, points, 3) dataset `positions`, plus `fields`.
+/// (times, points, 3) dataset `positions`, plus `fields`, and `lines` between
+/// the points if it has any.
 void writeXdmfPoints(const std::filesystem::path& xdmf_path, const std::string& h5_name,
                      const std::vector<double>& times, std::size_t points, const std::string& positions,
-                     const std::vector<XdmfField>& fields);
+                     const std::vector<XdmfField>& fields, const XdmfLines& lines = {});
 
 }  // namespace gabion::bridge

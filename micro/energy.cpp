@@ -17,11 +17,15 @@ bool EnergyLedger::close(double runaway_factor) {
   e.local_damping_dissipation_J = local;
   e.viscous_damping_dissipation_J = viscous;
   e.link_rupture_dissipation_J = link_rupture;
+  e.link_plastic_dissipation_J = link_plastic;
   e.wall_work_J = wall_work;
+  e.driven_work_J = driven_work;
   const double stored = e.kinetic_translational_J + e.kinetic_rotational_J + e.elastic_contact_J + e.elastic_link_J;
   const double dissipated = e.friction_dissipation_J + e.plastic_dissipation_J + e.local_damping_dissipation_J +
-                            e.viscous_damping_dissipation_J + e.link_rupture_dissipation_J;
-  e.total_J = stored + e.gravity_potential_J + dissipated - e.wall_work_J;
+                            e.viscous_damping_dissipation_J + e.link_rupture_dissipation_J +
+                            e.link_plastic_dissipation_J;
+  const double work = e.wall_work_J + e.driven_work_J;
+  e.total_J = stored + e.gravity_potential_J + dissipated - work;
   if (!have_e0_) {
     have_e0_ = true;
     e0_ = e.total_J;
@@ -30,10 +34,10 @@ bool EnergyLedger::close(double runaway_factor) {
   }
   // Scale of the balance: all the energy that has been moved around.
   const double scale =
-      std::max(scale0_, stored + std::fabs(e.gravity_potential_J - pe0_) + dissipated + std::fabs(e.wall_work_J));
+      std::max(scale0_, stored + std::fabs(e.gravity_potential_J - pe0_) + dissipated + std::fabs(work));
   e.balance_rel_error = scale > 0.0 ? (e.total_J - e0_) / scale : 0.0;
   stored_ = stored;
-  supplied_ = scale0_ + std::fabs(e.gravity_potential_J - pe0_) + std::fabs(e.wall_work_J);
+  supplied_ = scale0_ + std::fabs(e.gravity_potential_J - pe0_) + std::fabs(work);
   return !(stored > runaway_factor * supplied_ && stored > 0.0);
 }
 

@@ -1,15 +1,16 @@
 #pragma once
 /// \file
 /// The energy ledger of the fine DEM: dissipations and the work of moving
-/// walls accumulate every step; the stored terms (kinetic, potential,
-/// elastic) are taken on measuring steps. The balance
-/// E = kinetic + gravity + elastic + dissipated - wall work is constant in
+/// walls and driven spheres accumulate every step; the stored terms
+/// (kinetic, potential, elastic) and the wires' plastic work (a function of
+/// their state) are taken on measuring steps. The balance
+/// E = kinetic + gravity + elastic + dissipated - wall work - driven work is constant in
 /// an exact integration; its relative drift is reported, and stored energy
 /// far above all the energy ever supplied is a runaway (docs/micro.md).
 namespace gabion::micro {
 
 /// Energy terms of the whole system (J). balance_rel_error is
-/// (E(t) - E(0)) / scale with E = kinetic + gravity + elastic + dissipated - wall work.
+/// (E(t) - E(0)) / scale with E = kinetic + gravity + elastic + dissipated - wall work - driven work.
 struct EnergyTotals {
   double kinetic_translational_J = 0.0;
   double kinetic_rotational_J = 0.0;
@@ -21,7 +22,9 @@ struct EnergyTotals {
   double local_damping_dissipation_J = 0.0;
   double viscous_damping_dissipation_J = 0.0;
   double link_rupture_dissipation_J = 0.0;  ///< energy held by links when they broke
+  double link_plastic_dissipation_J = 0.0;  ///< plastic work of the wires (bridge/laws/wire.hpp)
   double wall_work_J = 0.0;                 ///< work done by moving walls on the bodies
+  double driven_work_J = 0.0;               ///< work done by driven spheres (fixed, moving) on the bodies
   double total_J = 0.0;                     ///< E above
   double balance_rel_error = 0.0;
 };
@@ -29,9 +32,11 @@ struct EnergyTotals {
 class EnergyLedger {
  public:
   // Running sums since the start (J).
-  double friction = 0.0, plastic = 0.0, viscous = 0.0, local = 0.0, wall_work = 0.0, link_rupture = 0.0;
-  // Stored terms of the current measuring step (J).
-  double elastic_contact = 0.0, elastic_link = 0.0, ke_t = 0.0, ke_r = 0.0, pe = 0.0;
+  double friction = 0.0, plastic = 0.0, viscous = 0.0, local = 0.0, wall_work = 0.0, driven_work = 0.0,
+         link_rupture = 0.0;
+  // Terms of the current measuring step (J): stored, and the wires' plastic
+  // work (a function of their state, summed over the links like the stored terms).
+  double elastic_contact = 0.0, elastic_link = 0.0, ke_t = 0.0, ke_r = 0.0, pe = 0.0, link_plastic = 0.0;
 
   /// Closes a measuring step: fills totals() and the balance. Returns false
   /// when the stored energy exceeds runaway_factor x the energy supplied.

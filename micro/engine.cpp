@@ -28,7 +28,7 @@ std::vector<MassProperties> blockMassProperties(const Scene& scene) {
 double criticalStep(const Scene& scene, const std::vector<MassProperties>& block_props) {
   // stiffness of the links at each sphere
   std::vector<double> k_link(scene.spheres.size(), 0.0);
-  for (const LinkSpec& l : scene.links) k_link[l.a] += l.law.stiffness_N_m, k_link[l.b] += l.law.stiffness_N_m;
+  for (const LinkSpec& l : scene.links) k_link[l.a] += l.stiffness(), k_link[l.b] += l.stiffness();
   const std::size_t nmat = scene.materials.size();
   std::vector<PairLaw> laws(nmat * nmat);
   for (std::size_t a = 0; a < nmat; ++a)
@@ -51,7 +51,7 @@ double criticalStep(const Scene& scene, const std::vector<MassProperties>& block
     const SphereSpec& sp = scene.spheres[s];
     if (sp.fixed) continue;
     const auto m = static_cast<std::size_t>(sp.material);
-    const double mass = scene.materials[m].density_kg_m3 * sphereVolume(sp.radius_m);
+    const double mass = sphereMass(scene, sp);
     dt = std::min({dt, std::sqrt(mass / (kn_max[m] + k_link[s])), std::sqrt(0.4 * mass / ks_max[m])});
   }
   for (std::size_t bi = 0; bi < scene.blocks.size(); ++bi) {
@@ -98,10 +98,12 @@ Engine::Engine(const Scene& scene, int threads) {
     p_.mat[s] = static_cast<std::uint32_t>(sp.material);
     p_.group[s] = static_cast<std::uint8_t>(sp.group);
     if (sp.fixed) {
-      place(s, sp.center_m, Vec3::Zero(), Vec3::Zero());
+      // Infinite mass, its own constant velocity (a clamp, or a driven node).
+      place(s, sp.center_m, sp.velocity_m_s, Vec3::Zero());
+      if (sp.velocity_m_s != Vec3::Zero()) driven_.push_back(static_cast<std::uint32_t>(s));
       continue;
     }
-    const double mass = m.density_kg_m3 * sphereVolume(sp.radius_m);
+    const double mass = sphereMass(scene, sp);
     place(s, sp.center_m, sp.velocity_m_s, sp.angular_velocity_rad_s);
     p_.mass[s] = mass;
     p_.inv_mass[s] = 1.0 / mass;
@@ -490,7 +492,7 @@ void Engine::computeLinkForces(bool measure) {
   parallel(StageProfile::kLinks, [&](int task) {
     const auto t = static_cast<std::size_t>(task);
     WorkerScratch& s = scratch_[t];
-    s.link_elastic = s.link_rupture = 0.0;
+    s.link_elastic = s.link_rupture = s.link_plastic = 0.0;
     s.link_events.clear();
     links_.evaluate(p_, nl * t / T, nl * (t + 1) / T, time_, measure, s);
   });
@@ -499,7 +501,7 @@ void Engine::computeLinkForces(bool measure) {
     links_.apply(p_, nn * t / T, nn * (t + 1) / T);
   });
   for (const WorkerScratch& s : scratch_) {
-    if (measure) energy_.elastic_link += s.link_elastic;
+    if (measure) energy_.elastic_link += s.link_elastic, energy_.link_plastic += s.link_plastic;
     energy_.link_rupture += s.link_rupture;
     link_events_.insert(link_events_.end(), s.link_events.begin(), s.link_events.end());
   }
@@ -574,6 +576,11 @@ void Engine::integrate(bool measure) {
     sum.max_d2 = std::max(sum.max_d2, s.max_d2);
   };
   for (const WorkerScratch& w : scratch_) add(w.spheres);
+  // Driven spheres (fixed, moving): the work they did on the bodies over this step.
+  for (const std::uint32_t id : driven_) {
+    const std::uint32_t i = p_.slot[id];
+    energy_.driven_work -= dt_ * (p_.fx[i] * p_.vx[i] + p_.fy[i] * p_.vy[i] + p_.fz[i] * p_.vz[i]);
+  }
   if (!blocks_.empty()) {
     std::vector<SphereSums> per_block(blocks_.size());
     forBlocks(StageProfile::kIntegrate, blocks_.size(),
@@ -612,7 +619,7 @@ void Engine::integrate(bool measure) {
 
 void Engine::measureEnergy() {
   const bool ok = energy_.close(runaway_factor_);
-  energy_.elastic_contact = energy_.elastic_link = 0.0;
+  energy_.elastic_contact = energy_.elastic_link = energy_.link_plastic = 0.0;
   if (ok) return;
   std::ostringstream m;
   m << "energy runaway: kinetic + elastic energy " << energy_.stored() << " J exceeds " << runaway_factor_
@@ -681,6 +688,10 @@ std::size_t Engine::wallIndex(const std::string& name) const {
   for (std::size_t w = 0; w < walls_.size(); ++w)
     if (walls_[w].name == name) return w;
   return walls_.size();
+}
+Vec3 Engine::sphereForce(std::size_t s) const {
+  const std::uint32_t i = p_.slot[s];
+  return {p_.fx[i], p_.fy[i], p_.fz[i]};
 }
 Vec3 Engine::wallForce(std::size_t w) const {
   return walls_[w].force_N;

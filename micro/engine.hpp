@@ -90,6 +90,11 @@ class Engine {
   /// Sphere radius, or for a block the radius of the sphere of equal volume (m).
   double bodyRadius(std::size_t b) const;
 
+  /// Force the other bodies, links and walls exerted on sphere s (input
+  /// order) at the last step, gravity excluded (N): for a clamped or driven
+  /// sphere, the reaction it takes.
+  Vec3 sphereForce(std::size_t s) const;
+
   std::size_t wallCount() const;
   const std::string& wallName(std::size_t w) const { return walls_[w].name; }
   /// Index of the wall called `name`, or wallCount() if none is.
@@ -153,6 +158,7 @@ class Engine {
 
   Particles p_;  // every sphere in contact detection, in cell order
   std::size_t sphere_count_ = 0;
+  std::vector<std::uint32_t> driven_;  // ids of the fixed spheres that move
   std::vector<RigidBlock> blocks_;
   std::vector<Wall> walls_;
   Links links_;

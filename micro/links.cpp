@@ -11,8 +11,20 @@ Links::Links(const std::vector<LinkSpec>& specs, std::size_t particles) : partic
     a_.push_back(static_cast<std::uint32_t>(s.a));
     b_.push_back(static_cast<std::uint32_t>(s.b));
     law_.push_back(s.law);
+    if (s.law == LinkSpec::Law::Linear) {
+      law_index_.push_back(static_cast<std::uint32_t>(linear_.size()));
+      linear_.push_back(s.linear);
+      wire_rest_.push_back(0.0);
+      continue;
+    }
+    // A netting has a handful of distinct curves (mesh wire, twists, selvedge).
+    auto same = std::find(wires_.begin(), wires_.end(), s.wire.curve);
+    law_index_.push_back(static_cast<std::uint32_t>(same - wires_.begin()));
+    if (same == wires_.end()) wires_.push_back(s.wire.curve);
+    wire_rest_.push_back(s.wire.rest_length_m);
   }
   const std::size_t n = a_.size();
+  wire_state_.assign(n, bridge::WireState{});
   broken_.assign(n, 0);
   for (auto* v : {&fx_, &fy_, &fz_, &tension_}) v->assign(n, 0.0);
   // Incidence by particle id, links in increasing order at each node.
@@ -53,18 +65,31 @@ ExcludedPairs Links::excludedPairs() const {
 
 void Links::evaluate(const Particles& p, std::size_t l0, std::size_t l1, double time_s, bool measure,
                      WorkerScratch& s) {
-  double elastic = 0.0, rupture = 0.0;
+  double elastic = 0.0, rupture = 0.0, plastic = 0.0;
   for (std::size_t l = l0; l < l1; ++l) {
+    const bool wire = law_[l] == LinkSpec::Law::Wire;
+    // A wire's plastic work stays dissipated after it breaks.
+    if (measure && wire) plastic += bridge::wireDissipatedEnergy(wires_[law_index_[l]], wire_rest_[l], wire_state_[l]);
     if (broken_[l]) continue;
     const std::uint32_t i = p.slot[a_[l]], j = p.slot[b_[l]];
     const double ex = p.x[j] - p.x[i], ey = p.y[j] - p.y[i], ez = p.z[j] - p.z[i];
     const double length = std::sqrt(ex * ex + ey * ey + ez * ez);
-    const bridge::LinkResponse r = bridge::linearLinkResponse(law_[l], length);
+    bridge::LinkResponse r;
+    if (wire) {
+      const bridge::WireResponse w = bridge::wireResponse(wires_[law_index_[l]], wire_rest_[l], wire_state_[l], length);
+      r = {w.force_N, w.elastic_J, w.breaks};
+    } else {
+      r = bridge::linearLinkResponse(linear_[law_index_[l]], length);
+    }
     if (r.breaks) {
       // The energy the link held is lost with it.
-      bridge::LinearLinkParams intact = law_[l];
-      intact.rupture_strain = std::numeric_limits<double>::infinity();
-      rupture += bridge::linearLinkResponse(intact, length).elastic_J;
+      if (wire) {
+        rupture += r.elastic_J;
+      } else {
+        bridge::LinearLinkParams intact = linear_[law_index_[l]];
+        intact.rupture_strain = std::numeric_limits<double>::infinity();
+        rupture += bridge::linearLinkResponse(intact, length).elastic_J;
+      }
       broken_[l] = 1;
       fx_[l] = fy_[l] = fz_[l] = tension_[l] = 0.0;
       s.link_events.push_back({time_s, l, Vec3(p.x[i] + 0.5 * ex, p.y[i] + 0.5 * ey, p.z[i] + 0.5 * ez)});
@@ -78,6 +103,7 @@ void Links::evaluate(const Particles& p, std::size_t l0, std::size_t l1, double 
   }
   s.link_elastic += elastic;
   s.link_rupture += rupture;
+  s.link_plastic += plastic;
 }
 
 void Links::apply(Particles& p, std::size_t k0, std::size_t k1) const {

@@ -9,11 +9,14 @@
 /// summed per particle over its links in a fixed order (workers take ranges
 /// of particles): parallel, and the same for any thread count. A link whose
 /// law says it broke stops acting for good, and its event (time, link,
-/// position) is recorded once.
+/// position) is recorded once. Two laws: linear springs
+/// (bridge/laws/link_linear.hpp) and the elastoplastic wires of the netting
+/// (bridge/laws/wire.hpp), whose plastic work joins the energy ledger.
 #include <cstdint>
 #include <vector>
 
 #include "bridge/laws/link_linear.hpp"
+#include "bridge/laws/wire.hpp"
 #include "micro/neighbour_grid.hpp"
 #include "micro/particles.hpp"
 #include "micro/scene.hpp"
@@ -36,7 +39,8 @@ class Links {
   /// Pass 1, links [l0, l1): forces of this step from the current positions;
   /// a link that breaks is marked, its stored energy counted as dissipated,
   /// and its event appended to s.link_events. Stored energy into
-  /// s.link_elastic when `measure`.
+  /// s.link_elastic, and the wires' plastic work so far into s.link_plastic,
+  /// when `measure`.
   void evaluate(const Particles& p, std::size_t l0, std::size_t l1, double time_s, bool measure, WorkerScratch& s);
   /// Pass 2, linked particles [k0, k1) of nodeCount(): adds their links' forces.
   void apply(Particles& p, std::size_t k0, std::size_t k1) const;
@@ -47,11 +51,20 @@ class Links {
   std::uint32_t idB(std::size_t l) const { return b_[l]; }
   /// Tension of link l at the last step (N; < 0 in compression, 0 once broken).
   double tension(std::size_t l) const { return tension_[l]; }
+  /// State of link l if it is a wire (plastic strain, strain reached).
+  const bridge::WireState& wireState(std::size_t l) const { return wire_state_[l]; }
 
  private:
   std::size_t particles_ = 0;
   std::vector<std::uint32_t> a_, b_;  // stable ids
-  std::vector<bridge::LinearLinkParams> law_;
+  // Law of each link: linear_[law_index_[l]] or wires_[law_index_[l]] (wire
+  // curves shared by the links that have the same one), and a wire's state.
+  std::vector<LinkSpec::Law> law_;
+  std::vector<std::uint32_t> law_index_;
+  std::vector<bridge::LinearLinkParams> linear_;
+  std::vector<bridge::WireCurve> wires_;
+  std::vector<double> wire_rest_;
+  std::vector<bridge::WireState> wire_state_;
   std::vector<std::uint8_t> broken_;
   std::vector<double> fx_, fy_, fz_, tension_;  // force on a (N) at this step; -f on b
   // incidence: node k is particle id node_id_[k]; its links are

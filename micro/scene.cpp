@@ -4,7 +4,9 @@
 #include <map>
 
 #include "bridge/errors.hpp"
+#include "micro/netting/wire_input.hpp"
 #include "micro/particles.hpp"
+#include "micro/rigid_body.hpp"
 
 namespace gabion::micro {
 namespace {
@@ -124,6 +126,7 @@ Scene parseScene(const JsonReader& root) {
     sp.fixed = r.boolean("fixed", false);
     sp.group = static_cast<int>(r.integer("group", 0, 0));
     if (sp.group > kMaxGroup) r.fail("group", "contact groups are 0 .. " + std::to_string(kMaxGroup));
+    if (r.has("mass_kg")) sp.mass_kg = r.number("mass_kg", Check::Positive);
     s.spheres.push_back(sp);
   }
 
@@ -177,7 +180,7 @@ Scene parseScene(const JsonReader& root) {
   const std::vector<bridge::JsonReader> link_readers = root.objects("links");
   for (const JsonReader& r : link_readers) {
     LinkSpec l;
-    r.choice("law", {"linear"});
+    const std::string law = r.choice("law", {"linear", "wire"}, "linear");
     l.a = static_cast<std::size_t>(r.integer("a", 0));
     l.b = static_cast<std::size_t>(r.integer("b", 0));
     for (const auto& [key, index] : {std::pair<const char*, std::size_t>{"a", l.a}, {"b", l.b}})
@@ -185,12 +188,24 @@ Scene parseScene(const JsonReader& root) {
         r.fail(key, "sphere index " + std::to_string(index) + " out of range (" + std::to_string(s.spheres.size()) +
                         " spheres)");
     if (l.a == l.b) r.fail("b", "a link joins two different spheres");
-    l.law.stiffness_N_m = r.number("stiffness_N_m", Check::Positive);
     const double initial = (s.spheres[l.b].center_m - s.spheres[l.a].center_m).norm();
-    l.law.rest_length_m = r.number("rest_length_m", initial, Check::Positive);
-    if (!(l.law.rest_length_m > 0.0)) r.fail("rest_length_m", "the spheres coincide: give a rest length > 0");
-    l.law.tension_only = r.boolean("tension_only", false);
-    if (r.has("rupture_strain")) l.law.rupture_strain = r.number("rupture_strain", Check::Positive);
+    const double rest = r.number("rest_length_m", initial, Check::Positive);
+    if (!(rest > 0.0)) r.fail("rest_length_m", "the spheres coincide: give a rest length > 0");
+    if (law == "linear") {
+      l.linear.rest_length_m = rest;
+      l.linear.stiffness_N_m = r.number("stiffness_N_m", Check::Positive);
+      l.linear.tension_only = r.boolean("tension_only", false);
+      if (r.has("rupture_strain")) l.linear.rupture_strain = r.number("rupture_strain", Check::Positive);
+    } else {
+      // A wire (bridge/laws/wire.hpp): its diameter, table and, for a double twist, the twist factors.
+      l.law = LinkSpec::Law::Wire;
+      l.wire.rest_length_m = rest;
+      const double d = r.number("diameter_m", Check::Positive);
+      const bridge::WireStressStrain table = parseWireTable(r, "stress_strain");
+      l.wire.curve = r.has("double_twist")
+                         ? bridge::doubleTwistCurve(table, d, parseDoubleTwist(r, "double_twist"), rest)
+                         : bridge::wireCurve(table, d);
+    }
     s.links.push_back(l);
   }
 
@@ -232,6 +247,11 @@ Scene parseScene(const JsonReader& root) {
 }  // namespace gabion::micro
 
 namespace gabion::micro {
+
+double sphereMass(const Scene& scene, const SphereSpec& sphere) {
+  if (sphere.mass_kg > 0.0) return sphere.mass_kg;
+  return scene.materials[static_cast<std::size_t>(sphere.material)].density_kg_m3 * sphereVolume(sphere.radius_m);
+}
 
 std::string wallName(const Scene& scene, std::size_t w) {
   const std::string& name = scene.walls[w].name;
@@ -275,6 +295,7 @@ void validateScene(const Scene& s, const std::string& file) {
     if (!(sp.radius_m > 0.0 && std::isfinite(sp.radius_m))) fail(at("spheres", k, "radius_m"), "must be > 0");
     if (!finite(sp.velocity_m_s)) fail(at("spheres", k, "velocity_m_s"), "must be finite");
     if (!finite(sp.angular_velocity_rad_s)) fail(at("spheres", k, "angular_velocity_rad_s"), "must be finite");
+    if (!(sp.mass_kg >= 0.0 && std::isfinite(sp.mass_kg))) fail(at("spheres", k, "mass_kg"), "must be > 0");
     material(sp.material, at("spheres", k, "material"));
     group(sp.group, at("spheres", k, "group"));
   }
@@ -330,11 +351,19 @@ void validateScene(const Scene& s, const std::string& file) {
     const LinkSpec& l = s.links[k];
     if (l.a >= s.spheres.size()) fail(at("links", k, "a"), "sphere index out of range");
     if (l.b >= s.spheres.size() || l.b == l.a) fail(at("links", k, "b"), "sphere index out of range or equal to a");
-    if (!(l.law.stiffness_N_m > 0.0 && std::isfinite(l.law.stiffness_N_m)))
+    if (l.law == LinkSpec::Law::Wire) {
+      if (!(l.wire.rest_length_m > 0.0 && std::isfinite(l.wire.rest_length_m)))
+        fail(at("links", k, "rest_length_m"), "must be > 0");
+      bridge::WireStressStrain as_table{l.wire.curve.strain, l.wire.curve.force_N};
+      const bridge::WireTableIssue issue = bridge::checkWireTable(as_table);
+      if (!issue.message.empty()) fail(at("links", k, "stress_strain"), "wire curve: " + issue.message);
+      continue;
+    }
+    if (!(l.linear.stiffness_N_m > 0.0 && std::isfinite(l.linear.stiffness_N_m)))
       fail(at("links", k, "stiffness_N_m"), "must be > 0");
-    if (!(l.law.rest_length_m > 0.0 && std::isfinite(l.law.rest_length_m)))
+    if (!(l.linear.rest_length_m > 0.0 && std::isfinite(l.linear.rest_length_m)))
       fail(at("links", k, "rest_length_m"), "must be > 0");
-    if (!(l.law.rupture_strain > 0.0)) fail(at("links", k, "rupture_strain"), "must be > 0");
+    if (!(l.linear.rupture_strain > 0.0)) fail(at("links", k, "rupture_strain"), "must be > 0");
   }
   for (std::size_t k = 0; k < s.no_contact_groups.size(); ++k) {
     group(s.no_contact_groups[k].first, "/no_contact_groups/" + std::to_string(k) + "/0");

@@ -13,6 +13,7 @@
 
 #include "bridge/json_reader.hpp"
 #include "bridge/laws/link_linear.hpp"
+#include "bridge/laws/wire.hpp"
 
 namespace gabion::micro {
 
@@ -38,8 +39,12 @@ struct SphereSpec {
   int material = 0;
   Vec3 velocity_m_s = Vec3::Zero();
   Vec3 angular_velocity_rad_s = Vec3::Zero();
-  bool fixed = false;  ///< never moves (infinite mass)
-  int group = 0;       ///< contact group, 0 .. 31 (Scene::no_contact_groups)
+  /// Infinite mass: forces do not move it; it keeps velocity_m_s (zero by
+  /// default: a clamp; else a driven node, whose work on the bodies is
+  /// EnergyTotals::driven_work_J).
+  bool fixed = false;
+  int group = 0;        ///< contact group, 0 .. 31 (Scene::no_contact_groups)
+  double mass_kg = 0.0;  ///< > 0: this mass (a netting node carrying its wires); 0: density x volume
 };
 
 /// A rigid multi-sphere block. Member centres are in body coordinates; the
@@ -59,8 +64,16 @@ struct BlockSpec {
 /// A link between two spheres (micro/links.hpp): a force of their distance
 /// only, with its own law; the two never touch through the contact law.
 struct LinkSpec {
+  enum class Law {
+    Linear,  ///< bridge/laws/link_linear.hpp
+    Wire     ///< bridge/laws/wire.hpp: elastoplastic, tension only, breaks
+  };
   std::size_t a = 0, b = 0;  ///< sphere indices (input order)
-  bridge::LinearLinkParams law;
+  Law law = Law::Linear;
+  bridge::LinearLinkParams linear;  ///< Law::Linear
+  bridge::WireLinkParams wire;      ///< Law::Wire
+  /// Elastic stiffness (N/m), for the critical time step.
+  double stiffness() const { return law == Law::Wire ? wire.stiffness() : linear.stiffness_N_m; }
 };
 
 /// How a wall moves (micro/walls.hpp). The motion is integrated step by step
@@ -132,6 +145,9 @@ struct Scene {
 /// Parses the case root (format and kind are read by the app). Throws
 /// bridge::InputError naming the file and JSON pointer of the bad value.
 Scene parseScene(const bridge::JsonReader& root);
+
+/// Mass of a free sphere (kg): its own mass_kg, or its material's density x volume.
+double sphereMass(const Scene& scene, const SphereSpec& sphere);
 
 /// The name of wall w: its own, or wall_<w> if it has none.
 std::string wallName(const Scene& scene, std::size_t w);

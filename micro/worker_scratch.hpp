@@ -74,7 +74,7 @@ struct WorkerScratch {
   std::size_t wall_fail_wall = 0;
   double wall_fail_ratio = 0.0;
   // links of this worker's range
-  double link_elastic = 0.0, link_rupture = 0.0;
+  double link_elastic = 0.0, link_rupture = 0.0, link_plastic = 0.0;
   std::vector<LinkEvent> link_events;
   // integration of the free spheres of its partition
   SphereSums spheres;

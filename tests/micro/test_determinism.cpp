@@ -36,9 +36,9 @@ Scene everyStage() {
     gabion::micro::LinkSpec l;
     l.a = i;
     l.b = i + 1;
-    l.law.stiffness_N_m = 500.0;
-    l.law.rest_length_m = (s.spheres[i + 1].center_m - s.spheres[i].center_m).norm();
-    l.law.rupture_strain = 0.05;
+    l.linear.stiffness_N_m = 500.0;
+    l.linear.rest_length_m = (s.spheres[i + 1].center_m - s.spheres[i].center_m).norm();
+    l.linear.rupture_strain = 0.05;
     s.links.push_back(l);
   }
   gabion::micro::BlockSpec b;

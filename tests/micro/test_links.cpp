@@ -24,9 +24,9 @@ LinkSpec link(std::size_t a, std::size_t b, double k, double rest, double ruptur
   LinkSpec l;
   l.a = a;
   l.b = b;
-  l.law.stiffness_N_m = k;
-  l.law.rest_length_m = rest;
-  l.law.rupture_strain = rupture;
+  l.linear.stiffness_N_m = k;
+  l.linear.rest_length_m = rest;
+  l.linear.rupture_strain = rupture;
   return l;
 }
 

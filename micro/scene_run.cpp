@@ -1,0 +1,299 @@
+#include "micro/scene_run.hpp"
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <sstream>
+
+#include "bridge/errors.hpp"
+#include "bridge/output.hpp"
+
+namespace gabion::micro {
+namespace {
+
+// Scalar series, kept in memory (a few numbers per sample) and written at the
+// end; body snapshots are streamed to the file as they are taken.
+struct Series {
+  std::vector<double> time;
+  std::vector<std::vector<double>> energy;  // per term
+  std::vector<double> contacts;
+  std::vector<std::vector<double>> wall_force, wall_position;  // per wall, (n, 3) flat
+};
+
+const std::vector<std::pair<std::string, double EnergyTotals::*>>& energyTerms() {
+  static const std::vector<std::pair<std::string, double EnergyTotals::*>> terms = {
+      {"kinetic_translational_J", &EnergyTotals::kinetic_translational_J},
+      {"kinetic_rotational_J", &EnergyTotals::kinetic_rotational_J},
+      {"gravity_potential_J", &EnergyTotals::gravity_potential_J},
+      {"elastic_contact_J", &EnergyTotals::elastic_contact_J},
+      {"elastic_link_J", &EnergyTotals::elastic_link_J},
+      {"friction_dissipation_J", &EnergyTotals::friction_dissipation_J},
+      {"plastic_dissipation_J", &EnergyTotals::plastic_dissipation_J},
+      {"local_damping_dissipation_J", &EnergyTotals::local_damping_dissipation_J},
+      {"viscous_damping_dissipation_J", &EnergyTotals::viscous_damping_dissipation_J},
+      {"link_rupture_dissipation_J", &EnergyTotals::link_rupture_dissipation_J},
+      {"link_plastic_dissipation_J", &EnergyTotals::link_plastic_dissipation_J},
+      {"wall_work_J", &EnergyTotals::wall_work_J},
+      {"driven_work_J", &EnergyTotals::driven_work_J},
+      {"total_J", &EnergyTotals::total_J},
+      {"balance_rel_error", &EnergyTotals::balance_rel_error}};
+  return terms;
+}
+
+// Where the step loop's time went, as a small table (printed after a run):
+// each stage's wall time and share, with several threads the busiest
+// partition over the mean (1.00: balanced), and the rest of the loop
+// (series, snapshots, progress) as "other".
+std::string timingReport(const Engine& engine, double loop_s, double body_steps_per_s, int threads) {
+  const StageProfile& prof = engine.profile();
+  std::ostringstream r;
+  r.setf(std::ios::fixed);
+  r.precision(2);
+  r << "step loop: " << engine.steps() << " steps in " << loop_s << " s, " << body_steps_per_s / 1e6
+    << " M body-steps/s, " << threads << (threads == 1 ? " thread, " : " threads, ") << engine.neighbourRebuilds()
+    << " neighbour rebuilds\n";
+  r << "  stage          wall s   share" << (threads > 1 ? "   busiest/mean partition" : "") << "\n";
+  double staged = 0.0;
+  const auto row = [&](const std::string& name, double s) {
+    r << "  " << name << std::string(name.size() < 12 ? 12 - name.size() : 1, ' ');
+    r.width(9);
+    r.precision(3);
+    r << s;
+    r.width(7);
+    r.precision(1);
+    r << (loop_s > 0.0 ? 100.0 * s / loop_s : 0.0) << " %";
+    r.precision(2);
+  };
+  for (int k = 0; k < StageProfile::kStageCount; ++k) {
+    const double s = prof.wall_s[static_cast<std::size_t>(k)];
+    staged += s;
+    row(StageProfile::name(k), s);
+    if (threads > 1 && k != StageProfile::kEnergy) {
+      double sum = 0.0, most = 0.0;
+      for (const auto& p : prof.partition_busy_s) {
+        sum += p[static_cast<std::size_t>(k)];
+        most = std::max(most, p[static_cast<std::size_t>(k)]);
+      }
+      const double mean = sum / static_cast<double>(prof.partition_busy_s.size());
+      if (mean > 0.0) r << "   " << most / mean;
+    }
+    r << "\n";
+  }
+  row("other", std::max(0.0, loop_s - staged));
+  r << "   (series, snapshots, progress)\n";
+  return r.str();
+}
+
+}  // namespace
+
+// The step to use: dt_s if given (refused above the critical step unless
+// run.allow_dt_above_critical), else dt_safety x critical. `file` names the
+// case in the error.
+double chooseDt(const Scene& scene, double critical, const std::string& file) {
+  const RunSpec& rs = scene.run;
+  if (rs.dt_s > 0.0) {
+    if (rs.dt_s > critical && !rs.allow_dt_above_critical) {
+      std::ostringstream m;
+      m << "dt_s = " << rs.dt_s << " s is above the critical time step " << critical
+        << " s (set run.allow_dt_above_critical = true to run anyway)";
+      throw bridge::InputError(file, "/run/dt_s", m.str());
+    }
+    return rs.dt_s;
+  }
+  if (std::isfinite(critical)) return rs.dt_safety * critical;
+  return rs.series_interval_s;  // nothing moves: any step is stable
+}
+
+bridge::RunOutcome runScene(Scene scene, const std::string& file, const bridge::RunContext& ctx,
+                            const SceneRunHooks& hooks) {
+  const std::size_t sphere_count = scene.spheres.size();
+  Engine engine(scene, ctx.threads);
+  std::vector<SphereSpec>().swap(scene.spheres);  // the engine has its own copy
+  std::vector<BlockSpec>().swap(scene.blocks);
+  const double dt = chooseDt(scene, engine.criticalDt(), file);
+  engine.setDt(dt);
+  const auto steps = static_cast<long long>(std::ceil(scene.run.duration_s / dt - 1e-9));
+  const long long series_every = std::max(1LL, std::llround(scene.run.series_interval_s / dt));
+  const long long output_every = std::max(1LL, std::llround(scene.run.output_interval_s / dt));
+
+  const std::size_t nb = engine.bodyCount(), nw = engine.wallCount(), nblk = engine.blockCount();
+  std::vector<Vec3> initial_wall_position(nw);
+  for (std::size_t w = 0; w < nw; ++w) initial_wall_position[w] = engine.wallPosition(w);
+  Series series;
+  series.energy.resize(energyTerms().size());
+  series.wall_force.resize(nw);
+  series.wall_position.resize(nw);
+  bridge::H5Writer h5(ctx.outdir / "result.h5");
+  std::vector<double> snap_t, row(3 * nb), row_q(4 * nblk);
+  // The intact links at each snapshot, for the XDMF lines: a new table each
+  // time links have broken since the last one.
+  bridge::XdmfLines lines;
+  std::size_t tables = 0, broken_in_table = 0;
+  const auto snapshotLinks = [&] {
+    const std::size_t broken = engine.linkEvents().size();
+    if (tables == 0 || broken != broken_in_table) {
+      std::vector<long long> ends;
+      for (std::size_t l = 0; l < engine.linkCount(); ++l)
+        if (!engine.linkBroken(l)) ends.push_back(static_cast<long long>(engine.linkEnds(l).first)),
+                                   ends.push_back(static_cast<long long>(engine.linkEnds(l).second));
+      lines.dataset.push_back("/links/intact/" + std::to_string(tables++));
+      lines.count.push_back(ends.size() / 2);
+      h5.writeInts(lines.dataset.back(), ends, {ends.size() / 2, 2});
+      broken_in_table = broken;
+    } else {
+      lines.dataset.push_back(lines.dataset.back());
+      lines.count.push_back(lines.count.back());
+    }
+  };
+  const auto snapshot = [&](double t) {
+    snap_t.push_back(t);
+    if (engine.linkCount() > 0) snapshotLinks();
+    const std::pair<const char*, Vec3 BodyState::*> fields[3] = {
+        {"position_m", &BodyState::position_m},
+        {"velocity_m_s", &BodyState::velocity_m_s},
+        {"angular_velocity_rad_s", &BodyState::angular_velocity_rad_s}};
+    const char* units[3] = {"m", "m/s", "rad/s"};
+    for (int f = 0; f < 3; ++f) {
+      for (std::size_t b = 0; b < nb; ++b) {
+        const Vec3 v = engine.body(b).*(fields[f].second);
+        row[3 * b] = v.x(), row[3 * b + 1] = v.y(), row[3 * b + 2] = v.z();
+      }
+      h5.appendRow(std::string("/bodies/") + fields[f].first, row, {nb, 3}, units[f]);
+    }
+    if (nblk == 0) return;
+    for (std::size_t k = 0; k < nblk; ++k) {
+      const Eigen::Quaterniond q = engine.blockOrientation(k);
+      row_q[4 * k] = q.w(), row_q[4 * k + 1] = q.x(), row_q[4 * k + 2] = q.y(), row_q[4 * k + 3] = q.z();
+    }
+    h5.appendRow("/blocks/orientation", row_q, {nblk, 4}, "1");
+  };
+  const auto record = [&](double t) {
+    series.time.push_back(t);
+    const EnergyTotals& e = engine.energy();
+    for (std::size_t k = 0; k < energyTerms().size(); ++k) series.energy[k].push_back(e.*(energyTerms()[k].second));
+    series.contacts.push_back(static_cast<double>(engine.contactCount()));
+    for (std::size_t w = 0; w < nw; ++w) {
+      const Vec3 f = engine.wallForce(w), p = engine.wallPosition(w);
+      for (int c = 0; c < 3; ++c) {
+        series.wall_force[w].push_back(f[c]);
+        series.wall_position[w].push_back(p[c]);
+      }
+    }
+  };
+
+  bridge::Progress progress(ctx.progress, hooks.label);
+  snapshot(0.0);
+  StepStatus status = StepStatus::Ok;
+  bool ended = false;  // the kind's test is over before the duration
+  const auto t0 = std::chrono::steady_clock::now();
+  for (long long n = 0; n < steps && !ended; ++n) {
+    const bool measure = n % series_every == 0 || n + 1 == steps;
+    const double t = engine.time();
+    status = engine.step(measure);
+    if (status != StepStatus::Ok) break;
+    if (measure) {
+      record(t);
+      if (hooks.record) hooks.record(engine, t);
+      ended = hooks.done && hooks.done(engine);
+    }
+    if ((n + 1) % output_every == 0 || n + 1 == steps || ended) snapshot(engine.time());
+    progress.update(static_cast<double>(n + 1) * dt, scene.run.duration_s, n + 1);
+  }
+  const double loop_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  progress.finish();
+  const bool ok = status == StepStatus::Ok;
+  if (!ok) snapshot(engine.time());
+
+  // Result files (the snapshots are in h5 already).
+  {
+    h5.write("/series/time_s", series.time, "s");
+    for (std::size_t k = 0; k < energyTerms().size(); ++k) {
+      const std::string& name = energyTerms()[k].first;
+      h5.write("/series/" + name, series.energy[k], name == "balance_rel_error" ? "1" : "J");
+    }
+    h5.write("/series/contacts", series.contacts, "1");
+    const std::size_t ns = series.time.size();
+    // Each wall's series under its name: a program reads the "lid" curve, not "wall 5".
+    for (std::size_t w = 0; w < nw; ++w) {
+      const std::string base = "/series/walls/" + engine.wallName(w) + "/";
+      h5.write(base + "force_N", series.wall_force[w], {ns, 3}, "N");
+      h5.write(base + "position_m", series.wall_position[w], {ns, 3}, "m");
+      std::vector<double> disp(series.wall_position[w]);
+      for (std::size_t k = 0; k < disp.size(); ++k) disp[k] -= initial_wall_position[w][k % 3];
+      h5.write(base + "displacement_m", disp, {ns, 3}, "m");
+    }
+    if (engine.linkCount() > 0) {
+      // Links that broke: time, link index, position (an empty table if none did).
+      const auto& events = engine.linkEvents();
+      std::vector<double> t, link, pos;
+      for (const LinkEvent& ev : events) {
+        t.push_back(ev.time_s);
+        link.push_back(static_cast<double>(ev.link));
+        for (int c = 0; c < 3; ++c) pos.push_back(ev.position_m[c]);
+      }
+      h5.write("/links/broken/time_s", t, "s");
+      h5.write("/links/broken/link", link, "1");
+      h5.write("/links/broken/position_m", pos, {events.size(), 3}, "m");
+      std::vector<long long> ends;
+      for (std::size_t l = 0; l < engine.linkCount(); ++l)
+        ends.push_back(static_cast<long long>(engine.linkEnds(l).first)),
+            ends.push_back(static_cast<long long>(engine.linkEnds(l).second));
+      h5.writeInts("/links/ends", ends, {engine.linkCount(), 2});
+    }
+    if (hooks.write) hooks.write(engine, h5);
+    std::vector<double> radius(nb);
+    for (std::size_t b = 0; b < nb; ++b) radius[b] = engine.bodyRadius(b);
+    h5.write("/bodies/time_s", snap_t, "s");
+    h5.write("/bodies/radius_m", radius, "m");
+    h5.attribute("/", "format", "gabion.micro.scene/2");
+    h5.commit();
+    bridge::writeXdmfPoints(ctx.outdir / "result.xdmf", "result.h5", snap_t, nb, "/bodies/position_m",
+                            {{"velocity_m_s", "/bodies/velocity_m_s", 3, true},
+                             {"angular_velocity_rad_s", "/bodies/angular_velocity_rad_s", 3, true},
+                             {"radius_m", "/bodies/radius_m", 1, false}},
+                            lines);
+  }
+
+  bridge::RunOutcome out;
+  const EnergyTotals& e = engine.energy();
+  nlohmann::json energy;
+  for (const auto& [name, member] : energyTerms()) energy[name] = e.*member;
+  out.results["steps"] = engine.steps();
+  out.results["dt_s"] = dt;
+  out.results["dt_critical_s"] = engine.criticalDt();
+  out.results["bodies"] = nb;
+  out.results["spheres"] = sphere_count;
+  out.results["blocks"] = nblk;
+  out.results["walls"] = nw;
+  out.results["links"] = engine.linkCount();
+  out.results["broken_links"] = engine.linkEvents().size();
+  out.results["size_classes"] = engine.sizeClassCount();
+  out.results["step_status"] = statusName(status);
+  out.results["ended_by"] = !ok ? "failure" : ended ? "test" : "duration";
+  out.results["energy"] = energy;
+  out.results["contacts"] = engine.contactCount();
+  out.results["neighbour_rebuilds"] = engine.neighbourRebuilds();
+  out.results["step_loop_wall_time_s"] = loop_s;
+  const double body_steps_per_s =
+      loop_s > 0.0 ? static_cast<double>(nb) * static_cast<double>(engine.steps()) / loop_s : 0.0;
+  out.results["body_steps_per_s"] = body_steps_per_s;
+  // Where the time went (docs/micro.md, Output): per stage, and per partition.
+  const StageProfile& prof = engine.profile();
+  nlohmann::json stage_wall = nlohmann::json::object(), busy = nlohmann::json::object();
+  for (int k = 0; k < StageProfile::kStageCount; ++k) {
+    stage_wall[StageProfile::name(k)] = prof.wall_s[static_cast<std::size_t>(k)];
+    nlohmann::json per = nlohmann::json::array();
+    for (const auto& p : prof.partition_busy_s) per.push_back(p[static_cast<std::size_t>(k)]);
+    if (k != StageProfile::kEnergy) busy[StageProfile::name(k)] = per;
+  }
+  out.results["profile"] = {{"stage_wall_time_s", stage_wall}, {"partition_busy_time_s", busy}};
+  out.report = timingReport(engine, loop_s, body_steps_per_s, ctx.threads);
+  if (!ok) {
+    out.status = bridge::RunOutcome::Status::NumericalFailure;
+    out.message = engine.failure();
+  }
+  return out;
+}
+
+
+}  // namespace gabion::micro

@@ -1,0 +1,39 @@
+#pragma once
+/// \file
+/// Running a scene as a case: the engine stepped to the run's duration with
+/// its series, snapshots, link tables, energy ledger and stage profile
+/// written to result.h5 / result.xdmf, and the summary every micro case
+/// kind shares (docs/micro.md, Output). The lab tests and the netting test
+/// are scenes with hooks: series of their own, an end of their own.
+#include <functional>
+#include <string>
+
+#include "bridge/output.hpp"
+#include "bridge/run.hpp"
+#include "micro/engine.hpp"
+#include "micro/scene.hpp"
+
+namespace gabion::micro {
+
+/// What a case kind adds to the scene run (micro.scene adds nothing).
+struct SceneRunHooks {
+  std::string label = "micro.scene";  ///< shown on the progress line
+  /// After each series sample (engine state after the step that started at t).
+  std::function<void(const Engine&, double t)> record;
+  /// After each series sample: true when the test is over (the run ends
+  /// there with ended_by = "test").
+  std::function<bool(const Engine&)> done;
+  /// Before the result file is committed: the kind's own datasets.
+  std::function<void(const Engine&, bridge::H5Writer&)> write;
+};
+
+/// The step to use: run.dt_s if given (refused above the critical step unless
+/// run.allow_dt_above_critical, the error naming `file`), else
+/// run.dt_safety x critical.
+double chooseDt(const Scene& scene, double critical, const std::string& file);
+
+/// Runs the scene into ctx.outdir; the outcome holds the shared summary.
+bridge::RunOutcome runScene(Scene scene, const std::string& file, const bridge::RunContext& ctx,
+                            const SceneRunHooks& hooks = {});
+
+}  // namespace gabion::micro

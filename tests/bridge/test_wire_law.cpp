@@ -1,0 +1,139 @@
+// The wire law of the netting (bridge/laws/wire.hpp) against its definition:
+// the published table, elastic unloading and reloading from the plastic
+// strain, slack in compression, rupture after the last point, the plastic
+// work as a state function, and the double-twist rule.
+#include <gtest/gtest.h>
+
+#include <cmath>
+
+#include "bridge/laws/wire.hpp"
+
+using namespace gabion::bridge;
+
+namespace {
+constexpr double kD = 0.0027;                          // mesh wire (m)
+const double kL0 = 0.080 / std::sqrt(3.0);             // 46.19 mm link
+double strainToLength(double eps) { return kL0 * (1.0 + eps); }
+}  // namespace
+
+TEST(WireLaw, ElasticStiffnessOfTheReferenceLink) {
+  // ../shared/reference/wire-netting.md: EA / l0 = 16.115e6 N/m (E = 130 GPa).
+  const WireCurve c = wireCurve(defaultWireTable(), kD);
+  EXPECT_NEAR(c.elasticForce() / kL0, 16.115e6, 0.001e6);
+  WireState s;
+  const WireResponse r = wireResponse(c, kL0, s, kL0 + 1e-6);
+  EXPECT_NEAR(r.force_N / 1e-6, c.elasticForce() / kL0, 1e-6 * c.elasticForce() / kL0);
+}
+
+TEST(WireLaw, LoadUnloadReloadRuptureCycleFollowsTheTableAndTheUnloadingRule) {
+  const WireStressStrain t = defaultWireTable();
+  const WireCurve c = wireCurve(t, kD);
+  const double A = wireSection(kD), E = t.stress_Pa[0] / t.strain[0] * A;
+  WireState s;
+  // Loading through the table points: the force is the table's, exactly.
+  for (std::size_t k = 0; k <= 3; ++k) {  // up to 15 % strain, on the backbone
+    const WireResponse r = wireResponse(c, kL0, s, strainToLength(t.strain[k]));
+    EXPECT_NEAR(r.force_N, t.stress_Pa[k] * A, 1e-9 * t.stress_Pa[k] * A) << "point " << k;
+  }
+  // Between points: linear interpolation of the table (10 % lies between 5 and 15 %).
+  WireState mid;
+  const double eps_mid = 0.10;
+  const double f_mid = (382.92e6 + (512.19e6 - 382.92e6) * (0.10 - 0.05) / 0.10) * A;
+  EXPECT_NEAR(wireResponse(c, kL0, mid, strainToLength(eps_mid)).force_N, f_mid, 1e-9 * f_mid);
+
+  // Unloading from 15 %: elastic with the initial modulus, from eps_p = 0.15 - F/E.
+  const double f15 = 512.19e6 * A, ep = 0.15 - f15 / E;
+  EXPECT_NEAR(s.plastic_strain, ep, 1e-12);
+  for (const double eps : {0.149, 0.148, ep + 1e-4}) {
+    const WireResponse r = wireResponse(c, kL0, s, strainToLength(eps));
+    EXPECT_NEAR(r.force_N, E * (eps - ep), 1e-6 * f15) << "unloading at " << eps;
+    EXPECT_NEAR(s.plastic_strain, ep, 1e-12);
+  }
+  // Compression (shorter than the plastic length): slack.
+  EXPECT_EQ(wireResponse(c, kL0, s, strainToLength(ep - 0.01)).force_N, 0.0);
+  EXPECT_EQ(wireResponse(c, kL0, s, 0.5 * kL0).force_N, 0.0);
+  // Reloading: elastic up to the strain reached, then on the backbone again.
+  EXPECT_NEAR(wireResponse(c, kL0, s, strainToLength(0.149)).force_N, E * (0.149 - ep), 1e-6 * f15);
+  const double f20 = 0.5 * (512.19e6 + 558.54e6) * A;
+  EXPECT_NEAR(wireResponse(c, kL0, s, strainToLength(0.20)).force_N, f20, 1e-9 * f20);
+  // Rupture after the last point (35 %), not at it.
+  WireResponse r = wireResponse(c, kL0, s, strainToLength(0.35 - 1e-12));
+  EXPECT_FALSE(r.breaks);
+  EXPECT_NEAR(r.force_N, 565.85e6 * A, 1e-9 * 565.85e6 * A);
+  r = wireResponse(c, kL0, s, strainToLength(0.3501));
+  EXPECT_TRUE(r.breaks);
+  EXPECT_EQ(r.force_N, 0.0);
+  // What it held at rupture: the elastic energy of the last point.
+  EXPECT_NEAR(r.elastic_J, 0.5 * std::pow(565.85e6 * A, 2) / E * kL0, 1e-12);
+}
+
+TEST(WireLaw, WorkOverACycleIsPlasticDissipationPlusStoredEnergy) {
+  // Drive one link through load, unload, slack, reload and on to 30 %,
+  // integrating the work F dL by the trapezoid rule on a fine path; at
+  // every point it equals the plastic work (a function of the state) plus
+  // the elastic energy stored. The path's kinks fall on its own points and
+  // the table points are hit within 1e-5 of strain, so the trapezoid error
+  // is of the order of (F jump x strain step): 1e-6 relative.
+  const WireCurve c = wireCurve(defaultWireTable(), kD);
+  WireState s;
+  std::vector<double> path;
+  const auto go = [&](double from, double to, int n) {
+    for (int k = 1; k <= n; ++k) path.push_back(from + (to - from) * k / n);
+  };
+  go(0.0, 0.12, 120000);
+  go(0.12, -0.02, 140000);  // unload and go slack
+  go(-0.02, 0.30, 320000);  // reload and on along the backbone
+  double work = 0.0, f_prev = 0.0, L_prev = kL0;
+  double worst = 0.0;
+  for (const double eps : path) {
+    const double L = strainToLength(eps);
+    const WireResponse r = wireResponse(c, kL0, s, L);
+    ASSERT_FALSE(r.breaks);
+    work += 0.5 * (r.force_N + f_prev) * (L - L_prev);
+    f_prev = r.force_N, L_prev = L;
+    const double held = wireDissipatedEnergy(c, kL0, s) + r.elastic_J;
+    worst = std::max(worst, std::fabs(held - work));
+  }
+  EXPECT_GT(work, 30.0);  // a 46 mm wire of 2.7 mm to 30 % absorbs some 38 J
+  EXPECT_LT(worst, 1e-6 * work);
+}
+
+TEST(WireLaw, DoubleTwistScalesStiffnessStrengthAndRuptureStrain) {
+  const WireStressStrain t = defaultWireTable();
+  const DoubleTwistParams p{0.66, 0.4, 0.3};
+  const double L0 = 0.04;
+  const WireCurve single = wireCurve(t, kD), twist = doubleTwistCurve(t, kD, p, L0);
+  const double ratio = doubleTwistStiffnessRatio(p, L0, kD);
+  // The helix term for a 40 mm twist of 2.7 mm wire is small (about 4.5 % of
+  // a straight wire), so k_D ~ 2 (1 - lambda_k) k_S = 0.68 k_S plus a little.
+  EXPECT_GT(ratio, 2.0 * (1.0 - p.lambda_k));
+  EXPECT_LT(ratio, 2.0 * (1.0 - p.lambda_k) + 2.0 * p.lambda_k * 0.1);
+  EXPECT_NEAR(twist.elasticForce(), ratio * single.elasticForce(), 1e-9 * single.elasticForce());
+  EXPECT_DOUBLE_EQ(twist.strain[0], single.strain[0]);
+  EXPECT_DOUBLE_EQ(twist.ruptureStrain(), 0.4 * 0.35);
+  EXPECT_NEAR(twist.force_N.back(), ratio * single.force_N.back(), 1e-9 * single.force_N.back());
+  // lambda_k = 0: two straight wires.
+  EXPECT_DOUBLE_EQ(doubleTwistStiffnessRatio({0.0, 1.0, 0.3}, L0, kD), 2.0);
+}
+
+TEST(WireLaw, BadTablesAreNamed) {
+  WireStressStrain t = defaultWireTable();
+  EXPECT_TRUE(checkWireTable(t).message.empty());
+  t.strain[3] = t.strain[2];
+  WireTableIssue i = checkWireTable(t);
+  EXPECT_EQ(i.at, 3);
+  EXPECT_TRUE(i.strain);
+  t = defaultWireTable();
+  t.stress_Pa[2] = -1.0;
+  i = checkWireTable(t);
+  EXPECT_EQ(i.at, 2);
+  EXPECT_FALSE(i.strain);
+  t = defaultWireTable();
+  t.stress_Pa[1] = 5e9;  // steeper than E between points 0 and 1
+  i = checkWireTable(t);
+  EXPECT_EQ(i.at, 1);
+  EXPECT_NE(i.message.find("elastic modulus"), std::string::npos);
+  t = defaultWireTable();
+  t.stress_Pa.pop_back();
+  EXPECT_FALSE(checkWireTable(t).message.empty());
+}
