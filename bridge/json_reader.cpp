@@ -200,6 +200,10 @@ void JsonReader::fail(const std::string& key, const std::string& message) const 
   throw InputError(state_->file, pointer(key), message);
 }
 
+void JsonReader::failElement(const std::string& key, std::size_t index, const std::string& message) const {
+  throw InputError(state_->file, pointer(key) + "/" + std::to_string(index), message);
+}
+
 void JsonReader::failHere(const std::string& message) const {
   throw InputError(state_->file, pointer_.empty() ? "/" : pointer_, message);
 }

@@ -102,6 +102,8 @@ class JsonReader {
 
   /// Throws InputError for `key` of this object with `message`.
   [[noreturn]] void fail(const std::string& key, const std::string& message) const;
+  /// Throws InputError for element `index` of the array at `key` (e.g. /strain/3).
+  [[noreturn]] void failElement(const std::string& key, std::size_t index, const std::string& message) const;
   /// Throws InputError for this object itself.
   [[noreturn]] void failHere(const std::string& message) const;
   /// JSON pointer of `key` in this object.

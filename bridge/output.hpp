@@ -42,7 +42,8 @@ class H5Writer {
   /// A 1-D integer dataset.
   void writeInts(const std::string& dataset, const std::vector<long long>& values);
   /// An N-D integer dataset in row-major order.
-  void writeInts(const std::string& dataset, const std::vector<long long>& values, const std::vector<std::size_t>& dims);
+  void writeInts(const std::string& dataset, const std::vector<long long>& values,
+                 const std::vector<std::size_t>& dims);
   /// A string attribute on the root group or on an existing object.
   void attribute(const std::string& object, const std::string& name, const std::string& value);
   /// Closes the file and renames it to its final name.

@@ -3,6 +3,7 @@
 #include <utility>
 
 #include "micro/engine.hpp"
+#include "micro/netting/tensile_test.hpp"
 #include "micro/scene.hpp"
 #include "micro/scene_run.hpp"
 
@@ -26,7 +27,8 @@ bridge::RunOutcome runSceneCase(const bridge::JsonDocument& doc, const bridge::R
 
 std::vector<bridge::CaseKind> caseKinds() {
   return {{"micro.scene", "fine DEM of explicit spheres, rigid multi-sphere blocks and planar walls (docs/micro.md)",
-           checkScene, runSceneCase}};
+           checkScene, runSceneCase},
+          nettingTensileKind()};
 }
 
 }  // namespace gabion::micro

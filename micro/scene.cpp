@@ -27,6 +27,8 @@ int materialIndex(const JsonReader& r, const std::map<std::string, int>& names) 
   return it->second;
 }
 
+}  // namespace
+
 Material parseMaterial(const std::string& name, const JsonReader& r) {
   Material m;
   m.name = name;
@@ -39,6 +41,27 @@ Material parseMaterial(const std::string& name, const JsonReader& r) {
   m.viscous_damping_ratio = r.number("viscous_damping_ratio", 0.0, Check::UnitOpen);
   return m;
 }
+
+RunSpec parseRun(const JsonReader& run, double default_duration_s) {
+  RunSpec rs;
+  rs.duration_s = default_duration_s > 0.0 ? run.number("duration_s", default_duration_s, Check::Positive)
+                                           : run.number("duration_s", Check::Positive);
+  if (run.has("dt_s")) rs.dt_s = run.number("dt_s", Check::Positive);
+  rs.dt_safety = run.number("dt_safety", 0.2, Check::Positive);
+  if (rs.dt_safety > 1.0) run.fail("dt_safety", "must be <= 1 (a fraction of the critical step)");
+  rs.allow_dt_above_critical = run.boolean("allow_dt_above_critical", false);
+  rs.output_interval_s = run.number("output_interval_s", rs.duration_s / 100.0, Check::Positive);
+  rs.series_interval_s = run.number("series_interval_s", rs.output_interval_s, Check::Positive);
+  rs.max_overlap_ratio = run.number("max_overlap_ratio", 0.5, Check::Positive);
+  if (rs.max_overlap_ratio > 1.0) run.fail("max_overlap_ratio", "must be <= 1");
+  rs.energy_runaway_factor = run.number("energy_runaway_factor", 10.0, Check::Positive);
+  if (rs.energy_runaway_factor <= 1.0) run.fail("energy_runaway_factor", "must be > 1");
+  rs.verlet_skin_ratio = run.number("verlet_skin_ratio", 0.2, Check::Positive);
+  if (rs.verlet_skin_ratio > 2.0) run.fail("verlet_skin_ratio", "must be <= 2");
+  return rs;
+}
+
+namespace {
 
 Eigen::Quaterniond quaternion(const JsonReader& r, const std::string& key) {
   if (!r.has(key)) return Eigen::Quaterniond::Identity();
@@ -203,7 +226,7 @@ Scene parseScene(const JsonReader& root) {
       const double d = r.number("diameter_m", Check::Positive);
       const bridge::WireStressStrain table = parseWireTable(r, "stress_strain");
       l.wire.curve = r.has("double_twist")
-                         ? bridge::doubleTwistCurve(table, d, parseDoubleTwist(r, "double_twist"), rest)
+                         ? bridge::doubleTwistCurve(table, d, parseDoubleTwist(r, "double_twist", table))
                          : bridge::wireCurve(table, d);
     }
     s.links.push_back(l);
@@ -225,21 +248,7 @@ Scene parseScene(const JsonReader& root) {
   }
   if (s.spheres.empty() && s.blocks.empty()) root.failHere("the scene has no spheres and no blocks");
 
-  const JsonReader run = root.object("run");
-  RunSpec& rs = s.run;
-  rs.duration_s = run.number("duration_s", Check::Positive);
-  if (run.has("dt_s")) rs.dt_s = run.number("dt_s", Check::Positive);
-  rs.dt_safety = run.number("dt_safety", 0.2, Check::Positive);
-  if (rs.dt_safety > 1.0) run.fail("dt_safety", "must be <= 1 (a fraction of the critical step)");
-  rs.allow_dt_above_critical = run.boolean("allow_dt_above_critical", false);
-  rs.output_interval_s = run.number("output_interval_s", rs.duration_s / 100.0, Check::Positive);
-  rs.series_interval_s = run.number("series_interval_s", rs.output_interval_s, Check::Positive);
-  rs.max_overlap_ratio = run.number("max_overlap_ratio", 0.5, Check::Positive);
-  if (rs.max_overlap_ratio > 1.0) run.fail("max_overlap_ratio", "must be <= 1");
-  rs.energy_runaway_factor = run.number("energy_runaway_factor", 10.0, Check::Positive);
-  if (rs.energy_runaway_factor <= 1.0) run.fail("energy_runaway_factor", "must be > 1");
-  rs.verlet_skin_ratio = run.number("verlet_skin_ratio", 0.2, Check::Positive);
-  if (rs.verlet_skin_ratio > 2.0) run.fail("verlet_skin_ratio", "must be <= 2");
+  s.run = parseRun(root.object("run"));
   validateScene(s, root.file());
   return s;
 }

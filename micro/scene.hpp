@@ -43,7 +43,7 @@ struct SphereSpec {
   /// default: a clamp; else a driven node, whose work on the bodies is
   /// EnergyTotals::driven_work_J).
   bool fixed = false;
-  int group = 0;        ///< contact group, 0 .. 31 (Scene::no_contact_groups)
+  int group = 0;         ///< contact group, 0 .. 31 (Scene::no_contact_groups)
   double mass_kg = 0.0;  ///< > 0: this mass (a netting node carrying its wires); 0: density x volume
 };
 
@@ -145,6 +145,13 @@ struct Scene {
 /// Parses the case root (format and kind are read by the app). Throws
 /// bridge::InputError naming the file and JSON pointer of the bad value.
 Scene parseScene(const bridge::JsonReader& root);
+
+/// A material object (the keys of Material; docs/micro.md) named `name`.
+Material parseMaterial(const std::string& name, const bridge::JsonReader& r);
+
+/// The `run` object. duration_s is required unless default_duration_s > 0
+/// (a test that knows how long it lasts).
+RunSpec parseRun(const bridge::JsonReader& run, double default_duration_s = 0.0);
 
 /// Mass of a free sphere (kg): its own mass_kg, or its material's density x volume.
 double sphereMass(const Scene& scene, const SphereSpec& sphere);

@@ -134,8 +134,9 @@ bridge::RunOutcome runScene(Scene scene, const std::string& file, const bridge::
     if (tables == 0 || broken != broken_in_table) {
       std::vector<long long> ends;
       for (std::size_t l = 0; l < engine.linkCount(); ++l)
-        if (!engine.linkBroken(l)) ends.push_back(static_cast<long long>(engine.linkEnds(l).first)),
-                                   ends.push_back(static_cast<long long>(engine.linkEnds(l).second));
+        if (!engine.linkBroken(l))
+          ends.push_back(static_cast<long long>(engine.linkEnds(l).first)),
+              ends.push_back(static_cast<long long>(engine.linkEnds(l).second));
       lines.dataset.push_back("/links/intact/" + std::to_string(tables++));
       lines.count.push_back(ends.size() / 2);
       h5.writeInts(lines.dataset.back(), ends, {ends.size() / 2, 2});
@@ -294,6 +295,5 @@ bridge::RunOutcome runScene(Scene scene, const std::string& file, const bridge::
   }
   return out;
 }
-
 
 }  // namespace gabion::micro

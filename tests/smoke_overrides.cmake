@@ -2,3 +2,5 @@
 # holds the extra arguments given to `gabion run` (a list of --set a.b=v).
 # fit.micro resumes from OUTDIR/evaluations.jsonl by default; a smoke run starts afresh.
 set(GABION_SMOKE_SET_fit_micro_wall --set resume=false)
+# The netting tensile test to 5 cm of pull (the full test tears at about 0.2 m).
+set(GABION_SMOKE_SET_micro_netting_tensile --set test.max_displacement_m=0.05)

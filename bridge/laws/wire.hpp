@@ -19,10 +19,9 @@
 /// eps_r - F_b(eps_r)^2 / (2 E_F)), so the energy ledger is exact at any step.
 ///
 /// Curves come from a stress-strain table times the wire section
-/// (wireCurve), and for a double twist from the two-wire rule of Bertrand
-/// et al. 2008 (doubleTwistCurve): stiffness and strengths scaled by
-/// k_D / k_S with k_D = 2 (lambda_k k_helix + (1 - lambda_k) k_S), strains
-/// after the first point scaled by lambda_eps.
+/// (wireCurve), and for a double twist from the two-wire rule
+/// (doubleTwistCurve): stiffness scaled by lambda_k, failure strains by
+/// lambda_eps.
 #include <algorithm>
 #include <cmath>
 #include <cstddef>
@@ -66,9 +65,10 @@ inline WireTableIssue checkWireTable(const WireStressStrain& t) {
   for (std::size_t k = 1; k < t.strain.size(); ++k) {
     const double slope = (t.stress_Pa[k] - t.stress_Pa[k - 1]) / (t.strain[k] - t.strain[k - 1]);
     if (slope > E * (1.0 + 1e-12))
-      return {"stress rises faster than the elastic modulus (first point) before this point: elastic unloading "
-              "from such a curve is not defined",
-              static_cast<int>(k), false};
+      return {
+          "stress rises faster than the elastic modulus (first point) before this point: elastic unloading "
+          "from such a curve is not defined",
+          static_cast<int>(k), false};
   }
   return {};
 }
@@ -85,7 +85,9 @@ struct WireCurve {
 };
 
 /// Area of a wire of diameter d (m^2).
-inline double wireSection(double diameter_m) { return 0.25 * 3.14159265358979323846 * diameter_m * diameter_m; }
+inline double wireSection(double diameter_m) {
+  return 0.25 * 3.14159265358979323846 * diameter_m * diameter_m;
+}
 
 /// A single wire of diameter d: the table times the section.
 inline WireCurve wireCurve(const WireStressStrain& t, double diameter_m) {
@@ -96,37 +98,38 @@ inline WireCurve wireCurve(const WireStressStrain& t, double diameter_m) {
   return c;
 }
 
-/// Double-twist parameters (Bertrand et al. 2008).
+/// Double-twist parameters (Bertrand et al. 2008; ../shared/reference/wire-netting.md).
 struct DoubleTwistParams {
-  double lambda_k = 0.66;    ///< weight of the helix stiffness in k_D (-), in [0, 1]
-  double lambda_eps = 0.4;   ///< factor on the strains after the first point (-), in (0, 1]
-  double poisson = 0.3;      ///< of the wire steel (-)
+  double lambda_k = 0.66;   ///< factor on the elastic stiffness of the two wires (-), in (0, 1]
+  double lambda_eps = 0.4;  ///< factor on the strains after the first point (-), in (0, 1]
 };
 
-/// Ratio k_D / k_S of the elastic stiffness of a double twist of length L0
-/// made of two wires of diameter d to that of one straight wire of the same
-/// length: the two wires as helices of pitch angle alpha = atan(L0 / (3 pi d)),
-/// each with k_helix = k_S (L0 d / A) / (48 cos(alpha) (41/9 (1 + nu) + 17/4 tan^2(alpha))),
-/// mixed with straight wires by lambda_k.
-inline double doubleTwistStiffnessRatio(const DoubleTwistParams& p, double rest_length_m, double diameter_m) {
-  const double A = wireSection(diameter_m);
-  const double alpha = std::atan(rest_length_m / (3.0 * 3.14159265358979323846 * diameter_m));
-  const double t = std::tan(alpha);
-  const double helix = (rest_length_m * diameter_m / A) /
-                       (48.0 * std::cos(alpha) * (41.0 / 9.0 * (1.0 + p.poisson) + 17.0 / 4.0 * t * t));
-  return 2.0 * (p.lambda_k * helix + (1.0 - p.lambda_k));
-}
-
-/// The backbone of a double twist of length L0: the single wire's forces
-/// times doubleTwistStiffnessRatio, its strains after the first times
-/// lambda_eps (a twist is stiffer than one wire and breaks earlier).
-inline WireCurve doubleTwistCurve(const WireStressStrain& t, double diameter_m, const DoubleTwistParams& p,
-                                  double rest_length_m) {
+/// The backbone of a double twist: two wires twisted together, so twice the
+/// force of one at every point; stiffer than one wire but less than two
+/// straight ones (elastic stiffness lambda_k x 2 E A / L0: the first point
+/// moves to strain eps_0 / lambda_k), and breaking earlier (the strains of
+/// the later points times lambda_eps). Returns an empty curve when the
+/// factors push the first point past the second (lambda_k too small for
+/// lambda_eps): checkDoubleTwist says so.
+inline WireCurve doubleTwistCurve(const WireStressStrain& t, double diameter_m, const DoubleTwistParams& p) {
   WireCurve c = wireCurve(t, diameter_m);
-  const double ratio = doubleTwistStiffnessRatio(p, rest_length_m, diameter_m);
-  for (double& f : c.force_N) f *= ratio;
+  for (double& f : c.force_N) f *= 2.0;
+  c.strain[0] /= p.lambda_k;
   for (std::size_t k = 1; k < c.strain.size(); ++k) c.strain[k] *= p.lambda_eps;
   return c;
+}
+
+/// What is wrong with a double twist made from table t, or empty.
+inline std::string checkDoubleTwist(const WireStressStrain& t, const DoubleTwistParams& p) {
+  if (!(p.lambda_k > 0.0 && p.lambda_k <= 1.0)) return "lambda_k must be in (0, 1]";
+  if (!(p.lambda_eps > 0.0 && p.lambda_eps <= 1.0)) return "lambda_eps must be in (0, 1]";
+  const WireCurve c = doubleTwistCurve(t, 1.0, p);
+  WireStressStrain scaled{c.strain, c.force_N};
+  const WireTableIssue issue = checkWireTable(scaled);
+  if (!issue.message.empty())
+    return "the twist's curve (strain_0 / lambda_k, then strains x lambda_eps) is not a valid curve: " + issue.message +
+           " (point " + std::to_string(issue.at) + "); raise lambda_k or lambda_eps";
+  return {};
 }
 
 /// A wire link: its backbone and rest length.

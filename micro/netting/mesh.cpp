@@ -22,7 +22,8 @@ const char* wireKindName(WireKind kind) {
 Netting flatSheet(const MeshSpec& mesh, double width_m, double length_m) {
   const double D = mesh.opening_m, a = mesh.twist_length_m, b = mesh.wire_rise_m;
   if (!(width_m >= D) || !(length_m >= 3.0 * a + 2.0 * b))
-    throw std::invalid_argument("a sheet must hold at least one mesh: width >= opening and length >= 3 twists + 2 rises");
+    throw std::invalid_argument(
+        "a sheet must hold at least one mesh: width >= opening and length >= 3 twists + 2 rises");
   // Whole meshes; an odd number of rows, so that both ends are full rows
   // with nodes on the side edges.
   const auto columns = static_cast<int>(std::floor(width_m / D + 1e-9)) + 1;  // twists of a full row
@@ -63,7 +64,8 @@ Netting flatSheet(const MeshSpec& mesh, double width_m, double length_m) {
     for (std::size_t k = 0; k < top[r].size(); ++k) {
       const double x = xs[r][k];
       for (std::size_t q = 0; q < bottom[r + 1].size(); ++q)
-        if (std::fabs(std::fabs(xs[r + 1][q] - x) - 0.5 * D) < 1e-9 * D) add(top[r][k], bottom[r + 1][q], WireKind::Single);
+        if (std::fabs(std::fabs(xs[r + 1][q] - x) - 0.5 * D) < 1e-9 * D)
+          add(top[r][k], bottom[r + 1][q], WireKind::Single);
     }
     // The selvedge between the full rows r and r + 2 on both side edges.
     if (full && r + 2 < bottom.size()) {
@@ -106,7 +108,7 @@ LinkSpec linkSpec(const MeshSpec& mesh, const NettingLink& link, std::size_t fir
       s.wire.curve = bridge::wireCurve(mesh.table, mesh.wire_diameter_m);
       break;
     case WireKind::DoubleTwist:
-      s.wire.curve = bridge::doubleTwistCurve(mesh.table, mesh.wire_diameter_m, mesh.twist, link.rest_length_m);
+      s.wire.curve = bridge::doubleTwistCurve(mesh.table, mesh.wire_diameter_m, mesh.twist);
       break;
     case WireKind::Selvedge:
       s.wire.curve = bridge::wireCurve(mesh.table, mesh.selvedge_diameter_m);

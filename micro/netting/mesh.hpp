@@ -25,9 +25,9 @@ namespace gabion::micro {
 
 /// Mesh and wire parameters (defaults: 8x10 gabion mesh of 2.7 mm wire).
 struct MeshSpec {
-  double opening_m = 0.08;        ///< D, distance between the twists of one row
-  double twist_length_m = 0.04;   ///< a, length of a double twist
-  double wire_rise_m = 0.03;      ///< b; the mesh height is a + 2b (100 mm for 8x10)
+  double opening_m = 0.08;       ///< D, distance between the twists of one row
+  double twist_length_m = 0.04;  ///< a, length of a double twist
+  double wire_rise_m = 0.03;     ///< b; the mesh height is a + 2b (100 mm for 8x10)
   double wire_diameter_m = 0.0027;
   double selvedge_diameter_m = 0.0034;
   double lacing_diameter_m = 0.0022;

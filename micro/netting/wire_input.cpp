@@ -2,8 +2,8 @@
 
 namespace gabion::micro {
 
-using bridge::JsonReader;
 using bridge::Check;
+using bridge::JsonReader;
 
 bridge::WireStressStrain parseWireTable(const JsonReader& r, const std::string& key) {
   if (!r.has(key)) return bridge::defaultWireTable();
@@ -17,20 +17,24 @@ bridge::WireStressStrain parseWireTable(const JsonReader& r, const std::string& 
   const bridge::WireTableIssue issue = bridge::checkWireTable(table);
   if (!issue.message.empty()) {
     const std::string field = issue.strain ? "strain" : "stress_Pa";
-    t.fail(issue.at < 0 ? field : field + "/" + std::to_string(issue.at), issue.message);
+    if (issue.at < 0) t.fail(field, issue.message);
+    t.failElement(field, static_cast<std::size_t>(issue.at), issue.message);
   }
   return table;
 }
 
-bridge::DoubleTwistParams parseDoubleTwist(const JsonReader& r, const std::string& key) {
+bridge::DoubleTwistParams parseDoubleTwist(const JsonReader& r, const std::string& key,
+                                           const bridge::WireStressStrain& table) {
   bridge::DoubleTwistParams p;
   const auto d = r.optionalObject(key);
-  if (!d) return p;
-  p.lambda_k = d->number("lambda_k", p.lambda_k, Check::Fraction);
-  p.lambda_eps = d->number("lambda_eps", p.lambda_eps, Check::Positive);
-  if (p.lambda_eps > 1.0) d->fail("lambda_eps", "must be in (0, 1]");
-  p.poisson = d->number("poisson", p.poisson, Check::NonNegative);
-  if (p.poisson >= 0.5) d->fail("poisson", "must be in [0, 0.5)");
+  if (d) {
+    p.lambda_k = d->number("lambda_k", p.lambda_k, Check::Positive);
+    if (p.lambda_k > 1.0) d->fail("lambda_k", "must be in (0, 1]");
+    p.lambda_eps = d->number("lambda_eps", p.lambda_eps, Check::Positive);
+    if (p.lambda_eps > 1.0) d->fail("lambda_eps", "must be in (0, 1]");
+  }
+  const std::string issue = bridge::checkDoubleTwist(table, p);
+  if (!issue.empty()) r.fail(key, issue);
   return p;
 }
 

@@ -14,7 +14,9 @@ namespace gabion::micro {
 bridge::WireStressStrain parseWireTable(const bridge::JsonReader& r, const std::string& key);
 
 /// The double-twist factors at `key` of r (defaults of bridge::DoubleTwistParams
-/// for the keys it lacks, or for all if r has no such key).
-bridge::DoubleTwistParams parseDoubleTwist(const bridge::JsonReader& r, const std::string& key);
+/// for the keys it lacks, or for all if r has no such key), checked against
+/// the wire table they scale.
+bridge::DoubleTwistParams parseDoubleTwist(const bridge::JsonReader& r, const std::string& key,
+                                           const bridge::WireStressStrain& table);
 
 }  // namespace gabion::micro

@@ -11,9 +11,11 @@
 using namespace gabion::bridge;
 
 namespace {
-constexpr double kD = 0.0027;                          // mesh wire (m)
-const double kL0 = 0.080 / std::sqrt(3.0);             // 46.19 mm link
-double strainToLength(double eps) { return kL0 * (1.0 + eps); }
+constexpr double kD = 0.0027;               // mesh wire (m)
+const double kL0 = 0.080 / std::sqrt(3.0);  // 46.19 mm link
+double strainToLength(double eps) {
+  return kL0 * (1.0 + eps);
+}
 }  // namespace
 
 TEST(WireLaw, ElasticStiffnessOfTheReferenceLink) {
@@ -98,22 +100,21 @@ TEST(WireLaw, WorkOverACycleIsPlasticDissipationPlusStoredEnergy) {
   EXPECT_LT(worst, 1e-6 * work);
 }
 
-TEST(WireLaw, DoubleTwistScalesStiffnessStrengthAndRuptureStrain) {
+TEST(WireLaw, DoubleTwistIsTwoWiresStifferThanOneBreakingEarlier) {
   const WireStressStrain t = defaultWireTable();
-  const DoubleTwistParams p{0.66, 0.4, 0.3};
-  const double L0 = 0.04;
-  const WireCurve single = wireCurve(t, kD), twist = doubleTwistCurve(t, kD, p, L0);
-  const double ratio = doubleTwistStiffnessRatio(p, L0, kD);
-  // The helix term for a 40 mm twist of 2.7 mm wire is small (about 4.5 % of
-  // a straight wire), so k_D ~ 2 (1 - lambda_k) k_S = 0.68 k_S plus a little.
-  EXPECT_GT(ratio, 2.0 * (1.0 - p.lambda_k));
-  EXPECT_LT(ratio, 2.0 * (1.0 - p.lambda_k) + 2.0 * p.lambda_k * 0.1);
-  EXPECT_NEAR(twist.elasticForce(), ratio * single.elasticForce(), 1e-9 * single.elasticForce());
-  EXPECT_DOUBLE_EQ(twist.strain[0], single.strain[0]);
+  const DoubleTwistParams p{0.66, 0.4};
+  const WireCurve single = wireCurve(t, kD), twist = doubleTwistCurve(t, kD, p);
+  // Elastic stiffness lambda_k x two wires: stiffer than one wire, softer than two.
+  EXPECT_NEAR(twist.elasticForce(), 0.66 * 2.0 * single.elasticForce(), 1e-9 * single.elasticForce());
+  // Two wires' force at every point; the strains after the first times lambda_eps.
+  for (std::size_t k = 0; k < t.strain.size(); ++k) EXPECT_DOUBLE_EQ(twist.force_N[k], 2.0 * single.force_N[k]) << k;
+  EXPECT_DOUBLE_EQ(twist.strain[0], t.strain[0] / 0.66);
   EXPECT_DOUBLE_EQ(twist.ruptureStrain(), 0.4 * 0.35);
-  EXPECT_NEAR(twist.force_N.back(), ratio * single.force_N.back(), 1e-9 * single.force_N.back());
-  // lambda_k = 0: two straight wires.
-  EXPECT_DOUBLE_EQ(doubleTwistStiffnessRatio({0.0, 1.0, 0.3}, L0, kD), 2.0);
+  EXPECT_TRUE(checkDoubleTwist(t, p).empty());
+  // lambda_k so small that the elastic limit passes the next point: refused.
+  EXPECT_NE(checkDoubleTwist(t, {0.2, 0.4}).find("raise lambda_k"), std::string::npos);
+  EXPECT_FALSE(checkDoubleTwist(t, {0.0, 0.4}).empty());
+  EXPECT_FALSE(checkDoubleTwist(t, {0.66, 1.5}).empty());
 }
 
 TEST(WireLaw, BadTablesAreNamed) {

@@ -1,0 +1,21 @@
+#pragma once
+/// \file
+/// The `netting` object of a case: mesh geometry, wires, nodes and the
+/// contact parameters of the nodes (docs/netting.md has every key).
+#include "bridge/json_reader.hpp"
+#include "micro/netting/mesh.hpp"
+#include "micro/scene.hpp"
+
+namespace gabion::micro {
+
+struct NettingInput {
+  MeshSpec mesh;
+  /// How the nodes touch other bodies (density: the steel's; unused, the
+  /// node masses are the netting's).
+  Material contact;
+};
+
+/// Parses and checks a `netting` object; errors name the key.
+NettingInput parseNetting(const bridge::JsonReader& r);
+
+}  // namespace gabion::micro

@@ -1,0 +1,199 @@
+// The wire netting: the mesh generator against the geometry it promises,
+// wire links in the engine against the law and the energy ledger, the sheet
+// tensile test against the data-sheet envelope, where it tears and how it
+// depends on the time step, and bad input named by its field.
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <fstream>
+#include <nlohmann/json.hpp>
+#include <string>
+
+#include "../support/run_gabion.hpp"
+#include "bridge/laws/wire.hpp"
+#include "micro/engine.hpp"
+#include "micro/netting/mesh.hpp"
+#include "micro_test_util.hpp"
+
+namespace {
+
+using gabion::testing::runGabion;
+using gabion::testing::scratchDir;
+using gabion::testing::writeFile;
+using namespace gabion::micro;
+
+TEST(NettingMesh, SheetHasWholeHexagonalMeshesOfTheGivenGeometry) {
+  const MeshSpec mesh;  // 8x10: D = 80 mm, twist 40 mm, rise 30 mm
+  const Netting net = flatSheet(mesh, 0.52, 0.96);
+  // Whole meshes: 7 twists across (0 .. 0.48 m), 13 rows (an odd number) along.
+  EXPECT_DOUBLE_EQ(net.width_m, 0.48);
+  EXPECT_NEAR(net.length_m, 13 * 0.04 + 12 * 0.03, 1e-12);
+  EXPECT_EQ(net.node_m.size(), 2u * (7 * 7 + 6 * 6));
+  EXPECT_EQ(net.bottom_edge.size(), 7u);
+  EXPECT_EQ(net.top_edge.size(), 7u);
+  std::size_t twists = 0, singles = 0, selvedges = 0;
+  std::vector<int> degree(net.node_m.size(), 0);
+  for (const NettingLink& l : net.links) {
+    ++degree[l.a], ++degree[l.b];
+    EXPECT_NEAR(l.rest_length_m, (net.node_m[l.b] - net.node_m[l.a]).norm(), 1e-15);
+    if (l.kind == WireKind::DoubleTwist) {
+      ++twists;
+      EXPECT_NEAR(l.rest_length_m, 0.04, 1e-12);
+    }
+    if (l.kind == WireKind::Single) {
+      ++singles;
+      EXPECT_NEAR(l.rest_length_m, 0.05, 1e-12);  // hypot(40, 30) mm
+    }
+    if (l.kind == WireKind::Selvedge) ++selvedges;
+  }
+  // Interior twists, one single wire per (top node, neighbour below) pair,
+  // the selvedge along both sides (edge twists and the runs between them).
+  EXPECT_EQ(twists, 7u * 5 + 6u * 6);
+  EXPECT_EQ(singles, 12u * 12);
+  EXPECT_EQ(selvedges, 2u * 7 + 2u * 6);
+  for (const int d : degree) EXPECT_LE(d, 3);  // a twist end: its twist and two wires
+  // An interior node carries half its twist (two wires) and half of two single wires.
+  const double A = gabion::bridge::wireSection(0.0027);
+  const double interior = 7850.0 * A * (0.5 * 2 * 0.04 + 2 * 0.5 * 0.05);
+  std::size_t checked = 0;
+  for (std::size_t k = 0; k < net.node_m.size(); ++k) {
+    const Vec3& x = net.node_m[k];
+    const bool inside = x.x() > 1e-9 && x.x() < 0.48 - 1e-9 && x.y() > 0.05 && x.y() < net.length_m - 0.05;
+    if (!inside) continue;
+    EXPECT_EQ(degree[k], 3);
+    EXPECT_NEAR(net.node_mass_kg[k], interior, 1e-12 * interior);
+    ++checked;
+  }
+  EXPECT_GT(checked, 100u);
+  EXPECT_NEAR(interior, 3.9e-3, 0.2e-3);  // the published node mass of this mesh
+  EXPECT_THROW(flatSheet(mesh, 0.05, 0.96), std::invalid_argument);
+}
+
+// A single wire between a clamped node and a node driven apart at constant
+// speed, run by the engine: the tension is the law's at every step, the
+// wire breaks once past its last point, and the driven work equals the
+// plastic work plus the energy it held at rupture.
+TEST(NettingEngine, DrivenWireFollowsTheLawAndClosesTheLedger) {
+  Scene s;
+  s.gravity_m_s2 = Vec3::Zero();
+  s.materials.push_back(test::material(1e6, 2.5e5, 0.3));
+  const double L0 = 0.05, v = 0.5;
+  SphereSpec a = test::sphere(Vec3::Zero(), 0.005), b = test::sphere(Vec3(L0, 0, 0), 0.005);
+  a.fixed = b.fixed = true;
+  b.velocity_m_s = Vec3(v, 0, 0);
+  s.spheres = {a, b};
+  LinkSpec l;
+  l.a = 0, l.b = 1;
+  l.law = LinkSpec::Law::Wire;
+  l.wire.rest_length_m = L0;
+  l.wire.curve = gabion::bridge::wireCurve(gabion::bridge::defaultWireTable(), 0.0027);
+  s.links = {l};
+  Engine e(s, 1);
+  const double dt = 1e-6;
+  e.setDt(dt);
+  gabion::bridge::WireState mirror;
+  bool broke = false;
+  for (int n = 0; n < 40000 && !broke; ++n) {
+    ASSERT_EQ(e.step(true), StepStatus::Ok);
+    broke = e.linkBroken(0);
+    // The force of this step came from the length at its start.
+    const double length = L0 + v * dt * n;
+    const double f = gabion::bridge::wireResponse(l.wire.curve, L0, mirror, length).force_N;
+    if (!broke) {
+      ASSERT_NEAR(e.linkTension(0), f, 1e-9 * std::max(1.0, f)) << "step " << n;
+    }
+  }
+  ASSERT_TRUE(broke);
+  EXPECT_NEAR(e.time(), 0.35 * L0 / v, 2 * dt);
+  ASSERT_EQ(e.linkEvents().size(), 1u);
+  const EnergyTotals& en = e.energy();
+  EXPECT_GT(en.link_plastic_dissipation_J, 10.0);
+  EXPECT_GT(en.link_rupture_dissipation_J, 0.0);
+  // Work put in = plastic work + what the wire held when it went (trapezoid
+  // vs the step's force: O(dt) of the force jump at the first point).
+  EXPECT_NEAR(en.driven_work_J, en.link_plastic_dissipation_J + en.link_rupture_dissipation_J,
+              1e-3 * en.driven_work_J);
+  EXPECT_LT(std::fabs(en.balance_rel_error), 1e-3);
+}
+
+// The default case, with node masses x 100 and twice the pull speed: the
+// curve of the full case to 0.1 % (docs/netting.md, Time step) in under a second.
+std::string tensileCase(const std::string& run_extra = "", const std::string& netting_extra = "") {
+  return R"({"format": "gabion.case/1", "kind": "micro.netting_tensile",
+ "netting": {"node_mass_scale": 100, "contact": {"local_damping": 0.5})" +
+         netting_extra + R"(},
+ "sheet": {"width_m": 0.52, "length_m": 0.96},
+ "test": {"pull_speed_m_s": 0.1, "max_displacement_m": 0.45},
+ "run": {"series_interval_s": 0.0005, "output_interval_s": 0.5)" +
+         run_extra + "}}";
+}
+
+nlohmann::json runTensile(const std::string& name, const std::string& text) {
+  const auto dir = scratchDir(name);
+  writeFile(dir / "case.json", text);
+  const auto r = runGabion("run " + (dir / "case.json").string() + " -q -o " + (dir / "out").string());
+  EXPECT_EQ(r.exit_code, 0) << r.output;
+  std::ifstream in(dir / "out" / "summary.json");
+  return nlohmann::json::parse(in);
+}
+
+TEST(NettingTensile, PeakWithinTheDataSheetEnvelopeTearsNearTheClampsAndKeepsItsBalance) {
+  const nlohmann::json s = runTensile("netting_tensile", tensileCase());
+  // Data sheets give about 50 kN/m for 8x10 mesh of 2.7 mm wire (EN 10223-3,
+  // EN 15381 Annex D); the wire strength they allow spans 350-550 N/mm2,
+  // +-22 % about its middle, and the published wire table peaks at 566 N/mm2:
+  // the mesh is accepted within 50 kN/m +-25 %.
+  const double per_m = s["peak_force_per_width_N_m"].get<double>();
+  EXPECT_GT(per_m, 37.5e3);
+  EXPECT_LT(per_m, 62.5e3);
+  EXPECT_TRUE(s["torn"].get<bool>());
+  EXPECT_EQ(s["ended_by"], "test");
+  // The first wire to go is within a mesh height of a clamp, or a twist.
+  const double y = s["first_rupture_position_m"][1].get<double>();
+  const double top = s["sheet_length_m"].get<double>() + s["first_rupture_s"].get<double>() * 0.1;
+  const bool near_clamp = y < 0.1 || y > top - 0.1;
+  EXPECT_TRUE(near_clamp || s["first_rupture_link_kind"] == "double_twist") << s.dump();
+  EXPECT_LT(std::fabs(s["energy"]["balance_rel_error"].get<double>()), 0.01);
+  EXPECT_GT(s["energy"]["link_plastic_dissipation_J"].get<double>(), 0.5 * s["energy"]["driven_work_J"].get<double>());
+}
+
+TEST(NettingTensile, PeakDoesNotDependOnTheTimeStepWithinTheSafetyFactor) {
+  const nlohmann::json a = runTensile("netting_dt_a", tensileCase(R"(, "dt_safety": 0.2)"));
+  const nlohmann::json b = runTensile("netting_dt_b", tensileCase(R"(, "dt_safety": 0.1)"));
+  const double pa = a["peak_force_N"].get<double>(), pb = b["peak_force_N"].get<double>();
+  EXPECT_NEAR(pa, pb, 0.01 * pb);
+  EXPECT_NEAR(a["displacement_at_peak_m"].get<double>(), b["displacement_at_peak_m"].get<double>(), 0.01);
+}
+
+TEST(NettingTensile, BadMeshesAndLawsAreInputErrorsNamingTheField) {
+  const auto dir = scratchDir("netting_bad");
+  struct Bad {
+    std::string name, text, pointer;
+  };
+  const std::string table = R"(, "stress_strain": {"strain": [0.002, 0.02, 0.01], "stress_Pa": [2.6e8, 3e8, 4e8]})";
+  const std::string negative = R"(, "stress_strain": {"strain": [0.002, 0.02], "stress_Pa": [2.6e8, -3e8]})";
+  std::string zero_length = tensileCase();
+  zero_length.replace(zero_length.find("\"length_m\": 0.96"), 16, "\"length_m\": 0.0 ");
+  std::string short_sheet = tensileCase();
+  short_sheet.replace(short_sheet.find("\"length_m\": 0.96"), 16, "\"length_m\": 0.05");
+  const std::vector<Bad> cases = {
+      {"decreasing_strain", tensileCase("", table), "/netting/stress_strain/strain/2"},
+      {"negative_stress", tensileCase("", negative), "/netting/stress_strain/stress_Pa/1"},
+      {"zero_length", zero_length, "/sheet/length_m"},
+      {"short_sheet", short_sheet, "/sheet/length_m"},
+      {"unknown_mesh", tensileCase("", R"(, "mesh": "square_welded")"), "/netting/mesh"},
+      {"weak_twist", tensileCase("", R"(, "double_twist": {"lambda_k": 0.2})"), "/netting/double_twist"},
+      {"fat_nodes", tensileCase("", R"(, "node_radius_m": 0.03)"), "/netting/node_radius_m"},
+  };
+  for (const Bad& c : cases) {
+    const auto file = dir / (c.name + ".json");
+    writeFile(file, c.text);
+    for (const std::string cmd : {"check ", "run -q -o /nonexistent/never "}) {
+      const auto r = runGabion(cmd + file.string());
+      EXPECT_EQ(r.exit_code, 2) << c.name << ": " << r.output;
+      EXPECT_NE(r.output.find(c.pointer), std::string::npos) << c.name << ": " << r.output;
+    }
+  }
+}
+
+}  // namespace
