@@ -76,7 +76,8 @@ bool connected(const Netting& net, const Engine& e, const std::vector<std::uint3
                const std::vector<std::uint32_t>& to) {
   std::vector<std::vector<std::uint32_t>> next(net.node_m.size());
   for (std::size_t l = 0; l < net.links.size(); ++l)
-    if (!e.linkBroken(l)) next[net.links[l].a].push_back(net.links[l].b), next[net.links[l].b].push_back(net.links[l].a);
+    if (!e.linkBroken(l))
+      next[net.links[l].a].push_back(net.links[l].b), next[net.links[l].b].push_back(net.links[l].a);
   std::vector<char> seen(net.node_m.size(), 0), goal(net.node_m.size(), 0);
   for (const std::uint32_t k : to) goal[k] = 1;
   std::vector<std::uint32_t> stack(from.begin(), from.end());

@@ -111,8 +111,7 @@ TEST(NettingEngine, DrivenWireFollowsTheLawAndClosesTheLedger) {
   EXPECT_GT(en.link_rupture_dissipation_J, 0.0);
   // Work put in = plastic work + what the wire held when it went (trapezoid
   // vs the step's force: O(dt) of the force jump at the first point).
-  EXPECT_NEAR(en.driven_work_J, en.link_plastic_dissipation_J + en.link_rupture_dissipation_J,
-              1e-3 * en.driven_work_J);
+  EXPECT_NEAR(en.driven_work_J, en.link_plastic_dissipation_J + en.link_rupture_dissipation_J, 1e-3 * en.driven_work_J);
   EXPECT_LT(std::fabs(en.balance_rel_error), 1e-3);
 }
 
