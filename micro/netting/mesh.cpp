@@ -1,6 +1,10 @@
 #include "micro/netting/mesh.hpp"
 
+#include <algorithm>
+#include <array>
 #include <cmath>
+#include <cstdint>
+#include <set>
 #include <stdexcept>
 
 namespace gabion::micro {
@@ -19,20 +23,16 @@ const char* wireKindName(WireKind kind) {
   return "?";
 }
 
-Netting flatSheet(const MeshSpec& mesh, double width_m, double length_m) {
+namespace {
+
+// A sheet of `columns` twists per full row and `rows` rows, in its own
+// plane (z = 0), without masses: nodes, links, its first row's bottom nodes
+// and its last row's top nodes.
+Netting sheetLayout(const MeshSpec& mesh, int columns, int rows) {
   const double D = mesh.opening_m, a = mesh.twist_length_m, b = mesh.wire_rise_m;
-  if (!(width_m >= D) || !(length_m >= 3.0 * a + 2.0 * b))
-    throw std::invalid_argument(
-        "a sheet must hold at least one mesh: width >= opening and length >= 3 twists + 2 rises");
-  // Whole meshes; an odd number of rows, so that both ends are full rows
-  // with nodes on the side edges.
-  const auto columns = static_cast<int>(std::floor(width_m / D + 1e-9)) + 1;  // twists of a full row
-  auto rows = static_cast<int>(std::floor((length_m - a) / (a + b) + 1e-9)) + 1;
-  if (rows % 2 == 0) --rows;
   Netting net;
   net.width_m = (columns - 1) * D;
   net.length_m = rows * a + (rows - 1) * b;
-
   // Nodes row by row: bottom and top node of each twist.
   std::vector<std::vector<std::uint32_t>> bottom(static_cast<std::size_t>(rows)), top(bottom.size());
   std::vector<std::vector<double>> xs(bottom.size());
@@ -75,6 +75,135 @@ Netting flatSheet(const MeshSpec& mesh, double width_m, double length_m) {
   }
   net.bottom_edge = bottom.front();
   net.top_edge = top.back();
+  return net;
+}
+
+}  // namespace
+
+Netting flatSheet(const MeshSpec& mesh, double width_m, double length_m) {
+  const double D = mesh.opening_m, a = mesh.twist_length_m, b = mesh.wire_rise_m;
+  if (!(width_m >= D) || !(length_m >= 3.0 * a + 2.0 * b))
+    throw std::invalid_argument(
+        "a sheet must hold at least one mesh: width >= opening and length >= 3 twists + 2 rises");
+  // Whole meshes; an odd number of rows, so that both ends are full rows
+  // with nodes on the side edges.
+  const auto columns = static_cast<int>(std::floor(width_m / D + 1e-9)) + 1;  // twists of a full row
+  auto rows = static_cast<int>(std::floor((length_m - a) / (a + b) + 1e-9)) + 1;
+  if (rows % 2 == 0) --rows;
+  Netting net = sheetLayout(mesh, columns, rows);
+  assignNodeMasses(mesh, net);
+  return net;
+}
+
+Netting closedBox(const MeshSpec& mesh, double edge_m) {
+  const double D = mesh.opening_m, a = mesh.twist_length_m, b = mesh.wire_rise_m;
+  if (!(edge_m >= D) || !(edge_m >= 2.0 * a + b))
+    throw std::invalid_argument("a box edge must hold at least one mesh: edge >= opening and >= 2 twists + 1 rise");
+  // Whole meshes fitted to the face: the nearest number of meshes across and
+  // of rows along, the face's sheet then stretched or shrunk to the edge.
+  const int meshes = std::max(1, static_cast<int>(std::lround(edge_m / D)));
+  int rows = 2;
+  for (int n = 3; n < 100000; ++n) {
+    const double len = n * a + (n - 1) * b;
+    if (std::fabs(len - edge_m) < std::fabs(rows * a + (rows - 1) * b - edge_m)) rows = n;
+    if (len > edge_m) break;
+  }
+  const Netting face = sheetLayout(mesh, meshes + 1, rows);
+  const double sx = edge_m / face.width_m, sy = edge_m / face.length_m;
+  // The faces: origin and the directions of the sheet's x and y (twists along y).
+  const Vec3 X = Vec3::UnitX(), Y = Vec3::UnitY(), Z = Vec3::UnitZ(), O = Vec3::Zero();
+  const std::array<std::array<Vec3, 3>, 6> frames = {
+      {{O, X, Y}, {edge_m * Z, X, Y}, {O, X, Z}, {edge_m * Y, X, Z}, {O, Y, Z}, {edge_m * X, Y, Z}}};
+  Netting net;
+  net.width_m = net.length_m = edge_m;
+  std::vector<std::uint32_t> face_of;  // face of each node before merging
+  for (std::size_t f = 0; f < frames.size(); ++f) {
+    const auto first = static_cast<std::uint32_t>(net.node_m.size());
+    for (const Vec3& p : face.node_m) {
+      net.node_m.push_back(frames[f][0] + frames[f][1] * (p.x() * sx) + frames[f][2] * (p.y() * sy));
+      face_of.push_back(static_cast<std::uint32_t>(f));
+    }
+    for (NettingLink l : face.links) {
+      l.a += first, l.b += first;
+      net.links.push_back(l);
+    }
+  }
+  // Nodes on the box's edges: where two faces meet, a node of one within two
+  // node radii of a node of the other becomes that node (a shared node);
+  // every other edge node is laced to the nearest edge node of the other face.
+  const double r = mesh.nodeRadius(), tol = 1e-9 * edge_m;
+  const auto onEdge = [&](const Vec3& p, int axis) {  // on a box edge parallel to `axis`
+    for (int c = 0; c < 3; ++c)
+      if (c != axis && std::fabs(p[c]) > tol && std::fabs(p[c] - edge_m) > tol) return false;
+    return true;
+  };
+  std::vector<std::uint32_t> same(net.node_m.size());
+  for (std::size_t k = 0; k < same.size(); ++k) same[k] = static_cast<std::uint32_t>(k);
+  const auto root = [&](std::uint32_t k) {
+    while (same[k] != k) k = same[k];
+    return k;
+  };
+  std::vector<std::pair<std::uint32_t, std::uint32_t>> lacing;
+  for (int axis = 0; axis < 3; ++axis)
+    for (const double u : {0.0, edge_m})
+      for (const double v : {0.0, edge_m}) {
+        // The box edge parallel to `axis` at the other two coordinates (u, v).
+        const int c1 = (axis + 1) % 3, c2 = (axis + 2) % 3;
+        std::vector<std::vector<std::uint32_t>> by_face(frames.size());
+        for (std::uint32_t k = 0; k < net.node_m.size(); ++k) {
+          const Vec3& p = net.node_m[k];
+          if (onEdge(p, axis) && std::fabs(p[c1] - u) <= tol && std::fabs(p[c2] - v) <= tol)
+            by_face[face_of[k]].push_back(k);
+        }
+        // The two faces whose planes meet there (a third face's corner
+        // node on the line is joined along that face's own edges).
+        const auto planeFace = [&](int c, double at) {
+          static constexpr std::array<std::size_t, 3> low = {4, 2, 0}, high = {5, 3, 1};
+          return at == 0.0 ? low[static_cast<std::size_t>(c)] : high[static_cast<std::size_t>(c)];
+        };
+        const std::array<std::size_t, 2> faces = {planeFace(c1, u), planeFace(c2, v)};
+        if (by_face[faces[0]].empty() || by_face[faces[1]].empty())
+          throw std::logic_error("closedBox: a face has no node on one of its edges");
+        const auto& A = by_face[faces[0]];
+        const auto& B = by_face[faces[1]];
+        const auto nearest = [&](std::uint32_t k, const std::vector<std::uint32_t>& other) {
+          std::uint32_t best = other[0];
+          for (const std::uint32_t q : other)
+            if ((net.node_m[q] - net.node_m[k]).norm() < (net.node_m[best] - net.node_m[k]).norm()) best = q;
+          return best;
+        };
+        for (const std::uint32_t k : B) {
+          const std::uint32_t q = nearest(k, A);
+          if ((net.node_m[q] - net.node_m[k]).norm() < 2.0 * r) same[root(k)] = root(q);
+        }
+        for (const auto& [from, to] : {std::pair{&A, &B}, std::pair{&B, &A}})
+          for (const std::uint32_t k : *from) {
+            const std::uint32_t q = nearest(k, *to);
+            if (root(q) != root(k)) lacing.emplace_back(k, q);
+          }
+      }
+  // Renumber the merged nodes, re-point the links, lace, drop repeats.
+  std::vector<std::uint32_t> index(net.node_m.size(), UINT32_MAX);
+  std::vector<Vec3> nodes;
+  for (std::uint32_t k = 0; k < net.node_m.size(); ++k)
+    if (root(k) == k) index[k] = static_cast<std::uint32_t>(nodes.size()), nodes.push_back(net.node_m[k]);
+  std::vector<NettingLink> links;
+  std::set<std::pair<std::uint32_t, std::uint32_t>> seen;
+  const auto keep = [&](std::uint32_t i, std::uint32_t j, WireKind kind) {
+    i = index[root(i)], j = index[root(j)];
+    if (i == j || !seen.insert({std::min(i, j), std::max(i, j)}).second) return;
+    links.push_back({i, j, kind, (nodes[j] - nodes[i]).norm()});
+  };
+  for (const NettingLink& l : net.links) keep(l.a, l.b, l.kind);
+  for (const auto& [i, j] : lacing) keep(i, j, WireKind::Lacing);
+  net.faces.assign(frames.size(), {});
+  for (std::uint32_t k = 0; k < face_of.size(); ++k) {
+    auto& f = net.faces[face_of[k]];
+    const std::uint32_t n = index[root(k)];
+    if (std::find(f.begin(), f.end(), n) == f.end()) f.push_back(n);
+  }
+  net.node_m = std::move(nodes);
+  net.links = std::move(links);
   assignNodeMasses(mesh, net);
   return net;
 }

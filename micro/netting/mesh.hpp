@@ -64,12 +64,25 @@ struct Netting {
   /// row's top (y = length), each in increasing x; its real size.
   std::vector<std::uint32_t> bottom_edge, top_edge;
   double width_m = 0.0, length_m = 0.0;
+  /// A box: the nodes of each face (bottom z = 0, top z = edge, front y = 0,
+  /// back y = edge, left x = 0, right x = edge); nodes on an edge are in two.
+  std::vector<std::vector<std::uint32_t>> faces;
 };
 
 /// A flat sheet of whole meshes within width_m (x) by length_m (y, along the
 /// twists), in the z = 0 plane with its corner at the origin. Throws
 /// std::invalid_argument when not even one mesh fits.
 Netting flatSheet(const MeshSpec& mesh, double width_m, double length_m);
+
+/// A closed box of netting, the cube [0, edge]^3: six faces of whole meshes
+/// (the nearest numbers of meshes, each face's sheet stretched or shrunk to
+/// the edge, a few per cent), twists along y on the bottom and top and along
+/// z on the sides. Where two faces meet, nodes closer than two node radii
+/// become one (a shared node) and every other edge node is laced (a lacing
+/// wire) to the nearest edge node of the other face. Rest lengths are the
+/// generated distances: the box is stress free. Throws std::invalid_argument
+/// when not even one mesh fits.
+Netting closedBox(const MeshSpec& mesh, double edge_m);
 
 /// Fills in node masses (given, or the wire each node carries, times the
 /// mass scale) and the radius.

@@ -6,7 +6,9 @@
 
 #include <cmath>
 #include <fstream>
+#include <iterator>
 #include <nlohmann/json.hpp>
+#include <set>
 #include <string>
 
 #include "../support/run_gabion.hpp"
@@ -133,7 +135,20 @@ nlohmann::json runTensile(const std::string& name, const std::string& text) {
   const auto r = runGabion("run " + (dir / "case.json").string() + " -q -o " + (dir / "out").string());
   EXPECT_EQ(r.exit_code, 0) << r.output;
   std::ifstream in(dir / "out" / "summary.json");
-  return nlohmann::json::parse(in);
+  nlohmann::json s = nlohmann::json::parse(in);
+  s["outdir"] = (dir / "out").string();
+  return s;
+}
+
+// The number of line segments of each snapshot of a result.xdmf, in order.
+std::vector<long> xdmfLineCounts(const std::string& path) {
+  std::ifstream in(path);
+  const std::string text((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  std::vector<long> counts;
+  const std::string key = "TopologyType=\"Polyline\" NodesPerElement=\"2\" NumberOfElements=\"";
+  for (std::size_t at = text.find(key); at != std::string::npos; at = text.find(key, at + 1))
+    counts.push_back(std::stol(text.substr(at + key.size())));
+  return counts;
 }
 
 TEST(NettingTensile, PeakWithinTheDataSheetEnvelopeTearsNearTheClampsAndKeepsItsBalance) {
@@ -154,6 +169,13 @@ TEST(NettingTensile, PeakWithinTheDataSheetEnvelopeTearsNearTheClampsAndKeepsIts
   EXPECT_TRUE(near_clamp || s["first_rupture_link_kind"] == "double_twist") << s.dump();
   EXPECT_LT(std::fabs(s["energy"]["balance_rel_error"].get<double>()), 0.01);
   EXPECT_GT(s["energy"]["link_plastic_dissipation_J"].get<double>(), 0.5 * s["energy"]["driven_work_J"].get<double>());
+  // ParaView: every snapshot draws the links intact at its time; the last,
+  // taken when the sheet tore, lacks exactly the broken ones.
+  const std::vector<long> lines = xdmfLineCounts(s["outdir"].get<std::string>() + "/result.xdmf");
+  ASSERT_GE(lines.size(), 2u);
+  EXPECT_EQ(lines.front(), s["links"].get<long>());
+  EXPECT_EQ(lines.back(), s["links"].get<long>() - s["broken_links"].get<long>());
+  for (std::size_t k = 1; k < lines.size(); ++k) EXPECT_LE(lines[k], lines[k - 1]);
 }
 
 TEST(NettingTensile, PeakDoesNotDependOnTheTimeStepWithinTheSafetyFactor) {
@@ -193,6 +215,139 @@ TEST(NettingTensile, BadMeshesAndLawsAreInputErrorsNamingTheField) {
       EXPECT_NE(r.output.find(c.pointer), std::string::npos) << c.name << ": " << r.output;
     }
   }
+}
+
+}  // namespace
+
+namespace {
+
+// A closed box of netting: every face whole meshes, faces joined at the
+// edges (shared nodes or lacing), stress free, each node within reach.
+TEST(NettingMesh, ClosedBoxIsJoinedAtEveryEdgeAndStressFree) {
+  const MeshSpec mesh;
+  const Netting box = closedBox(mesh, 0.5);
+  ASSERT_EQ(box.faces.size(), 6u);
+  std::size_t lacing = 0;
+  std::vector<int> degree(box.node_m.size(), 0);
+  for (const NettingLink& l : box.links) {
+    ++degree[l.a], ++degree[l.b];
+    EXPECT_NEAR(l.rest_length_m, (box.node_m[l.b] - box.node_m[l.a]).norm(), 1e-15);
+    EXPECT_GT(l.rest_length_m, 2.0 * box.node_radius_m - 1e-12);  // no link shorter than the nodes are wide
+    if (l.kind == WireKind::Lacing) ++lacing;
+  }
+  EXPECT_GT(lacing, 0u);
+  for (std::size_t k = 0; k < box.node_m.size(); ++k) {
+    EXPECT_GE(degree[k], 1) << "node " << k << " joins nothing";
+    for (int c = 0; c < 3; ++c) {  // on the cube's surface
+      EXPECT_GE(box.node_m[k][c], -1e-12);
+      EXPECT_LE(box.node_m[k][c], 0.5 + 1e-12);
+    }
+  }
+  // One piece: every node reaches every other through links.
+  std::vector<std::vector<std::uint32_t>> next(box.node_m.size());
+  for (const NettingLink& l : box.links) next[l.a].push_back(l.b), next[l.b].push_back(l.a);
+  std::vector<char> seen(box.node_m.size(), 0);
+  std::vector<std::uint32_t> stack{0};
+  seen[0] = 1;
+  std::size_t reached = 1;
+  while (!stack.empty()) {
+    const std::uint32_t k = stack.back();
+    stack.pop_back();
+    for (const std::uint32_t q : next[k])
+      if (!seen[q]) seen[q] = 1, ++reached, stack.push_back(q);
+  }
+  EXPECT_EQ(reached, box.node_m.size());
+  // No two nodes that are not linked overlap at rest.
+  std::set<std::pair<std::uint32_t, std::uint32_t>> linked;
+  for (const NettingLink& l : box.links) linked.insert({std::min(l.a, l.b), std::max(l.a, l.b)});
+  for (std::uint32_t i = 0; i < box.node_m.size(); ++i)
+    for (std::uint32_t j = i + 1; j < box.node_m.size(); ++j)
+      if (!linked.count({i, j})) {
+        EXPECT_GE((box.node_m[j] - box.node_m[i]).norm(), 2.0 * box.node_radius_m) << i << " " << j;
+      }
+}
+
+// The box hanging from its top face under gravity comes to rest: the top
+// face holds the weight of the rest, and the ledger balances.
+TEST(NettingEngine, ClosedBoxHangingFromItsTopFaceReachesEquilibrium) {
+  MeshSpec mesh;
+  mesh.node_mass_scale = 100.0;  // statics: the same shape, 10x the step (docs/netting.md, Time step)
+  const Netting box = closedBox(mesh, 0.5);
+  Scene s;
+  s.gravity_m_s2 = Vec3(0, 0, -9.81);
+  Material m = test::material(1e6, 2.5e5, 0.3, 0.0, 0.7);  // local damping brings it to rest
+  m.density_kg_m3 = 7850;
+  s.materials.push_back(m);
+  std::vector<char> top(box.node_m.size(), 0);
+  for (const std::uint32_t k : box.faces[1]) top[k] = 1;
+  double hanging = 0.0;
+  for (std::size_t k = 0; k < box.node_m.size(); ++k) {
+    SphereSpec sp = test::sphere(box.node_m[k], box.node_radius_m, top[k] != 0);
+    sp.mass_kg = box.node_mass_kg[k];
+    if (!top[k]) hanging += sp.mass_kg;
+    s.spheres.push_back(sp);
+  }
+  for (const NettingLink& l : box.links) s.links.push_back(linkSpec(mesh, l, 0));
+  Engine e(s, 1);
+  e.setDt(0.2 * e.criticalDt());
+  const int steps = static_cast<int>(2.0 / e.dt());
+  double pe0 = 0.0;
+  for (int n = 0; n < steps; ++n) {
+    ASSERT_EQ(e.step(n % 100 == 0 || n + 1 == steps), StepStatus::Ok) << e.failure();
+    if (n == 0) pe0 = e.energy().gravity_potential_J;
+  }
+  // Held: the reactions at the top face carry the weight of the rest.
+  double held = 0.0;
+  for (std::size_t k = 0; k < box.node_m.size(); ++k)
+    if (top[k]) held += e.sphereForce(k).z();
+  EXPECT_NEAR(-held, hanging * 9.81, 1e-3 * hanging * 9.81);
+  const EnergyTotals& en = e.energy();
+  // At rest: the kinetic energy is a vanishing share of the energy released.
+  const double released = pe0 - en.gravity_potential_J;
+  EXPECT_GT(released, 0.0);
+  EXPECT_LT(en.kinetic_translational_J, 1e-3 * released) << "released " << released;
+  EXPECT_LT(std::fabs(en.balance_rel_error), 0.01);
+  EXPECT_EQ(e.linkEvents().size(), 0u);
+}
+
+}  // namespace
+
+namespace {
+
+// Wire links in a micro.scene: a lacing that joins a node to itself, an
+// unknown law and a bad table are input errors naming the link's field.
+TEST(NettingScene, BadWireLinksAreNamed) {
+  const auto dir = scratchDir("netting_scene_bad");
+  const auto scene = [](const std::string& link) {
+    return R"({"format": "gabion.case/1", "kind": "micro.scene", "gravity_m_s2": [0, 0, 0],
+ "materials": {"steel": {"density_kg_m3": 7850, "normal_stiffness_N_m": 1e6, "shear_stiffness_N_m": 2.5e5, "friction": 0.3}},
+ "spheres": [{"center_m": [0, 0, 0], "radius_m": 0.005, "material": "steel", "fixed": true},
+             {"center_m": [0.05, 0, 0], "radius_m": 0.005, "material": "steel", "mass_kg": 0.004}],
+ "links": [)" +
+           link + R"(], "run": {"duration_s": 0.001}})";
+  };
+  struct Bad {
+    std::string name, link, pointer;
+  };
+  const std::vector<Bad> cases = {
+      {"self", R"({"a": 1, "b": 1, "law": "wire", "diameter_m": 0.0022})", "/links/0/b"},
+      {"law", R"({"a": 0, "b": 1, "law": "rope", "diameter_m": 0.0022})", "/links/0/law"},
+      {"no_diameter", R"({"a": 0, "b": 1, "law": "wire"})", "/links/0/diameter_m"},
+      {"table", R"({"a": 0, "b": 1, "law": "wire", "diameter_m": 0.0022,
+                   "stress_strain": {"strain": [0.01, 0.005], "stress_Pa": [1e8, 2e8]}})",
+       "/links/0/stress_strain/strain/1"},
+  };
+  for (const Bad& c : cases) {
+    const auto file = dir / (c.name + ".json");
+    writeFile(file, scene(c.link));
+    const auto r = runGabion("check " + file.string());
+    EXPECT_EQ(r.exit_code, 2) << c.name << ": " << r.output;
+    EXPECT_NE(r.output.find(c.pointer), std::string::npos) << c.name << ": " << r.output;
+  }
+  // And a good one runs: the wire holds the free node at rest.
+  const auto good = dir / "good.json";
+  writeFile(good, scene(R"({"a": 0, "b": 1, "law": "wire", "diameter_m": 0.0022})"));
+  EXPECT_EQ(runGabion("run " + good.string() + " -q -o " + (dir / "out").string()).exit_code, 0);
 }
 
 }  // namespace
