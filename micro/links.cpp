@@ -23,6 +23,7 @@ Links::Links(const std::vector<LinkSpec>& specs, std::size_t particles) : partic
     if (same == wires_.end()) wires_.push_back(s.wire.curve);
     wire_rest_.push_back(s.wire.rest_length_m);
   }
+  for (const double L0 : wire_rest_) wire_inv_rest_.push_back(L0 > 0.0 ? 1.0 / L0 : 0.0);
   const std::size_t n = a_.size();
   wire_state_.assign(n, bridge::WireState{});
   broken_.assign(n, 0);
@@ -76,8 +77,12 @@ void Links::evaluate(const Particles& p, std::size_t l0, std::size_t l1, double 
     const double length = std::sqrt(ex * ex + ey * ey + ez * ez);
     bridge::LinkResponse r;
     if (wire) {
-      const bridge::WireResponse w = bridge::wireResponse(wires_[law_index_[l]], wire_rest_[l], wire_state_[l], length);
-      r = {w.force_N, w.elastic_J, w.breaks};
+      const bridge::WireCurve& c = wires_[law_index_[l]];
+      const double L0 = wire_rest_[l];
+      const bridge::WireResponse w = bridge::wireResponse(c, wire_state_[l], (length - L0) * wire_inv_rest_[l]);
+      // (it held the energy of its last point when it went)
+      const double held = w.breaks ? c.force().back() : w.force_N;
+      r = {w.force_N, measure || w.breaks ? bridge::wireElasticEnergy(c, L0, held) : 0.0, w.breaks};
     } else {
       r = bridge::linearLinkResponse(linear_[law_index_[l]], length);
     }

@@ -63,7 +63,7 @@ class Links {
   std::vector<std::uint32_t> law_index_;
   std::vector<bridge::LinearLinkParams> linear_;
   std::vector<bridge::WireCurve> wires_;
-  std::vector<double> wire_rest_;
+  std::vector<double> wire_rest_, wire_inv_rest_;
   std::vector<bridge::WireState> wire_state_;
   std::vector<std::uint8_t> broken_;
   std::vector<double> fx_, fy_, fz_, tension_;  // force on a (N) at this step; -f on b

@@ -363,7 +363,7 @@ void validateScene(const Scene& s, const std::string& file) {
     if (l.law == LinkSpec::Law::Wire) {
       if (!(l.wire.rest_length_m > 0.0 && std::isfinite(l.wire.rest_length_m)))
         fail(at("links", k, "rest_length_m"), "must be > 0");
-      bridge::WireStressStrain as_table{l.wire.curve.strain, l.wire.curve.force_N};
+      bridge::WireStressStrain as_table{l.wire.curve.strain(), l.wire.curve.force()};
       const bridge::WireTableIssue issue = bridge::checkWireTable(as_table);
       if (!issue.message.empty()) fail(at("links", k, "stress_strain"), "wire curve: " + issue.message);
       continue;

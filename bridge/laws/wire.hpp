@@ -26,6 +26,7 @@
 #include <cmath>
 #include <cstddef>
 #include <string>
+#include <utility>
 #include <vector>
 
 namespace gabion::bridge {
@@ -73,15 +74,37 @@ inline WireTableIssue checkWireTable(const WireStressStrain& t) {
   return {};
 }
 
-/// A wire's backbone in force (N) against engineering strain (-).
-struct WireCurve {
-  std::vector<double> strain;   ///< as the table (after any double-twist scaling)
-  std::vector<double> force_N;  ///< force at each strain
+/// A wire's backbone in force (N) against engineering strain (-), with what
+/// the law needs at every step (elastic force per unit strain, its inverse,
+/// the slope of each segment) computed once here.
+class WireCurve {
+ public:
+  WireCurve() = default;
+  /// Points (strain, force): strains strictly increasing and > 0, forces >= 0
+  /// with the first > 0 (checkWireTable says what is wrong otherwise).
+  WireCurve(std::vector<double> strain, std::vector<double> force_N)
+      : strain_(std::move(strain)), force_(std::move(force_N)) {
+    if (strain_.empty() || strain_.size() != force_.size()) return;
+    elastic_ = force_[0] / strain_[0];
+    inv_elastic_ = 1.0 / elastic_;
+    slope_.assign(strain_.size(), elastic_);
+    for (std::size_t k = 1; k < strain_.size(); ++k)
+      slope_[k] = (force_[k] - force_[k - 1]) / (strain_[k] - strain_[k - 1]);
+  }
+  const std::vector<double>& strain() const { return strain_; }
+  const std::vector<double>& force() const { return force_; }
   /// Elastic force per unit strain, E A (N).
-  double elasticForce() const { return force_N[0] / strain[0]; }
+  double elasticForce() const { return elastic_; }
+  double inverseElasticForce() const { return inv_elastic_; }
+  /// Slope of the segment ending at point k (point 0: the elastic line).
+  double slope(std::size_t k) const { return slope_[k]; }
   /// Strain beyond which the wire breaks.
-  double ruptureStrain() const { return strain.back(); }
-  bool operator==(const WireCurve& o) const { return strain == o.strain && force_N == o.force_N; }
+  double ruptureStrain() const { return strain_.back(); }
+  bool operator==(const WireCurve& o) const { return strain_ == o.strain_ && force_ == o.force_; }
+
+ private:
+  std::vector<double> strain_, force_, slope_;
+  double elastic_ = 0.0, inv_elastic_ = 0.0;
 };
 
 /// Area of a wire of diameter d (m^2).
@@ -91,11 +114,10 @@ inline double wireSection(double diameter_m) {
 
 /// A single wire of diameter d: the table times the section.
 inline WireCurve wireCurve(const WireStressStrain& t, double diameter_m) {
-  WireCurve c;
-  c.strain = t.strain;
   const double A = wireSection(diameter_m);
-  for (const double s : t.stress_Pa) c.force_N.push_back(s * A);
-  return c;
+  std::vector<double> force;
+  for (const double s : t.stress_Pa) force.push_back(s * A);
+  return {t.strain, force};
 }
 
 /// Double-twist parameters (Bertrand et al. 2008; ../shared/reference/wire-netting.md).
@@ -112,11 +134,12 @@ struct DoubleTwistParams {
 /// factors push the first point past the second (lambda_k too small for
 /// lambda_eps): checkDoubleTwist says so.
 inline WireCurve doubleTwistCurve(const WireStressStrain& t, double diameter_m, const DoubleTwistParams& p) {
-  WireCurve c = wireCurve(t, diameter_m);
-  for (double& f : c.force_N) f *= 2.0;
-  c.strain[0] /= p.lambda_k;
-  for (std::size_t k = 1; k < c.strain.size(); ++k) c.strain[k] *= p.lambda_eps;
-  return c;
+  const double A = wireSection(diameter_m);
+  std::vector<double> strain = t.strain, force;
+  for (const double s : t.stress_Pa) force.push_back(2.0 * s * A);
+  strain[0] /= p.lambda_k;
+  for (std::size_t k = 1; k < strain.size(); ++k) strain[k] *= p.lambda_eps;
+  return {strain, force};
 }
 
 /// What is wrong with a double twist made from table t, or empty.
@@ -124,7 +147,7 @@ inline std::string checkDoubleTwist(const WireStressStrain& t, const DoubleTwist
   if (!(p.lambda_k > 0.0 && p.lambda_k <= 1.0)) return "lambda_k must be in (0, 1]";
   if (!(p.lambda_eps > 0.0 && p.lambda_eps <= 1.0)) return "lambda_eps must be in (0, 1]";
   const WireCurve c = doubleTwistCurve(t, 1.0, p);
-  WireStressStrain scaled{c.strain, c.force_N};
+  WireStressStrain scaled{c.strain(), c.force()};
   const WireTableIssue issue = checkWireTable(scaled);
   if (!issue.message.empty())
     return "the twist's curve (strain_0 / lambda_k, then strains x lambda_eps) is not a valid curve: " + issue.message +
@@ -146,65 +169,69 @@ struct WireState {
   double reached_strain = 0.0;  ///< largest strain reached on the backbone (0: still elastic)
 };
 
-/// Force on the backbone at strain eps, for curve.strain[0] <= eps <= rupture.
+/// Force on the backbone at strain eps, for strain(0) <= eps <= rupture.
 inline double wireBackbone(const WireCurve& c, double eps) {
+  const std::vector<double>& strain = c.strain();
   std::size_t k = 1;
-  while (k + 1 < c.strain.size() && eps > c.strain[k]) ++k;
-  const double s0 = c.strain[k - 1], s1 = c.strain[k];
-  return c.force_N[k - 1] + (c.force_N[k] - c.force_N[k - 1]) * (eps - s0) / (s1 - s0);
+  while (k + 1 < strain.size() && eps > strain[k]) ++k;
+  return c.force()[k - 1] + c.slope(k) * (eps - strain[k - 1]);
 }
 
 /// Plastic work per unit rest length (N) of a wire that reached eps_r on the
 /// backbone: area under the backbone up to eps_r minus the elastic triangle
 /// F_b(eps_r)^2 / (2 E_F).
 inline double wirePlasticWork(const WireCurve& c, double eps_r) {
-  if (eps_r <= c.strain[0]) return 0.0;
-  double area = 0.5 * c.force_N[0] * c.strain[0];
+  const std::vector<double>&strain = c.strain(), &force = c.force();
+  if (eps_r <= strain[0]) return 0.0;
+  double area = 0.5 * force[0] * strain[0];
   std::size_t k = 1;
-  for (; k < c.strain.size() && c.strain[k] <= eps_r; ++k)
-    area += 0.5 * (c.force_N[k] + c.force_N[k - 1]) * (c.strain[k] - c.strain[k - 1]);
-  double f = c.force_N[k - 1];
-  if (k < c.strain.size()) {
+  for (; k < strain.size() && strain[k] <= eps_r; ++k)
+    area += 0.5 * (force[k] + force[k - 1]) * (strain[k] - strain[k - 1]);
+  double f = force[k - 1];
+  if (k < strain.size()) {
     f = wireBackbone(c, eps_r);
-    area += 0.5 * (f + c.force_N[k - 1]) * (eps_r - c.strain[k - 1]);
+    area += 0.5 * (f + force[k - 1]) * (eps_r - strain[k - 1]);
   }
-  return area - 0.5 * f * f / c.elasticForce();
+  return area - 0.5 * f * f * c.inverseElasticForce();
+}
+
+/// Elastic energy (J) of a wire of rest length L0 carrying force F.
+inline double wireElasticEnergy(const WireCurve& c, double rest_length_m, double force_N) {
+  return 0.5 * force_N * force_N * c.inverseElasticForce() * rest_length_m;
 }
 
 /// The wire's response at length L.
 struct WireResponse {
-  double force_N = 0.0;    ///< tension >= 0 (pulls the ends together)
-  double elastic_J = 0.0;  ///< elastic energy stored; when the wire breaks, what it held at rupture
-  bool breaks = false;     ///< strain beyond the last point: the wire stops acting
+  double force_N = 0.0;  ///< tension >= 0 (pulls the ends together)
+  bool breaks = false;   ///< strain beyond the last point: the wire stops acting
 };
 
-/// Advances the state to length L (m) and returns the force. A wire that
-/// breaks leaves its state at the last point of the curve.
-inline WireResponse wireResponse(const WireCurve& c, double rest_length_m, WireState& s, double length_m) {
-  const double E = c.elasticForce();
-  const double eps = (length_m - rest_length_m) / rest_length_m;
+/// Advances the state to strain eps = (L - L0) / L0 and returns the force. A
+/// wire that breaks leaves its state at the last point of the curve (the
+/// energy it held then: wireElasticEnergy of its last force).
+inline WireResponse wireResponse(const WireCurve& c, WireState& s, double eps) {
   WireResponse out;
   if (eps > c.ruptureStrain()) {
-    // It held the elastic energy of its last point when it went.
-    const double f = c.force_N.back();
     s.reached_strain = c.ruptureStrain();
-    s.plastic_strain = s.reached_strain - f / E;
+    s.plastic_strain = s.reached_strain - c.force().back() * c.inverseElasticForce();
     out.breaks = true;
-    out.elastic_J = 0.5 * f * f / E * rest_length_m;
     return out;
   }
-  const double elastic = E * (eps - s.plastic_strain);
-  double f = std::max(0.0, elastic);
-  if (eps > std::max(s.reached_strain, c.strain[0])) {
+  double f = std::max(0.0, c.elasticForce() * (eps - s.plastic_strain));
+  if (eps > std::max(s.reached_strain, c.strain()[0])) {
     // Beyond the largest strain reached: on the backbone (its slopes never
     // exceed E, so the elastic trial is never below it there).
     f = std::min(f, wireBackbone(c, eps));
     s.reached_strain = eps;
-    s.plastic_strain = eps - f / E;
+    s.plastic_strain = eps - f * c.inverseElasticForce();
   }
   out.force_N = f;
-  out.elastic_J = 0.5 * f * f / E * rest_length_m;
   return out;
+}
+
+/// The same at length L (m) of a wire of rest length L0.
+inline WireResponse wireResponse(const WireCurve& c, double rest_length_m, WireState& s, double length_m) {
+  return wireResponse(c, s, (length_m - rest_length_m) / rest_length_m);
 }
 
 /// Plastic work dissipated by a wire in state s (J).

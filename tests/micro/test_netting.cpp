@@ -290,7 +290,7 @@ TEST(NettingEngine, ClosedBoxHangingFromItsTopFaceReachesEquilibrium) {
   for (const NettingLink& l : box.links) s.links.push_back(linkSpec(mesh, l, 0));
   Engine e(s, 1);
   e.setDt(0.2 * e.criticalDt());
-  const int steps = static_cast<int>(2.0 / e.dt());
+  const int steps = static_cast<int>(3.0 / e.dt());
   double pe0 = 0.0;
   for (int n = 0; n < steps; ++n) {
     ASSERT_EQ(e.step(n % 100 == 0 || n + 1 == steps), StepStatus::Ok) << e.failure();
