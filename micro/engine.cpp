@@ -210,12 +210,19 @@ const char* StageProfile::name(int stage) {
 
 void Engine::lap(StageProfile::Stage stage) {
   const auto now = std::chrono::steady_clock::now();
-  profile_.wall_s[stage] += std::chrono::duration<double>(now - lap_).count();
+  const double s = std::chrono::duration<double>(now - lap_).count();
+  profile_.wall_s[stage] += s;
+  // One worker: its partition was busy for the whole stage (no clock reads of its own).
+  if (scratch_.size() == 1) profile_.partition_busy_s[0][stage] += s;
   lap_ = now;
 }
 
 template <class Job>
 void Engine::parallel(StageProfile::Stage stage, const Job& job) {
+  if (scratch_.size() == 1) {
+    job(0);
+    return;
+  }
   pool_->run([&](int t) {
     const auto start = std::chrono::steady_clock::now();
     job(t);

@@ -27,7 +27,7 @@ Links::Links(const std::vector<LinkSpec>& specs, std::size_t particles) : partic
   const std::size_t n = a_.size();
   wire_state_.assign(n, bridge::WireState{});
   broken_.assign(n, 0);
-  for (auto* v : {&fx_, &fy_, &fz_, &tension_}) v->assign(n, 0.0);
+  for (auto* v : {&fx_, &fy_, &fz_, &tension_, &len_, &ux_, &uy_, &uz_}) v->assign(n, 0.0);
   // Incidence by particle id, links in increasing order at each node.
   std::vector<std::uint32_t> count(particles + 1, 0);
   for (std::size_t l = 0; l < n; ++l) ++count[a_[l] + 1], ++count[b_[l] + 1];
@@ -67,14 +67,28 @@ ExcludedPairs Links::excludedPairs() const {
 void Links::evaluate(const Particles& p, std::size_t l0, std::size_t l1, double time_s, bool measure,
                      WorkerScratch& s) {
   double elastic = 0.0, rupture = 0.0, plastic = 0.0;
+  // Geometry of every link of the range first, in one vectorised pass (the
+  // square roots and divisions off the laws' branchy path): length and unit
+  // vector from a to b.
+  {
+    const double *X = p.x.data(), *Y = p.y.data(), *Z = p.z.data();
+    const std::uint32_t *slot = p.slot.data(), *A = a_.data(), *B = b_.data();
+    double *len = len_.data(), *ux = ux_.data(), *uy = uy_.data(), *uz = uz_.data();
+#pragma omp simd
+    for (std::size_t l = l0; l < l1; ++l) {
+      const std::uint32_t i = slot[A[l]], j = slot[B[l]];
+      const double ex = X[j] - X[i], ey = Y[j] - Y[i], ez = Z[j] - Z[i];
+      const double length = std::sqrt(ex * ex + ey * ey + ez * ez);
+      const double inv = length > 0.0 ? 1.0 / length : 0.0;
+      len[l] = length, ux[l] = ex * inv, uy[l] = ey * inv, uz[l] = ez * inv;
+    }
+  }
   for (std::size_t l = l0; l < l1; ++l) {
     const bool wire = law_[l] == LinkSpec::Law::Wire;
     // A wire's plastic work stays dissipated after it breaks.
     if (measure && wire) plastic += bridge::wireDissipatedEnergy(wires_[law_index_[l]], wire_rest_[l], wire_state_[l]);
     if (broken_[l]) continue;
-    const std::uint32_t i = p.slot[a_[l]], j = p.slot[b_[l]];
-    const double ex = p.x[j] - p.x[i], ey = p.y[j] - p.y[i], ez = p.z[j] - p.z[i];
-    const double length = std::sqrt(ex * ex + ey * ey + ez * ez);
+    const double length = len_[l];
     bridge::LinkResponse r;
     if (wire) {
       const bridge::WireCurve& c = wires_[law_index_[l]];
@@ -97,12 +111,13 @@ void Links::evaluate(const Particles& p, std::size_t l0, std::size_t l1, double 
       }
       broken_[l] = 1;
       fx_[l] = fy_[l] = fz_[l] = tension_[l] = 0.0;
-      s.link_events.push_back({time_s, l, Vec3(p.x[i] + 0.5 * ex, p.y[i] + 0.5 * ey, p.z[i] + 0.5 * ez)});
+      const std::uint32_t i = p.slot[a_[l]];
+      const double h = 0.5 * length;
+      s.link_events.push_back({time_s, l, Vec3(p.x[i] + h * ux_[l], p.y[i] + h * uy_[l], p.z[i] + h * uz_[l])});
       continue;
     }
     // Tension pulls a towards b.
-    const double scale = length > 0.0 ? r.force_N / length : 0.0;
-    fx_[l] = scale * ex, fy_[l] = scale * ey, fz_[l] = scale * ez;
+    fx_[l] = r.force_N * ux_[l], fy_[l] = r.force_N * uy_[l], fz_[l] = r.force_N * uz_[l];
     tension_[l] = r.force_N;
     if (measure) elastic += r.elastic_J;
   }

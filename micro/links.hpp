@@ -67,6 +67,7 @@ class Links {
   std::vector<bridge::WireState> wire_state_;
   std::vector<std::uint8_t> broken_;
   std::vector<double> fx_, fy_, fz_, tension_;  // force on a (N) at this step; -f on b
+  std::vector<double> len_, ux_, uy_, uz_;      // length and unit vector a -> b at this step
   // incidence: node k is particle id node_id_[k]; its links are
   // node_link_[node_begin_[k] .. node_begin_[k + 1]), with the sign of the force on it
   std::vector<std::uint32_t> node_id_, node_begin_, node_link_;
