@@ -4,6 +4,7 @@
 #include <map>
 
 #include "bridge/errors.hpp"
+#include "micro/netting/scene_nettings.hpp"
 #include "micro/netting/wire_input.hpp"
 #include "micro/particles.hpp"
 #include "micro/rigid_body.hpp"
@@ -231,6 +232,8 @@ Scene parseScene(const JsonReader& root) {
     }
     s.links.push_back(l);
   }
+
+  addNettings(root, s);
 
   if (root.has("no_contact_groups")) {
     const nlohmann::json& pairs = root.raw("no_contact_groups");

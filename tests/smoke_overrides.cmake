@@ -5,3 +5,4 @@ set(GABION_SMOKE_SET_fit_micro_wall --set resume=false)
 # The netting tensile test to 5 cm of pull (the full test tears at about 0.2 m).
 set(GABION_SMOKE_SET_micro_netting_tensile --set test.max_displacement_m=0.05)
 set(GABION_SMOKE_SET_micro_netting_tensile_paper --set test.max_displacement_m=0.05)
+set(GABION_SMOKE_SET_micro_netting_box --set run.duration_s=0.02)

@@ -13,6 +13,7 @@
 
 #include "../support/run_gabion.hpp"
 #include "bridge/laws/wire.hpp"
+#include "bridge/output.hpp"
 #include "micro/engine.hpp"
 #include "micro/netting/mesh.hpp"
 #include "micro_test_util.hpp"
@@ -348,6 +349,77 @@ TEST(NettingScene, BadWireLinksAreNamed) {
   const auto good = dir / "good.json";
   writeFile(good, scene(R"({"a": 0, "b": 1, "law": "wire", "diameter_m": 0.0022})"));
   EXPECT_EQ(runGabion("run " + good.string() + " -q -o " + (dir / "out").string()).exit_code, 0);
+}
+
+}  // namespace
+
+namespace {
+
+// cases/micro_netting_box.json: 27 stones of 120 mm fall inside a closed
+// 0.5 m box of netting standing on a floor. The nodes touch the stones and
+// the floor with the netting's own contact parameters; the netting holds
+// the stones: none leaves the space the nodes span, none goes through the
+// base, and the ledger balances.
+TEST(NettingScene, ClosedBoxHoldsTheStonesDroppedInsideIt) {
+  const auto dir = scratchDir("netting_box");
+  const auto r = runGabion(
+      "run " + std::string(GABION_SOURCE_DIR) + "/cases/micro_netting_box.json -q -o " + (dir / "out").string() +
+      " --set nettings.0.node_mass_scale=10 --set run.duration_s=0.3 --set run.output_interval_s=0.3");
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  const gabion::bridge::H5Reader h5(dir / "out" / "result.h5");
+  const auto dims = h5.dims("/bodies/position_m");
+  const std::vector<double> x = h5.read("/bodies/position_m");
+  const std::size_t nb = dims[1], last = dims[0] - 1, stones = 27;
+  const auto at = [&](std::size_t b, int c) { return x[(last * nb + b) * 3 + static_cast<std::size_t>(c)]; };
+  Vec3 lo = Vec3::Constant(1e9), hi = Vec3::Constant(-1e9);
+  for (std::size_t b = stones; b < nb; ++b)
+    for (int c = 0; c < 3; ++c) lo[c] = std::min(lo[c], at(b, c)), hi[c] = std::max(hi[c], at(b, c));
+  for (std::size_t b = 0; b < stones; ++b) {
+    for (int c = 0; c < 3; ++c) {
+      EXPECT_GT(at(b, c), lo[c]) << "stone " << b << " axis " << c;
+      EXPECT_LT(at(b, c), hi[c]) << "stone " << b << " axis " << c;
+    }
+    EXPECT_GT(at(b, 2), 0.06 - 0.01) << "stone " << b << " went into the base";  // radius 60 mm, base at z = 0
+  }
+  // The stones fell: the bottom layer rests on the base.
+  double lowest = 1e9;
+  for (std::size_t b = 0; b < stones; ++b) lowest = std::min(lowest, at(b, 2));
+  EXPECT_LT(lowest, 0.07);
+  std::ifstream in(dir / "out" / "summary.json");
+  const nlohmann::json s = nlohmann::json::parse(in);
+  EXPECT_EQ(s["broken_links"], 0);
+  EXPECT_LT(std::fabs(s["energy"]["balance_rel_error"].get<double>()), 0.01);
+}
+
+}  // namespace
+
+namespace {
+
+TEST(NettingScene, BadNettingEntriesAreNamed) {
+  const auto dir = scratchDir("netting_scene_entries");
+  const auto scene = [](const std::string& netting) {
+    return R"({"format": "gabion.case/1", "kind": "micro.scene", "gravity_m_s2": [0, 0, -9.81],
+ "materials": {"rock": {"density_kg_m3": 2600, "normal_stiffness_N_m": 1e6, "shear_stiffness_N_m": 2.5e5, "friction": 0.5}},
+ "nettings": [)" +
+           netting + R"(], "run": {"duration_s": 0.001}})";
+  };
+  struct Bad {
+    std::string name, netting, pointer;
+  };
+  const std::vector<Bad> cases = {
+      {"fix", R"({"box": {"edge_m": 0.5}, "fix": ["top", "lid"]})", "/nettings/0/fix/1"},
+      {"both", R"({"box": {"edge_m": 0.5}, "sheet": {"width_m": 0.5, "length_m": 0.5}})", "/nettings/0"},
+      {"small", R"({"box": {"edge_m": 0.05}})", "/nettings/0/box"},
+      {"sheet_fix", R"({"sheet": {"width_m": 0.5, "length_m": 0.5}, "fix": ["top"]})", "/nettings/0/fix/0"},
+      {"mesh", R"({"box": {"edge_m": 0.5}, "twist_length_m": -1})", "/nettings/0/twist_length_m"},
+  };
+  for (const Bad& c : cases) {
+    const auto file = dir / (c.name + ".json");
+    writeFile(file, scene(c.netting));
+    const auto r = runGabion("check " + file.string());
+    EXPECT_EQ(r.exit_code, 2) << c.name << ": " << r.output;
+    EXPECT_NE(r.output.find(c.pointer), std::string::npos) << c.name << ": " << r.output;
+  }
 }
 
 }  // namespace
