@@ -298,12 +298,20 @@ if not use_collider:
 
 # ----------------------------------------------------------- verification
 linkpairs = set((min(bid[la[i]], bid[lb[i]]), max(bid[la[i]], bid[lb[i]])) for i in range(L))
-nreal = 0
-for I in O.interactions:
-    if I.isReal:
-        nreal += 1
-        if (min(I.id1, I.id2), max(I.id1, I.id2)) not in linkpairs:
-            fail("interaction %d-%d is not a listed link" % (I.id1, I.id2))
+
+
+def count_real_links(when):
+    # The real interactions, each of which must be a listed link.
+    n = 0
+    for I in O.interactions:
+        if I.isReal:
+            n += 1
+            if (min(I.id1, I.id2), max(I.id1, I.id2)) not in linkpairs:
+                fail("%sinteraction %d-%d is not a listed link" % (when, I.id1, I.id2))
+    return n
+
+
+nreal = count_real_links("")
 if nreal != L or len(O.interactions) != L:
     fail("%d interactions (%d real) but %d links in the file" % (len(O.interactions), nreal, L))
 
@@ -404,12 +412,7 @@ O.run(steps, True)
 wall = time.perf_counter() - t0
 
 # final bookkeeping (outside the timed loop)
-nreal = 0
-for I in O.interactions:
-    if I.isReal:
-        nreal += 1
-        if (min(I.id1, I.id2), max(I.id1, I.id2)) not in linkpairs:
-            fail("after the run: interaction %d-%d is not a listed link" % (I.id1, I.id2))
+nreal = count_real_links("after the run: ")
 broken = L - nreal
 broken_by_kind = {}
 broken_ids = []

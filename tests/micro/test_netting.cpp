@@ -25,6 +25,27 @@ using gabion::testing::scratchDir;
 using gabion::testing::writeFile;
 using namespace gabion::micro;
 
+struct BadInput {
+  std::string name, text, pointer;
+};
+
+// Each case is an input error: exit 2 and a message naming its field, from
+// `check` and, with `also_run`, from `run` before anything runs.
+void expectInputErrors(const std::string& dir_name, const std::vector<BadInput>& cases, bool also_run) {
+  const auto dir = scratchDir(dir_name);
+  std::vector<std::string> commands = {"check "};
+  if (also_run) commands.push_back("run -q -o " + (dir / "never").string() + " ");
+  for (const BadInput& c : cases) {
+    const auto file = dir / (c.name + ".json");
+    writeFile(file, c.text);
+    for (const std::string& cmd : commands) {
+      const auto r = runGabion(cmd + file.string());
+      EXPECT_EQ(r.exit_code, 2) << c.name << ": " << r.output;
+      EXPECT_NE(r.output.find(c.pointer), std::string::npos) << c.name << ": " << r.output;
+    }
+  }
+}
+
 TEST(NettingMesh, SheetHasWholeHexagonalMeshesOfTheGivenGeometry) {
   const MeshSpec mesh;  // 8x10: D = 80 mm, twist 40 mm, rise 30 mm
   const Netting net = flatSheet(mesh, 0.52, 0.96);
@@ -188,34 +209,24 @@ TEST(NettingTensile, PeakDoesNotDependOnTheTimeStepWithinTheSafetyFactor) {
 }
 
 TEST(NettingTensile, BadMeshesAndLawsAreInputErrorsNamingTheField) {
-  const auto dir = scratchDir("netting_bad");
-  struct Bad {
-    std::string name, text, pointer;
-  };
   const std::string table = R"(, "stress_strain": {"strain": [0.002, 0.02, 0.01], "stress_Pa": [2.6e8, 3e8, 4e8]})";
   const std::string negative = R"(, "stress_strain": {"strain": [0.002, 0.02], "stress_Pa": [2.6e8, -3e8]})";
   std::string zero_length = tensileCase();
   zero_length.replace(zero_length.find("\"length_m\": 0.96"), 16, "\"length_m\": 0.0 ");
   std::string short_sheet = tensileCase();
   short_sheet.replace(short_sheet.find("\"length_m\": 0.96"), 16, "\"length_m\": 0.05");
-  const std::vector<Bad> cases = {
-      {"decreasing_strain", tensileCase("", table), "/netting/stress_strain/strain/2"},
-      {"negative_stress", tensileCase("", negative), "/netting/stress_strain/stress_Pa/1"},
-      {"zero_length", zero_length, "/sheet/length_m"},
-      {"short_sheet", short_sheet, "/sheet/length_m"},
-      {"unknown_mesh", tensileCase("", R"(, "mesh": "square_welded")"), "/netting/mesh"},
-      {"weak_twist", tensileCase("", R"(, "double_twist": {"lambda_k": 0.2})"), "/netting/double_twist"},
-      {"fat_nodes", tensileCase("", R"(, "node_radius_m": 0.03)"), "/netting/node_radius_m"},
-  };
-  for (const Bad& c : cases) {
-    const auto file = dir / (c.name + ".json");
-    writeFile(file, c.text);
-    for (const std::string cmd : {"check ", "run -q -o /nonexistent/never "}) {
-      const auto r = runGabion(cmd + file.string());
-      EXPECT_EQ(r.exit_code, 2) << c.name << ": " << r.output;
-      EXPECT_NE(r.output.find(c.pointer), std::string::npos) << c.name << ": " << r.output;
-    }
-  }
+  expectInputErrors(
+      "netting_bad",
+      {
+          {"decreasing_strain", tensileCase("", table), "/netting/stress_strain/strain/2"},
+          {"negative_stress", tensileCase("", negative), "/netting/stress_strain/stress_Pa/1"},
+          {"zero_length", zero_length, "/sheet/length_m"},
+          {"short_sheet", short_sheet, "/sheet/length_m"},
+          {"unknown_mesh", tensileCase("", R"(, "mesh": "square_welded")"), "/netting/mesh"},
+          {"weak_twist", tensileCase("", R"(, "double_twist": {"lambda_k": 0.2})"), "/netting/double_twist"},
+          {"fat_nodes", tensileCase("", R"(, "node_radius_m": 0.03)"), "/netting/node_radius_m"},
+      },
+      true);
 }
 
 }  // namespace
@@ -318,7 +329,7 @@ namespace {
 // Wire links in a micro.scene: a lacing that joins a node to itself, an
 // unknown law and a bad table are input errors naming the link's field.
 TEST(NettingScene, BadWireLinksAreNamed) {
-  const auto dir = scratchDir("netting_scene_bad");
+  const auto dir = scratchDir("netting_scene_good");
   const auto scene = [](const std::string& link) {
     return R"({"format": "gabion.case/1", "kind": "micro.scene", "gravity_m_s2": [0, 0, 0],
  "materials": {"steel": {"density_kg_m3": 7850, "normal_stiffness_N_m": 1e6, "shear_stiffness_N_m": 2.5e5, "friction": 0.3}},
@@ -327,25 +338,17 @@ TEST(NettingScene, BadWireLinksAreNamed) {
  "links": [)" +
            link + R"(], "run": {"duration_s": 0.001}})";
   };
-  struct Bad {
-    std::string name, link, pointer;
-  };
-  const std::vector<Bad> cases = {
-      {"self", R"({"a": 1, "b": 1, "law": "wire", "diameter_m": 0.0022})", "/links/0/b"},
-      {"law", R"({"a": 0, "b": 1, "law": "rope", "diameter_m": 0.0022})", "/links/0/law"},
-      {"no_diameter", R"({"a": 0, "b": 1, "law": "wire"})", "/links/0/diameter_m"},
-      {"table", R"({"a": 0, "b": 1, "law": "wire", "diameter_m": 0.0022,
-                   "stress_strain": {"strain": [0.01, 0.005], "stress_Pa": [1e8, 2e8]}})",
-       "/links/0/stress_strain/strain/1"},
-  };
-  for (const Bad& c : cases) {
-    const auto file = dir / (c.name + ".json");
-    writeFile(file, scene(c.link));
-    const auto r = runGabion("check " + file.string());
-    EXPECT_EQ(r.exit_code, 2) << c.name << ": " << r.output;
-    EXPECT_NE(r.output.find(c.pointer), std::string::npos) << c.name << ": " << r.output;
-  }
-  // And a good one runs: the wire holds the free node at rest.
+  expectInputErrors("netting_scene_bad",
+                    {
+                        {"self", scene(R"({"a": 1, "b": 1, "law": "wire", "diameter_m": 0.0022})"), "/links/0/b"},
+                        {"law", scene(R"({"a": 0, "b": 1, "law": "rope", "diameter_m": 0.0022})"), "/links/0/law"},
+                        {"no_diameter", scene(R"({"a": 0, "b": 1, "law": "wire"})"), "/links/0/diameter_m"},
+                        {"table", scene(R"({"a": 0, "b": 1, "law": "wire", "diameter_m": 0.0022,
+                   "stress_strain": {"strain": [0.01, 0.005], "stress_Pa": [1e8, 2e8]}})"),
+                         "/links/0/stress_strain/strain/1"},
+                    },
+                    false);
+  // And a good one runs.
   const auto good = dir / "good.json";
   writeFile(good, scene(R"({"a": 0, "b": 1, "law": "wire", "diameter_m": 0.0022})"));
   EXPECT_EQ(runGabion("run " + good.string() + " -q -o " + (dir / "out").string()).exit_code, 0);
@@ -396,30 +399,22 @@ TEST(NettingScene, ClosedBoxHoldsTheStonesDroppedInsideIt) {
 namespace {
 
 TEST(NettingScene, BadNettingEntriesAreNamed) {
-  const auto dir = scratchDir("netting_scene_entries");
   const auto scene = [](const std::string& netting) {
     return R"({"format": "gabion.case/1", "kind": "micro.scene", "gravity_m_s2": [0, 0, -9.81],
  "materials": {"rock": {"density_kg_m3": 2600, "normal_stiffness_N_m": 1e6, "shear_stiffness_N_m": 2.5e5, "friction": 0.5}},
  "nettings": [)" +
            netting + R"(], "run": {"duration_s": 0.001}})";
   };
-  struct Bad {
-    std::string name, netting, pointer;
-  };
-  const std::vector<Bad> cases = {
-      {"fix", R"({"box": {"edge_m": 0.5}, "fix": ["top", "lid"]})", "/nettings/0/fix/1"},
-      {"both", R"({"box": {"edge_m": 0.5}, "sheet": {"width_m": 0.5, "length_m": 0.5}})", "/nettings/0"},
-      {"small", R"({"box": {"edge_m": 0.05}})", "/nettings/0/box"},
-      {"sheet_fix", R"({"sheet": {"width_m": 0.5, "length_m": 0.5}, "fix": ["top"]})", "/nettings/0/fix/0"},
-      {"mesh", R"({"box": {"edge_m": 0.5}, "twist_length_m": -1})", "/nettings/0/twist_length_m"},
-  };
-  for (const Bad& c : cases) {
-    const auto file = dir / (c.name + ".json");
-    writeFile(file, scene(c.netting));
-    const auto r = runGabion("check " + file.string());
-    EXPECT_EQ(r.exit_code, 2) << c.name << ": " << r.output;
-    EXPECT_NE(r.output.find(c.pointer), std::string::npos) << c.name << ": " << r.output;
-  }
+  expectInputErrors(
+      "netting_scene_entries",
+      {
+          {"fix", scene(R"({"box": {"edge_m": 0.5}, "fix": ["top", "lid"]})"), "/nettings/0/fix/1"},
+          {"both", scene(R"({"box": {"edge_m": 0.5}, "sheet": {"width_m": 0.5, "length_m": 0.5}})"), "/nettings/0"},
+          {"small", scene(R"({"box": {"edge_m": 0.05}})"), "/nettings/0/box"},
+          {"sheet_fix", scene(R"({"sheet": {"width_m": 0.5, "length_m": 0.5}, "fix": ["top"]})"), "/nettings/0/fix/0"},
+          {"mesh", scene(R"({"box": {"edge_m": 0.5}, "twist_length_m": -1})"), "/nettings/0/twist_length_m"},
+      },
+      false);
 }
 
 }  // namespace
