@@ -154,6 +154,7 @@ Engine::Engine(const Scene& scene, int threads) {
     walls_.back().name = micro::wallName(scene, w);
   }
   links_ = Links(scene.links, p_.size());
+  links_.followSlots(p_);
   excluded_ = links_.excludedPairs();
 
   const bool one_material = std::all_of(p_.mat.begin(), p_.mat.end(), [&](std::uint32_t m) { return m == p_.mat[0]; });
@@ -337,6 +338,7 @@ void Engine::reorderParticles(const std::vector<std::uint32_t>& order) {
     for (std::size_t a = static_cast<std::size_t>(t); a < tasks.size(); a += workers) tasks[a]();
   });
   for (std::size_t k = 0; k < p_.size(); ++k) p_.slot[p_.id[k]] = static_cast<std::uint32_t>(k);
+  links_.followSlots(p_);
 }
 
 // Carries the history of touching contacts over to the new list: a pair that

@@ -50,6 +50,12 @@ Links::Links(const std::vector<LinkSpec>& specs, std::size_t particles) : partic
   }
 }
 
+void Links::followSlots(const Particles& p) {
+  slot_a_.resize(a_.size()), slot_b_.resize(b_.size()), node_slot_.resize(node_id_.size());
+  for (std::size_t l = 0; l < a_.size(); ++l) slot_a_[l] = p.slot[a_[l]], slot_b_[l] = p.slot[b_[l]];
+  for (std::size_t k = 0; k < node_id_.size(); ++k) node_slot_[k] = p.slot[node_id_[k]];
+}
+
 ExcludedPairs Links::excludedPairs() const {
   ExcludedPairs out;
   if (empty()) return out;
@@ -72,11 +78,11 @@ void Links::evaluate(const Particles& p, std::size_t l0, std::size_t l1, double 
   // vector from a to b.
   {
     const double *X = p.x.data(), *Y = p.y.data(), *Z = p.z.data();
-    const std::uint32_t *slot = p.slot.data(), *A = a_.data(), *B = b_.data();
+    const std::uint32_t *SA = slot_a_.data(), *SB = slot_b_.data();
     double *len = len_.data(), *ux = ux_.data(), *uy = uy_.data(), *uz = uz_.data();
 #pragma omp simd
     for (std::size_t l = l0; l < l1; ++l) {
-      const std::uint32_t i = slot[A[l]], j = slot[B[l]];
+      const std::uint32_t i = SA[l], j = SB[l];
       const double ex = X[j] - X[i], ey = Y[j] - Y[i], ez = Z[j] - Z[i];
       const double length = std::sqrt(ex * ex + ey * ey + ez * ez);
       const double inv = length > 0.0 ? 1.0 / length : 0.0;
@@ -111,7 +117,7 @@ void Links::evaluate(const Particles& p, std::size_t l0, std::size_t l1, double 
       }
       broken_[l] = 1;
       fx_[l] = fy_[l] = fz_[l] = tension_[l] = 0.0;
-      const std::uint32_t i = p.slot[a_[l]];
+      const std::uint32_t i = slot_a_[l];
       const double h = 0.5 * length;
       s.link_events.push_back({time_s, l, Vec3(p.x[i] + h * ux_[l], p.y[i] + h * uy_[l], p.z[i] + h * uz_[l])});
       continue;
@@ -128,7 +134,7 @@ void Links::evaluate(const Particles& p, std::size_t l0, std::size_t l1, double 
 
 void Links::apply(Particles& p, std::size_t k0, std::size_t k1) const {
   for (std::size_t k = k0; k < k1; ++k) {
-    const std::uint32_t i = p.slot[node_id_[k]];
+    const std::uint32_t i = node_slot_[k];
     double fx = 0.0, fy = 0.0, fz = 0.0;
     for (std::uint32_t q = node_begin_[k]; q < node_begin_[k + 1]; ++q) {
       const std::uint32_t l = node_link_[q];

@@ -36,6 +36,10 @@ class Links {
   /// Pairs that the contact law leaves alone (the linked ones).
   ExcludedPairs excludedPairs() const;
 
+  /// Takes the particles' slots after a re-sort (the link stage reads
+  /// positions by slot; call before evaluate() and after every re-sort).
+  void followSlots(const Particles& p);
+
   /// Pass 1, links [l0, l1): forces of this step from the current positions;
   /// a link that breaks is marked, its stored energy counted as dissipated,
   /// and its event appended to s.link_events. Stored energy into
@@ -56,7 +60,8 @@ class Links {
 
  private:
   std::size_t particles_ = 0;
-  std::vector<std::uint32_t> a_, b_;  // stable ids
+  std::vector<std::uint32_t> a_, b_;            // stable ids
+  std::vector<std::uint32_t> slot_a_, slot_b_;  // their slots since the last re-sort
   // Law of each link: linear_[law_index_[l]] or wires_[law_index_[l]] (wire
   // curves shared by the links that have the same one), and a wire's state.
   std::vector<LinkSpec::Law> law_;
@@ -70,7 +75,7 @@ class Links {
   std::vector<double> len_, ux_, uy_, uz_;      // length and unit vector a -> b at this step
   // incidence: node k is particle id node_id_[k]; its links are
   // node_link_[node_begin_[k] .. node_begin_[k + 1]), with the sign of the force on it
-  std::vector<std::uint32_t> node_id_, node_begin_, node_link_;
+  std::vector<std::uint32_t> node_id_, node_begin_, node_link_, node_slot_;
   std::vector<double> node_sign_;
 };
 
