@@ -129,14 +129,19 @@ bridge::RunOutcome runScene(Scene scene, const std::string& file, const bridge::
   // time links have broken since the last one.
   bridge::XdmfLines lines;
   std::size_t tables = 0, broken_in_table = 0;
+  // The sphere indices of the links (the intact ones only, or all), row by row.
+  const auto linkEnds = [&](bool intact_only) {
+    std::vector<long long> ends;
+    for (std::size_t l = 0; l < engine.linkCount(); ++l)
+      if (!intact_only || !engine.linkBroken(l))
+        ends.push_back(static_cast<long long>(engine.linkEnds(l).first)),
+            ends.push_back(static_cast<long long>(engine.linkEnds(l).second));
+    return ends;
+  };
   const auto snapshotLinks = [&] {
     const std::size_t broken = engine.linkEvents().size();
     if (tables == 0 || broken != broken_in_table) {
-      std::vector<long long> ends;
-      for (std::size_t l = 0; l < engine.linkCount(); ++l)
-        if (!engine.linkBroken(l))
-          ends.push_back(static_cast<long long>(engine.linkEnds(l).first)),
-              ends.push_back(static_cast<long long>(engine.linkEnds(l).second));
+      const std::vector<long long> ends = linkEnds(true);
       lines.dataset.push_back("/links/intact/" + std::to_string(tables++));
       lines.count.push_back(ends.size() / 2);
       h5.writeInts(lines.dataset.back(), ends, {ends.size() / 2, 2});
@@ -235,11 +240,7 @@ bridge::RunOutcome runScene(Scene scene, const std::string& file, const bridge::
       h5.write("/links/broken/time_s", t, "s");
       h5.write("/links/broken/link", link, "1");
       h5.write("/links/broken/position_m", pos, {events.size(), 3}, "m");
-      std::vector<long long> ends;
-      for (std::size_t l = 0; l < engine.linkCount(); ++l)
-        ends.push_back(static_cast<long long>(engine.linkEnds(l).first)),
-            ends.push_back(static_cast<long long>(engine.linkEnds(l).second));
-      h5.writeInts("/links/ends", ends, {engine.linkCount(), 2});
+      h5.writeInts("/links/ends", linkEnds(false), {engine.linkCount(), 2});
     }
     if (hooks.write) hooks.write(engine, h5);
     std::vector<double> radius(nb);

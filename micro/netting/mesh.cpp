@@ -132,11 +132,6 @@ Netting closedBox(const MeshSpec& mesh, double edge_m) {
   // node radii of a node of the other becomes that node (a shared node);
   // every other edge node is laced to the nearest edge node of the other face.
   const double r = mesh.nodeRadius(), tol = 1e-9 * edge_m;
-  const auto onEdge = [&](const Vec3& p, int axis) {  // on a box edge parallel to `axis`
-    for (int c = 0; c < 3; ++c)
-      if (c != axis && std::fabs(p[c]) > tol && std::fabs(p[c] - edge_m) > tol) return false;
-    return true;
-  };
   std::vector<std::uint32_t> same(net.node_m.size());
   for (std::size_t k = 0; k < same.size(); ++k) same[k] = static_cast<std::uint32_t>(k);
   const auto root = [&](std::uint32_t k) {
@@ -152,8 +147,7 @@ Netting closedBox(const MeshSpec& mesh, double edge_m) {
         std::vector<std::vector<std::uint32_t>> by_face(frames.size());
         for (std::uint32_t k = 0; k < net.node_m.size(); ++k) {
           const Vec3& p = net.node_m[k];
-          if (onEdge(p, axis) && std::fabs(p[c1] - u) <= tol && std::fabs(p[c2] - v) <= tol)
-            by_face[face_of[k]].push_back(k);
+          if (std::fabs(p[c1] - u) <= tol && std::fabs(p[c2] - v) <= tol) by_face[face_of[k]].push_back(k);
         }
         // The two faces whose planes meet there (a third face's corner
         // node on the line is joined along that face's own edges).

@@ -2,7 +2,6 @@
 
 #include <algorithm>
 #include <cmath>
-#include <memory>
 #include <optional>
 #include <stdexcept>
 
@@ -160,31 +159,31 @@ bridge::RunOutcome run(const bridge::JsonDocument& doc, const bridge::RunContext
     double peak = 0.0, at_peak = 0.0;
     std::optional<LinkEvent> first_rupture;
   };
-  auto curve = std::make_shared<Curve>();
+  Curve curve;
   SceneRunHooks hooks;
   hooks.label = "micro.netting_tensile";
-  hooks.record = [&, curve](const Engine& e, double) {
+  hooks.record = [&](const Engine& e, double) {
     double f = 0.0;
     for (const std::uint32_t k : net.top_edge) f -= e.sphereForce(k).y();
     const double u = c.pull_speed_m_s * e.time();
-    curve->time.push_back(e.time());
-    curve->displacement.push_back(u);
-    curve->force.push_back(f);
-    if (f > curve->peak) curve->peak = f, curve->at_peak = u;
-    if (!curve->first_rupture && !e.linkEvents().empty()) curve->first_rupture = e.linkEvents().front();
+    curve.time.push_back(e.time());
+    curve.displacement.push_back(u);
+    curve.force.push_back(f);
+    if (f > curve.peak) curve.peak = f, curve.at_peak = u;
+    if (!curve.first_rupture && !e.linkEvents().empty()) curve.first_rupture = e.linkEvents().front();
   };
   // Torn: no path of intact links joins the pulled edge to the clamped one
   // (checked when links have broken since the last check).
-  auto checked = std::make_shared<std::size_t>(0);
-  hooks.done = [&, checked](const Engine& e) {
-    if (e.linkEvents().size() == *checked) return false;
-    *checked = e.linkEvents().size();
+  std::size_t checked = 0;
+  hooks.done = [&](const Engine& e) {
+    if (e.linkEvents().size() == checked) return false;
+    checked = e.linkEvents().size();
     return !connected(net, e, net.top_edge, net.bottom_edge);
   };
-  hooks.write = [&, curve](const Engine&, bridge::H5Writer& h5) {
-    h5.write("/series/pull/time_s", curve->time, "s");
-    h5.write("/series/pull/displacement_m", curve->displacement, "m");
-    h5.write("/series/pull/force_N", curve->force, "N");
+  hooks.write = [&](const Engine&, bridge::H5Writer& h5) {
+    h5.write("/series/pull/time_s", curve.time, "s");
+    h5.write("/series/pull/displacement_m", curve.displacement, "m");
+    h5.write("/series/pull/force_N", curve.force, "N");
     std::vector<long long> kind, clamped(net.bottom_edge.begin(), net.bottom_edge.end()),
         pulled(net.top_edge.begin(), net.top_edge.end());
     for (const NettingLink& l : net.links) kind.push_back(static_cast<long long>(l.kind));
@@ -203,16 +202,16 @@ bridge::RunOutcome run(const bridge::JsonDocument& doc, const bridge::RunContext
   for (const double m : net.node_mass_kg) mass += m;
   r["node_mass_mean_kg"] = mass / static_cast<double>(net.node_m.size());
   r["node_radius_m"] = net.node_radius_m;
-  r["peak_force_N"] = curve->peak;
-  r["peak_force_per_width_N_m"] = curve->peak / net.width_m;
-  r["displacement_at_peak_m"] = curve->at_peak;
+  r["peak_force_N"] = curve.peak;
+  r["peak_force_per_width_N_m"] = curve.peak / net.width_m;
+  r["displacement_at_peak_m"] = curve.at_peak;
   r["torn"] = out.results["ended_by"] == "test";
   // Where the tearing started: the first link to break (the engine's link
   // index is the netting's), its kind and place.
   r["first_rupture_s"] = nullptr;
   r["first_rupture_link_kind"] = nullptr;
   r["first_rupture_position_m"] = nullptr;
-  if (const auto& ev = curve->first_rupture) {
+  if (const auto& ev = curve.first_rupture) {
     r["first_rupture_s"] = ev->time_s;
     r["first_rupture_link_kind"] = wireKindName(net.links[ev->link].kind);
     r["first_rupture_position_m"] = {ev->position_m.x(), ev->position_m.y(), ev->position_m.z()};

@@ -2,6 +2,8 @@
 // Runs the `gabion` binary of this build (GABION_BINARY) and captures its exit
 // code and output, for tests of the command line's contract.
 #include <sys/wait.h>
+#include <unistd.h>
+#include <unistd.h>
 
 #include <array>
 #include <cstdio>
@@ -28,9 +30,10 @@ inline CliResult runGabion(const std::string& args) {
   return r;
 }
 
-/// A fresh scratch folder under the test temp dir.
+/// A fresh scratch folder under the test temp dir, named by the test and
+/// the process (two test runs on one machine never share one).
 inline std::filesystem::path scratchDir(const std::string& name) {
-  const auto dir = std::filesystem::path(::testing::TempDir()) / ("gabion_" + name);
+  const auto dir = std::filesystem::path(::testing::TempDir()) / ("gabion_" + name + "_" + std::to_string(::getpid()));
   std::filesystem::remove_all(dir);
   std::filesystem::create_directories(dir);
   return dir;
