@@ -3,7 +3,6 @@
 // code and output, for tests of the command line's contract.
 #include <sys/wait.h>
 #include <unistd.h>
-#include <unistd.h>
 
 #include <array>
 #include <cstdio>
