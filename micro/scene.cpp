@@ -4,6 +4,7 @@
 #include <map>
 
 #include "bridge/errors.hpp"
+#include "micro/blocks/block_fill.hpp"
 #include "micro/netting/scene_nettings.hpp"
 #include "micro/netting/wire_input.hpp"
 #include "micro/particles.hpp"
@@ -234,6 +235,7 @@ Scene parseScene(const JsonReader& root) {
   }
 
   addNettings(root, s);
+  if (root.has("block_fills")) s.generated["block_fills"] = addBlockFills(root, s);
 
   if (root.has("no_contact_groups")) {
     const nlohmann::json& pairs = root.raw("no_contact_groups");

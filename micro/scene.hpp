@@ -140,6 +140,9 @@ struct Scene {
   /// Pairs of contact groups whose particles never touch.
   std::vector<std::pair<int, int>> no_contact_groups;
   RunSpec run;
+  /// What the scene's generators made (e.g. `block_fills`: blocks, mass and
+  /// grading against its target), copied into the run's summary.
+  nlohmann::json generated = nlohmann::json::object();
 };
 
 /// Parses the case root (format and kind are read by the app). Throws

@@ -271,6 +271,7 @@ bridge::RunOutcome runScene(Scene scene, const std::string& file, const bridge::
   out.results["broken_links"] = engine.linkEvents().size();
   out.results["size_classes"] = engine.sizeClassCount();
   out.results["step_status"] = statusName(status);
+  for (const auto& [key, report] : scene.generated.items()) out.results[key] = report;
   out.results["ended_by"] = !ok ? "failure" : ended ? "test" : "duration";
   out.results["energy"] = energy;
   out.results["contacts"] = engine.contactCount();

@@ -4,7 +4,12 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <fstream>
+#include <nlohmann/json.hpp>
+#include <string>
 
+#include "../support/run_gabion.hpp"
+#include "bridge/output.hpp"
 #include "micro/blocks/angular_block.hpp"
 #include "micro/blocks/grading.hpp"
 #include "micro/rigid_body.hpp"
@@ -155,6 +160,57 @@ TEST(Grading, BadTablesAreNamed) {
   g = paperLike();
   g.passing_percent.back() = 90.0;
   EXPECT_EQ(checkGrading(g).at, 5);
+}
+
+}  // namespace
+
+namespace {
+
+using gabion::testing::runGabion;
+using gabion::testing::scratchDir;
+using gabion::testing::writeFile;
+
+std::string fillCase(const std::string& fill_extra, const std::string& grading) {
+  return R"({"format": "gabion.case/1", "kind": "micro.scene", "gravity_m_s2": [0, 0, -9.81],
+ "materials": {"limestone": {"density_kg_m3": 2600, "normal_stiffness_N_m": 1e6, "shear_stiffness_N_m": 2.5e5, "friction": 0.5}},
+ "block_fills": [{"material": "limestone", "region": {"min_m": [0, 0, 0], "max_m": [0.3, 0.3, 0.6]},
+                  "grading": )" +
+         grading + R"(, "seed": 4)" + fill_extra + R"(}],
+ "walls": [{"point_m": [0, 0, 0], "normal": [0, 0, 1], "material": "limestone"}],
+ "run": {"duration_s": 0.002}})";
+}
+const std::string kGrading = R"({"sieve_m": [0.04, 0.06, 0.08], "passing_percent": [0, 40, 100]})";
+
+// A fill in a scene: the summary reports what was made against the target,
+// the same seed makes the same blocks, and bad fills are named.
+TEST(BlockFill, SceneReportsTheGradingItMadeAndNamesBadFills) {
+  const auto dir = scratchDir("block_fill");
+  writeFile(dir / "fill.json", fillCase(R"(, "mass_kg": 8)", kGrading));
+  for (const char* out : {"a", "b"}) {
+    const auto r = runGabion("run " + (dir / "fill.json").string() + " -q -o " + (dir / out).string());
+    ASSERT_EQ(r.exit_code, 0) << r.output;
+  }
+  std::ifstream in(dir / "a" / "summary.json");
+  const nlohmann::json s = nlohmann::json::parse(in);
+  const nlohmann::json& f = s["block_fills"][0];
+  EXPECT_EQ(f["blocks"], s["blocks"]);
+  EXPECT_NEAR(f["mass_kg"].get<double>(), 8.0, 0.5);
+  EXPECT_NEAR(f["passing_percent"][1].get<double>(), 40.0, 10.0);  // a handful of blocks: coarse
+  EXPECT_EQ(f["passing_percent"][2], 100.0);
+  const gabion::bridge::H5Reader a(dir / "a" / "result.h5"), b(dir / "b" / "result.h5");
+  EXPECT_EQ(a.read("/bodies/position_m"), b.read("/bodies/position_m"));
+
+  const auto bad = [&](const std::string& name, const std::string& text, const std::string& pointer) {
+    writeFile(dir / (name + ".json"), text);
+    const auto r = runGabion("check " + (dir / (name + ".json")).string());
+    EXPECT_EQ(r.exit_code, 2) << name << ": " << r.output;
+    EXPECT_NE(r.output.find(pointer), std::string::npos) << name << ": " << r.output;
+  };
+  bad("first_not_zero", fillCase(R"(, "mass_kg": 8)", R"({"sieve_m": [0.04, 0.08], "passing_percent": [10, 100]})"),
+      "/block_fills/0/grading/passing_percent/0");
+  bad("too_much", fillCase(R"(, "mass_kg": 500)", kGrading), "/block_fills/0/region");
+  bad("both", fillCase(R"(, "mass_kg": 8, "solid_fraction": 0.5)", kGrading), "/block_fills/0");
+  bad("cut", fillCase(R"(, "mass_kg": 8, "shape": {"cut": 1.2})", kGrading), "/block_fills/0/shape/cut");
 }
 
 }  // namespace
