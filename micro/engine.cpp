@@ -679,6 +679,13 @@ Eigen::Quaterniond Engine::blockOrientation(std::size_t b) const {
   return (k.q * k.principal_axes.conjugate()).normalized();
 }
 
+void Engine::sphereGeometry(std::vector<Vec3>& centers_m, std::vector<double>& radii_m) const {
+  centers_m.resize(p_.size());
+  radii_m.resize(p_.size());
+  for (std::size_t i = 0; i < p_.size(); ++i)
+    centers_m[p_.id[i]] = Vec3(p_.x[i], p_.y[i], p_.z[i]), radii_m[p_.id[i]] = p_.r[i];
+}
+
 double Engine::bodyRadius(std::size_t b) const {
   if (b < sphere_count_) return p_.r[p_.slot[b]];
   return std::cbrt(3.0 * blocks_[b - sphere_count_].volume / (4.0 * 3.14159265358979323846));

@@ -87,6 +87,9 @@ class Engine {
   BodyState body(std::size_t b) const;
   /// Orientation of block b (body input frame -> world).
   Eigen::Quaterniond blockOrientation(std::size_t b) const;
+  /// Every sphere in contact detection (free spheres in input order, then the
+  /// members of each block): centres and radii, e.g. for a porosity.
+  void sphereGeometry(std::vector<Vec3>& centers_m, std::vector<double>& radii_m) const;
   /// Sphere radius, or for a block the radius of the sphere of equal volume (m).
   double bodyRadius(std::size_t b) const;
 

@@ -116,6 +116,14 @@ struct WallSpec {
   double half_u_m = 0.0, half_v_m = 0.0;  ///< half-lengths of the rectangle (m)
 };
 
+/// A box in which the porosity of the final packing is measured (`porosity`
+/// object of the scene; micro/cell/porosity.hpp).
+struct PorosityBox {
+  bool enabled = false;
+  Vec3 min_m = Vec3::Zero(), max_m = Vec3::Zero();
+  double spacing_m = 0.001;  ///< grid spacing of the measurement
+};
+
 /// Run settings (`run` object). Defaults in docs/micro.md.
 struct RunSpec {
   double duration_s = 0.0;
@@ -140,6 +148,7 @@ struct Scene {
   /// Pairs of contact groups whose particles never touch.
   std::vector<std::pair<int, int>> no_contact_groups;
   RunSpec run;
+  PorosityBox porosity;
   /// What the scene's generators made (e.g. `block_fills`: blocks, mass and
   /// grading against its target), copied into the run's summary.
   nlohmann::json generated = nlohmann::json::object();

@@ -7,6 +7,7 @@
 
 #include "bridge/errors.hpp"
 #include "bridge/output.hpp"
+#include "micro/cell/porosity.hpp"
 
 namespace gabion::micro {
 namespace {
@@ -272,6 +273,14 @@ bridge::RunOutcome runScene(Scene scene, const std::string& file, const bridge::
   out.results["size_classes"] = engine.sizeClassCount();
   out.results["step_status"] = statusName(status);
   for (const auto& [key, report] : scene.generated.items()) out.results[key] = report;
+  if (scene.porosity.enabled) {
+    // The final packing's porosity in the box (each point counted once).
+    std::vector<Vec3> centers;
+    std::vector<double> radii;
+    engine.sphereGeometry(centers, radii);
+    const PorosityBox& b = scene.porosity;
+    out.results["porosity"] = 1.0 - solidFraction(centers, radii, b.min_m, b.max_m, b.spacing_m);
+  }
   out.results["ended_by"] = !ok ? "failure" : ended ? "test" : "duration";
   out.results["energy"] = energy;
   out.results["contacts"] = engine.contactCount();
