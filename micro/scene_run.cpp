@@ -7,6 +7,7 @@
 
 #include "bridge/errors.hpp"
 #include "bridge/output.hpp"
+#include "micro/blocks/block_fill.hpp"
 #include "micro/cell/porosity.hpp"
 
 namespace gabion::micro {
@@ -273,6 +274,7 @@ bridge::RunOutcome runScene(Scene scene, const std::string& file, const bridge::
   out.results["size_classes"] = engine.sizeClassCount();
   out.results["step_status"] = statusName(status);
   for (const auto& [key, report] : scene.generated.items()) out.results[key] = report;
+  if (scene.generated.contains("block_fills")) writeGradingFigures(ctx.outdir, scene.generated["block_fills"]);
   if (scene.porosity.enabled) {
     // The final packing's porosity in the box (each point counted once).
     std::vector<Vec3> centers;

@@ -7,6 +7,7 @@
 #include <string>
 #include <vector>
 
+#include "bridge/plot.hpp"
 #include "micro/blocks/angular_block.hpp"
 #include "micro/blocks/grading.hpp"
 #include "micro/particles.hpp"
@@ -137,6 +138,28 @@ nlohmann::json addBlockFills(const JsonReader& root, Scene& scene) {
     reports.push_back(rep);
   }
   return reports;
+}
+
+std::vector<std::string> writeGradingFigures(const std::filesystem::path& outdir, const nlohmann::json& reports) {
+  std::vector<std::string> files;
+  for (std::size_t k = 0; k < reports.size(); ++k) {
+    const nlohmann::json& rep = reports[k];
+    bridge::PlotSpec plot;
+    plot.title = "Block fill " + std::to_string(k) + ": grading made against its target";
+    plot.x_label = "sieve size (mm)";
+    plot.y_label = "passing by mass (%)";
+    std::vector<double> mm;
+    for (const double s : rep["sieve_m"].get<std::vector<double>>()) mm.push_back(1000.0 * s);
+    if (rep.contains("target_passing_percent"))
+      plot.series.push_back({"target", mm, rep["target_passing_percent"].get<std::vector<double>>(),
+                             bridge::PlotSeries::Style::LineMarkers});
+    plot.series.push_back({"made (" + std::to_string(rep["blocks"].get<std::size_t>()) + " blocks)", mm,
+                           rep["passing_percent"].get<std::vector<double>>(), bridge::PlotSeries::Style::Markers});
+    const std::string name = "grading_" + std::to_string(k) + ".png";
+    bridge::writePlotPng(outdir / name, plot);
+    files.push_back(name);
+  }
+  return files;
 }
 
 }  // namespace gabion::micro

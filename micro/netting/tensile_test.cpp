@@ -7,6 +7,7 @@
 
 #include "bridge/errors.hpp"
 #include "bridge/output.hpp"
+#include "bridge/plot.hpp"
 #include "micro/netting/mesh.hpp"
 #include "micro/netting/netting_input.hpp"
 #include "micro/scene_run.hpp"
@@ -193,6 +194,18 @@ bridge::RunOutcome run(const bridge::JsonDocument& doc, const bridge::RunContext
     h5.writeInts("/netting/pulled", pulled);
   };
   bridge::RunOutcome out = runScene(std::move(scene), doc.file(), ctx, hooks);
+  {
+    bridge::PlotSpec plot;
+    plot.title = "Sheet tensile test: " + std::to_string(net.width_m).substr(0, 4) + " m wide, " +
+                 std::to_string(net.length_m).substr(0, 4) + " m long";
+    plot.x_label = "pull displacement (mm)";
+    plot.y_label = "pulling force (kN)";
+    bridge::PlotSeries s{"force", {}, {}, bridge::PlotSeries::Style::Line};
+    for (std::size_t k = 0; k < curve.force.size(); ++k)
+      s.x.push_back(1000.0 * curve.displacement[k]), s.y.push_back(1e-3 * curve.force[k]);
+    plot.series.push_back(s);
+    bridge::writePlotPng(ctx.outdir / "tensile_curve.png", plot);
+  }
 
   nlohmann::json& r = out.results;
   r["sheet_width_m"] = net.width_m;

@@ -4,6 +4,7 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <filesystem>
 #include <fstream>
 #include <nlohmann/json.hpp>
 #include <string>
@@ -197,6 +198,7 @@ TEST(BlockFill, SceneReportsTheGradingItMadeAndNamesBadFills) {
   EXPECT_NEAR(f["mass_kg"].get<double>(), 8.0, 0.5);
   EXPECT_NEAR(f["passing_percent"][1].get<double>(), 40.0, 10.0);  // a handful of blocks: coarse
   EXPECT_EQ(f["passing_percent"][2], 100.0);
+  EXPECT_GT(std::filesystem::file_size(dir / "a" / "grading_0.png"), 1000u);  // the figure beside the table
   const gabion::bridge::H5Reader a(dir / "a" / "result.h5"), b(dir / "b" / "result.h5");
   EXPECT_EQ(a.read("/bodies/position_m"), b.read("/bodies/position_m"));
 

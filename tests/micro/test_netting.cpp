@@ -5,6 +5,7 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <filesystem>
 #include <fstream>
 #include <iterator>
 #include <nlohmann/json.hpp>
@@ -191,6 +192,7 @@ TEST(NettingTensile, PeakWithinTheDataSheetEnvelopeTearsNearTheClampsAndKeepsIts
   EXPECT_TRUE(near_clamp || s["first_rupture_link_kind"] == "double_twist") << s.dump();
   EXPECT_LT(std::fabs(s["energy"]["balance_rel_error"].get<double>()), 0.01);
   EXPECT_GT(s["energy"]["link_plastic_dissipation_J"].get<double>(), 0.5 * s["energy"]["driven_work_J"].get<double>());
+  EXPECT_GT(std::filesystem::file_size(s["outdir"].get<std::string>() + "/tensile_curve.png"), 1000u);
   // ParaView: every snapshot draws the links intact at its time; the last,
   // taken when the sheet tore, lacks exactly the broken ones.
   const std::vector<long> lines = xdmfLineCounts(s["outdir"].get<std::string>() + "/result.xdmf");
