@@ -109,6 +109,8 @@ class Engine {
 
   std::size_t linkCount() const { return links_.size(); }
   bool linkBroken(std::size_t l) const { return links_.broken(l); }
+  /// State of link l if it is a wire.
+  const bridge::WireState& linkWireState(std::size_t l) const { return links_.wireState(l); }
   /// Tension of link l at the last step (N).
   double linkTension(std::size_t l) const { return links_.tension(l); }
   /// The sphere indices (input order) link l joins.

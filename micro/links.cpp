@@ -25,7 +25,8 @@ Links::Links(const std::vector<LinkSpec>& specs, std::size_t particles) : partic
   }
   for (const double L0 : wire_rest_) wire_inv_rest_.push_back(L0 > 0.0 ? 1.0 / L0 : 0.0);
   const std::size_t n = a_.size();
-  wire_state_.assign(n, bridge::WireState{});
+  wire_state_.clear();
+  for (const LinkSpec& s : specs) wire_state_.push_back(s.wire_state);
   broken_.assign(n, 0);
   for (auto* v : {&fx_, &fy_, &fz_, &tension_, &len_, &ux_, &uy_, &uz_}) v->assign(n, 0.0);
   // Incidence by particle id, links in increasing order at each node.

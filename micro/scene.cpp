@@ -1,10 +1,12 @@
 #include "micro/scene.hpp"
 
 #include <cmath>
+#include <filesystem>
 #include <map>
 
 #include "bridge/errors.hpp"
 #include "micro/blocks/block_fill.hpp"
+#include "micro/cell/cell_file.hpp"
 #include "micro/netting/scene_nettings.hpp"
 #include "micro/netting/wire_input.hpp"
 #include "micro/particles.hpp"
@@ -137,7 +139,6 @@ Scene parseScene(const JsonReader& root) {
     names[name] = static_cast<int>(s.materials.size());
     s.materials.push_back(parseMaterial(name, r));
   }
-  if (s.materials.empty()) root.fail("materials", "at least one material is required");
 
   const std::vector<bridge::JsonReader> sphere_readers = root.objects("spheres");
   s.spheres.reserve(sphere_readers.size());
@@ -236,6 +237,14 @@ Scene parseScene(const JsonReader& root) {
 
   addNettings(root, s);
   if (root.has("block_fills")) s.generated["block_fills"] = addBlockFills(root, s);
+  if (root.has("from_cell")) {
+    // A relative path is taken from the case file's folder.
+    std::filesystem::path cell = root.string("from_cell");
+    if (cell.is_relative()) cell = std::filesystem::path(root.file()).parent_path() / cell;
+    loadCellFile(cell, s);
+  }
+  s.save_cell = root.boolean("save_cell", false);
+  if (s.materials.empty()) root.fail("materials", "at least one material is required (in the case or its cell file)");
   if (const auto p = root.optionalObject("porosity")) {
     s.porosity.enabled = true;
     s.porosity.min_m = p->vec3("min_m");

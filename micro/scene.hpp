@@ -72,6 +72,7 @@ struct LinkSpec {
   Law law = Law::Linear;
   bridge::LinearLinkParams linear;  ///< Law::Linear
   bridge::WireLinkParams wire;      ///< Law::Wire
+  bridge::WireState wire_state;     ///< Law::Wire: its state at the start (a cell file's wires keep theirs)
   /// Elastic stiffness (N/m), for the critical time step.
   double stiffness() const { return law == Law::Wire ? wire.stiffness() : linear.stiffness_N_m; }
 };
@@ -149,6 +150,8 @@ struct Scene {
   std::vector<std::pair<int, int>> no_contact_groups;
   RunSpec run;
   PorosityBox porosity;
+  /// Write the final state as OUTDIR/cell.h5 (micro/cell/cell_file.hpp).
+  bool save_cell = false;
   /// What the scene's generators made (e.g. `block_fills`: blocks, mass and
   /// grading against its target), copied into the run's summary.
   nlohmann::json generated = nlohmann::json::object();

@@ -8,6 +8,7 @@
 #include "bridge/errors.hpp"
 #include "bridge/output.hpp"
 #include "micro/blocks/block_fill.hpp"
+#include "micro/cell/cell_file.hpp"
 #include "micro/cell/porosity.hpp"
 
 namespace gabion::micro {
@@ -110,8 +111,10 @@ bridge::RunOutcome runScene(Scene scene, const std::string& file, const bridge::
                             const SceneRunHooks& hooks) {
   const std::size_t sphere_count = scene.spheres.size();
   Engine engine(scene, ctx.threads);
-  std::vector<SphereSpec>().swap(scene.spheres);  // the engine has its own copy
-  std::vector<BlockSpec>().swap(scene.blocks);
+  if (!scene.save_cell) {
+    std::vector<SphereSpec>().swap(scene.spheres);  // the engine has its own copy
+    std::vector<BlockSpec>().swap(scene.blocks);
+  }
   const double dt = chooseDt(scene, engine.criticalDt(), file);
   engine.setDt(dt);
   const auto steps = static_cast<long long>(std::ceil(scene.run.duration_s / dt - 1e-9));
@@ -302,6 +305,12 @@ bridge::RunOutcome runScene(Scene scene, const std::string& file, const bridge::
   }
   out.results["profile"] = {{"stage_wall_time_s", stage_wall}, {"partition_busy_time_s", busy}};
   out.report = timingReport(engine, loop_s, body_steps_per_s, ctx.threads);
+  if (scene.save_cell && ok) {
+    // The packed state, for later runs (`from_cell`), with what this run measured.
+    nlohmann::json summary = {{"time_s", engine.time()}, {"steps", engine.steps()}};
+    if (out.results.contains("porosity")) summary["porosity"] = out.results["porosity"];
+    writeCellFile(ctx.outdir / "cell.h5", scene, engine, summary);
+  }
   if (!ok) {
     out.status = bridge::RunOutcome::Status::NumericalFailure;
     out.message = engine.failure();
