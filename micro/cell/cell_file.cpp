@@ -37,8 +37,13 @@ Vec3 at3(const std::vector<double>& v, std::size_t k) {
 void writeCellFile(const std::filesystem::path& path, const Scene& in, const Engine& engine,
                    const nlohmann::json& summary) {
   bridge::H5Writer h5(path);
-  nlohmann::json materials = nlohmann::json::object();
-  for (const Material& m : in.materials) materials[m.name] = materialJson(m);
+  // In index order (an array: a JSON object would sort them by name).
+  nlohmann::json materials = nlohmann::json::array();
+  for (const Material& m : in.materials) {
+    nlohmann::json j = materialJson(m);
+    j["name"] = m.name;
+    materials.push_back(j);
+  }
   // Spheres: static attributes from the input, state from the engine.
   {
     std::vector<double> x, v, w, r, mass;
@@ -159,7 +164,9 @@ void loadCellFile(const std::filesystem::path& path, Scene& scene) {
   } catch (const nlohmann::json::exception&) {
     fail("its materials attribute is not JSON");
   }
-  for (const auto& [name, m] : materials.items()) {
+  if (!materials.is_array()) fail("its materials attribute is not a list");
+  for (const nlohmann::json& m : materials) {
+    const std::string name = m.value("name", "");
     const auto it =
         std::find_if(scene.materials.begin(), scene.materials.end(), [&](const Material& x) { return x.name == name; });
     if (it != scene.materials.end()) {

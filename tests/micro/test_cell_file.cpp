@@ -28,7 +28,11 @@ Scene movingScene() {
   s.gravity_m_s2 = Vec3(0, 0, -9.81);
   Material rock = test::material(1e6, 2.5e5, 0.5, 0.1);
   rock.density_kg_m3 = 2600;
-  s.materials.push_back(rock);
+  rock.name = "rock";
+  Material steel = test::material(2e6, 5e5, 0.3);
+  steel.density_kg_m3 = 7850;
+  steel.name = "a_steel";  // sorts before "rock": the file must keep the index order
+  s.materials = {rock, steel};
   s.walls.push_back({});  // the floor z = 0
   for (int k = 0; k < 4; ++k) s.spheres.push_back(test::sphere(Vec3(0.05 * k, 0.0, 0.05), 0.02));
   for (int k = 0; k < 2; ++k) {
@@ -73,8 +77,11 @@ TEST(CellFile, ReadsBackToTheSameState) {
   ASSERT_EQ(b.spheres.size(), a.spheres.size());
   ASSERT_EQ(b.blocks.size(), a.blocks.size());
   ASSERT_EQ(b.links.size(), 1u);
-  ASSERT_EQ(b.materials.size(), 1u);
+  ASSERT_EQ(b.materials.size(), 2u);
+  EXPECT_EQ(b.materials[0].name, "rock");
   EXPECT_EQ(b.materials[0].friction, 0.5);
+  EXPECT_EQ(b.materials[1].friction, 0.3);
+  for (std::size_t k = 0; k < a.spheres.size(); ++k) EXPECT_EQ(b.spheres[k].material, a.spheres[k].material) << k;
   Engine eb(b, 1);
   for (std::size_t k = 0; k < ea.bodyCount(); ++k) {
     const BodyState x = ea.body(k), y = eb.body(k);
