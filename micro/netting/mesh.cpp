@@ -95,7 +95,7 @@ Netting flatSheet(const MeshSpec& mesh, double width_m, double length_m) {
   return net;
 }
 
-Netting closedBox(const MeshSpec& mesh, double edge_m) {
+Netting closedBox(const MeshSpec& mesh, double edge_m, bool open_top) {
   const double D = mesh.opening_m, a = mesh.twist_length_m, b = mesh.wire_rise_m;
   if (!(edge_m >= D) || !(edge_m >= 2.0 * a + b))
     throw std::invalid_argument("a box edge must hold at least one mesh: edge >= opening and >= 2 twists + 1 rise");
@@ -118,6 +118,7 @@ Netting closedBox(const MeshSpec& mesh, double edge_m) {
   net.width_m = net.length_m = edge_m;
   std::vector<std::uint32_t> face_of;  // face of each node before merging
   for (std::size_t f = 0; f < frames.size(); ++f) {
+    if (open_top && f == 1) continue;  // a basket: no lid
     const auto first = static_cast<std::uint32_t>(net.node_m.size());
     for (const Vec3& p : face.node_m) {
       net.node_m.push_back(frames[f][0] + frames[f][1] * (p.x() * sx) + frames[f][2] * (p.y() * sy));
@@ -156,6 +157,7 @@ Netting closedBox(const MeshSpec& mesh, double edge_m) {
           return at == 0.0 ? low[static_cast<std::size_t>(c)] : high[static_cast<std::size_t>(c)];
         };
         const std::array<std::size_t, 2> faces = {planeFace(c1, u), planeFace(c2, v)};
+        if (open_top && (faces[0] == 1 || faces[1] == 1)) continue;  // the rim of a basket
         if (by_face[faces[0]].empty() || by_face[faces[1]].empty())
           throw std::logic_error("closedBox: a face has no node on one of its edges");
         const auto& A = by_face[faces[0]];

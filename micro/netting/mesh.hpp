@@ -80,9 +80,10 @@ Netting flatSheet(const MeshSpec& mesh, double width_m, double length_m);
 /// z on the sides. Where two faces meet, nodes closer than two node radii
 /// become one (a shared node) and every other edge node is laced (a lacing
 /// wire) to the nearest edge node of the other face. Rest lengths are the
-/// generated distances: the box is stress free. Throws std::invalid_argument
-/// when not even one mesh fits.
-Netting closedBox(const MeshSpec& mesh, double edge_m);
+/// generated distances: the box is stress free. `open_top`: no top face (a
+/// basket, to be filled; faces[1] is then empty). Throws
+/// std::invalid_argument when not even one mesh fits.
+Netting closedBox(const MeshSpec& mesh, double edge_m, bool open_top = false);
 
 /// Fills in node masses (given, or the wire each node carries, times the
 /// mass scale) and the radius.

@@ -27,9 +27,10 @@ void addNettings(const JsonReader& root, Scene& scene) {
     std::map<std::string, std::vector<std::uint32_t>> sets;
     try {
       if (box) {
-        net = closedBox(in.mesh, shape.number("edge_m", Check::Positive));
+        net = closedBox(in.mesh, shape.number("edge_m", Check::Positive), shape.boolean("open_top", false));
         const char* names[6] = {"bottom", "top", "front", "back", "left", "right"};
-        for (std::size_t f = 0; f < 6; ++f) sets[names[f]] = net.faces[f];
+        for (std::size_t f = 0; f < 6; ++f)
+          if (!net.faces[f].empty()) sets[names[f]] = net.faces[f];
       } else {
         const double width = shape.number("width_m", Check::Positive),
                      length = shape.number("length_m", Check::Positive);

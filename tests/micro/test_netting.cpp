@@ -420,3 +420,35 @@ TEST(NettingScene, BadNettingEntriesAreNamed) {
 }
 
 }  // namespace
+
+namespace {
+
+TEST(NettingMesh, OpenTopBoxIsABasket) {
+  const MeshSpec mesh;
+  const Netting closed = closedBox(mesh, 0.5), basket = closedBox(mesh, 0.5, true);
+  EXPECT_TRUE(basket.faces[1].empty());
+  EXPECT_LT(basket.node_m.size(), closed.node_m.size());
+  EXPECT_LT(basket.links.size(), closed.links.size());
+  // The rim is free: a node at the top joins only its own face's wires, no lacing.
+  std::vector<int> lacings(basket.node_m.size(), 0);
+  for (const NettingLink& l : basket.links)
+    if (l.kind == WireKind::Lacing) ++lacings[l.a], ++lacings[l.b];
+  for (std::size_t k = 0; k < basket.node_m.size(); ++k) {
+    const Vec3& x = basket.node_m[k];
+    const bool on_rim_only =
+        x.z() > 0.5 - 1e-9 && x.x() > 1e-9 && x.x() < 0.5 - 1e-9 && x.y() > 1e-9 && x.y() < 0.5 - 1e-9;
+    EXPECT_FALSE(on_rim_only) << "a node inside the open top";
+  }
+  int top_lacings = 0;
+  for (std::size_t k = 0; k < basket.node_m.size(); ++k)
+    if (basket.node_m[k].z() > 0.5 - 1e-9) top_lacings += lacings[k];
+  int corner_lacings = 0;  // the vertical corner edges reach the rim: their top nodes may be laced
+  for (std::size_t k = 0; k < basket.node_m.size(); ++k) {
+    const Vec3& x = basket.node_m[k];
+    const bool corner = (x.x() < 1e-9 || x.x() > 0.5 - 1e-9) && (x.y() < 1e-9 || x.y() > 0.5 - 1e-9);
+    if (x.z() > 0.5 - 1e-9 && corner) corner_lacings += lacings[k];
+  }
+  EXPECT_EQ(top_lacings, corner_lacings);
+}
+
+}  // namespace
