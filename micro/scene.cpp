@@ -251,6 +251,7 @@ Scene parseScene(const JsonReader& root) {
     s.porosity.max_m = p->vec3("max_m");
     if (!((s.porosity.max_m - s.porosity.min_m).minCoeff() > 0.0)) p->fail("max_m", "must exceed min_m in x, y and z");
     s.porosity.spacing_m = p->number("spacing_m", s.porosity.spacing_m, Check::Positive);
+    s.porosity.blocks_only = p->choice("of", {"all", "blocks"}, "all") == "blocks";
     const double cells = (s.porosity.max_m - s.porosity.min_m).prod() / std::pow(s.porosity.spacing_m, 3);
     if (cells > 2e9)
       p->fail("spacing_m", "would sample " + std::to_string(cells) + " cells (more than 2e9): give a coarser spacing");

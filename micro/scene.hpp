@@ -123,6 +123,7 @@ struct PorosityBox {
   bool enabled = false;
   Vec3 min_m = Vec3::Zero(), max_m = Vec3::Zero();
   double spacing_m = 0.001;  ///< grid spacing of the measurement
+  bool blocks_only = false;  ///< count the blocks' spheres only (the rock, not a netting's nodes)
 };
 
 /// Run settings (`run` object). Defaults in docs/micro.md.

@@ -284,6 +284,10 @@ bridge::RunOutcome runScene(Scene scene, const std::string& file, const bridge::
     std::vector<double> radii;
     engine.sphereGeometry(centers, radii);
     const PorosityBox& b = scene.porosity;
+    if (b.blocks_only) {  // the free spheres come first: keep the blocks' members
+      centers.erase(centers.begin(), centers.begin() + static_cast<std::ptrdiff_t>(sphere_count));
+      radii.erase(radii.begin(), radii.begin() + static_cast<std::ptrdiff_t>(sphere_count));
+    }
     out.results["porosity"] = 1.0 - solidFraction(centers, radii, b.min_m, b.max_m, b.spacing_m);
   }
   out.results["ended_by"] = !ok ? "failure" : ended ? "test" : "duration";

@@ -17,8 +17,10 @@ struct BlockShape {
   /// Member spheres along the longest edge (>= 1): the resolution of the shape.
   int spheres_along_long = 6;
   /// Spacing of the lattice over the sphere diameter, in (0, 1]: 1 puts the
-  /// spheres side by side, less overlaps them for a smoother surface.
-  double spacing_ratio = 0.75;
+  /// spheres side by side, less overlaps them for a smoother surface. The
+  /// default 0.5 gives the gravity-filled porosity of the paper's model
+  /// (about 0.50; docs/blocks.md).
+  double spacing_ratio = 0.5;
   /// How deep edges and corners are cut, in [0, 1): 0 keeps the whole
   /// parallelepiped. With d_c the depth of a lattice centre below face c
   /// (each axis: its largest centre coordinate minus |x_c|), d*_c the

@@ -39,11 +39,11 @@ TEST(AngularBlock, UncutLatticeFillsTheParallelepipedSymmetrically) {
     EXPECT_NEAR(lo[c], -0.5 * g.edges_m[c], 1e-12) << c;
   }
   EXPECT_LT(sum.norm(), 1e-12);
-  // 6 along the long edge; 0.75 of a diameter apart: r = 0.14 / (2 + 1.5 x 5).
-  const double r = 0.14 / 9.5;
+  // 6 along the long edge, spacing_ratio diameters apart: r = 0.14 / (2 + 2 ratio x 5).
+  const double ratio = shape.spacing_ratio, r = 0.14 / (2.0 + 10.0 * ratio), spacing = 2.0 * r * ratio;
   EXPECT_NEAR(g.radii_m[0], r, 1e-15);
-  const int ny = 1 + static_cast<int>(std::lround((0.10 - 2 * r) / (1.5 * r)));
-  const int nz = 1 + static_cast<int>(std::lround((0.07 - 2 * r) / (1.5 * r)));
+  const int ny = 1 + static_cast<int>(std::lround((0.10 - 2 * r) / spacing));
+  const int nz = 1 + static_cast<int>(std::lround((0.07 - 2 * r) / spacing));
   EXPECT_EQ(g.centers_m.size(), static_cast<std::size_t>(6 * ny * nz));
 }
 

@@ -67,15 +67,25 @@ TEST(Porosity, SceneReportsThePorosityOfItsBox) {
     return R"({"format": "gabion.case/1", "kind": "micro.scene", "gravity_m_s2": [0, 0, 0],
  "materials": {"rock": {"density_kg_m3": 2600, "normal_stiffness_N_m": 1e6, "shear_stiffness_N_m": 2.5e5, "friction": 0.5}},
  "spheres": [{"center_m": [0.1, 0.1, 0.1], "radius_m": 0.05, "material": "rock", "fixed": true}],
+ "blocks": [{"material": "rock", "position_m": [0.1, 0.1, 0.3], "fixed": true,
+             "spheres": [{"center_m": [0, 0, 0], "radius_m": 0.04}]}],
  "porosity": )" +
            porosity + R"(, "run": {"duration_s": 0.001}})";
   };
-  gabion::testing::writeFile(dir / "ok.json", scene(R"({"min_m": [0, 0, 0], "max_m": [0.2, 0.2, 0.2]})"));
-  const auto r = gabion::testing::runGabion("run " + (dir / "ok.json").string() + " -q -o " + (dir / "out").string());
-  ASSERT_EQ(r.exit_code, 0) << r.output;
-  std::ifstream in(dir / "out" / "summary.json");
-  const nlohmann::json s = nlohmann::json::parse(in);
-  EXPECT_NEAR(s["porosity"].get<double>(), 1.0 - ball(0.05) / 0.008, 0.003 * ball(0.05) / 0.008);
+  const auto porosityOf = [&](const std::string& name, const std::string& box) {
+    gabion::testing::writeFile(dir / (name + ".json"), scene(box));
+    const auto r =
+        gabion::testing::runGabion("run " + (dir / (name + ".json")).string() + " -q -o " + (dir / name).string());
+    EXPECT_EQ(r.exit_code, 0) << r.output;
+    std::ifstream in(dir / name / "summary.json");
+    return nlohmann::json::parse(in)["porosity"].get<double>();
+  };
+  // The free sphere alone in the lower box; the block alone in the upper one,
+  // or the whole column with the blocks only.
+  EXPECT_NEAR(porosityOf("low", R"({"min_m": [0, 0, 0], "max_m": [0.2, 0.2, 0.2]})"), 1.0 - ball(0.05) / 0.008,
+              0.003 * ball(0.05) / 0.008);
+  EXPECT_NEAR(porosityOf("blocks", R"({"min_m": [0, 0, 0], "max_m": [0.2, 0.2, 0.4], "of": "blocks"})"),
+              1.0 - ball(0.04) / 0.016, 0.004 * ball(0.04) / 0.016);
   gabion::testing::writeFile(dir / "fine.json",
                              scene(R"({"min_m": [0, 0, 0], "max_m": [2, 2, 2], "spacing_m": 1e-4})"));
   const auto bad = gabion::testing::runGabion("check " + (dir / "fine.json").string());
