@@ -70,9 +70,14 @@ nlohmann::json addBlockFills(const JsonReader& root, Scene& scene) {
     const bool by_mass = r.has("mass_kg");
     if (by_mass == r.has("solid_fraction"))
       r.failHere("give either `mass_kg` or `solid_fraction` (of the region's volume)");
-    const double target = by_mass ? r.number("mass_kg", Check::Positive)
-                                  : r.number("solid_fraction", Check::Positive) * density * (hi - lo).prod();
-    if (!by_mass && r.number("solid_fraction", Check::Positive) >= 1.0) r.fail("solid_fraction", "must be below 1");
+    double target = 0.0;
+    if (by_mass) {
+      target = r.number("mass_kg", Check::Positive);
+    } else {
+      const double fraction = r.number("solid_fraction", Check::Positive);
+      if (fraction >= 1.0) r.fail("solid_fraction", "must be below 1");
+      target = fraction * density * (hi - lo).prod();
+    }
     const auto seed = static_cast<std::uint64_t>(r.integer("seed", 1, 0));
     std::vector<double> sizes;
     GradingTable table;
