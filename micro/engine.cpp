@@ -121,6 +121,7 @@ Engine::Engine(const Scene& scene, int threads) {
     b.volume = props.volume_m3;
     b.inertia = props.principal_moments_kg_m2;
     b.principal_axes = props.principal_axes;
+    b.frame_center = props.center_m;
     b.offsets = principalFrameOffsets(props, spec.member_centers_m);
     b.q = (spec.orientation * props.principal_axes).normalized();
     b.x = spec.position_m + spec.orientation * props.center_m;
@@ -684,6 +685,11 @@ void Engine::sphereGeometry(std::vector<Vec3>& centers_m, std::vector<double>& r
   radii_m.resize(p_.size());
   for (std::size_t i = 0; i < p_.size(); ++i)
     centers_m[p_.id[i]] = Vec3(p_.x[i], p_.y[i], p_.z[i]), radii_m[p_.id[i]] = p_.r[i];
+}
+
+Vec3 Engine::blockFrameOrigin(std::size_t b) const {
+  const RigidBlock& k = blocks_[b];
+  return k.x - blockOrientation(b) * k.frame_center;
 }
 
 double Engine::bodyRadius(std::size_t b) const {

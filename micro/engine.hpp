@@ -87,6 +87,9 @@ class Engine {
   BodyState body(std::size_t b) const;
   /// Orientation of block b (body input frame -> world).
   Eigen::Quaterniond blockOrientation(std::size_t b) const;
+  /// World position of block b's input body-frame origin (m): with
+  /// blockOrientation, the pose a BlockSpec gives it.
+  Vec3 blockFrameOrigin(std::size_t b) const;
   /// Every sphere in contact detection (free spheres in input order, then the
   /// members of each block): centres and radii, e.g. for a porosity.
   void sphereGeometry(std::vector<Vec3>& centers_m, std::vector<double>& radii_m) const;

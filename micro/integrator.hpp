@@ -24,6 +24,7 @@ struct RigidBlock {
   Vec3 x = Vec3::Zero(), v = Vec3::Zero(), L = Vec3::Zero(), omega = Vec3::Zero();
   Eigen::Quaterniond q = Eigen::Quaterniond::Identity();               ///< principal -> world
   Eigen::Quaterniond principal_axes = Eigen::Quaterniond::Identity();  ///< principal -> input body frame
+  Vec3 frame_center = Vec3::Zero();                                    ///< centre of mass in the input body frame (m)
   std::vector<Vec3> offsets;                                           ///< member centres in the principal frame (m)
   std::vector<std::uint32_t> ids;                                      ///< stable ids of the members
   bool fixed = false;

@@ -6,7 +6,6 @@
 
 #include "bridge/errors.hpp"
 #include "bridge/output.hpp"
-#include "micro/rigid_body.hpp"
 
 namespace gabion::micro {
 namespace {
@@ -71,12 +70,9 @@ void writeCellFile(const std::filesystem::path& path, const Scene& in, const Eng
     std::vector<long long> count, material, group, fixed;
     for (std::size_t b = 0; b < in.blocks.size(); ++b) {
       const BlockSpec& spec = in.blocks[b];
-      const double density = in.materials[static_cast<std::size_t>(spec.material)].density_kg_m3;
-      const MassProperties props = clusterMassProperties(spec.member_centers_m, spec.member_radii_m, density);
       const BodyState s = engine.body(in.spheres.size() + b);
       const Eigen::Quaterniond o = engine.blockOrientation(b);
-      // The frame origin: the centre of mass minus its place in the frame.
-      push3(pos, s.position_m - o * props.center_m);
+      push3(pos, engine.blockFrameOrigin(b));
       q.push_back(o.w()), q.push_back(o.x()), q.push_back(o.y()), q.push_back(o.z());
       push3(v, s.velocity_m_s), push3(w, s.angular_velocity_rad_s);
       for (std::size_t k = 0; k < spec.member_radii_m.size(); ++k)
