@@ -26,9 +26,6 @@ std::vector<MassProperties> blockMassProperties(const Scene& scene) {
 // (docs/micro.md): sqrt(m / k_n) and sqrt(I / (k l^2)) with l the farthest
 // reach of the body from its centre (R for a sphere, I = 0.4 m R^2).
 double criticalStep(const Scene& scene, const std::vector<MassProperties>& block_props) {
-  // stiffness of the links at each sphere
-  std::vector<double> k_link(scene.spheres.size(), 0.0);
-  for (const LinkSpec& l : scene.links) k_link[l.a] += l.stiffness(), k_link[l.b] += l.stiffness();
   const std::size_t nmat = scene.materials.size();
   std::vector<PairLaw> laws(nmat * nmat);
   for (std::size_t a = 0; a < nmat; ++a)
@@ -52,7 +49,7 @@ double criticalStep(const Scene& scene, const std::vector<MassProperties>& block
     if (sp.fixed) continue;
     const auto m = static_cast<std::size_t>(sp.material);
     const double mass = sphereMass(scene, sp);
-    dt = std::min({dt, std::sqrt(mass / (kn_max[m] + k_link[s])), std::sqrt(0.4 * mass / ks_max[m])});
+    dt = std::min({dt, std::sqrt(mass / kn_max[m]), std::sqrt(0.4 * mass / ks_max[m])});
   }
   for (std::size_t bi = 0; bi < scene.blocks.size(); ++bi) {
     const BlockSpec& spec = scene.blocks[bi];
@@ -83,6 +80,8 @@ Engine::Engine(const Scene& scene, int threads) {
 
   // Particles: free spheres (ids 0 .. spheres-1), then the members of each block.
   sphere_count_ = scene.spheres.size();
+  std::vector<bool> linked(sphere_count_, false);  // link nodes: the link stage moves them (LinkedNodes)
+  for (const LinkSpec& l : scene.links) linked[l.a] = linked[l.b] = true;
   std::size_t members = 0;
   for (const auto& b : scene.blocks) members += b.member_radii_m.size();
   p_.resize(sphere_count_ + members);
@@ -100,7 +99,7 @@ Engine::Engine(const Scene& scene, int threads) {
     if (sp.fixed) {
       // Infinite mass, its own constant velocity (a clamp, or a driven node).
       place(s, sp.center_m, sp.velocity_m_s, Vec3::Zero());
-      if (sp.velocity_m_s != Vec3::Zero()) driven_.push_back(static_cast<std::uint32_t>(s));
+      if (sp.velocity_m_s != Vec3::Zero() && !linked[s]) driven_.push_back(static_cast<std::uint32_t>(s));
       continue;
     }
     const double mass = sphereMass(scene, sp);
@@ -155,7 +154,7 @@ Engine::Engine(const Scene& scene, int threads) {
     walls_.back().name = micro::wallName(scene, w);
   }
   links_ = Links(scene.links, p_.size());
-  links_.followSlots(p_);
+  nodes_ = LinkedNodes(scene, links_, p_);
   excluded_ = links_.excludedPairs();
 
   const bool one_material = std::all_of(p_.mat.begin(), p_.mat.end(), [&](std::uint32_t m) { return m == p_.mat[0]; });
@@ -166,6 +165,8 @@ Engine::Engine(const Scene& scene, int threads) {
   skin_m_ = scene.run.verlet_skin_ratio * grid_.finestMeanRadius();
 
   dt_critical_ = criticalStep(scene, block_props);
+  dt_link_critical_ = criticalLinkStep(scene);
+  dt_safety_ = scene.run.dt_safety;
 
   pool_ = std::make_unique<WorkerPool>(threads);
   scratch_.resize(static_cast<std::size_t>(pool_->size()));
@@ -177,6 +178,12 @@ Engine::Engine(const Scene& scene, int threads) {
 }
 
 Engine::~Engine() = default;
+
+void Engine::setDt(double dt_s) {
+  dt_ = dt_s;
+  const double h = dt_safety_ * dt_link_critical_;
+  substeps_ = std::isfinite(h) && h > 0.0 ? std::max(1, static_cast<int>(std::ceil(dt_s / h - 1e-9))) : 1;
+}
 
 // ---------------------------------------------------------------------------
 // The step.
@@ -190,13 +197,14 @@ StepStatus Engine::step(bool measure) {
   lap(S::kNeighbours);
   computeContactForces(measure);
   lap(S::kContacts);
-  computeLinkForces(measure);
-  lap(S::kLinks);
   applyWallsAndLoads(measure);
   lap(S::kWalls);
   if (status_ != StepStatus::Ok) return status_;
   integrate(measure);
   lap(S::kIntegrate);
+  advanceLinkedNodes(measure);
+  lap(S::kLinks);
+  checkStep(measure);
   if (status_ != StepStatus::Ok) return status_;
   if (measure) measureEnergy();
   lap(S::kEnergy);
@@ -339,7 +347,6 @@ void Engine::reorderParticles(const std::vector<std::uint32_t>& order) {
     for (std::size_t a = static_cast<std::size_t>(t); a < tasks.size(); a += workers) tasks[a]();
   });
   for (std::size_t k = 0; k < p_.size(); ++k) p_.slot[p_.id[k]] = static_cast<std::uint32_t>(k);
-  links_.followSlots(p_);
 }
 
 // Carries the history of touching contacts over to the new list: a pair that
@@ -493,28 +500,35 @@ void Engine::computeContactForces(bool measure) {
 }
 
 // ---------------------------------------------------------------------------
-// computeLinkForces (micro/links.cpp): forces per link over ranges of links,
-// then per linked particle over ranges of particles.
+// advanceLinkedNodes (micro/linked_nodes.cpp, micro/links.cpp): the link
+// nodes in `substeps_` sub-steps, each with the link forces of its positions
+// (per link over ranges of links, then summed per node) and the contact and
+// wall forces of the step held.
 
-void Engine::computeLinkForces(bool measure) {
-  if (links_.empty()) return;
-  const std::size_t T = scratch_.size(), nl = links_.size(), nn = links_.nodeCount();
-  parallel(StageProfile::kLinks, [&](int task) {
-    const auto t = static_cast<std::size_t>(task);
-    WorkerScratch& s = scratch_[t];
-    s.link_elastic = s.link_rupture = s.link_plastic = 0.0;
-    s.link_events.clear();
-    links_.evaluate(p_, nl * t / T, nl * (t + 1) / T, time_, measure, s);
-  });
-  parallel(StageProfile::kLinks, [&](int task) {
-    const auto t = static_cast<std::size_t>(task);
-    links_.apply(p_, nn * t / T, nn * (t + 1) / T);
-  });
-  for (const WorkerScratch& s : scratch_) {
-    if (measure) energy_.elastic_link += s.link_elastic, energy_.link_plastic += s.link_plastic;
-    energy_.link_rupture += s.link_rupture;
-    link_events_.insert(link_events_.end(), s.link_events.begin(), s.link_events.end());
+void Engine::advanceLinkedNodes(bool measure) {
+  if (nodes_.empty()) return;
+  nodes_.hold(p_);
+  const std::size_t T = scratch_.size(), nl = links_.size();
+  const double h = dt_ / substeps_;
+  for (int k = 0; k < substeps_; ++k) {
+    const bool last = k + 1 == substeps_, m = measure && last;
+    parallel(StageProfile::kLinks, [&](int task) {
+      const auto t = static_cast<std::size_t>(task);
+      WorkerScratch& s = scratch_[t];
+      s.link_elastic = s.link_rupture = s.link_plastic = 0.0;
+      s.link_events.clear();
+      links_.evaluate(nodes_.x(), nodes_.y(), nodes_.z(), nl * t / T, nl * (t + 1) / T, time_ + k * h, m, s);
+    });
+    for (const WorkerScratch& s : scratch_) {
+      if (m) energy_.elastic_link += s.link_elastic, energy_.link_plastic += s.link_plastic;
+      energy_.link_rupture += s.link_rupture;
+      link_events_.insert(link_events_.end(), s.link_events.begin(), s.link_events.end());
+    }
+    const SphereSums s = nodes_.advance(links_, k, substeps_, h, gravity_, m, energy_.driven_work);
+    sums_.local += s.local, sums_.finite += s.finite, sums_.max_d2 = std::max(sums_.max_d2, s.max_d2);
+    if (m) sums_.ke_t += s.ke_t, sums_.ke_r += s.ke_r, sums_.pe += s.pe;
   }
+  nodes_.store(p_, dt_);
 }
 
 // ---------------------------------------------------------------------------
@@ -580,7 +594,8 @@ void Engine::integrate(bool measure) {
     addForceBuffers(b, e);
     scratch_[t].spheres = integrateSpheres(p_, b, e, dt_, gravity_, measure);
   });
-  SphereSums sum;
+  SphereSums& sum = sums_;
+  sum = SphereSums{};
   const auto add = [&](const SphereSums& s) {
     sum.local += s.local, sum.ke_t += s.ke_t, sum.ke_r += s.ke_r, sum.pe += s.pe, sum.finite += s.finite;
     sum.max_d2 = std::max(sum.max_d2, s.max_d2);
@@ -597,6 +612,13 @@ void Engine::integrate(bool measure) {
               [&](std::size_t b) { per_block[b] = integrateBlock(blocks_[b], p_, dt_, gravity_, measure); });
     for (const SphereSums& s : per_block) add(s);
   }
+}
+
+// After the bodies and the link nodes moved: the energies they summed, the
+// walls' move, the finiteness probe, and whether the neighbour list is stale.
+void Engine::checkStep(bool measure) {
+  const SphereSums& sum = sums_;
+  const std::size_t n = p_.size();
   energy_.local += sum.local;
   if (measure) energy_.ke_t = sum.ke_t, energy_.ke_r = sum.ke_r, energy_.pe = sum.pe;
   double wall_move = 0.0;

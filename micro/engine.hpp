@@ -5,10 +5,11 @@
 /// Coulomb contacts with an optional normal force cap, local and viscous
 /// damping, O(N) neighbour search for any mix of sizes (a grid per size class
 /// + Verlet list), full energy bookkeeping.
-/// One step() = updateNeighbours -> computeContactForces -> computeLinkForces
-/// -> applyWallsAndLoads -> integrate -> (measureEnergy); docs/architecture.md
-/// says what each stage reads and writes. Each stage lives in its own file:
-/// neighbour_grid, contact_kernel, links, walls, integrator, energy.
+/// One step() = updateNeighbours -> computeContactForces -> applyWallsAndLoads
+/// -> integrate -> advanceLinkedNodes -> checkStep -> (measureEnergy);
+/// docs/architecture.md says what each stage reads and writes. Each stage
+/// lives in its own file: neighbour_grid, contact_kernel, walls, integrator,
+/// linked_nodes and links, energy.
 #include <Eigen/Core>
 #include <Eigen/Geometry>
 #include <array>
@@ -20,6 +21,7 @@
 
 #include "micro/energy.hpp"
 #include "micro/integrator.hpp"
+#include "micro/linked_nodes.hpp"
 #include "micro/links.hpp"
 #include "micro/material_laws.hpp"
 #include "micro/neighbour_grid.hpp"
@@ -62,12 +64,18 @@ class Engine {
   ~Engine();
 
   /// Critical time step estimate (s): min over bodies of sqrt(m / k) with k
-  /// the stiffest contact plus the body's links, and sqrt(I_min / (k l^2))
-  /// (docs/micro.md).
+  /// the stiffest contact, and sqrt(I_min / (k l^2)) (docs/micro.md). The
+  /// links' stiffness is left to the link nodes' sub-steps.
   double criticalDt() const { return dt_critical_; }
+  /// Critical step of the link nodes against their links (s; criticalLinkStep).
+  double linkCriticalDt() const { return dt_link_critical_; }
   double dt() const { return dt_; }
-  /// Sets the step (s), also during a run; the caller checks it against criticalDt().
-  void setDt(double dt_s) { dt_ = dt_s; }
+  /// Sets the step (s), also during a run; the caller checks it against
+  /// criticalDt(). The link nodes take as many sub-steps as keep theirs
+  /// within the run's dt_safety x linkCriticalDt().
+  void setDt(double dt_s);
+  /// Sub-steps of the link nodes per step (1: none).
+  int linkSubsteps() const { return substeps_; }
 
   /// Advances one step. `measure`: also compute the stored energies (elastic,
   /// kinetic, potential) for energy(). On anything but Ok, failure() says
@@ -131,9 +139,10 @@ class Engine {
   // The stages of step().
   void updateNeighbours();
   void computeContactForces(bool measure);
-  void computeLinkForces(bool measure);
   void applyWallsAndLoads(bool measure);
   void integrate(bool measure);
+  void advanceLinkedNodes(bool measure);
+  void checkStep(bool measure);
   void measureEnergy();
 
   // The parts of a neighbour-list rebuild.
@@ -170,6 +179,9 @@ class Engine {
   std::vector<RigidBlock> blocks_;
   std::vector<Wall> walls_;
   Links links_;
+  LinkedNodes nodes_;  // the spheres links join, moved by the link stage
+  int substeps_ = 1;
+  SphereSums sums_;  // of this step's integration (bodies and link nodes)
   std::vector<LinkEvent> link_events_;
   MaterialLaws laws_;
 
@@ -185,7 +197,7 @@ class Engine {
   std::size_t rebuilds_ = 0;
 
   Vec3 gravity_;
-  double dt_ = 0.0, dt_critical_ = 0.0, time_ = 0.0;
+  double dt_ = 0.0, dt_critical_ = 0.0, dt_link_critical_ = 0.0, dt_safety_ = 0.2, time_ = 0.0;
   double max_overlap_ratio_ = 0.5, runaway_factor_ = 10.0;
   long long step_ = 0;
   std::size_t contacts_ = 0;

@@ -49,12 +49,9 @@ Links::Links(const std::vector<LinkSpec>& specs, std::size_t particles) : partic
       node_link_.push_back(link[q]), node_sign_.push_back(sign[q]);
     node_begin_.push_back(static_cast<std::uint32_t>(node_link_.size()));
   }
-}
-
-void Links::followSlots(const Particles& p) {
-  slot_a_.resize(a_.size()), slot_b_.resize(b_.size()), node_slot_.resize(node_id_.size());
-  for (std::size_t l = 0; l < a_.size(); ++l) slot_a_[l] = p.slot[a_[l]], slot_b_[l] = p.slot[b_[l]];
-  for (std::size_t k = 0; k < node_id_.size(); ++k) node_slot_[k] = p.slot[node_id_[k]];
+  std::vector<std::uint32_t> node_of(particles, 0);
+  for (std::size_t k = 0; k < node_id_.size(); ++k) node_of[node_id_[k]] = static_cast<std::uint32_t>(k);
+  for (std::size_t l = 0; l < n; ++l) ka_.push_back(node_of[a_[l]]), kb_.push_back(node_of[b_[l]]);
 }
 
 ExcludedPairs Links::excludedPairs() const {
@@ -71,15 +68,14 @@ ExcludedPairs Links::excludedPairs() const {
   return out;
 }
 
-void Links::evaluate(const Particles& p, std::size_t l0, std::size_t l1, double time_s, bool measure,
-                     WorkerScratch& s) {
+void Links::evaluate(const double* X, const double* Y, const double* Z, std::size_t l0, std::size_t l1, double time_s,
+                     bool measure, WorkerScratch& s) {
   double elastic = 0.0, rupture = 0.0, plastic = 0.0;
   // Geometry of every link of the range first, in one vectorised pass (the
   // square roots and divisions off the laws' branchy path): length and unit
   // vector from a to b.
   {
-    const double *X = p.x.data(), *Y = p.y.data(), *Z = p.z.data();
-    const std::uint32_t *SA = slot_a_.data(), *SB = slot_b_.data();
+    const std::uint32_t *SA = ka_.data(), *SB = kb_.data();
     double *len = len_.data(), *ux = ux_.data(), *uy = uy_.data(), *uz = uz_.data();
 #pragma omp simd
     for (std::size_t l = l0; l < l1; ++l) {
@@ -118,9 +114,9 @@ void Links::evaluate(const Particles& p, std::size_t l0, std::size_t l1, double 
       }
       broken_[l] = 1;
       fx_[l] = fy_[l] = fz_[l] = tension_[l] = 0.0;
-      const std::uint32_t i = slot_a_[l];
+      const std::uint32_t i = ka_[l];
       const double h = 0.5 * length;
-      s.link_events.push_back({time_s, l, Vec3(p.x[i] + h * ux_[l], p.y[i] + h * uy_[l], p.z[i] + h * uz_[l])});
+      s.link_events.push_back({time_s, l, Vec3(X[i] + h * ux_[l], Y[i] + h * uy_[l], Z[i] + h * uz_[l])});
       continue;
     }
     // Tension pulls a towards b.
@@ -133,17 +129,14 @@ void Links::evaluate(const Particles& p, std::size_t l0, std::size_t l1, double 
   s.link_plastic += plastic;
 }
 
-void Links::apply(Particles& p, std::size_t k0, std::size_t k1) const {
-  for (std::size_t k = k0; k < k1; ++k) {
-    const std::uint32_t i = node_slot_[k];
-    double fx = 0.0, fy = 0.0, fz = 0.0;
-    for (std::uint32_t q = node_begin_[k]; q < node_begin_[k + 1]; ++q) {
-      const std::uint32_t l = node_link_[q];
-      const double sg = node_sign_[q];
-      fx += sg * fx_[l], fy += sg * fy_[l], fz += sg * fz_[l];
-    }
-    p.fx[i] += fx, p.fy[i] += fy, p.fz[i] += fz;
+Vec3 Links::nodeForce(std::size_t k) const {
+  double fx = 0.0, fy = 0.0, fz = 0.0;
+  for (std::uint32_t q = node_begin_[k]; q < node_begin_[k + 1]; ++q) {
+    const std::uint32_t l = node_link_[q];
+    const double sg = node_sign_[q];
+    fx += sg * fx_[l], fy += sg * fy_[l], fz += sg * fz_[l];
   }
+  return {fx, fy, fz};
 }
 
 }  // namespace gabion::micro

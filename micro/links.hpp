@@ -2,12 +2,14 @@
 /// \file
 /// The link stage of the fine DEM: pairs of spheres joined by a force law of
 /// their distance only (remote interactions: the wires of the netting), with
-/// per-link state and a broken flag, keyed by stable ids so that re-sorting
-/// the particles never changes a link's partners. Linked particles never
-/// touch through the contact law (their pair is excluded from the neighbour
-/// list). Forces are computed per link (workers take ranges of links), then
-/// summed per particle over its links in a fixed order (workers take ranges
-/// of particles): parallel, and the same for any thread count. A link whose
+/// per-link state and a broken flag. The spheres links join are the link
+/// nodes, numbered 0 .. nodeCount()-1 in increasing stable id; the links read
+/// the nodes' positions from node-indexed arrays (micro/linked_nodes.hpp
+/// holds them), so re-sorting the particle store never touches them. Linked
+/// particles never touch through the contact law (their pair is excluded
+/// from the neighbour list). Forces are computed per link (workers take
+/// ranges of links), then summed per node over its links in a fixed order:
+/// the same for any thread count. A link whose
 /// law says it broke stops acting for good, and its event (time, link,
 /// position) is recorded once. Two laws: linear springs
 /// (bridge/laws/link_linear.hpp) and the elastoplastic wires of the netting
@@ -36,19 +38,18 @@ class Links {
   /// Pairs that the contact law leaves alone (the linked ones).
   ExcludedPairs excludedPairs() const;
 
-  /// Takes the particles' slots after a re-sort (the link stage reads
-  /// positions by slot; call before evaluate() and after every re-sort).
-  void followSlots(const Particles& p);
-
-  /// Pass 1, links [l0, l1): forces of this step from the current positions;
-  /// a link that breaks is marked, its stored energy counted as dissipated,
-  /// and its event appended to s.link_events. Stored energy into
-  /// s.link_elastic, and the wires' plastic work so far into s.link_plastic,
-  /// when `measure`.
-  void evaluate(const Particles& p, std::size_t l0, std::size_t l1, double time_s, bool measure, WorkerScratch& s);
-  /// Pass 2, linked particles [k0, k1) of nodeCount(): adds their links' forces.
-  void apply(Particles& p, std::size_t k0, std::size_t k1) const;
+  /// Pass 1, links [l0, l1): forces from the nodes' positions (X, Y, Z,
+  /// indexed by node); a link that breaks is marked, its stored energy
+  /// counted as dissipated, and its event appended to s.link_events. Stored
+  /// energy into s.link_elastic, and the wires' plastic work so far into
+  /// s.link_plastic, when `measure`.
+  void evaluate(const double* X, const double* Y, const double* Z, std::size_t l0, std::size_t l1, double time_s,
+                bool measure, WorkerScratch& s);
+  /// Pass 2: the force of its links on node k (N), summed in link order.
+  Vec3 nodeForce(std::size_t k) const;
   std::size_t nodeCount() const { return node_id_.size(); }
+  /// The stable particle id of each node, increasing.
+  const std::vector<std::uint32_t>& nodeIds() const { return node_id_; }
 
   bool broken(std::size_t l) const { return broken_[l] != 0; }
   std::uint32_t idA(std::size_t l) const { return a_[l]; }
@@ -60,8 +61,8 @@ class Links {
 
  private:
   std::size_t particles_ = 0;
-  std::vector<std::uint32_t> a_, b_;            // stable ids
-  std::vector<std::uint32_t> slot_a_, slot_b_;  // their slots since the last re-sort
+  std::vector<std::uint32_t> a_, b_;    // stable ids
+  std::vector<std::uint32_t> ka_, kb_;  // their node indices
   // Law of each link: linear_[law_index_[l]] or wires_[law_index_[l]] (wire
   // curves shared by the links that have the same one), and a wire's state.
   std::vector<LinkSpec::Law> law_;
@@ -75,7 +76,7 @@ class Links {
   std::vector<double> len_, ux_, uy_, uz_;      // length and unit vector a -> b at this step
   // incidence: node k is particle id node_id_[k]; its links are
   // node_link_[node_begin_[k] .. node_begin_[k + 1]), with the sign of the force on it
-  std::vector<std::uint32_t> node_id_, node_begin_, node_link_, node_slot_;
+  std::vector<std::uint32_t> node_id_, node_begin_, node_link_;
   std::vector<double> node_sign_;
 };
 

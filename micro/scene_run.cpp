@@ -268,6 +268,10 @@ bridge::RunOutcome runScene(Scene scene, const std::string& file, const bridge::
   out.results["steps"] = engine.steps();
   out.results["dt_s"] = dt;
   out.results["dt_critical_s"] = engine.criticalDt();
+  if (engine.linkCount() > 0) {
+    out.results["link_substeps"] = engine.linkSubsteps();
+    out.results["dt_link_critical_s"] = engine.linkCriticalDt();
+  }
   out.results["bodies"] = nb;
   out.results["spheres"] = sphere_count;
   out.results["blocks"] = nblk;

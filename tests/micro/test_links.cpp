@@ -178,3 +178,84 @@ TEST(MicroLinks, ExcludedPairsFeelNoForce) {
 }
 
 }  // namespace
+
+namespace {
+
+// The link nodes' sub-steps (micro/linked_nodes.hpp). Without contacts, a
+// step of dt in n sub-steps is n leapfrog steps of dt / n: the chain of the
+// test above, run both ways, is at the same place (to rounding).
+TEST(MicroLinkSubsteps, WithoutContactsTheyAreLeapfrogAtTheSubStep) {
+  constexpr int N = 5;
+  const double k = 1e3, L0 = 0.05, r = 0.005, amp = 1e-3;
+  Scene s;
+  s.gravity_m_s2 = Vec3(0, 0, -9.81);
+  s.materials = {rock()};
+  s.spheres.push_back(sphere(Vec3(0, 0, 0), r, true));
+  for (int j = 1; j <= N; ++j) s.spheres.push_back(sphere(Vec3(j * L0 + amp * std::sin(j * kPi / (N + 1)), 0, 0), r));
+  s.spheres.push_back(sphere(Vec3((N + 1) * L0, 0, 0), r, true));
+  for (int j = 0; j <= N; ++j) s.links.push_back(link(j, j + 1, k, L0));
+  Engine fine(s, 1), coarse(s, 1);
+  const double h = s.run.dt_safety * fine.linkCriticalDt();
+  fine.setDt(h);
+  coarse.setDt(20 * h);
+  ASSERT_EQ(fine.linkSubsteps(), 1);
+  ASSERT_EQ(coarse.linkSubsteps(), 20);
+  for (int n = 0; n < 2000; ++n) ASSERT_EQ(fine.step(false), StepStatus::Ok);
+  for (int n = 0; n < 100; ++n) ASSERT_EQ(coarse.step(false), StepStatus::Ok);
+  for (int j = 1; j <= N; ++j)
+    EXPECT_NEAR((fine.body(j).position_m - coarse.body(j).position_m).norm(), 0.0, 1e-12) << "node " << j;
+}
+
+// A stone dropped on a taut chain of stiff wires clamped at both ends: the
+// contact sets the step, the wires take 20 sub-steps of it. The held contact
+// force gives its impulse at the start of the step (r-RESPA), so the energy
+// ledger closes as it does without sub-steps (a force held over the sub-steps
+// would arrive half a step late and feed energy into the bounce), and the
+// stone comes to rest where it does with the wires' own step.
+TEST(MicroLinkSubsteps, StoneOnAWireChainKeepsTheEnergyAndTheRestingPlace) {
+  constexpr int N = 9;
+  const double L0 = 0.05, r = 0.006, k_wire = 2e7;
+  Scene s;
+  s.materials = {rock()};
+  s.materials[0].local_damping = 0.3;
+  s.spheres.push_back(sphere(Vec3(0, 0, 0), r, true));
+  for (int j = 1; j <= N; ++j) {
+    SphereSpec n = sphere(Vec3(j * L0, 0, 0), r);
+    n.mass_kg = 0.005;
+    s.spheres.push_back(n);
+  }
+  s.spheres.push_back(sphere(Vec3((N + 1) * L0, 0, 0), r, true));
+  for (int j = 0; j <= N; ++j) s.links.push_back(link(j, j + 1, k_wire, 0.999 * L0));  // pre-tensioned
+  const std::size_t stone = s.spheres.size();
+  s.spheres.push_back(sphere(Vec3(5 * L0, 0, 0.08), 0.03));
+  const auto run = [&](double dt, int& substeps, double& balance) {
+    Engine e(s, 1);
+    e.setDt(dt);
+    substeps = e.linkSubsteps();
+    const auto steps = static_cast<long long>(0.6 / dt);
+    for (long long n = 0; n < steps; ++n) {
+      const StepStatus st = e.step(n + 1 == steps || n % 50 == 0);
+      if (st != StepStatus::Ok) ADD_FAILURE() << e.failure();
+      if (st != StepStatus::Ok) break;
+      balance = std::max(balance, std::fabs(e.energy().balance_rel_error));
+    }
+    return e.body(stone).position_m.z();
+  };
+  Engine probe(s, 1);
+  const double h = s.run.dt_safety * probe.linkCriticalDt(), dt = s.run.dt_safety * probe.criticalDt();
+  ASSERT_GT(dt / h, 15.0);
+  int n_fine = 0, n_coarse = 0;
+  double b_fine = 0.0, b_coarse = 0.0;
+  const double z_fine = run(h, n_fine, b_fine), z_coarse = run(dt, n_coarse, b_coarse);
+  EXPECT_EQ(n_fine, 1);
+  EXPECT_GT(n_coarse, 15);
+  // The stone rests on the chain (radii 0.03 + 0.006 above it), which sags.
+  const double sag = 0.036 - z_fine;
+  EXPECT_GT(sag, 1e-4);
+  EXPECT_LT(b_fine, 1e-3);
+  EXPECT_LT(b_coarse, 1e-3);
+  EXPECT_NEAR(z_coarse, z_fine, 0.01 * sag)
+      << "fine " << z_fine << " coarse " << z_coarse << "; balance fine " << b_fine << " coarse " << b_coarse;
+}
+
+}  // namespace

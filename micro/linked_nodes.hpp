@@ -1,0 +1,79 @@
+#pragma once
+/// \file
+/// The link nodes (the spheres links join: a netting's nodes) and their
+/// integration in sub-steps. A wire is far stiffer than any contact its node
+/// makes (a 2.7 mm wire 50 mm long: 1.5e7 N/m on a node of a few grams,
+/// against 1e6 N/m for a rock contact), so a step that suits the wires would
+/// be twenty times shorter than the rock needs. The nodes therefore advance
+/// in `substeps` leapfrog sub-steps of every engine step, each with the link
+/// forces of its own positions. The contact and wall forces, computed once
+/// per step at the step's positions, give their whole impulse (force x step)
+/// in the first sub-step's kick, as leapfrog gives it at that position: the
+/// impulse form of multiple time stepping (r-RESPA, Tuckerman et al. 1992),
+/// which keeps the energy; holding the force over the sub-steps instead
+/// would apply it half a step late and pump energy into every impact
+/// (docs/micro.md, Time step). With one sub-step this is the engine's
+/// leapfrog exactly.
+///
+/// The nodes' state lives here (a particle store of their own, node-indexed
+/// like Links); the engine's store keeps a copy for contact detection, with
+/// no mass, so that its free-sphere pass leaves them to this stage.
+#include <cstdint>
+#include <vector>
+
+#include "micro/links.hpp"
+#include "micro/particles.hpp"
+#include "micro/scene.hpp"
+#include "micro/worker_scratch.hpp"
+
+namespace gabion::micro {
+
+class LinkedNodes {
+ public:
+  LinkedNodes() = default;
+  /// The nodes of `links` (sphere ids of `scene`), taken over from the store
+  /// `p` (whose entries for them lose their mass and local damping).
+  LinkedNodes(const Scene& scene, const Links& links, Particles& p);
+
+  std::size_t size() const { return n_.size(); }
+  bool empty() const { return n_.size() == 0; }
+
+  /// Takes the step's contact and wall forces and torques of the nodes from
+  /// the store, their positions at the step's start and at the last
+  /// neighbour-list build.
+  void hold(const Particles& p);
+  /// Sub-step k of `substeps` (each h long): the link forces are in `links`
+  /// (evaluated on x(), y(), z()); sub-step 0 adds the held impulse. Kicks and
+  /// drifts every node by h. Returns the free-sphere sums (energies when
+  /// `measure`), and adds the work of the driven nodes to `driven_work`.
+  SphereSums advance(const Links& links, int k, int substeps, double h, const Vec3& g, bool measure,
+                     double& driven_work);
+  /// Writes the nodes' positions, and their force (the held contact and wall
+  /// forces plus the links' of the last sub-step), into the store, with as velocity the mean over the step of length dt (its
+  /// displacement / dt): the contacts' shear increments then follow the
+  /// node's real path over the step, whatever the sub-steps did inside it.
+  void store(Particles& p, double dt) const;
+
+  const double* x() const { return n_.x.data(); }
+  const double* y() const { return n_.y.data(); }
+  const double* z() const { return n_.z.data(); }
+  /// Particle id of node k.
+  std::uint32_t id(std::size_t k) const { return n_.id[k]; }
+
+ private:
+  template <bool kMeasure>
+  SphereSums kickAndDrift(double held, double h, const Vec3& g);
+
+  Particles n_;  // the nodes' own store: state, masses, and this sub-step's forces
+  std::vector<double> hfx_, hfy_, hfz_, htx_, hty_, htz_;  // held contact and wall forces of the step
+  std::vector<double> sx_, sy_, sz_;                       // positions at the step's start
+  std::vector<double> lfx_, lfy_, lfz_;                    // the links' force of the last sub-step
+  std::vector<std::uint32_t> driven_;                      // nodes that are fixed and move
+};
+
+/// The critical step of the link nodes against their links alone (s): min
+/// over free nodes of sqrt(m / sum of their links' stiffness); infinite if
+/// there are none.
+double criticalLinkStep(const Scene& scene);
+
+}  // namespace gabion::micro
