@@ -60,12 +60,12 @@ SphereSums LinkedNodes::kickAndDrift(double held, double h, const Vec3& g) {
   double* __restrict X = n_.x.data(), * __restrict Y = n_.y.data(), * __restrict Z = n_.z.data();
   double* __restrict VX = n_.vx.data(), * __restrict VY = n_.vy.data(), * __restrict VZ = n_.vz.data();
   double* __restrict WX = n_.wx.data(), * __restrict WY = n_.wy.data(), * __restrict WZ = n_.wz.data();
-  const double *__restrict HX = hfx_.data(), *__restrict HY = hfy_.data(), *__restrict HZ = hfz_.data();
-  const double *__restrict TX = htx_.data(), *__restrict TY = hty_.data(), *__restrict TZ = htz_.data();
-  const double *__restrict LX = lfx_.data(), *__restrict LY = lfy_.data(), *__restrict LZ = lfz_.data();
+  const double* __restrict HX = hfx_.data(), * __restrict HY = hfy_.data(), * __restrict HZ = hfz_.data();
+  const double* __restrict TX = htx_.data(), * __restrict TY = hty_.data(), * __restrict TZ = htz_.data();
+  const double* __restrict LX = lfx_.data(), * __restrict LY = lfy_.data(), * __restrict LZ = lfz_.data();
   const double *__restrict M = n_.mass.data(), *__restrict IM = n_.inv_mass.data(),
                *__restrict II = n_.inv_inertia.data(), *__restrict AL = n_.alpha.data();
-  const double *__restrict X0 = n_.x0.data(), *__restrict Y0 = n_.y0.data(), *__restrict Z0 = n_.z0.data();
+  const double* __restrict X0 = n_.x0.data(), * __restrict Y0 = n_.y0.data(), * __restrict Z0 = n_.z0.data();
   const double gx = g.x(), gy = g.y(), gz = g.z(), extra = held - 1.0;
   double local = 0.0, ke_t = 0.0, ke_r = 0.0, pe = 0.0, finite = 0.0, max_d2 = 0.0;
 #pragma omp simd reduction(+ : local, ke_t, ke_r, pe, finite) reduction(max : max_d2)
@@ -130,7 +130,8 @@ double criticalLinkStep(const Scene& scene) {
   for (const LinkSpec& l : scene.links) k_link[l.a] += l.stiffness(), k_link[l.b] += l.stiffness();
   double dt = std::numeric_limits<double>::infinity();
   for (std::size_t s = 0; s < scene.spheres.size(); ++s)
-    if (!scene.spheres[s].fixed && k_link[s] > 0.0) dt = std::min(dt, std::sqrt(sphereMass(scene, scene.spheres[s]) / k_link[s]));
+    if (!scene.spheres[s].fixed && k_link[s] > 0.0)
+      dt = std::min(dt, std::sqrt(sphereMass(scene, scene.spheres[s]) / k_link[s]));
   return dt;
 }
 

@@ -49,9 +49,9 @@ class LinkedNodes {
   SphereSums advance(const Links& links, int k, int substeps, double h, const Vec3& g, bool measure,
                      double& driven_work);
   /// Writes the nodes' positions, and their force (the held contact and wall
-  /// forces plus the links' of the last sub-step), into the store, with as velocity the mean over the step of length dt (its
-  /// displacement / dt): the contacts' shear increments then follow the
-  /// node's real path over the step, whatever the sub-steps did inside it.
+  /// forces plus the links' of the last sub-step), into the store, with as velocity the mean over the step of length dt
+  /// (its displacement / dt): the contacts' shear increments then follow the node's real path over the step, whatever
+  /// the sub-steps did inside it.
   void store(Particles& p, double dt) const;
 
   const double* x() const { return n_.x.data(); }
