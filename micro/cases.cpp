@@ -2,6 +2,7 @@
 
 #include <utility>
 
+#include "micro/cell/cell_assembly.hpp"
 #include "micro/engine.hpp"
 #include "micro/netting/tensile_test.hpp"
 #include "micro/scene.hpp"
@@ -28,7 +29,8 @@ bridge::RunOutcome runSceneCase(const bridge::JsonDocument& doc, const bridge::R
 std::vector<bridge::CaseKind> caseKinds() {
   return {{"micro.scene", "fine DEM of explicit spheres, rigid multi-sphere blocks and planar walls (docs/micro.md)",
            checkScene, runSceneCase},
-          nettingTensileKind()};
+          nettingTensileKind(),
+          cellKind()};
 }
 
 }  // namespace gabion::micro

@@ -111,7 +111,7 @@ bridge::RunOutcome runScene(Scene scene, const std::string& file, const bridge::
                             const SceneRunHooks& hooks) {
   const std::size_t sphere_count = scene.spheres.size();
   Engine engine(scene, ctx.threads);
-  if (!scene.save_cell) {
+  if (!scene.save_cell && !hooks.end) {
     std::vector<SphereSpec>().swap(scene.spheres);  // the engine has its own copy
     std::vector<BlockSpec>().swap(scene.blocks);
   }
@@ -319,6 +319,7 @@ bridge::RunOutcome runScene(Scene scene, const std::string& file, const bridge::
     if (out.results.contains("porosity")) summary["porosity"] = out.results["porosity"];
     writeCellFile(ctx.outdir / "cell.h5", scene, engine, summary);
   }
+  if (ok && hooks.end) hooks.end(engine, scene);
   if (!ok) {
     out.status = bridge::RunOutcome::Status::NumericalFailure;
     out.message = engine.failure();

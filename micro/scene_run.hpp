@@ -25,6 +25,9 @@ struct SceneRunHooks {
   std::function<bool(const Engine&)> done;
   /// Before the result file is committed: the kind's own datasets.
   std::function<void(const Engine&, bridge::H5Writer&)> write;
+  /// At the end of a run that did not fail, with the scene the engine was
+  /// built from (e.g. to take its state, micro/cell/cell_file.hpp stateScene).
+  std::function<void(const Engine&, const Scene&)> end;
 };
 
 /// The step to use: run.dt_s if given (refused above the critical step unless

@@ -8,3 +8,4 @@ set(GABION_SMOKE_SET_micro_netting_tensile_paper --set test.max_displacement_m=0
 set(GABION_SMOKE_SET_micro_netting_box --set run.duration_s=0.02)
 set(GABION_SMOKE_SET_micro_block_fill --set run.duration_s=0.01)
 set(GABION_SMOKE_SET_micro_cell_fill --set run.duration_s=0.005)
+set(GABION_SMOKE_SET_micro_cell --set fill.max_duration_s=0.01 --set vibration.max_duration_s=0.005 --set standing.max_duration_s=0.005)

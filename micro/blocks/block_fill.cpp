@@ -46,6 +46,78 @@ BlockShape parseShape(const JsonReader& r) {
 
 }  // namespace
 
+nlohmann::json addBlockFill(const JsonReader& r, Scene& scene, int material, const Vec3& lo, const Vec3& hi,
+                            double target, std::uint64_t seed,
+                            const std::function<void(const std::string&)>& too_small) {
+  const double density = scene.materials[static_cast<std::size_t>(material)].density_kg_m3;
+  const BlockShape shape = parseShape(r);
+  // A block of size d has the mass of the unit block times d^3 (one shape).
+  const BlockGeometry unit = angularBlock(shape, 1.0);
+  const double unit_mass = clusterMassProperties(unit.centers_m, unit.radii_m, density).mass_kg;
+  const auto mass_of = [&](double d) { return unit_mass * d * d * d; };
+  std::vector<double> sizes;
+  GradingTable table;
+  const bool graded = r.has("grading");
+  if (graded == r.has("gaussian")) r.failHere("give either a `grading` table or a `gaussian` of the block size");
+  if (graded) {
+    const JsonReader g = r.object("grading");
+    table.sieve_m = g.numbers("sieve_m", Check::Positive, 2);
+    table.passing_percent = g.numbers("passing_percent", Check::NonNegative, 2);
+    const GradingIssue issue = checkGrading(table);
+    if (!issue.key.empty()) {
+      if (issue.at < 0) g.fail(issue.key, issue.message);
+      g.failElement(issue.key, static_cast<std::size_t>(issue.at), issue.message);
+    }
+    sizes = sampleGrading(table, target, mass_of, seed);
+  } else {
+    const JsonReader g = r.object("gaussian");
+    const double mean = g.number("mean_m", Check::Positive), sd = g.number("sd_m", Check::NonNegative);
+    sizes = sampleGaussian(mean, sd, target, mass_of, seed);
+    // Report it against sieves spanning the sample.
+    for (int k = 0; k <= 6; ++k) table.sieve_m.push_back(std::max(0.2 * mean, mean - 2.5 * sd) + k * 5.0 * sd / 6.0);
+  }
+  if (sizes.empty()) r.failHere("the mass of rock is below half a block: no block to place");
+  // Largest first, layer by layer: rows along x, rows stacked along y,
+  // layers up z, each block laid flat in its box with a gap of 2 % of its size.
+  std::sort(sizes.begin(), sizes.end(), std::greater<>());
+  std::mt19937_64 rng(seed ^ 0x9e3779b97f4a7c15ull);
+  double x = lo.x(), y = lo.y(), z = lo.z(), row = 0.0, layer = 0.0;
+  const int group = static_cast<int>(r.integer("group", 0, 0));
+  if (group >= kGroupCount) r.fail("group", "contact groups are 0 .. " + std::to_string(kGroupCount - 1));
+  std::vector<double> masses;
+  double mass = 0.0;
+  for (std::size_t b = 0; b < sizes.size(); ++b) {
+    const BlockGeometry geom = angularBlock(shape, sizes[b]);
+    const Eigen::Quaterniond q = flatRotation(rng);
+    const Vec3 box = (q.toRotationMatrix().cwiseAbs() * geom.edges_m).array() + 0.02 * sizes[b];
+    if (x + box.x() > hi.x() + 1e-12) x = lo.x(), y += row, row = 0.0;
+    if (y + box.y() > hi.y() + 1e-12) x = lo.x(), y = lo.y(), z += layer, row = layer = 0.0;
+    if (x + box.x() > hi.x() + 1e-12 || y + box.y() > hi.y() + 1e-12 || z + box.z() > hi.z() + 1e-12)
+      too_small("the region holds " + std::to_string(b) + " of the " + std::to_string(sizes.size()) +
+                " blocks (packed side by side in their boxes, layer by layer): make it taller, or ask for less rock");
+    BlockSpec spec;
+    spec.member_centers_m = geom.centers_m;
+    spec.member_radii_m = geom.radii_m;
+    spec.material = material;
+    spec.group = group;
+    spec.position_m = Vec3(x, y, z) + 0.5 * box;
+    spec.orientation = q;
+    scene.blocks.push_back(spec);
+    masses.push_back(mass_of(sizes[b]));
+    mass += masses.back();
+    x += box.x(), row = std::max(row, box.y()), layer = std::max(layer, box.z());
+  }
+  nlohmann::json rep;
+  rep["blocks"] = sizes.size();
+  rep["mass_kg"] = mass;
+  rep["target_mass_kg"] = target;
+  rep["sieve_m"] = table.sieve_m;
+  if (graded) rep["target_passing_percent"] = table.passing_percent;
+  rep["passing_percent"] = passingPercent(sizes, masses, table.sieve_m);
+  rep["spheres_per_block"] = unit.centers_m.size();
+  return rep;
+}
+
 nlohmann::json addBlockFills(const JsonReader& root, Scene& scene) {
   nlohmann::json reports = nlohmann::json::array();
   const std::vector<JsonReader> fills = root.objects("block_fills");
@@ -57,12 +129,6 @@ nlohmann::json addBlockFills(const JsonReader& root, Scene& scene) {
         std::find_if(scene.materials.begin(), scene.materials.end(), [&](const Material& m) { return m.name == name; });
     if (mat == scene.materials.end()) r.fail("material", "unknown material '" + name + "'");
     const int material = static_cast<int>(mat - scene.materials.begin());
-    const double density = mat->density_kg_m3;
-    const BlockShape shape = parseShape(r);
-    // A block of size d has the mass of the unit block times d^3 (one shape).
-    const BlockGeometry unit = angularBlock(shape, 1.0);
-    const double unit_mass = clusterMassProperties(unit.centers_m, unit.radii_m, density).mass_kg;
-    const auto mass_of = [&](double d) { return unit_mass * d * d * d; };
     // The region and the mass of rock to put in it.
     const JsonReader region = r.object("region");
     const Vec3 lo = region.vec3("min_m"), hi = region.vec3("max_m");
@@ -76,71 +142,11 @@ nlohmann::json addBlockFills(const JsonReader& root, Scene& scene) {
     } else {
       const double fraction = r.number("solid_fraction", Check::Positive);
       if (fraction >= 1.0) r.fail("solid_fraction", "must be below 1");
-      target = fraction * density * (hi - lo).prod();
+      target = fraction * mat->density_kg_m3 * (hi - lo).prod();
     }
     const auto seed = static_cast<std::uint64_t>(r.integer("seed", 1, 0));
-    std::vector<double> sizes;
-    GradingTable table;
-    const bool graded = r.has("grading");
-    if (graded == r.has("gaussian")) r.failHere("give either a `grading` table or a `gaussian` of the block size");
-    if (graded) {
-      const JsonReader g = r.object("grading");
-      table.sieve_m = g.numbers("sieve_m", Check::Positive, 2);
-      table.passing_percent = g.numbers("passing_percent", Check::NonNegative, 2);
-      const GradingIssue issue = checkGrading(table);
-      if (!issue.key.empty()) {
-        if (issue.at < 0) g.fail(issue.key, issue.message);
-        g.failElement(issue.key, static_cast<std::size_t>(issue.at), issue.message);
-      }
-      sizes = sampleGrading(table, target, mass_of, seed);
-    } else {
-      const JsonReader g = r.object("gaussian");
-      const double mean = g.number("mean_m", Check::Positive), sd = g.number("sd_m", Check::NonNegative);
-      sizes = sampleGaussian(mean, sd, target, mass_of, seed);
-      // Report it against sieves spanning the sample.
-      for (int k = 0; k <= 6; ++k) table.sieve_m.push_back(std::max(0.2 * mean, mean - 2.5 * sd) + k * 5.0 * sd / 6.0);
-    }
-    if (sizes.empty()) r.failHere("the mass of rock is below half a block: no block to place");
-    // Largest first, layer by layer: rows along x, rows stacked along y,
-    // layers up z, each block laid flat in its box with a gap of 2 % of its size.
-    std::sort(sizes.begin(), sizes.end(), std::greater<>());
-    std::mt19937_64 rng(seed ^ 0x9e3779b97f4a7c15ull);
-    double x = lo.x(), y = lo.y(), z = lo.z(), row = 0.0, layer = 0.0;
-    const int group = static_cast<int>(r.integer("group", 0, 0));
-    if (group >= kGroupCount) r.fail("group", "contact groups are 0 .. " + std::to_string(kGroupCount - 1));
-    std::vector<double> masses;
-    double mass = 0.0;
-    for (std::size_t b = 0; b < sizes.size(); ++b) {
-      const BlockGeometry geom = angularBlock(shape, sizes[b]);
-      const Eigen::Quaterniond q = flatRotation(rng);
-      const Vec3 box = (q.toRotationMatrix().cwiseAbs() * geom.edges_m).array() + 0.02 * sizes[b];
-      if (x + box.x() > hi.x() + 1e-12) x = lo.x(), y += row, row = 0.0;
-      if (y + box.y() > hi.y() + 1e-12) x = lo.x(), y = lo.y(), z += layer, row = layer = 0.0;
-      if (x + box.x() > hi.x() + 1e-12 || y + box.y() > hi.y() + 1e-12 || z + box.z() > hi.z() + 1e-12)
-        region.failHere("the region holds " + std::to_string(b) + " of the " + std::to_string(sizes.size()) +
-                        " blocks (packed side by side in their boxes, layer by layer): make it taller, or ask for "
-                        "less rock");
-      BlockSpec spec;
-      spec.member_centers_m = geom.centers_m;
-      spec.member_radii_m = geom.radii_m;
-      spec.material = material;
-      spec.group = group;
-      spec.position_m = Vec3(x, y, z) + 0.5 * box;
-      spec.orientation = q;
-      scene.blocks.push_back(spec);
-      masses.push_back(mass_of(sizes[b]));
-      mass += masses.back();
-      x += box.x(), row = std::max(row, box.y()), layer = std::max(layer, box.z());
-    }
-    nlohmann::json rep;
-    rep["blocks"] = sizes.size();
-    rep["mass_kg"] = mass;
-    rep["target_mass_kg"] = target;
-    rep["sieve_m"] = table.sieve_m;
-    if (graded) rep["target_passing_percent"] = table.passing_percent;
-    rep["passing_percent"] = passingPercent(sizes, masses, table.sieve_m);
-    rep["spheres_per_block"] = unit.centers_m.size();
-    reports.push_back(rep);
+    reports.push_back(
+        addBlockFill(r, scene, material, lo, hi, target, seed, [&](const std::string& m) { region.failHere(m); }));
   }
   return reports;
 }

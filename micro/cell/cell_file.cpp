@@ -33,6 +33,32 @@ Vec3 at3(const std::vector<double>& v, std::size_t k) {
 
 }  // namespace
 
+Scene stateScene(const Scene& in, const Engine& engine) {
+  Scene s = in;
+  for (std::size_t k = 0; k < s.spheres.size(); ++k) {
+    const BodyState b = engine.body(k);
+    s.spheres[k].center_m = b.position_m;
+    s.spheres[k].velocity_m_s = b.velocity_m_s;
+    s.spheres[k].angular_velocity_rad_s = b.angular_velocity_rad_s;
+  }
+  for (std::size_t k = 0; k < s.blocks.size(); ++k) {
+    const BodyState b = engine.body(s.spheres.size() + k);
+    s.blocks[k].position_m = engine.blockFrameOrigin(k);
+    s.blocks[k].orientation = engine.blockOrientation(k);
+    s.blocks[k].velocity_m_s = b.velocity_m_s;
+    s.blocks[k].angular_velocity_rad_s = b.angular_velocity_rad_s;
+  }
+  s.links.clear();
+  for (std::size_t l = 0; l < in.links.size(); ++l) {
+    if (engine.linkBroken(l)) continue;
+    s.links.push_back(in.links[l]);
+    if (in.links[l].law == LinkSpec::Law::Wire) s.links.back().wire_state = engine.linkWireState(l);
+  }
+  s.generated = nlohmann::json::object();
+  s.save_cell = false;
+  return s;
+}
+
 void writeCellFile(const std::filesystem::path& path, const Scene& in, const Engine& engine,
                    const nlohmann::json& summary) {
   bridge::H5Writer h5(path);

@@ -1,0 +1,463 @@
+#include "micro/cell/cell_assembly.hpp"
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <optional>
+#include <sstream>
+#include <stdexcept>
+#include <string>
+#include <vector>
+
+#include "bridge/errors.hpp"
+#include "bridge/output.hpp"
+#include "bridge/plot.hpp"
+#include "micro/blocks/block_fill.hpp"
+#include "micro/cell/cell_file.hpp"
+#include "micro/cell/porosity.hpp"
+#include "micro/netting/mesh.hpp"
+#include "micro/netting/netting_input.hpp"
+#include "micro/scene_run.hpp"
+
+namespace gabion::micro {
+namespace {
+
+using bridge::Check;
+using bridge::JsonReader;
+
+struct CellCase {
+  double edge_m = 0.5;
+  double target_porosity = 0.436;
+  std::uint64_t seed = 1;
+  Vec3 gravity = Vec3(0, 0, -9.81);
+  Material rock, formwork;
+  NettingInput netting;
+  std::optional<JsonReader> blocks;
+  double mass_kg = 0.0;  // rock to fill the cell to the target porosity
+  struct {
+    double max_duration_s = 2.0, settled_kinetic_ratio = 1e-3;
+  } fill;
+  struct {
+    double frequency_hz = 20.0, amplitude_m = 0.002, max_duration_s = 1.5, check_interval_s = 0.05;
+    double surcharge_Pa = 1000.0;
+  } vibration;
+  struct {
+    double max_duration_s = 2.0, kinetic_ratio = 1e-6, max_bulge_m = 0.02, max_settlement_m = 0.02;
+  } standing;
+  double porosity_spacing_m = 0.002;
+  RunSpec run;
+};
+
+Material parseNamedMaterial(const std::string& name, const JsonReader& r) {
+  Material m = parseMaterial(name, r);
+  m.name = name;
+  return m;
+}
+
+CellCase parseCase(const bridge::JsonDocument& doc) {
+  const JsonReader root = doc.root();
+  CellCase c;
+  c.edge_m = root.number("edge_m", c.edge_m, Check::Positive);
+  c.target_porosity = root.number("target_porosity", c.target_porosity, Check::Positive);
+  if (c.target_porosity >= 1.0) root.fail("target_porosity", "must be below 1");
+  c.seed = static_cast<std::uint64_t>(root.integer("seed", 1, 0));
+  c.gravity = root.vec3("gravity_m_s2", c.gravity);
+  if (!(c.gravity.z() < 0.0)) root.fail("gravity_m_s2", "a cell is filled under gravity: its z component must be < 0");
+  c.rock = parseNamedMaterial("rock", root.object("rock"));
+  c.formwork = c.rock;
+  c.formwork.name = "formwork";
+  if (const auto f = root.optionalObject("formwork")) c.formwork = parseNamedMaterial("formwork", *f);
+  c.netting = parseNetting(root.object("netting"));
+  c.netting.contact.name = "netting";
+  c.blocks = root.object("blocks");
+  c.mass_kg = (1.0 - c.target_porosity) * c.rock.density_kg_m3 * std::pow(c.edge_m, 3);
+  if (c.netting.mesh.opening_m > c.edge_m) root.fail("edge_m", "the cell must be at least one mesh opening wide");
+  if (const auto f = root.optionalObject("fill")) {
+    c.fill.max_duration_s = f->number("max_duration_s", c.fill.max_duration_s, Check::Positive);
+    c.fill.settled_kinetic_ratio = f->number("settled_kinetic_ratio", c.fill.settled_kinetic_ratio, Check::Positive);
+  }
+  if (const auto v = root.optionalObject("vibration")) {
+    c.vibration.frequency_hz = v->number("frequency_hz", c.vibration.frequency_hz, Check::Positive);
+    c.vibration.amplitude_m = v->number("amplitude_m", c.vibration.amplitude_m, Check::NonNegative);
+    c.vibration.max_duration_s = v->number("max_duration_s", c.vibration.max_duration_s, Check::NonNegative);
+    c.vibration.check_interval_s = v->number("check_interval_s", c.vibration.check_interval_s, Check::Positive);
+    c.vibration.surcharge_Pa = v->number("surcharge_Pa", c.vibration.surcharge_Pa, Check::NonNegative);
+  }
+  if (const auto s = root.optionalObject("standing")) {
+    c.standing.max_duration_s = s->number("max_duration_s", c.standing.max_duration_s, Check::Positive);
+    c.standing.kinetic_ratio = s->number("kinetic_ratio", c.standing.kinetic_ratio, Check::Positive);
+    c.standing.max_bulge_m = s->number("max_bulge_m", c.standing.max_bulge_m, Check::Positive);
+    c.standing.max_settlement_m = s->number("max_settlement_m", c.standing.max_settlement_m, Check::Positive);
+  }
+  c.porosity_spacing_m = root.number("porosity_spacing_m", c.porosity_spacing_m, Check::Positive);
+  if (c.porosity_spacing_m > 0.05 * c.edge_m) root.fail("porosity_spacing_m", "must be at most 5 % of the edge");
+  c.run = parseRun(root.object("run"), c.fill.max_duration_s);
+  return c;
+}
+
+// The netting of the cell: a closed box whose nodes' inner surfaces are the
+// cell's faces (the box of edge + 2 r placed at -r: the node contact radius
+// is a contact device and must not eat the cell's volume), split into the
+// basket (bottom and sides, filled first) and the lid's own nodes.
+struct CellNetting {
+  Netting box;
+  std::vector<bool> lid_only;             // node of the top face and of no other
+  std::vector<std::uint32_t> basket_of;   // box node -> basket sphere index (basket nodes)
+  std::vector<std::uint32_t> basket_ids;  // basket sphere -> box node
+  Vec3 origin;
+};
+
+CellNetting makeNetting(const CellCase& c, const std::string& file) {
+  CellNetting n;
+  const double r = c.netting.mesh.nodeRadius();
+  try {
+    n.box = closedBox(c.netting.mesh, c.edge_m + 2.0 * r, false);
+  } catch (const std::invalid_argument& e) {
+    throw bridge::InputError(file, "/edge_m", e.what());
+  }
+  n.origin = Vec3::Constant(-r);
+  const std::size_t nn = n.box.node_m.size();
+  std::vector<int> faces_of(nn, 0);
+  for (std::size_t f = 0; f < 6; ++f)
+    for (const std::uint32_t k : n.box.faces[f]) faces_of[k] += f == 1 ? 1 : 2;  // top counts 1, others 2
+  n.lid_only.assign(nn, false);
+  n.basket_of.assign(nn, 0);
+  for (std::size_t k = 0; k < nn; ++k) {
+    n.lid_only[k] = faces_of[k] == 1;
+    if (!n.lid_only[k]) {
+      n.basket_of[k] = static_cast<std::uint32_t>(n.basket_ids.size());
+      n.basket_ids.push_back(static_cast<std::uint32_t>(k));
+    }
+  }
+  return n;
+}
+
+SphereSpec nodeSphere(const CellNetting& n, std::size_t k, int material) {
+  SphereSpec sp;
+  sp.center_m = n.origin + n.box.node_m[k];
+  sp.radius_m = n.box.node_radius_m;
+  sp.mass_kg = n.box.node_mass_kg[k];
+  sp.material = material;
+  sp.group = 1;
+  return sp;
+}
+
+WallSpec wall(const std::string& name, const Vec3& point, const Vec3& normal, int material) {
+  WallSpec w;
+  w.name = name;
+  w.point_m = point;
+  w.normal = normal;
+  w.material = material;
+  return w;
+}
+
+enum Mat { kRock = 0, kFormwork = 1, kNetting = 2 };
+
+// Stage 1: the basket in its formwork (floor and four sides just outside the
+// nodes) and the blocks laid out in a column above its base, ready to fall.
+Scene fillScene(const CellCase& c, const CellNetting& n, nlohmann::json& fill_report) {
+  Scene s;
+  s.gravity_m_s2 = c.gravity;
+  s.materials = {c.rock, c.formwork, c.netting.contact};
+  s.run = c.run;
+  s.run.duration_s = c.fill.max_duration_s;
+  for (const std::uint32_t k : n.basket_ids) s.spheres.push_back(nodeSphere(n, k, kNetting));
+  for (const NettingLink& l : n.box.links)
+    if (!n.lid_only[l.a] && !n.lid_only[l.b]) {
+      NettingLink b = l;
+      b.a = n.basket_of[l.a], b.b = n.basket_of[l.b];
+      s.links.push_back(linkSpec(c.netting.mesh, b, 0));
+    }
+  const double r = n.box.node_radius_m, e = c.edge_m;
+  // The blocks: a column over the cell, tall enough for any loose layout.
+  fill_report = addBlockFill(*c.blocks, s, kRock, Vec3(0.002, 0.002, 0.002), Vec3(e - 0.002, e - 0.002, 12.0 * e),
+                             c.mass_kg, c.seed, [&](const std::string& m) { c.blocks->failHere(m); });
+  s.walls = {wall("floor", Vec3(0, 0, -2 * r), Vec3::UnitZ(), kFormwork),
+             wall("x_minus", Vec3(-2 * r, 0, 0), Vec3::UnitX(), kFormwork),
+             wall("x_plus", Vec3(e + 2 * r, 0, 0), -Vec3::UnitX(), kFormwork),
+             wall("y_minus", Vec3(0, -2 * r, 0), Vec3::UnitY(), kFormwork),
+             wall("y_plus", Vec3(0, e + 2 * r, 0), -Vec3::UnitY(), kFormwork)};
+  s.porosity.enabled = true;
+  s.porosity.min_m = Vec3::Zero();
+  s.porosity.max_m = Vec3::Constant(e);
+  s.porosity.spacing_m = c.porosity_spacing_m;
+  s.porosity.blocks_only = true;
+  return s;
+}
+
+// The rock's spheres (the block members), for porosities and heights.
+void rockSpheres(const Engine& engine, std::size_t spheres, std::vector<Vec3>& x, std::vector<double>& r) {
+  engine.sphereGeometry(x, r);
+  x.erase(x.begin(), x.begin() + static_cast<std::ptrdiff_t>(spheres));
+  r.erase(r.begin(), r.begin() + static_cast<std::ptrdiff_t>(spheres));
+}
+
+double cellPorosity(const Engine& engine, std::size_t spheres, const Vec3& base, double edge, double spacing) {
+  std::vector<Vec3> x;
+  std::vector<double> r;
+  rockSpheres(engine, spheres, x, r);
+  return 1.0 - solidFraction(x, r, base, base + Vec3::Constant(edge), spacing);
+}
+
+double rockTop(const Engine& engine, std::size_t spheres) {
+  std::vector<Vec3> x;
+  std::vector<double> r;
+  rockSpheres(engine, spheres, x, r);
+  double top = -1e300;
+  for (std::size_t k = 0; k < x.size(); ++k) top = std::max(top, x[k].z() + r[k]);
+  return top;
+}
+
+// A stage's run in OUTDIR/<name>: the scene run with the stage's hooks; the
+// state it ends in goes to `state`. Throws NumericalError if it fails.
+struct StageRun {
+  bridge::RunOutcome outcome;
+  Scene state;
+  double wall_s = 0.0;
+};
+
+StageRun runStage(const std::string& name, Scene scene, const std::string& file, const bridge::RunContext& ctx,
+                  SceneRunHooks hooks) {
+  StageRun out;
+  bridge::RunContext sub = ctx;
+  sub.outdir = ctx.outdir / name;
+  std::filesystem::create_directories(sub.outdir);
+  hooks.label = "micro.cell " + name;
+  hooks.end = [&](const Engine& e, const Scene& in) { out.state = stateScene(in, e); };
+  const auto t0 = std::chrono::steady_clock::now();
+  out.outcome = runScene(std::move(scene), file, sub, hooks);
+  out.wall_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  if (out.outcome.status != bridge::RunOutcome::Status::Ok)
+    throw std::runtime_error("micro.cell, stage '" + name + "': " + out.outcome.message);
+  return out;
+}
+
+// Kinetic energy against a reference (J), at the last measuring step.
+double kinetic(const Engine& e) {
+  return e.energy().kinetic_translational_J + e.energy().kinetic_rotational_J;
+}
+
+void check(const bridge::JsonDocument& doc) {
+  const CellCase c = parseCase(doc);
+  const CellNetting n = makeNetting(c, doc.file());
+  nlohmann::json report;
+  const Scene s = fillScene(c, n, report);
+  validateScene(s, doc.file());
+  chooseDt(s, criticalTimeStep(s), doc.file());
+}
+
+bridge::RunOutcome run(const bridge::JsonDocument& doc, const bridge::RunContext& ctx) {
+  const CellCase c = parseCase(doc);
+  const std::string file = doc.file();
+  const CellNetting n = makeNetting(c, file);
+  const double e = c.edge_m, r = n.box.node_radius_m;
+  nlohmann::json fill_report;
+  Scene scene = fillScene(c, n, fill_report);
+  const std::size_t basket = scene.spheres.size();
+  bridge::RunOutcome out;
+
+  // --- 1. Fill: until the blocks are nearly at rest (kinetic energy below
+  // a fraction of the work gravity did) or the time limit.
+  double pe0 = NAN;
+  SceneRunHooks fill_hooks;
+  fill_hooks.done = [&](const Engine& eng) {
+    if (std::isnan(pe0)) pe0 = eng.energy().gravity_potential_J;
+    const double work = pe0 - eng.energy().gravity_potential_J;
+    return eng.time() > 0.2 && work > 0.0 && kinetic(eng) < c.fill.settled_kinetic_ratio * work;
+  };
+  StageRun fill = runStage("fill", std::move(scene), file, ctx, fill_hooks);
+  const double porosity_gravity = fill.outcome.results.value("porosity", NAN);
+
+  // --- 2. Vibration: floor and formwork shake vertically together while a
+  // plate presses the fill with the surcharge; until the porosity inside the
+  // cell reaches the target (checked every check_interval_s) or the limit.
+  Scene vib = fill.state;
+  for (WallSpec& w : vib.walls) {
+    w.program.kind = WallProgram::Kind::Sinusoid;
+    w.program.direction = Vec3::UnitZ();
+    w.program.amplitude_m = c.vibration.amplitude_m;
+    w.program.frequency_hz = c.vibration.frequency_hz;
+  }
+  {
+    // The plate: a bounded wall over the cell's opening (it misses the rim's nodes).
+    Engine probe(fill.state, 1);
+    const double top = rockTop(probe, basket);
+    WallSpec press = wall("press", Vec3(0.5 * e, 0.5 * e, std::max(top, e) + 0.002), -Vec3::UnitZ(), kFormwork);
+    press.bounded = true;
+    press.axis_u = Vec3::UnitX();
+    press.half_u_m = press.half_v_m = 0.5 * e;
+    const double force = c.vibration.surcharge_Pa * e * e;
+    if (force > 0.0) {
+      press.program.kind = WallProgram::Kind::Servo;
+      press.program.target_force_N = force;
+      press.program.max_speed_m_s = 0.05;
+      press.program.gain_m_s_N = 0.05 / force;
+    }
+    vib.walls.push_back(press);
+  }
+  vib.run.duration_s = std::max(c.vibration.max_duration_s, vib.run.series_interval_s);
+  std::vector<double> vib_t, vib_n;
+  double next_check = 0.0, porosity_vibrated = porosity_gravity;
+  SceneRunHooks vib_hooks;
+  vib_hooks.done = [&](const Engine& eng) {
+    if (eng.time() + 1e-12 < next_check) return false;
+    next_check += c.vibration.check_interval_s;
+    const double floor_dz = eng.wallPosition(0).z() + 2 * r;
+    porosity_vibrated = cellPorosity(eng, basket, Vec3(0, 0, floor_dz), e, 2.0 * c.porosity_spacing_m);
+    vib_t.push_back(eng.time()), vib_n.push_back(porosity_vibrated);
+    return porosity_vibrated <= c.target_porosity;
+  };
+  StageRun vibration = runStage("vibration", std::move(vib), file, ctx, vib_hooks);
+
+  // --- 3. Closing and standing: the lid's nodes are laced on over the fill,
+  // the formwork and plate are taken away, the floor stays as the rigid base.
+  Scene stand = vibration.state;
+  {
+    Engine probe(vibration.state, 1);
+    const double floor_z = probe.wallPosition(0).z();
+    stand.walls.resize(1);
+    stand.walls[0].point_m = probe.wallPosition(0);
+    stand.walls[0].program = WallProgram{};
+    const double top = rockTop(probe, basket);
+    // The lid lies on the rim's plane, or on the fill where it stands higher.
+    const double lift =
+        std::max(0.0, top + r - (n.origin.z() + n.box.node_m[n.box.faces[1][0]].z())) + (floor_z + 2 * r);
+    std::vector<std::uint32_t> sphere_of(n.box.node_m.size(), 0);
+    for (std::size_t k = 0; k < n.box.node_m.size(); ++k) {
+      if (!n.lid_only[k]) {
+        sphere_of[k] = n.basket_of[k];
+        continue;
+      }
+      sphere_of[k] = static_cast<std::uint32_t>(stand.spheres.size());
+      SphereSpec sp = nodeSphere(n, k, kNetting);
+      sp.center_m.z() += lift;
+      stand.spheres.push_back(sp);
+    }
+    for (const NettingLink& l : n.box.links) {
+      if (!n.lid_only[l.a] && !n.lid_only[l.b]) continue;
+      NettingLink b = l;
+      b.a = sphere_of[l.a], b.b = sphere_of[l.b];
+      LinkSpec spec = linkSpec(c.netting.mesh, b, 0);
+      if (!n.lid_only[l.a] || !n.lid_only[l.b])  // a lace or shared wire to the rim: tied as it lies
+        spec.wire.rest_length_m = (stand.spheres[b.a].center_m - stand.spheres[b.b].center_m).norm();
+      stand.links.push_back(spec);
+    }
+  }
+  stand.run.duration_s = c.standing.max_duration_s;
+  double reference = 0.0;  // the work gravity would do bringing every body down to the base (J)
+  std::vector<Vec3> start;
+  for (const SphereSpec& sp : stand.spheres) start.push_back(sp.center_m);
+  double ke_ratio = NAN;
+  SceneRunHooks stand_hooks;
+  double pe_base = NAN;
+  stand_hooks.done = [&](const Engine& eng) {
+    if (std::isnan(pe_base)) {
+      // m g h over all bodies, h above the base: minus the potential at the base.
+      double mass = 0.0;
+      for (const SphereSpec& sp : stand.spheres) mass += sp.fixed ? 0.0 : sphereMass(stand, sp);
+      mass += c.mass_kg;
+      pe_base = eng.energy().gravity_potential_J - mass * -c.gravity.z() * eng.wallPosition(0).z();
+      reference = pe_base;
+    }
+    ke_ratio = kinetic(eng) / reference;
+    return eng.time() > 0.1 && ke_ratio < c.standing.kinetic_ratio;
+  };
+  StageRun standing = runStage("standing", std::move(stand), file, ctx, stand_hooks);
+
+  // --- The cell as it stands.
+  const Scene& fin = standing.state;
+  const double base = fin.walls[0].point_m.z() + 2 * r;  // the rock's bottom face
+  double bulge = 0.0, settlement = 0.0, lid_z0 = 0.0, lid_z1 = 0.0;
+  std::size_t lid_nodes = 0;
+  // Side faces (left, right, front, back: box faces 4, 5, 2, 3): the largest
+  // outward move of a node from its plane at closing.
+  const int side_face[4] = {4, 5, 2, 3};
+  const int axis[4] = {0, 0, 1, 1};
+  const double sign[4] = {-1, 1, -1, 1};
+  for (int f = 0; f < 4; ++f)
+    for (const std::uint32_t k : n.box.faces[static_cast<std::size_t>(side_face[f])]) {
+      if (n.lid_only[k]) continue;
+      const std::size_t s = n.basket_of[k];
+      bulge = std::max(bulge, sign[f] * (fin.spheres[s].center_m[axis[f]] - start[s][axis[f]]));
+    }
+  for (std::size_t s = basket; s < fin.spheres.size(); ++s)
+    lid_z0 += start[s].z(), lid_z1 += fin.spheres[s].center_m.z(), ++lid_nodes;
+  lid_z0 /= static_cast<double>(lid_nodes), lid_z1 /= static_cast<double>(lid_nodes);
+  settlement = lid_z0 - lid_z1;
+  const double height = lid_z1 - r - base;
+  double porosity = NAN;
+  {
+    Engine probe(fin, 1);
+    porosity = cellPorosity(probe, fin.spheres.size(), Vec3(0, 0, base), e, c.porosity_spacing_m);
+  }
+  const bool at_rest = ke_ratio < c.standing.kinetic_ratio;
+  const bool stands = at_rest && bulge < c.standing.max_bulge_m && settlement < c.standing.max_settlement_m;
+
+  nlohmann::json& res = out.results;
+  res["porosity"] = porosity;
+  res["porosity_after_gravity"] = porosity_gravity;
+  res["porosity_after_vibration"] = porosity_vibrated;
+  res["target_porosity"] = c.target_porosity;
+  res["blocks"] = fin.blocks.size();
+  res["mass_kg"] = fill_report["mass_kg"];
+  res["height_m"] = height;
+  res["bulge_m"] = bulge;
+  res["settlement_m"] = settlement;
+  res["stands"] = stands;
+  res["standing"] = {{"kinetic_ratio", ke_ratio},
+                     {"kinetic_ratio_limit", c.standing.kinetic_ratio},
+                     {"at_rest", at_rest},
+                     {"max_bulge_m", c.standing.max_bulge_m},
+                     {"max_settlement_m", c.standing.max_settlement_m}};
+  res["block_fills"] = nlohmann::json::array({fill_report});
+  writeGradingFigures(ctx.outdir, res["block_fills"]);
+  nlohmann::json stages;
+  for (const auto& [name, st] :
+       {std::pair<std::string, const StageRun*>{"fill", &fill}, {"vibration", &vibration}, {"standing", &standing}}) {
+    nlohmann::json j = st->outcome.results;
+    j["wall_time_s"] = st->wall_s;
+    stages[name] = j;
+  }
+  res["stages"] = stages;
+  res["wall_time_s"] = fill.wall_s + vibration.wall_s + standing.wall_s;
+  // The porosity through the vibration, against the target.
+  if (!vib_t.empty()) {
+    bridge::PlotSpec plot;
+    plot.title = "Vibration: porosity inside the cell";
+    plot.x_label = "time (s)";
+    plot.y_label = "porosity (-)";
+    plot.series.push_back({"porosity", vib_t, vib_n, bridge::PlotSeries::Style::LineMarkers});
+    plot.series.push_back({"target",
+                           {vib_t.front(), vib_t.back()},
+                           {c.target_porosity, c.target_porosity},
+                           bridge::PlotSeries::Style::Line});
+    bridge::writePlotPng(ctx.outdir / "vibration.png", plot);
+  }
+  {
+    Engine probe(fin, 1);
+    writeCellFile(ctx.outdir / "cell.h5", fin, probe, res);
+  }
+  std::ostringstream rep;
+  rep.setf(std::ios::fixed);
+  rep.precision(3);
+  rep << "cell: porosity " << porosity << " (after gravity " << porosity_gravity << ", after vibration "
+      << porosity_vibrated << ", target " << c.target_porosity << "); " << fin.blocks.size() << " blocks, "
+      << res["mass_kg"].get<double>() << " kg\n";
+  rep << "standing: bulge " << 1000 * bulge << " mm, settlement " << 1000 * settlement << " mm, kinetic ratio "
+      << ke_ratio << " -> " << (stands ? "stands" : "DOES NOT STAND") << "\n";
+  rep << "stages (wall s): fill " << fill.wall_s << ", vibration " << vibration.wall_s << ", standing "
+      << standing.wall_s << "\n";
+  out.report = rep.str();
+  return out;
+}
+
+}  // namespace
+
+bridge::CaseKind cellKind() {
+  return {"micro.cell",
+          "a gabion cell: netting basket filled with angular blocks by gravity, vibrated to a target porosity, "
+          "closed and left to stand (docs/cell.md)",
+          check, run};
+}
+
+}  // namespace gabion::micro

@@ -1,0 +1,94 @@
+// The micro.cell kind (micro/cell/cell_assembly.hpp): a small cell is filled,
+// vibrated, closed and left to stand end to end; each stage keeps its energy
+// ledger; the same seed gives the same cell; bad input names its field.
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <fstream>
+#include <nlohmann/json.hpp>
+#include <string>
+
+#include "../support/run_gabion.hpp"
+#include "bridge/output.hpp"
+
+namespace {
+
+using gabion::testing::runGabion;
+using gabion::testing::scratchDir;
+using gabion::testing::writeFile;
+
+// A 0.3 m cell of 60-90 mm blocks (about 45 blocks) with short stages.
+std::string smallCell(const std::string& extra = "") {
+  return R"({"format": "gabion.case/1", "kind": "micro.cell", "edge_m": 0.3, "seed": 3,
+ "rock": {"density_kg_m3": 2600, "normal_stiffness_N_m": 1e6, "shear_stiffness_N_m": 2.5e5, "friction": 0.5,
+          "local_damping": 0.1, "viscous_damping_ratio": 0.1},
+ "blocks": {"grading": {"sieve_m": [0.06, 0.075, 0.09], "passing_percent": [0, 50, 100]}},
+ "netting": {"contact": {"normal_stiffness_N_m": 1e6, "shear_stiffness_N_m": 2.5e5, "friction": 0.5, "local_damping": 0.1}},
+ "fill": {"max_duration_s": 0.35},
+ "vibration": {"max_duration_s": 0.1, "check_interval_s": 0.05},
+ "standing": {"max_duration_s": 0.1},
+ "run": {"output_interval_s": 0.05, "series_interval_s": 0.005})" +
+         extra + "}";
+}
+
+nlohmann::json summaryOf(const std::filesystem::path& dir) {
+  std::ifstream in(dir / "summary.json");
+  return nlohmann::json::parse(in);
+}
+
+TEST(MicroCell, SmallCellIsFilledVibratedClosedAndStoodWithItsLedgerClosed) {
+  const auto dir = scratchDir("cell_small");
+  writeFile(dir / "cell.json", smallCell());
+  const auto a = runGabion("run -q " + (dir / "cell.json").string() + " -o " + (dir / "a").string());
+  ASSERT_EQ(a.exit_code, 0) << a.output;
+  const nlohmann::json s = summaryOf(dir / "a");
+  const nlohmann::json& r = s.contains("results") ? s["results"] : s;
+  // 39.6 kg of rock: (1 - 0.436) x 2600 kg/m3 x 0.027 m3, to within half a block.
+  EXPECT_NEAR(r["mass_kg"].get<double>(), 0.564 * 2600 * 0.027, 1.0);
+  EXPECT_GT(r["blocks"].get<int>(), 20);
+  for (const char* key :
+       {"porosity", "porosity_after_gravity", "porosity_after_vibration", "height_m", "bulge_m", "settlement_m"}) {
+    ASSERT_TRUE(r.contains(key)) << key;
+    EXPECT_TRUE(std::isfinite(r[key].get<double>())) << key;
+  }
+  // A loose gravity packing of angular blocks: well above the dense limit.
+  EXPECT_GT(r["porosity_after_gravity"].get<double>(), 0.40);
+  EXPECT_LT(r["porosity_after_gravity"].get<double>(), 0.70);
+  EXPECT_TRUE(r.contains("stands"));
+  for (const char* stage : {"fill", "vibration", "standing"}) {
+    const nlohmann::json& st = r["stages"][stage];
+    EXPECT_EQ(st["step_status"], "ok") << stage;
+    EXPECT_LT(std::fabs(st["energy"]["balance_rel_error"].get<double>()), 0.01) << stage;
+    EXPECT_TRUE(std::filesystem::exists(dir / "a" / stage / "result.h5")) << stage;
+  }
+  EXPECT_TRUE(std::filesystem::exists(dir / "a" / "cell.h5"));
+  EXPECT_TRUE(std::filesystem::exists(dir / "a" / "vibration.png"));
+
+  // The same seed (and thread count): the same cell, to the last bit.
+  const auto b = runGabion("run -q " + (dir / "cell.json").string() + " -o " + (dir / "b").string());
+  ASSERT_EQ(b.exit_code, 0) << b.output;
+  const gabion::bridge::H5Reader ha(dir / "a" / "cell.h5"), hb(dir / "b" / "cell.h5");
+  for (const char* d : {"/blocks/position_m", "/blocks/orientation", "/spheres/center_m", "/links/plastic_strain"})
+    EXPECT_EQ(ha.read(d), hb.read(d)) << d;
+}
+
+TEST(MicroCell, BadInputIsNamed) {
+  const auto dir = scratchDir("cell_bad");
+  const struct {
+    std::string name, text, pointer;
+  } cases[] = {
+      {"porosity", smallCell(R"(, "target_porosity": 1.2)"), "/target_porosity"},
+      {"edge", smallCell(R"(, "edge_m": 0.05)"), "/edge_m"},
+      {"ratio", smallCell(R"(, "standing": {"kinetic_ratio": -1})"), "/standing/kinetic_ratio"},
+      {"grading", smallCell(R"(, "porosity_spacing_m": 0.1)"), "/porosity_spacing_m"},
+      {"unknown", smallCell(R"(, "vibration": {"frequency": 20})"), "/vibration/frequency"},
+  };
+  for (const auto& c : cases) {
+    writeFile(dir / (c.name + ".json"), c.text);
+    const auto r = runGabion("check " + (dir / (c.name + ".json")).string());
+    EXPECT_EQ(r.exit_code, 2) << c.name << ": " << r.output;
+    EXPECT_NE(r.output.find(c.pointer), std::string::npos) << c.name << ": " << r.output;
+  }
+}
+
+}  // namespace
