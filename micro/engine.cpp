@@ -181,8 +181,7 @@ Engine::~Engine() = default;
 
 void Engine::setDt(double dt_s) {
   dt_ = dt_s;
-  const double h = dt_safety_ * dt_link_critical_;
-  substeps_ = std::isfinite(h) && h > 0.0 ? std::max(1, static_cast<int>(std::ceil(dt_s / h - 1e-9))) : 1;
+  substeps_ = micro::linkSubsteps(dt_s, dt_safety_, dt_link_critical_);
 }
 
 // ---------------------------------------------------------------------------
@@ -507,7 +506,8 @@ void Engine::computeContactForces(bool measure) {
 
 void Engine::advanceLinkedNodes(bool measure) {
   if (nodes_.empty()) return;
-  nodes_.hold(p_);
+  nodes_.hold(p_, rebuilds_ != nodes_rebuilds_);
+  nodes_rebuilds_ = rebuilds_;
   const std::size_t T = scratch_.size(), nl = links_.size();
   const double h = dt_ / substeps_;
   for (int k = 0; k < substeps_; ++k) {

@@ -181,7 +181,8 @@ class Engine {
   Links links_;
   LinkedNodes nodes_;  // the spheres links join, moved by the link stage
   int substeps_ = 1;
-  SphereSums sums_;  // of this step's integration (bodies and link nodes)
+  std::size_t nodes_rebuilds_ = ~std::size_t{0};  // the list build the nodes last took x0 from
+  SphereSums sums_;                               // of this step's integration (bodies and link nodes)
   std::vector<LinkEvent> link_events_;
   MaterialLaws laws_;
 

@@ -41,14 +41,19 @@ LinkedNodes::LinkedNodes(const Scene& scene, const Links& links, Particles& p) {
   }
 }
 
-void LinkedNodes::hold(const Particles& p) {
+void LinkedNodes::hold(const Particles& p, bool rebuilt) {
+  const std::uint32_t* id = n_.id.data();
   for (std::size_t k = 0; k < size(); ++k) {
-    const std::uint32_t i = p.slot[n_.id[k]];
+    const std::uint32_t i = p.slot[id[k]];
     hfx_[k] = p.fx[i], hfy_[k] = p.fy[i], hfz_[k] = p.fz[i];
     htx_[k] = p.tx[i], hty_[k] = p.ty[i], htz_[k] = p.tz[i];
-    n_.x0[k] = p.x0[i], n_.y0[k] = p.y0[i], n_.z0[k] = p.z0[i];
-    sx_[k] = n_.x[k], sy_[k] = n_.y[k], sz_[k] = n_.z[k];
   }
+  if (rebuilt)
+    for (std::size_t k = 0; k < size(); ++k) {
+      const std::uint32_t i = p.slot[id[k]];
+      n_.x0[k] = p.x0[i], n_.y0[k] = p.y0[i], n_.z0[k] = p.z0[i];
+    }
+  sx_ = n_.x, sy_ = n_.y, sz_ = n_.z;
 }
 
 // One vectorised pass over the nodes' arrays (as the free spheres';
@@ -116,12 +121,28 @@ SphereSums LinkedNodes::advance(const Links& links, int k, int substeps, double 
 
 void LinkedNodes::store(Particles& p, double dt) const {
   const double inv = 1.0 / dt;
-  for (std::size_t k = 0; k < size(); ++k) {
-    const std::uint32_t i = p.slot[n_.id[k]];
-    p.x[i] = n_.x[k], p.y[i] = n_.y[k], p.z[i] = n_.z[k];
-    p.vx[i] = (n_.x[k] - sx_[k]) * inv, p.vy[i] = (n_.y[k] - sy_[k]) * inv, p.vz[i] = (n_.z[k] - sz_[k]) * inv;
-    p.wx[i] = n_.wx[k], p.wy[i] = n_.wy[k], p.wz[i] = n_.wz[k];
-    p.fx[i] = hfx_[k] + lfx_[k], p.fy[i] = hfy_[k] + lfy_[k], p.fz[i] = hfz_[k] + lfz_[k];
+  const std::uint32_t *id = n_.id.data(), *slot = p.slot.data();
+  // Positions, mean velocities over the step, spins; then forces.
+  {
+    double* __restrict X = p.x.data(), * __restrict Y = p.y.data(), * __restrict Z = p.z.data();
+    double* __restrict VX = p.vx.data(), * __restrict VY = p.vy.data(), * __restrict VZ = p.vz.data();
+    const double *x = n_.x.data(), *y = n_.y.data(), *z = n_.z.data();
+    const double *sx = sx_.data(), *sy = sy_.data(), *sz = sz_.data();
+    for (std::size_t k = 0; k < size(); ++k) {
+      const std::uint32_t i = slot[id[k]];
+      X[i] = x[k], Y[i] = y[k], Z[i] = z[k];
+      VX[i] = (x[k] - sx[k]) * inv, VY[i] = (y[k] - sy[k]) * inv, VZ[i] = (z[k] - sz[k]) * inv;
+    }
+  }
+  {
+    double* __restrict WX = p.wx.data(), * __restrict WY = p.wy.data(), * __restrict WZ = p.wz.data();
+    double* __restrict FX = p.fx.data(), * __restrict FY = p.fy.data(), * __restrict FZ = p.fz.data();
+    const double *wx = n_.wx.data(), *wy = n_.wy.data(), *wz = n_.wz.data();
+    for (std::size_t k = 0; k < size(); ++k) {
+      const std::uint32_t i = slot[id[k]];
+      WX[i] = wx[k], WY[i] = wy[k], WZ[i] = wz[k];
+      FX[i] = hfx_[k] + lfx_[k], FY[i] = hfy_[k] + lfy_[k], FZ[i] = hfz_[k] + lfz_[k];
+    }
   }
 }
 
@@ -133,6 +154,11 @@ double criticalLinkStep(const Scene& scene) {
     if (!scene.spheres[s].fixed && k_link[s] > 0.0)
       dt = std::min(dt, std::sqrt(sphereMass(scene, scene.spheres[s]) / k_link[s]));
   return dt;
+}
+
+int linkSubsteps(double dt_s, double dt_safety, double link_critical_s) {
+  const double h = dt_safety * link_critical_s;
+  return std::isfinite(h) && h > 0.0 ? std::max(1, static_cast<int>(std::ceil(dt_s / h - 1e-9))) : 1;
 }
 
 }  // namespace gabion::micro

@@ -39,9 +39,10 @@ class LinkedNodes {
   bool empty() const { return n_.size() == 0; }
 
   /// Takes the step's contact and wall forces and torques of the nodes from
-  /// the store, their positions at the step's start and at the last
-  /// neighbour-list build.
-  void hold(const Particles& p);
+  /// the store, and their positions at the step's start; with `rebuilt`
+  /// (the neighbour list was built since the last call) also their positions
+  /// at that build.
+  void hold(const Particles& p, bool rebuilt);
   /// Sub-step k of `substeps` (each h long): the link forces are in `links`
   /// (evaluated on x(), y(), z()); sub-step 0 adds the held impulse. Kicks and
   /// drifts every node by h. Returns the free-sphere sums (energies when
@@ -75,5 +76,9 @@ class LinkedNodes {
 /// over free nodes of sqrt(m / sum of their links' stiffness); infinite if
 /// there are none.
 double criticalLinkStep(const Scene& scene);
+
+/// Sub-steps of the link nodes in a step of dt_s: as many as keep each within
+/// dt_safety x link_critical_s (1 when there are no free link nodes).
+int linkSubsteps(double dt_s, double dt_safety, double link_critical_s);
 
 }  // namespace gabion::micro

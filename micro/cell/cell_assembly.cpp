@@ -228,7 +228,15 @@ StageRun runStage(const std::string& name, Scene scene, const std::string& file,
   out.outcome = runScene(std::move(scene), file, sub, hooks);
   out.wall_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   if (out.outcome.status != bridge::RunOutcome::Status::Ok)
-    throw std::runtime_error("micro.cell, stage '" + name + "': " + out.outcome.message);
+    out.outcome.message = "stage '" + name + "': " + out.outcome.message;
+  return out;
+}
+
+// A stage that failed ends the run: its numerical failure, with what the
+// stages so far gave (each in its own folder).
+bridge::RunOutcome failed(const StageRun& st, const nlohmann::json& so_far) {
+  bridge::RunOutcome out = st.outcome;
+  out.results = so_far;
   return out;
 }
 
@@ -266,6 +274,8 @@ bridge::RunOutcome run(const bridge::JsonDocument& doc, const bridge::RunContext
     return eng.time() > 0.2 && work > 0.0 && kinetic(eng) < c.fill.settled_kinetic_ratio * work;
   };
   StageRun fill = runStage("fill", std::move(scene), file, ctx, fill_hooks);
+  if (fill.outcome.status != bridge::RunOutcome::Status::Ok)
+    return failed(fill, {{"stages", {{"fill", fill.outcome.results}}}});
   const double porosity_gravity = fill.outcome.results.value("porosity", NAN);
 
   // --- 2. Vibration: floor and formwork shake vertically together while a
@@ -308,10 +318,15 @@ bridge::RunOutcome run(const bridge::JsonDocument& doc, const bridge::RunContext
     return porosity_vibrated <= c.target_porosity;
   };
   StageRun vibration = runStage("vibration", std::move(vib), file, ctx, vib_hooks);
+  if (vibration.outcome.status != bridge::RunOutcome::Status::Ok)
+    return failed(vibration, {{"stages", {{"fill", fill.outcome.results}, {"vibration", vibration.outcome.results}}}});
 
   // --- 3. Closing and standing: the lid's nodes are laced on over the fill,
   // the formwork and plate are taken away, the floor stays as the rigid base.
   Scene stand = vibration.state;
+  // The vibrator stops: the cell starts its standing test at rest.
+  for (SphereSpec& sp : stand.spheres) sp.velocity_m_s.setZero(), sp.angular_velocity_rad_s.setZero();
+  for (BlockSpec& b : stand.blocks) b.velocity_m_s.setZero(), b.angular_velocity_rad_s.setZero();
   {
     Engine probe(vibration.state, 1);
     const double floor_z = probe.wallPosition(0).z();
@@ -363,6 +378,11 @@ bridge::RunOutcome run(const bridge::JsonDocument& doc, const bridge::RunContext
     return eng.time() > 0.1 && ke_ratio < c.standing.kinetic_ratio;
   };
   StageRun standing = runStage("standing", std::move(stand), file, ctx, stand_hooks);
+  if (standing.outcome.status != bridge::RunOutcome::Status::Ok)
+    return failed(standing, {{"stages",
+                              {{"fill", fill.outcome.results},
+                               {"vibration", vibration.outcome.results},
+                               {"standing", standing.outcome.results}}}});
 
   // --- The cell as it stands.
   const Scene& fin = standing.state;

@@ -80,6 +80,40 @@ Netting sheetLayout(const MeshSpec& mesh, int columns, int rows) {
 
 }  // namespace
 
+// Beads: `mesh.wire_beads` extra nodes evenly along every single wire, so
+// that the rock meets the wire between the twists and not only at their
+// ends (docs/netting.md, `wire_beads`). Each piece is a wire of its share of the
+// rest length; a bead belongs to the faces both its wire's ends are on.
+void beadSingleWires(const MeshSpec& mesh, Netting& net) {
+  if (mesh.wire_beads <= 0) return;
+  std::vector<std::uint8_t> face_bits(net.node_m.size(), 0);
+  for (std::size_t f = 0; f < net.faces.size(); ++f)
+    for (const std::uint32_t k : net.faces[f]) face_bits[k] |= static_cast<std::uint8_t>(1u << f);
+  const int pieces = mesh.wire_beads + 1;
+  std::vector<NettingLink> links;
+  for (const NettingLink& l : net.links) {
+    if (l.kind != WireKind::Single) {
+      links.push_back(l);
+      continue;
+    }
+    const Vec3 a = net.node_m[l.a], b = net.node_m[l.b];
+    const std::uint8_t bits = face_bits[l.a] & face_bits[l.b];
+    std::uint32_t prev = l.a;
+    for (int k = 1; k <= pieces; ++k) {
+      std::uint32_t next = l.b;
+      if (k < pieces) {
+        next = static_cast<std::uint32_t>(net.node_m.size());
+        net.node_m.push_back(a + (b - a) * (static_cast<double>(k) / pieces));
+        for (std::size_t f = 0; f < net.faces.size(); ++f)
+          if (bits & (1u << f)) net.faces[f].push_back(next);
+      }
+      links.push_back({prev, next, WireKind::Single, l.rest_length_m / pieces});
+      prev = next;
+    }
+  }
+  net.links = std::move(links);
+}
+
 Netting flatSheet(const MeshSpec& mesh, double width_m, double length_m) {
   const double D = mesh.opening_m, a = mesh.twist_length_m, b = mesh.wire_rise_m;
   if (!(width_m >= D) || !(length_m >= 3.0 * a + 2.0 * b))
@@ -91,6 +125,7 @@ Netting flatSheet(const MeshSpec& mesh, double width_m, double length_m) {
   auto rows = static_cast<int>(std::floor((length_m - a) / (a + b) + 1e-9)) + 1;
   if (rows % 2 == 0) --rows;
   Netting net = sheetLayout(mesh, columns, rows);
+  beadSingleWires(mesh, net);
   assignNodeMasses(mesh, net);
   return net;
 }
@@ -200,6 +235,7 @@ Netting closedBox(const MeshSpec& mesh, double edge_m, bool open_top) {
   }
   net.node_m = std::move(nodes);
   net.links = std::move(links);
+  beadSingleWires(mesh, net);
   assignNodeMasses(mesh, net);
   return net;
 }

@@ -38,6 +38,9 @@ struct MeshSpec {
   double node_radius_m = 0.0;
   /// Mass of every node (kg); 0: the wire it carries (half of each of its links).
   double node_mass_kg = 0.0;
+  /// Extra nodes evenly along every single wire (0: nodes at the twists'
+  /// ends only), so that the rock meets the wire between the twists.
+  int wire_beads = 0;
   /// Factor on the node masses (>= 1): a larger stable time step for a small
   /// error in the dynamics (docs/netting.md, Time step).
   double node_mass_scale = 1.0;

@@ -27,13 +27,15 @@ NettingInput parseNetting(const JsonReader& r) {
   if (r.has("node_radius_m")) m.node_radius_m = r.number("node_radius_m", Check::Positive);
   if (r.has("node_mass_kg")) m.node_mass_kg = r.number("node_mass_kg", Check::Positive);
   m.node_mass_scale = r.number("node_mass_scale", 1.0, Check::Positive);
+  m.wire_beads = static_cast<int>(r.integer("wire_beads", 0, 0));
+  if (m.wire_beads > 8) r.fail("wire_beads", "at most 8 beads per wire");
   if (m.node_mass_scale < 1.0) r.fail("node_mass_scale", "must be >= 1 (it scales the node masses up)");
   // Nodes sit at the ends of the wires: a node wider than half the shortest
   // wire would touch its neighbours' nodes before any load.
-  const double shortest = std::min(m.twist_length_m, std::hypot(0.5 * m.opening_m, m.wire_rise_m));
+  const double shortest = std::min(m.twist_length_m, std::hypot(0.5 * m.opening_m, m.wire_rise_m) / (m.wire_beads + 1));
   if (!(m.nodeRadius() < 0.5 * shortest))
     r.fail(r.has("node_radius_m") ? "node_radius_m" : "wire_diameter_m",
-           "the node radius (" + std::to_string(m.nodeRadius()) + " m) must be below half the shortest wire (" +
+           "the node radius (" + std::to_string(m.nodeRadius()) + " m) must be below half the shortest wire piece (" +
                std::to_string(shortest) + " m)");
 
   Material& c = in.contact;

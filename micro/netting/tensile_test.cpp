@@ -8,6 +8,7 @@
 #include "bridge/errors.hpp"
 #include "bridge/output.hpp"
 #include "bridge/plot.hpp"
+#include "micro/linked_nodes.hpp"
 #include "micro/netting/mesh.hpp"
 #include "micro/netting/netting_input.hpp"
 #include "micro/scene_run.hpp"
@@ -152,7 +153,9 @@ bridge::RunOutcome run(const bridge::JsonDocument& doc, const bridge::RunContext
   validateScene(scene, doc.file());
   const double dt = chooseDt(scene, criticalTimeStep(scene), doc.file());
   const auto steps = static_cast<long long>(std::ceil(scene.run.duration_s / dt - 1e-9));
-  bridge::writeJsonAtomic(ctx.outdir / "netting.json", exchangeFile(c, net, scene, dt, steps));
+  // The other engine integrates the wires at the step the nodes take here (a sub-step of dt).
+  const int substeps = linkSubsteps(dt, scene.run.dt_safety, criticalLinkStep(scene));
+  bridge::writeJsonAtomic(ctx.outdir / "netting.json", exchangeFile(c, net, scene, dt / substeps, steps * substeps));
 
   // The pulling force: what the netting exerts on the pulled nodes, against the pull.
   struct Curve {

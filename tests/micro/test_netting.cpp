@@ -227,6 +227,8 @@ TEST(NettingTensile, BadMeshesAndLawsAreInputErrorsNamingTheField) {
           {"unknown_mesh", tensileCase("", R"(, "mesh": "square_welded")"), "/netting/mesh"},
           {"weak_twist", tensileCase("", R"(, "double_twist": {"lambda_k": 0.2})"), "/netting/double_twist"},
           {"fat_nodes", tensileCase("", R"(, "node_radius_m": 0.03)"), "/netting/node_radius_m"},
+          {"many_beads", tensileCase("", R"(, "wire_beads": 9)"), "/netting/wire_beads"},
+          {"beads_too_close", tensileCase("", R"(, "wire_beads": 2)"), "/netting/wire_diameter_m"},
       },
       true);
 }
@@ -449,6 +451,43 @@ TEST(NettingMesh, OpenTopBoxIsABasket) {
     if (x.z() > 0.5 - 1e-9 && corner) corner_lacings += lacings[k];
   }
   EXPECT_EQ(top_lacings, corner_lacings);
+}
+
+}  // namespace
+
+namespace {
+
+// Beads (MeshSpec::wire_beads): each single wire becomes beads + 1 pieces in
+// line, with the same wire in all (total rest length and mass kept); twists,
+// selvedges and laces are left alone; a bead lies on its wire's faces.
+TEST(NettingMesh, BeadsSplitEverySingleWireAndKeepItsSteel) {
+  MeshSpec plain;
+  MeshSpec beaded = plain;
+  beaded.wire_beads = 2;
+  const Netting a = closedBox(plain, 0.52, true), b = closedBox(beaded, 0.52, true);
+  std::size_t singles = 0;
+  double length_a = 0.0, length_b = 0.0;
+  for (const auto& l : a.links)
+    if (l.kind == WireKind::Single) ++singles, length_a += l.rest_length_m;
+  for (const auto& l : b.links)
+    if (l.kind == WireKind::Single) length_b += l.rest_length_m;
+  EXPECT_EQ(b.node_m.size(), a.node_m.size() + 2 * singles);
+  EXPECT_EQ(b.links.size(), a.links.size() + 2 * singles);
+  EXPECT_NEAR(length_b, length_a, 1e-9);
+  double mass_a = 0.0, mass_b = 0.0;
+  for (const double m : a.node_mass_kg) mass_a += m;
+  for (const double m : b.node_mass_kg) mass_b += m;
+  EXPECT_NEAR(mass_b, mass_a, 1e-9 * mass_a);
+  // Every bead (a node beyond the plain box's) is on a face, and in line with its wire.
+  std::vector<int> on_face(b.node_m.size(), 0);
+  for (const auto& f : b.faces)
+    for (const auto k : f) on_face[k] = 1;
+  for (std::size_t k = a.node_m.size(); k < b.node_m.size(); ++k) EXPECT_EQ(on_face[k], 1) << "bead " << k;
+  for (const auto& l : b.links) {
+    if (l.kind == WireKind::Single) {
+      EXPECT_NEAR((b.node_m[l.a] - b.node_m[l.b]).norm(), l.rest_length_m, 1e-9);
+    }
+  }
 }
 
 }  // namespace
