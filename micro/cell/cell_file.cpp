@@ -48,6 +48,9 @@ Scene stateScene(const Scene& in, const Engine& engine) {
     s.blocks[k].velocity_m_s = b.velocity_m_s;
     s.blocks[k].angular_velocity_rad_s = b.angular_velocity_rad_s;
   }
+  // Walls where the engine has them (their programs start again from there).
+  for (std::size_t w = 0; w < s.walls.size() && w < engine.wallCount(); ++w)
+    s.walls[w].point_m = engine.wallPosition(w);
   s.links.clear();
   for (std::size_t l = 0; l < in.links.size(); ++l) {
     if (engine.linkBroken(l)) continue;

@@ -15,7 +15,8 @@ namespace gabion::micro {
 
 /// The engine's current state of the bodies of `input` (the scene the engine
 /// was built from) as a scene: the input's materials, walls, links and run,
-/// with the bodies where the engine has them and the wires in their states.
+/// with the bodies and walls where the engine has them (a wall's program
+/// starts again from there) and the wires in their states.
 /// Broken links are left out (the others keep their indices' spheres).
 Scene stateScene(const Scene& input, const Engine& engine);
 
