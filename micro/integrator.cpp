@@ -15,23 +15,28 @@ namespace {
 // once per step. Also the largest squared displacement since the last list
 // build; block members are placed afterwards and checked there.
 // One component's kick with Cundall local damping
-// (bridge::localDampingForce, branch-free): returns the new velocity and
-// adds the damping work to `local`.
-[[gnu::always_inline]] inline double dampedKick(double F, double v0, double inv_m, double alpha, double dt,
+// (bridge::localDampingForce, branch-free): v1 = v0 + dt inv_m (kick + Fd),
+// Fd the damping of the physical force F; the damping work is added to
+// `local`. A free sphere's kick is its force; a link node's first sub-step
+// kick also carries the step's held impulse (micro/linked_nodes.hpp).
+[[gnu::always_inline]] inline double dampedKick(double F, double kick, double v0, double inv_m, double alpha, double dt,
                                                 double& local) {
   const double Fd = bridge::localDampingForce({alpha}, F, v0);
-  const double v1 = v0 + dt * inv_m * (F + Fd);
+  const double v1 = v0 + dt * inv_m * (kick + Fd);
   local -= Fd * (v0 + v1) * 0.5 * dt;
   return v1;
 }
 
-template <bool kMeasure>
-SphereSums sphereLoop(Particles& p, std::size_t b, std::size_t e, double dt, const Vec3& g) {
+// kHeld: the link nodes' arrays (HeldForces), else the store's forces.
+template <bool kMeasure, bool kHeld>
+SphereSums sphereLoop(Particles& p, std::size_t b, std::size_t e, double dt, const Vec3& g, const HeldForces* held) {
   double* __restrict X = p.x.data(), * __restrict Y = p.y.data(), * __restrict Z = p.z.data();
   double* __restrict VX = p.vx.data(), * __restrict VY = p.vy.data(), * __restrict VZ = p.vz.data();
   double* __restrict WX = p.wx.data(), * __restrict WY = p.wy.data(), * __restrict WZ = p.wz.data();
-  const double* __restrict FX = p.fx.data(), * __restrict FY = p.fy.data(), * __restrict FZ = p.fz.data();
-  const double* __restrict TX = p.tx.data(), * __restrict TY = p.ty.data(), * __restrict TZ = p.tz.data();
+  const double* __restrict FX = kHeld ? held->hx : p.fx.data(), * __restrict FY = kHeld ? held->hy : p.fy.data(), * __restrict FZ = kHeld ? held->hz : p.fz.data();
+  const double* __restrict TX = kHeld ? held->tx : p.tx.data(), * __restrict TY = kHeld ? held->ty : p.ty.data(), * __restrict TZ = kHeld ? held->tz : p.tz.data();
+  const double* __restrict LX = kHeld ? held->lx : nullptr, * __restrict LY = kHeld ? held->ly : nullptr, * __restrict LZ = kHeld ? held->lz : nullptr;
+  const double extra = kHeld ? held->held - 1.0 : 0.0, spin = kHeld ? held->held : 1.0;
   const double *__restrict M = p.mass.data(), *__restrict IM = p.inv_mass.data(), *__restrict II = p.inv_inertia.data(),
                *__restrict AL = p.alpha.data();
   const double* __restrict X0 = p.x0.data(), * __restrict Y0 = p.y0.data(), * __restrict Z0 = p.z0.data();
@@ -40,12 +45,16 @@ SphereSums sphereLoop(Particles& p, std::size_t b, std::size_t e, double dt, con
 #pragma omp simd reduction(+ : local, ke_t, ke_r, pe, finite) reduction(max : max_d2)
   for (std::size_t i = b; i < e; ++i) {
     const double m = M[i], im = IM[i], ii = II[i], al = AL[i];
-    const double vx = dampedKick(FX[i] + m * gx, VX[i], im, al, dt, local);
-    const double vy = dampedKick(FY[i] + m * gy, VY[i], im, al, dt, local);
-    const double vz = dampedKick(FZ[i] + m * gz, VZ[i], im, al, dt, local);
-    const double wx = dampedKick(TX[i], WX[i], ii, al, dt, local);
-    const double wy = dampedKick(TY[i], WY[i], ii, al, dt, local);
-    const double wz = dampedKick(TZ[i], WZ[i], ii, al, dt, local);
+    // (a node's physical force: held + links + weight)
+    const double fx = kHeld ? FX[i] + LX[i] + m * gx : FX[i] + m * gx;
+    const double fy = kHeld ? FY[i] + LY[i] + m * gy : FY[i] + m * gy;
+    const double fz = kHeld ? FZ[i] + LZ[i] + m * gz : FZ[i] + m * gz;
+    const double vx = dampedKick(fx, kHeld ? fx + extra * FX[i] : fx, VX[i], im, al, dt, local);
+    const double vy = dampedKick(fy, kHeld ? fy + extra * FY[i] : fy, VY[i], im, al, dt, local);
+    const double vz = dampedKick(fz, kHeld ? fz + extra * FZ[i] : fz, VZ[i], im, al, dt, local);
+    const double wx = dampedKick(TX[i], kHeld ? spin * TX[i] : TX[i], WX[i], ii, al, dt, local);
+    const double wy = dampedKick(TY[i], kHeld ? spin * TY[i] : TY[i], WY[i], ii, al, dt, local);
+    const double wz = dampedKick(TZ[i], kHeld ? spin * TZ[i] : TZ[i], WZ[i], ii, al, dt, local);
     const double x0 = X[i], y0 = Y[i], z0 = Z[i];
     const double x1 = x0 + dt * vx, y1 = y0 + dt * vy, z1 = z0 + dt * vz;
     if (kMeasure) {
@@ -64,7 +73,11 @@ SphereSums sphereLoop(Particles& p, std::size_t b, std::size_t e, double dt, con
 }  // namespace
 
 SphereSums integrateSpheres(Particles& p, std::size_t b, std::size_t e, double dt, const Vec3& g, bool measure) {
-  return measure ? sphereLoop<true>(p, b, e, dt, g) : sphereLoop<false>(p, b, e, dt, g);
+  return measure ? sphereLoop<true, false>(p, b, e, dt, g, nullptr) : sphereLoop<false, false>(p, b, e, dt, g, nullptr);
+}
+
+SphereSums integrateHeld(Particles& n, const HeldForces& f, double h, const Vec3& g, bool measure) {
+  return measure ? sphereLoop<true, true>(n, 0, n.size(), h, g, &f) : sphereLoop<false, true>(n, 0, n.size(), h, g, &f);
 }
 
 SphereSums integrateBlock(RigidBlock& b, Particles& p, double dt, const Vec3& g, bool measure) {

@@ -36,6 +36,20 @@ struct RigidBlock {
 /// last list build.
 SphereSums integrateSpheres(Particles& p, std::size_t b, std::size_t e, double dt, const Vec3& g, bool measure);
 
+/// The forces of a link-node sub-step (micro/linked_nodes.hpp): the step's
+/// held contact and wall force and torque (h*, t*) and the links' force of
+/// this sub-step (l*), per node; the kick carries `held` times the held force
+/// and torque (the step's impulse in the first sub-step, none after), while
+/// local damping sees the physical force h + l.
+struct HeldForces {
+  const double *hx, *hy, *hz, *tx, *ty, *tz, *lx, *ly, *lz;
+  double held;
+};
+
+/// Advances the link nodes' own store `n` by one sub-step h, as
+/// integrateSpheres does the free spheres.
+SphereSums integrateHeld(Particles& n, const HeldForces& f, double h, const Vec3& g, bool measure);
+
 /// Advances one block by one step (forces and torques of its members in
 /// `p`) and places its members; the same sums as integrateSpheres.
 SphereSums integrateBlock(RigidBlock& block, Particles& p, double dt, const Vec3& g, bool measure);

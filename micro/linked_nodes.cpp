@@ -4,21 +4,9 @@
 #include <cmath>
 #include <limits>
 
-#include "bridge/laws/contact_damping.hpp"
+#include "micro/integrator.hpp"
 
 namespace gabion::micro {
-namespace {
-// One component's kick: v1 = v0 + h inv (kick + local damping of the
-// physical force `phys`), the damping's work added to `local` (branch-free,
-// so that the node loop vectorises).
-[[gnu::always_inline]] inline double kickOne(double h, double& local, double phys, double kick, double v0, double inv,
-                                             double alpha) {
-  const double fd = bridge::localDampingForce({alpha}, phys, v0);
-  const double v1 = v0 + h * inv * (kick + fd);
-  local -= fd * (v0 + v1) * 0.5 * h;
-  return v1;
-}
-}  // namespace
 
 LinkedNodes::LinkedNodes(const Scene& scene, const Links& links, Particles& p) {
   const std::vector<std::uint32_t>& ids = links.nodeIds();
@@ -56,49 +44,6 @@ void LinkedNodes::hold(const Particles& p, bool rebuilt) {
   sx_ = n_.x, sy_ = n_.y, sz_ = n_.z;
 }
 
-// One vectorised pass over the nodes' arrays (as the free spheres';
-// micro/integrator.cpp): the links' force of this sub-step is in lf*, the
-// held forces' share of this kick is held x hf*.
-template <bool kMeasure>
-SphereSums LinkedNodes::kickAndDrift(double held, double h, const Vec3& g) {
-  const std::size_t n = size();
-  double* __restrict X = n_.x.data(), * __restrict Y = n_.y.data(), * __restrict Z = n_.z.data();
-  double* __restrict VX = n_.vx.data(), * __restrict VY = n_.vy.data(), * __restrict VZ = n_.vz.data();
-  double* __restrict WX = n_.wx.data(), * __restrict WY = n_.wy.data(), * __restrict WZ = n_.wz.data();
-  const double* __restrict HX = hfx_.data(), * __restrict HY = hfy_.data(), * __restrict HZ = hfz_.data();
-  const double* __restrict TX = htx_.data(), * __restrict TY = hty_.data(), * __restrict TZ = htz_.data();
-  const double* __restrict LX = lfx_.data(), * __restrict LY = lfy_.data(), * __restrict LZ = lfz_.data();
-  const double *__restrict M = n_.mass.data(), *__restrict IM = n_.inv_mass.data(),
-               *__restrict II = n_.inv_inertia.data(), *__restrict AL = n_.alpha.data();
-  const double* __restrict X0 = n_.x0.data(), * __restrict Y0 = n_.y0.data(), * __restrict Z0 = n_.z0.data();
-  const double gx = g.x(), gy = g.y(), gz = g.z(), extra = held - 1.0;
-  double local = 0.0, ke_t = 0.0, ke_r = 0.0, pe = 0.0, finite = 0.0, max_d2 = 0.0;
-#pragma omp simd reduction(+ : local, ke_t, ke_r, pe, finite) reduction(max : max_d2)
-  for (std::size_t j = 0; j < n; ++j) {
-    const double m = M[j], im = IM[j], ii = II[j], al = AL[j];
-    const double fx = HX[j] + LX[j] + m * gx, fy = HY[j] + LY[j] + m * gy, fz = HZ[j] + LZ[j] + m * gz;
-    const double vx = kickOne(h, local, fx, fx + extra * HX[j], VX[j], im, al);
-    const double vy = kickOne(h, local, fy, fy + extra * HY[j], VY[j], im, al);
-    const double vz = kickOne(h, local, fz, fz + extra * HZ[j], VZ[j], im, al);
-    const double wx = kickOne(h, local, TX[j], held * TX[j], WX[j], ii, al);
-    const double wy = kickOne(h, local, TY[j], held * TY[j], WY[j], ii, al);
-    const double wz = kickOne(h, local, TZ[j], held * TZ[j], WZ[j], ii, al);
-    const double x0 = X[j], y0 = Y[j], z0 = Z[j];
-    const double x1 = x0 + h * vx, y1 = y0 + h * vy, z1 = z0 + h * vz;
-    if (kMeasure) {
-      ke_t += 0.5 * m * (vx * vx + vy * vy + vz * vz);
-      ke_r += ii > 0.0 ? 0.5 * (wx * wx + wy * wy + wz * wz) / ii : 0.0;
-      pe -= m * (gx * 0.5 * (x0 + x1) + gy * 0.5 * (y0 + y1) + gz * 0.5 * (z0 + z1));
-    }
-    VX[j] = vx, VY[j] = vy, VZ[j] = vz, WX[j] = wx, WY[j] = wy, WZ[j] = wz;
-    X[j] = x1, Y[j] = y1, Z[j] = z1;
-    finite += x1 + y1 + z1 + vx + vy + vz + wx + wy + wz;
-    const double ex = x1 - X0[j], ey = y1 - Y0[j], ez = z1 - Z0[j];
-    max_d2 = std::max(max_d2, ex * ex + ey * ey + ez * ez);
-  }
-  return {local, ke_t, ke_r, pe, finite, max_d2};
-}
-
 SphereSums LinkedNodes::advance(const Links& links, int k, int substeps, double h, const Vec3& g, bool measure,
                                 double& driven_work) {
   // The held forces' impulse over the whole step comes in the first kick;
@@ -111,7 +56,9 @@ SphereSums LinkedNodes::advance(const Links& links, int k, int substeps, double 
     const Vec3 f = links.nodeForce(j);
     lfx_[j] = f.x(), lfy_[j] = f.y(), lfz_[j] = f.z();
   }
-  const SphereSums s = measure ? kickAndDrift<true>(held, h, g) : kickAndDrift<false>(held, h, g);
+  const HeldForces f{hfx_.data(), hfy_.data(), hfz_.data(), htx_.data(), hty_.data(),
+                     htz_.data(), lfx_.data(), lfy_.data(), lfz_.data(), held};
+  const SphereSums s = integrateHeld(n_, f, h, g, measure);
   // A driven node keeps its velocity: the work it did on the rest over h.
   for (const std::uint32_t j : driven_)
     driven_work -= h * ((held * hfx_[j] + lfx_[j]) * n_.vx[j] + (held * hfy_[j] + lfy_[j]) * n_.vy[j] +

@@ -62,9 +62,6 @@ class LinkedNodes {
   std::uint32_t id(std::size_t k) const { return n_.id[k]; }
 
  private:
-  template <bool kMeasure>
-  SphereSums kickAndDrift(double held, double h, const Vec3& g);
-
   Particles n_;  // the nodes' own store: state, masses, and this sub-step's forces
   std::vector<double> hfx_, hfy_, hfz_, htx_, hty_, htz_;  // held contact and wall forces of the step
   std::vector<double> sx_, sy_, sz_;                       // positions at the step's start
