@@ -78,7 +78,7 @@ CellCase parseCase(const bridge::JsonDocument& doc) {
   }
   if (const auto v = root.optionalObject("vibration")) {
     c.vibration.frequency_hz = v->number("frequency_hz", c.vibration.frequency_hz, Check::Positive);
-    c.vibration.amplitude_m = v->number("amplitude_m", c.vibration.amplitude_m, Check::NonNegative);
+    c.vibration.amplitude_m = v->number("amplitude_m", c.vibration.amplitude_m, Check::Positive);
     c.vibration.max_duration_s = v->number("max_duration_s", c.vibration.max_duration_s, Check::NonNegative);
     c.vibration.check_interval_s = v->number("check_interval_s", c.vibration.check_interval_s, Check::Positive);
     c.vibration.surcharge_Pa = v->number("surcharge_Pa", c.vibration.surcharge_Pa, Check::NonNegative);
@@ -240,7 +240,7 @@ bridge::RunOutcome failed(const StageRun& st, const nlohmann::json& so_far) {
   return out;
 }
 
-// Kinetic energy against a reference (J), at the last measuring step.
+// Kinetic energy (J), translational and rotational, at the last measuring step.
 double kinetic(const Engine& e) {
   return e.energy().kinetic_translational_J + e.energy().kinetic_rotational_J;
 }
@@ -359,20 +359,17 @@ bridge::RunOutcome run(const bridge::JsonDocument& doc, const bridge::RunContext
     }
   }
   stand.run.duration_s = c.standing.max_duration_s;
-  double reference = 0.0;  // the work gravity would do bringing every body down to the base (J)
   std::vector<Vec3> start;
   for (const SphereSpec& sp : stand.spheres) start.push_back(sp.center_m);
   double ke_ratio = NAN;
+  double reference = NAN;  // the work gravity would do bringing every body down to the base (J)
   SceneRunHooks stand_hooks;
-  double pe_base = NAN;
   stand_hooks.done = [&](const Engine& eng) {
-    if (std::isnan(pe_base)) {
-      // m g h over all bodies, h above the base: minus the potential at the base.
-      double mass = 0.0;
+    if (std::isnan(reference)) {
+      // m g h over all bodies, h above the base: the potential less its value at the base.
+      double mass = fill_report["mass_kg"].get<double>();
       for (const SphereSpec& sp : stand.spheres) mass += sp.fixed ? 0.0 : sphereMass(stand, sp);
-      mass += c.mass_kg;
-      pe_base = eng.energy().gravity_potential_J - mass * -c.gravity.z() * eng.wallPosition(0).z();
-      reference = pe_base;
+      reference = eng.energy().gravity_potential_J - mass * -c.gravity.z() * eng.wallPosition(0).z();
     }
     ke_ratio = kinetic(eng) / reference;
     return eng.time() > 0.1 && ke_ratio < c.standing.kinetic_ratio;
@@ -405,11 +402,8 @@ bridge::RunOutcome run(const bridge::JsonDocument& doc, const bridge::RunContext
   lid_z0 /= static_cast<double>(lid_nodes), lid_z1 /= static_cast<double>(lid_nodes);
   settlement = lid_z0 - lid_z1;
   const double height = lid_z1 - r - base;
-  double porosity = NAN;
-  {
-    Engine probe(fin, 1);
-    porosity = cellPorosity(probe, fin.spheres.size(), Vec3(0, 0, base), e, c.porosity_spacing_m);
-  }
+  const Engine final_state(fin, 1);  // the cell as it stands, for its porosity and its file
+  const double porosity = cellPorosity(final_state, fin.spheres.size(), Vec3(0, 0, base), e, c.porosity_spacing_m);
   const bool at_rest = ke_ratio < c.standing.kinetic_ratio;
   const bool stands = at_rest && bulge < c.standing.max_bulge_m && settlement < c.standing.max_settlement_m;
 
@@ -453,10 +447,7 @@ bridge::RunOutcome run(const bridge::JsonDocument& doc, const bridge::RunContext
                            bridge::PlotSeries::Style::Line});
     bridge::writePlotPng(ctx.outdir / "vibration.png", plot);
   }
-  {
-    Engine probe(fin, 1);
-    writeCellFile(ctx.outdir / "cell.h5", fin, probe, res);
-  }
+  writeCellFile(ctx.outdir / "cell.h5", fin, final_state, res);
   std::ostringstream rep;
   rep.setf(std::ios::fixed);
   rep.precision(3);
