@@ -40,6 +40,8 @@ struct CellCase {
   struct {
     double frequency_hz = 20.0, amplitude_m = 0.002, max_duration_s = 1.5, check_interval_s = 0.05;
     double surcharge_Pa = 1000.0;
+    Vec3 direction = Vec3::UnitZ();  // of the shaking, unit
+    double friction = -1.0;          // the rock's friction while shaking (< 0: its own)
   } vibration;
   struct {
     double max_duration_s = 2.0, kinetic_ratio = 1e-6, max_bulge_m = 0.02, max_settlement_m = 0.02;
@@ -82,6 +84,10 @@ CellCase parseCase(const bridge::JsonDocument& doc) {
     c.vibration.max_duration_s = v->number("max_duration_s", c.vibration.max_duration_s, Check::NonNegative);
     c.vibration.check_interval_s = v->number("check_interval_s", c.vibration.check_interval_s, Check::Positive);
     c.vibration.surcharge_Pa = v->number("surcharge_Pa", c.vibration.surcharge_Pa, Check::NonNegative);
+    c.vibration.direction = v->vec3("direction", c.vibration.direction);
+    if (!(c.vibration.direction.norm() > 0.0)) v->fail("direction", "must not be zero");
+    c.vibration.direction.normalize();
+    c.vibration.friction = v->number("friction", c.rock.friction, Check::NonNegative);
   }
   if (const auto s = root.optionalObject("standing")) {
     c.standing.max_duration_s = s->number("max_duration_s", c.standing.max_duration_s, Check::Positive);
@@ -284,7 +290,7 @@ bridge::RunOutcome run(const bridge::JsonDocument& doc, const bridge::RunContext
   Scene vib = fill.state;
   for (WallSpec& w : vib.walls) {
     w.program.kind = WallProgram::Kind::Sinusoid;
-    w.program.direction = Vec3::UnitZ();
+    w.program.direction = c.vibration.direction;
     w.program.amplitude_m = c.vibration.amplitude_m;
     w.program.frequency_hz = c.vibration.frequency_hz;
   }
@@ -305,6 +311,7 @@ bridge::RunOutcome run(const bridge::JsonDocument& doc, const bridge::RunContext
     }
     vib.walls.push_back(press);
   }
+  vib.materials[kRock].friction = c.vibration.friction;
   vib.run.duration_s = std::max(c.vibration.max_duration_s, vib.run.series_interval_s);
   std::vector<double> vib_t, vib_n;
   double next_check = 0.0, porosity_vibrated = porosity_gravity;
@@ -324,6 +331,7 @@ bridge::RunOutcome run(const bridge::JsonDocument& doc, const bridge::RunContext
   // --- 3. Closing and standing: the lid's nodes are laced on over the fill,
   // the formwork and plate are taken away, the floor stays as the rigid base.
   Scene stand = vibration.state;
+  stand.materials[kRock] = c.rock;  // its own friction again
   // The vibrator stops: the cell starts its standing test at rest.
   for (SphereSpec& sp : stand.spheres) sp.velocity_m_s.setZero(), sp.angular_velocity_rad_s.setZero();
   for (BlockSpec& b : stand.blocks) b.velocity_m_s.setZero(), b.angular_velocity_rad_s.setZero();

@@ -82,6 +82,8 @@ TEST(MicroCell, BadInputIsNamed) {
       {"ratio", smallCell(R"(, "standing": {"kinetic_ratio": -1})"), "/standing/kinetic_ratio"},
       {"grading", smallCell(R"(, "porosity_spacing_m": 0.1)"), "/porosity_spacing_m"},
       {"unknown", smallCell(R"(, "vibration": {"frequency": 20})"), "/vibration/frequency"},
+      {"direction", smallCell(R"(, "vibration": {"direction": [0, 0, 0]})"), "/vibration/direction"},
+      {"friction", smallCell(R"(, "vibration": {"friction": -0.1})"), "/vibration/friction"},
   };
   for (const auto& c : cases) {
     writeFile(dir / (c.name + ".json"), c.text);
