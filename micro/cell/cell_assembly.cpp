@@ -205,17 +205,17 @@ double cellPorosity(const Engine& engine, std::size_t spheres, const Vec3& base,
   return 1.0 - solidFraction(x, r, base, base + Vec3::Constant(edge), spacing);
 }
 
-double rockTop(const Engine& engine, std::size_t spheres) {
-  std::vector<Vec3> x;
-  std::vector<double> r;
-  rockSpheres(engine, spheres, x, r);
+// The highest point of the rock in a scene (its blocks' member spheres, as placed).
+double rockTop(const Scene& s) {
   double top = -1e300;
-  for (std::size_t k = 0; k < x.size(); ++k) top = std::max(top, x[k].z() + r[k]);
+  for (const BlockSpec& b : s.blocks)
+    for (std::size_t k = 0; k < b.member_radii_m.size(); ++k)
+      top = std::max(top, (b.position_m + b.orientation * b.member_centers_m[k]).z() + b.member_radii_m[k]);
   return top;
 }
 
 // A stage's run in OUTDIR/<name>: the scene run with the stage's hooks; the
-// state it ends in goes to `state`. Throws NumericalError if it fails.
+// state it ends in goes to `state`. A failure is in `outcome`, named by stage.
 struct StageRun {
   bridge::RunOutcome outcome;
   Scene state;
@@ -296,8 +296,7 @@ bridge::RunOutcome run(const bridge::JsonDocument& doc, const bridge::RunContext
   }
   {
     // The plate: a bounded wall over the cell's opening (it misses the rim's nodes).
-    Engine probe(fill.state, 1);
-    const double top = rockTop(probe, basket);
+    const double top = rockTop(fill.state);
     WallSpec press = wall("press", Vec3(0.5 * e, 0.5 * e, std::max(top, e) + 0.002), -Vec3::UnitZ(), kFormwork);
     press.bounded = true;
     press.axis_u = Vec3::UnitX();
@@ -336,12 +335,11 @@ bridge::RunOutcome run(const bridge::JsonDocument& doc, const bridge::RunContext
   for (SphereSpec& sp : stand.spheres) sp.velocity_m_s.setZero(), sp.angular_velocity_rad_s.setZero();
   for (BlockSpec& b : stand.blocks) b.velocity_m_s.setZero(), b.angular_velocity_rad_s.setZero();
   {
-    Engine probe(vibration.state, 1);
-    const double floor_z = probe.wallPosition(0).z();
+    // (the floor where the vibration left it: stateScene moved it there)
+    const double floor_z = stand.walls[0].point_m.z();
     stand.walls.resize(1);
-    stand.walls[0].point_m = probe.wallPosition(0);
     stand.walls[0].program = WallProgram{};
-    const double top = rockTop(probe, basket);
+    const double top = rockTop(vibration.state);
     // The lid lies on the rim's plane, or on the fill where it stands higher.
     const double lift =
         std::max(0.0, top + r - (n.origin.z() + n.box.node_m[n.box.faces[1][0]].z())) + (floor_z + 2 * r);
