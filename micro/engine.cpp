@@ -68,7 +68,7 @@ double criticalStep(const Scene& scene, const std::vector<MassProperties>& block
 }  // namespace
 
 double criticalTimeStep(const Scene& scene) {
-  return criticalStep(scene, blockMassProperties(scene));
+  return std::min(criticalStep(scene, blockMassProperties(scene)), criticalBeamStep(scene));
 }
 
 Engine::Engine(const Scene& scene, int threads) {
@@ -164,7 +164,7 @@ Engine::Engine(const Scene& scene, int threads) {
   grid_.assignClasses(p_);
   skin_m_ = scene.run.verlet_skin_ratio * grid_.finestMeanRadius();
 
-  dt_critical_ = criticalStep(scene, block_props);
+  dt_critical_ = std::min(criticalStep(scene, block_props), criticalBeamStep(scene));
   dt_link_critical_ = criticalLinkStep(scene);
   dt_safety_ = scene.run.dt_safety;
 
@@ -502,13 +502,27 @@ void Engine::computeContactForces(bool measure) {
 // advanceLinkedNodes (micro/linked_nodes.cpp, micro/links.cpp): the link
 // nodes in `substeps_` sub-steps, each with the link forces of its positions
 // (per link over ranges of links, then summed per node) and the contact and
-// wall forces of the step held.
+// wall forces of the step held, with the bending wires' forces and torques
+// (once per step, from the step's start).
 
 void Engine::advanceLinkedNodes(bool measure) {
   if (nodes_.empty()) return;
+  const std::size_t T = scratch_.size(), nl = links_.size();
+  // The beams from the nodes' turn over the last step, then the held forces.
+  if (links_.hasBeams())
+    parallel(StageProfile::kLinks, [&](int task) {
+      const auto t = static_cast<std::size_t>(task);
+      WorkerScratch& s = scratch_[t];
+      s.link_elastic = s.link_plastic = 0.0;
+      links_.evaluateBeams(nodes_.x(), nodes_.y(), nodes_.z(), nodes_.turnX(), nodes_.turnY(), nodes_.turnZ(),
+                           nl * t / T, nl * (t + 1) / T, measure, s);
+    });
+  if (links_.hasBeams() && measure)
+    for (const WorkerScratch& s : scratch_)
+      energy_.elastic_link += s.link_elastic, energy_.link_plastic += s.link_plastic;
   nodes_.hold(p_, rebuilds_ != nodes_rebuilds_);
   nodes_rebuilds_ = rebuilds_;
-  const std::size_t T = scratch_.size(), nl = links_.size();
+  if (links_.hasBeams()) nodes_.addBeams(links_);
   const double h = dt_ / substeps_;
   for (int k = 0; k < substeps_; ++k) {
     const bool last = k + 1 == substeps_, m = measure && last;

@@ -122,6 +122,7 @@ class Engine {
   bool linkBroken(std::size_t l) const { return links_.broken(l); }
   /// State of link l if it is a wire.
   const bridge::WireState& linkWireState(std::size_t l) const { return links_.wireState(l); }
+  bridge::WireBeamState linkBeamState(std::size_t l) const { return links_.beamState(l); }
   /// Tension of link l at the last step (N).
   double linkTension(std::size_t l) const { return links_.tension(l); }
   /// The sphere indices (input order) link l joins.

@@ -12,7 +12,8 @@ LinkedNodes::LinkedNodes(const Scene& scene, const Links& links, Particles& p) {
   const std::vector<std::uint32_t>& ids = links.nodeIds();
   const std::size_t n = ids.size();
   n_.resize(n);
-  for (auto* v : {&hfx_, &hfy_, &hfz_, &htx_, &hty_, &htz_, &sx_, &sy_, &sz_, &lfx_, &lfy_, &lfz_}) v->assign(n, 0.0);
+  for (auto* v : {&hfx_, &hfy_, &hfz_, &htx_, &hty_, &htz_, &sx_, &sy_, &sz_, &lfx_, &lfy_, &lfz_, &rx_, &ry_, &rz_})
+    v->assign(n, 0.0);
   for (std::size_t k = 0; k < n; ++k) {
     const std::uint32_t id = ids[k], i = p.slot[id];
     n_.id[k] = id;
@@ -42,6 +43,16 @@ void LinkedNodes::hold(const Particles& p, bool rebuilt) {
       n_.x0[k] = p.x0[i], n_.y0[k] = p.y0[i], n_.z0[k] = p.z0[i];
     }
   sx_ = n_.x, sy_ = n_.y, sz_ = n_.z;
+  std::fill(rx_.begin(), rx_.end(), 0.0), std::fill(ry_.begin(), ry_.end(), 0.0),
+      std::fill(rz_.begin(), rz_.end(), 0.0);
+}
+
+void LinkedNodes::addBeams(const Links& links) {
+  for (std::size_t k = 0; k < size(); ++k) {
+    const Vec3 f = links.nodeBeamForce(k), t = links.nodeBeamTorque(k);
+    hfx_[k] += f.x(), hfy_[k] += f.y(), hfz_[k] += f.z();
+    htx_[k] += t.x(), hty_[k] += t.y(), htz_[k] += t.z();
+  }
 }
 
 SphereSums LinkedNodes::advance(const Links& links, int k, int substeps, double h, const Vec3& g, bool measure,
@@ -59,6 +70,7 @@ SphereSums LinkedNodes::advance(const Links& links, int k, int substeps, double 
   const HeldForces f{hfx_.data(), hfy_.data(), hfz_.data(), htx_.data(), hty_.data(),
                      htz_.data(), lfx_.data(), lfy_.data(), lfz_.data(), held};
   const SphereSums s = integrateHeld(n_, f, h, g, measure);
+  for (std::size_t j = 0; j < n; ++j) rx_[j] += h * n_.wx[j], ry_[j] += h * n_.wy[j], rz_[j] += h * n_.wz[j];
   // A driven node keeps its velocity: the work it did on the rest over h.
   for (const std::uint32_t j : driven_)
     driven_work -= h * ((held * hfx_[j] + lfx_[j]) * n_.vx[j] + (held * hfy_[j] + lfy_[j]) * n_.vy[j] +
@@ -69,7 +81,7 @@ SphereSums LinkedNodes::advance(const Links& links, int k, int substeps, double 
 void LinkedNodes::store(Particles& p, double dt) const {
   const double inv = 1.0 / dt;
   const std::uint32_t *id = n_.id.data(), *slot = p.slot.data();
-  // Positions, mean velocities over the step, spins; then forces.
+  // Positions, mean velocities over the step; mean spins, then forces.
   {
     double* __restrict X = p.x.data(), * __restrict Y = p.y.data(), * __restrict Z = p.z.data();
     double* __restrict VX = p.vx.data(), * __restrict VY = p.vy.data(), * __restrict VZ = p.vz.data();
@@ -84,10 +96,10 @@ void LinkedNodes::store(Particles& p, double dt) const {
   {
     double* __restrict WX = p.wx.data(), * __restrict WY = p.wy.data(), * __restrict WZ = p.wz.data();
     double* __restrict FX = p.fx.data(), * __restrict FY = p.fy.data(), * __restrict FZ = p.fz.data();
-    const double *wx = n_.wx.data(), *wy = n_.wy.data(), *wz = n_.wz.data();
+    const double *rx = rx_.data(), *ry = ry_.data(), *rz = rz_.data();
     for (std::size_t k = 0; k < size(); ++k) {
       const std::uint32_t i = slot[id[k]];
-      WX[i] = wx[k], WY[i] = wy[k], WZ[i] = wz[k];
+      WX[i] = rx[k] * inv, WY[i] = ry[k] * inv, WZ[i] = rz[k] * inv;
       FX[i] = hfx_[k] + lfx_[k], FY[i] = hfy_[k] + lfy_[k], FZ[i] = hfz_[k] + lfz_[k];
     }
   }
@@ -100,6 +112,25 @@ double criticalLinkStep(const Scene& scene) {
   for (std::size_t s = 0; s < scene.spheres.size(); ++s)
     if (!scene.spheres[s].fixed && k_link[s] > 0.0)
       dt = std::min(dt, std::sqrt(sphereMass(scene, scene.spheres[s]) / k_link[s]));
+  return dt;
+}
+
+double criticalBeamStep(const Scene& scene) {
+  // A node's sway against its beams' shear stiffness, and its turn against
+  // their end stiffness (4 E I / L each) with the inertia of its sphere.
+  std::vector<double> k_sway(scene.spheres.size(), 0.0), k_turn(scene.spheres.size(), 0.0);
+  for (const LinkSpec& l : scene.links) {
+    if (l.law != LinkSpec::Law::Wire || !l.beam.active()) continue;
+    k_sway[l.a] += l.beam.shear_N_m, k_sway[l.b] += l.beam.shear_N_m;
+    k_turn[l.a] += l.beam.endStiffness(), k_turn[l.b] += l.beam.endStiffness();
+  }
+  double dt = std::numeric_limits<double>::infinity();
+  for (std::size_t s = 0; s < scene.spheres.size(); ++s) {
+    const SphereSpec& sp = scene.spheres[s];
+    if (sp.fixed || !(k_turn[s] > 0.0)) continue;
+    const double m = sphereMass(scene, sp);
+    dt = std::min({dt, std::sqrt(m / k_sway[s]), std::sqrt(0.4 * m * sp.radius_m * sp.radius_m / k_turn[s])});
+  }
   return dt;
 }
 

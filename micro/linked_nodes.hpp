@@ -41,7 +41,7 @@ class LinkedNodes {
   /// Takes the step's contact and wall forces and torques of the nodes from
   /// the store, and their positions at the step's start; with `rebuilt`
   /// (the neighbour list was built since the last call) also their positions
-  /// at that build.
+  /// at that build. Their turn starts again from zero.
   void hold(const Particles& p, bool rebuilt);
   /// Sub-step k of `substeps` (each h long): the link forces are in `links`
   /// (evaluated on x(), y(), z()); sub-step 0 adds the held impulse. Kicks and
@@ -51,10 +51,19 @@ class LinkedNodes {
                      double& driven_work);
   /// Writes the nodes' positions, and their force (the held contact and wall
   /// forces plus the links' of the last sub-step), into the store, with as velocity the mean over the step of length dt
-  /// (its displacement / dt): the contacts' shear increments then follow the node's real path over the step, whatever
-  /// the sub-steps did inside it.
+  /// (its displacement / dt), and as spin the mean over the step (its turn / dt): the contacts' shear increments then
+  /// follow the node's real path over the step, whatever the sub-steps did inside it.
   void store(Particles& p, double dt) const;
 
+  /// The beams' force and torque (Links::evaluateBeams, at the step's start,
+  /// before hold) join the held forces: bending wires are soft beside their
+  /// axial stiffness (a node turns against them in tens of microseconds), so
+  /// they act once per step, as an impulse, like the contacts.
+  void addBeams(const Links& links);
+  /// Each node's turn over the last step (rad), until hold.
+  const double* turnX() const { return rx_.data(); }
+  const double* turnY() const { return ry_.data(); }
+  const double* turnZ() const { return rz_.data(); }
   const double* x() const { return n_.x.data(); }
   const double* y() const { return n_.y.data(); }
   const double* z() const { return n_.z.data(); }
@@ -65,6 +74,7 @@ class LinkedNodes {
   Particles n_;  // the nodes' own store: state, masses, and this sub-step's forces
   std::vector<double> hfx_, hfy_, hfz_, htx_, hty_, htz_;  // held contact and wall forces of the step
   std::vector<double> sx_, sy_, sz_;                       // positions at the step's start
+  std::vector<double> rx_, ry_, rz_;                       // turn over the step so far (rad)
   std::vector<double> lfx_, lfy_, lfz_;                    // the links' force of the last sub-step
   std::vector<std::uint32_t> driven_;                      // nodes that are fixed and move
 };
@@ -73,6 +83,12 @@ class LinkedNodes {
 /// over free nodes of sqrt(m / sum of their links' stiffness); infinite if
 /// there are none.
 double criticalLinkStep(const Scene& scene);
+
+/// The critical step of the link nodes against their beams (s): their sway
+/// against the shear stiffness and their turn against the end stiffness;
+/// infinite without beams. The engine's step respects it (the beams act
+/// once per step).
+double criticalBeamStep(const Scene& scene);
 
 /// Sub-steps of the link nodes in a step of dt_s: as many as keep each within
 /// dt_safety x link_critical_s (1 when there are no free link nodes).

@@ -28,6 +28,15 @@ Links::Links(const std::vector<LinkSpec>& specs, std::size_t particles) : partic
   wire_state_.clear();
   for (const LinkSpec& s : specs) wire_state_.push_back(s.wire_state);
   broken_.assign(n, 0);
+  beam_of_.assign(n, kNoBeam);
+  for (std::size_t l = 0; l < n; ++l)
+    if (specs[l].law == LinkSpec::Law::Wire && specs[l].beam.active()) {
+      beam_of_[l] = static_cast<std::uint32_t>(beams_.size());
+      beams_.push_back(specs[l].beam);
+      beam_state_.push_back(specs[l].beam_state);
+    }
+  beam_chord_.assign(beams_.size(), Vec3::Zero());
+  for (auto* v : {&beam_force_, &torque_a_, &torque_b_}) v->assign(beams_.size(), Vec3::Zero());
   for (auto* v : {&fx_, &fy_, &fz_, &tension_, &len_, &ux_, &uy_, &uz_}) v->assign(n, 0.0);
   // Incidence by particle id, links in increasing order at each node.
   std::vector<std::uint32_t> count(particles + 1, 0);
@@ -90,6 +99,7 @@ void Links::evaluate(const double* X, const double* Y, const double* Z, std::siz
     const bool wire = law_[l] == LinkSpec::Law::Wire;
     // A wire's plastic work stays dissipated after it breaks.
     if (measure && wire) plastic += bridge::wireDissipatedEnergy(wires_[law_index_[l]], wire_rest_[l], wire_state_[l]);
+    const std::uint32_t beam = beam_of_[l];
     if (broken_[l]) continue;
     const double length = len_[l];
     bridge::LinkResponse r;
@@ -114,6 +124,11 @@ void Links::evaluate(const double* X, const double* Y, const double* Z, std::siz
       }
       broken_[l] = 1;
       fx_[l] = fy_[l] = fz_[l] = tension_[l] = 0.0;
+      if (beam != kNoBeam) {
+        // Its bending goes with it.
+        rupture += bridge::wireBeamElasticEnergy(beams_[beam], beam_state_[beam]);
+        beam_state_[beam].shear_N.setZero(), beam_state_[beam].moment_N_m.setZero();
+      }
       const std::uint32_t i = ka_[l];
       const double h = 0.5 * length;
       s.link_events.push_back({time_s, l, Vec3(X[i] + h * ux_[l], Y[i] + h * uy_[l], Z[i] + h * uz_[l])});
@@ -127,6 +142,53 @@ void Links::evaluate(const double* X, const double* Y, const double* Z, std::siz
   s.link_elastic += elastic;
   s.link_rupture += rupture;
   s.link_plastic += plastic;
+}
+
+void Links::evaluateBeams(const double* X, const double* Y, const double* Z, const double* RX, const double* RY,
+                          const double* RZ, std::size_t l0, std::size_t l1, bool measure, WorkerScratch& s) {
+  double elastic = 0.0, plastic = 0.0;
+  for (std::size_t l = l0; l < l1; ++l) {
+    const std::uint32_t beam = beam_of_[l];
+    if (beam == kNoBeam) continue;
+    bridge::WireBeamState& bs = beam_state_[beam];
+    if (measure) plastic += bs.dissipated_J;
+    if (broken_[l]) {
+      beam_force_[beam].setZero(), torque_a_[beam].setZero(), torque_b_[beam].setZero();
+      continue;
+    }
+    const std::uint32_t i = ka_[l], j = kb_[l];
+    const Vec3 chord(X[j] - X[i], Y[j] - Y[i], Z[j] - Z[i]);
+    Vec3& last = beam_chord_[beam];
+    const bool started = last.squaredNorm() > 0.0;  // (no increment at the first call)
+    const Vec3 c0 = started ? last : chord;
+    last = chord;
+    const Vec3 ta = started ? Vec3(RX[i], RY[i], RZ[i]) : Vec3::Zero(),
+               tb = started ? Vec3(RX[j], RY[j], RZ[j]) : Vec3::Zero();
+    const bridge::WireBeamParams& bp = beams_[beam];
+    const bridge::WireBeamResponse r = bridge::wireBeamStep(bp, bs, c0, chord, ta, tb);
+    beam_force_[beam] = r.force_b, torque_a_[beam] = r.torque_a, torque_b_[beam] = r.torque_b;
+    if (measure) elastic += bridge::wireBeamElasticEnergy(bp, bs);
+  }
+  s.link_elastic += elastic;
+  s.link_plastic += plastic;
+}
+
+Vec3 Links::nodeBeamForce(std::size_t k) const {
+  Vec3 f = Vec3::Zero();
+  for (std::uint32_t q = node_begin_[k]; q < node_begin_[k + 1]; ++q) {
+    const std::uint32_t beam = beam_of_[node_link_[q]];
+    if (beam != kNoBeam) f += node_sign_[q] > 0.0 ? Vec3(-beam_force_[beam]) : beam_force_[beam];
+  }
+  return f;
+}
+
+Vec3 Links::nodeBeamTorque(std::size_t k) const {
+  Vec3 t = Vec3::Zero();
+  for (std::uint32_t q = node_begin_[k]; q < node_begin_[k + 1]; ++q) {
+    const std::uint32_t beam = beam_of_[node_link_[q]];
+    if (beam != kNoBeam) t += node_sign_[q] > 0.0 ? torque_a_[beam] : torque_b_[beam];
+  }
+  return t;
 }
 
 Vec3 Links::nodeForce(std::size_t k) const {

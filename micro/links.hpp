@@ -13,12 +13,16 @@
 /// law says it broke stops acting for good, and its event (time, link,
 /// position) is recorded once. Two laws: linear springs
 /// (bridge/laws/link_linear.hpp) and the elastoplastic wires of the netting
-/// (bridge/laws/wire.hpp), whose plastic work joins the energy ledger.
+/// (bridge/laws/wire.hpp), whose plastic work joins the energy ledger. A
+/// wire may also bend as a beam between its nodes (bridge/laws/wire_beam.hpp:
+/// a shear force and torques on the nodes from their relative motion and
+/// turn), until it breaks.
 #include <cstdint>
 #include <vector>
 
 #include "bridge/laws/link_linear.hpp"
 #include "bridge/laws/wire.hpp"
+#include "bridge/laws/wire_beam.hpp"
 #include "micro/neighbour_grid.hpp"
 #include "micro/particles.hpp"
 #include "micro/scene.hpp"
@@ -38,15 +42,27 @@ class Links {
   /// Pairs that the contact law leaves alone (the linked ones).
   ExcludedPairs excludedPairs() const;
 
-  /// Pass 1, links [l0, l1): forces from the nodes' positions (X, Y, Z,
-  /// indexed by node); a link that breaks is marked, its stored energy
-  /// counted as dissipated, and its event appended to s.link_events. Stored
-  /// energy into s.link_elastic, and the wires' plastic work so far into
-  /// s.link_plastic, when `measure`.
+  /// Pass 1, links [l0, l1): the links' axial forces from the nodes'
+  /// positions (X, Y, Z, indexed by node); a link that breaks is marked, its
+  /// stored energy counted as dissipated, and its event appended to
+  /// s.link_events. Stored energy into s.link_elastic, and the wires'
+  /// plastic work so far into s.link_plastic, when `measure`.
   void evaluate(const double* X, const double* Y, const double* Z, std::size_t l0, std::size_t l1, double time_s,
                 bool measure, WorkerScratch& s);
-  /// Pass 2: the force of its links on node k (N), summed in link order.
+  /// Pass 2: the axial force of its links on node k (N), summed in link order.
   Vec3 nodeForce(std::size_t k) const;
+
+  /// Whether any link bends (bridge/laws/wire_beam.hpp).
+  bool hasBeams() const { return !beams_.empty(); }
+  /// The beams' pass, links [l0, l1), once per step: their increments are
+  /// the change of each wire's chord since the last call (positions X, Y, Z)
+  /// and the turn of its nodes over that time (RX, RY, RZ, rad; indexed by
+  /// node). Stored energy and plastic work so far as in evaluate().
+  void evaluateBeams(const double* X, const double* Y, const double* Z, const double* RX, const double* RY,
+                     const double* RZ, std::size_t l0, std::size_t l1, bool measure, WorkerScratch& s);
+  /// The beams' force (N) and torque (N m) on node k, summed in link order.
+  Vec3 nodeBeamForce(std::size_t k) const;
+  Vec3 nodeBeamTorque(std::size_t k) const;
   std::size_t nodeCount() const { return node_id_.size(); }
   /// The stable particle id of each node, increasing.
   const std::vector<std::uint32_t>& nodeIds() const { return node_id_; }
@@ -58,6 +74,10 @@ class Links {
   double tension(std::size_t l) const { return tension_[l]; }
   /// State of link l if it is a wire (plastic strain, strain reached).
   const bridge::WireState& wireState(std::size_t l) const { return wire_state_[l]; }
+  /// State of link l's beam (zero if it does not bend).
+  bridge::WireBeamState beamState(std::size_t l) const {
+    return beam_of_[l] == kNoBeam ? bridge::WireBeamState{} : beam_state_[beam_of_[l]];
+  }
 
  private:
   std::size_t particles_ = 0;
@@ -78,6 +98,14 @@ class Links {
   // node_link_[node_begin_[k] .. node_begin_[k + 1]), with the sign of the force on it
   std::vector<std::uint32_t> node_id_, node_begin_, node_link_;
   std::vector<double> node_sign_;
+  // Beams: link l bends if beam_of_[l] != kNoBeam; its parameters, state,
+  // chord at the last evaluation, and actions at this step.
+  static constexpr std::uint32_t kNoBeam = 0xffffffffu;
+  std::vector<std::uint32_t> beam_of_;
+  std::vector<bridge::WireBeamParams> beams_;
+  std::vector<bridge::WireBeamState> beam_state_;
+  std::vector<Vec3> beam_chord_;                        // zero before the first evaluation
+  std::vector<Vec3> beam_force_, torque_a_, torque_b_;  // force on b, torques on a and b
 };
 
 }  // namespace gabion::micro

@@ -14,6 +14,7 @@
 #include "bridge/json_reader.hpp"
 #include "bridge/laws/link_linear.hpp"
 #include "bridge/laws/wire.hpp"
+#include "bridge/laws/wire_beam.hpp"
 
 namespace gabion::micro {
 
@@ -73,6 +74,10 @@ struct LinkSpec {
   bridge::LinearLinkParams linear;  ///< Law::Linear
   bridge::WireLinkParams wire;      ///< Law::Wire
   bridge::WireState wire_state;     ///< Law::Wire: its state at the start (a cell file's wires keep theirs)
+  /// Law::Wire: the wire's bending as a beam between its nodes (inactive by
+  /// default: a pin-jointed wire), and the beam's state at the start.
+  bridge::WireBeamParams beam;
+  bridge::WireBeamState beam_state;
   /// Elastic stiffness (N/m), for the critical time step.
   double stiffness() const { return law == Law::Wire ? wire.stiffness() : linear.stiffness_N_m; }
 };

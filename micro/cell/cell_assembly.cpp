@@ -69,7 +69,7 @@ CellCase parseCase(const bridge::JsonDocument& doc) {
   c.formwork = c.rock;
   c.formwork.name = "formwork";
   if (const auto f = root.optionalObject("formwork")) c.formwork = parseNamedMaterial("formwork", *f);
-  c.netting = parseNetting(root.object("netting"));
+  c.netting = parseNetting(root.object("netting"), true);
   c.netting.contact.name = "netting";
   c.blocks = root.object("blocks");
   c.mass_kg = (1.0 - c.target_porosity) * c.rock.density_kg_m3 * std::pow(c.edge_m, 3);
@@ -108,6 +108,7 @@ CellCase parseCase(const bridge::JsonDocument& doc) {
 struct CellNetting {
   Netting box;
   std::vector<bool> lid_only;             // node of the top face and of no other
+  std::vector<bool> rim;                  // basket node on the top edge of a side face
   std::vector<std::uint32_t> basket_of;   // box node -> basket sphere index (basket nodes)
   std::vector<std::uint32_t> basket_ids;  // basket sphere -> box node
   Vec3 origin;
@@ -127,9 +128,12 @@ CellNetting makeNetting(const CellCase& c, const std::string& file) {
   for (std::size_t f = 0; f < 6; ++f)
     for (const std::uint32_t k : n.box.faces[f]) faces_of[k] += f == 1 ? 1 : 2;  // top counts 1, others 2
   n.lid_only.assign(nn, false);
+  n.rim.assign(nn, false);
   n.basket_of.assign(nn, 0);
+  const double top = c.edge_m + 2.0 * r;
   for (std::size_t k = 0; k < nn; ++k) {
     n.lid_only[k] = faces_of[k] == 1;
+    n.rim[k] = !n.lid_only[k] && n.box.node_m[k].z() > top - 0.5 * r;
     if (!n.lid_only[k]) {
       n.basket_of[k] = static_cast<std::uint32_t>(n.basket_ids.size());
       n.basket_ids.push_back(static_cast<std::uint32_t>(k));
@@ -161,13 +165,20 @@ enum Mat { kRock = 0, kFormwork = 1, kNetting = 2 };
 
 // Stage 1: the basket in its formwork (floor and four sides just outside the
 // nodes) and the blocks laid out in a column above its base, ready to fall.
+// The basket's rim is tied to the formwork (its nodes held where they are)
+// until the lid is laced on: a pin-jointed net has no bending stiffness to
+// stand up in, and its sides would fold down onto the floor under their own
+// weight and the rock sliding past them.
 Scene fillScene(const CellCase& c, const CellNetting& n, nlohmann::json& fill_report) {
   Scene s;
   s.gravity_m_s2 = c.gravity;
   s.materials = {c.rock, c.formwork, c.netting.contact};
   s.run = c.run;
   s.run.duration_s = c.fill.max_duration_s;
-  for (const std::uint32_t k : n.basket_ids) s.spheres.push_back(nodeSphere(n, k, kNetting));
+  for (const std::uint32_t k : n.basket_ids) {
+    s.spheres.push_back(nodeSphere(n, k, kNetting));
+    s.spheres.back().fixed = n.rim[k];
+  }
   for (const NettingLink& l : n.box.links)
     if (!n.lid_only[l.a] && !n.lid_only[l.b]) {
       NettingLink b = l;
@@ -332,7 +343,8 @@ bridge::RunOutcome run(const bridge::JsonDocument& doc, const bridge::RunContext
   Scene stand = vibration.state;
   stand.materials[kRock] = c.rock;  // its own friction again
   // The vibrator stops: the cell starts its standing test at rest.
-  for (SphereSpec& sp : stand.spheres) sp.velocity_m_s.setZero(), sp.angular_velocity_rad_s.setZero();
+  // The rim is untied from the formwork.
+  for (SphereSpec& sp : stand.spheres) sp.velocity_m_s.setZero(), sp.angular_velocity_rad_s.setZero(), sp.fixed = false;
   for (BlockSpec& b : stand.blocks) b.velocity_m_s.setZero(), b.angular_velocity_rad_s.setZero();
   {
     // (the floor where the vibration left it: stateScene moved it there)

@@ -10,7 +10,7 @@
 namespace gabion::micro {
 namespace {
 
-constexpr const char* kFormat = "gabion.cell/1";
+constexpr const char* kFormat = "gabion.cell/2";
 
 nlohmann::json materialJson(const Material& m) {
   nlohmann::json j = {{"density_kg_m3", m.density_kg_m3},
@@ -55,7 +55,10 @@ Scene stateScene(const Scene& in, const Engine& engine) {
   for (std::size_t l = 0; l < in.links.size(); ++l) {
     if (engine.linkBroken(l)) continue;
     s.links.push_back(in.links[l]);
-    if (in.links[l].law == LinkSpec::Law::Wire) s.links.back().wire_state = engine.linkWireState(l);
+    if (in.links[l].law == LinkSpec::Law::Wire) {
+      s.links.back().wire_state = engine.linkWireState(l);
+      s.links.back().beam_state = engine.linkBeamState(l);
+    }
   }
   s.generated = nlohmann::json::object();
   s.save_cell = false;
@@ -125,6 +128,7 @@ void writeCellFile(const std::filesystem::path& path, const Scene& in, const Eng
   {
     std::vector<long long> a, b, law, curve;
     std::vector<double> rest, k, tension_only, rupture, plastic, reached;
+    std::vector<double> beam, beam_shear, beam_moment, beam_dissipated;  // beams: k_s, k_b, M_p, L; state
     std::vector<bridge::WireCurve> curves;
     for (std::size_t l = 0; l < in.links.size(); ++l) {
       if (engine.linkBroken(l)) continue;
@@ -138,6 +142,11 @@ void writeCellFile(const std::filesystem::path& path, const Scene& in, const Eng
       rupture.push_back(wire ? 0.0 : s.linear.rupture_strain);
       const bridge::WireState st = wire ? engine.linkWireState(l) : bridge::WireState{};
       plastic.push_back(st.plastic_strain), reached.push_back(st.reached_strain);
+      const bridge::WireBeamParams& bp = s.beam;
+      const bridge::WireBeamState bs = wire ? engine.linkBeamState(l) : bridge::WireBeamState{};
+      for (const double x : {bp.shear_N_m, bp.bending_N_m_rad, bp.active() ? bp.plastic_moment_N_m : 0.0, bp.length_m})
+        beam.push_back(x);
+      push3(beam_shear, bs.shear_N), push3(beam_moment, bs.moment_N_m), beam_dissipated.push_back(bs.dissipated_J);
       long long c = -1;
       if (wire) {
         auto it = std::find(curves.begin(), curves.end(), s.wire.curve);
@@ -156,6 +165,10 @@ void writeCellFile(const std::filesystem::path& path, const Scene& in, const Eng
     h5.write("/links/rupture_strain", rupture, "1");
     h5.write("/links/plastic_strain", plastic, "1");
     h5.write("/links/reached_strain", reached, "1");
+    h5.write("/links/beam", beam, {a.size(), 4}, "N/m, N m/rad, N m, m");
+    h5.write("/links/beam_shear_N", beam_shear, {a.size(), 3}, "N");
+    h5.write("/links/beam_moment_N_m", beam_moment, {a.size(), 3}, "N m");
+    h5.write("/links/beam_dissipated_J", beam_dissipated, "J");
     for (std::size_t c = 0; c < curves.size(); ++c) {
       h5.write("/links/curves/" + std::to_string(c) + "/strain", curves[c].strain(), "1");
       h5.write("/links/curves/" + std::to_string(c) + "/force_N", curves[c].force(), "N");
@@ -267,7 +280,9 @@ void loadCellFile(const std::filesystem::path& path, Scene& scene) {
                curve = count("/links/curve", nl, 1), rest = count("/links/rest_length_m", nl, 1),
                k = count("/links/stiffness_N_m", nl, 1), tension = count("/links/tension_only", nl, 1),
                rupture = count("/links/rupture_strain", nl, 1), plastic = count("/links/plastic_strain", nl, 1),
-               reached = count("/links/reached_strain", nl, 1);
+               reached = count("/links/reached_strain", nl, 1), beam = count("/links/beam", nl, 4),
+               beam_shear = count("/links/beam_shear_N", nl, 3), beam_moment = count("/links/beam_moment_N_m", nl, 3),
+               beam_dissipated = count("/links/beam_dissipated_J", nl, 1);
     const auto nc = static_cast<std::size_t>(count("/links/curve_count", 1, 1)[0]);
     std::vector<bridge::WireCurve> curves;
     for (std::size_t c = 0; c < nc; ++c)
@@ -286,6 +301,12 @@ void loadCellFile(const std::filesystem::path& path, Scene& scene) {
         s.wire.curve = curves[static_cast<std::size_t>(c)];
         s.wire.rest_length_m = rest[l];
         s.wire_state = {plastic[l], reached[l]};
+        if (beam[4 * l + 1] > 0.0) {
+          s.beam = {beam[4 * l], beam[4 * l + 1], beam[4 * l + 2], beam[4 * l + 3]};
+          if (!(s.beam.shear_N_m > 0.0 && s.beam.plastic_moment_N_m > 0.0 && s.beam.length_m > 0.0))
+            fail("a bending wire with a stiffness, plastic moment or length that is not > 0");
+          s.beam_state = {at3(beam_shear, l), at3(beam_moment, l), beam_dissipated[l]};
+        }
       } else {
         s.linear.rest_length_m = rest[l];
         s.linear.stiffness_N_m = k[l];

@@ -1,6 +1,6 @@
 #pragma once
 /// \file
-/// The cell file (`gabion.cell/1`, HDF5; docs/blocks.md, Cell files): the
+/// The cell file (`gabion.cell/2`, HDF5; docs/formats.md, Cell files): the
 /// state of a packed scene (its spheres, blocks, links with their wire
 /// states, and materials) as an engine has it at the end of a run, so that
 /// later runs start from the same assembly (`"from_cell"` in a micro.scene).

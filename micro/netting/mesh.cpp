@@ -278,6 +278,12 @@ LinkSpec linkSpec(const MeshSpec& mesh, const NettingLink& link, std::size_t fir
       s.wire.curve = bridge::wireCurve(mesh.table, mesh.lacing_diameter_m);
       break;
   }
+  if (mesh.bending && link.kind != WireKind::Lacing) {
+    // The table's first point: the elastic modulus and the yield stress.
+    const double yield = mesh.table.stress_Pa.front(), E = yield / mesh.table.strain.front();
+    const double d = link.kind == WireKind::Selvedge ? mesh.selvedge_diameter_m : mesh.wire_diameter_m;
+    s.beam = bridge::wireBeam(E, yield, d, link.rest_length_m, link.kind == WireKind::DoubleTwist ? 2.0 : 1.0);
+  }
   return s;
 }
 

@@ -41,6 +41,11 @@ struct MeshSpec {
   /// Extra nodes evenly along every single wire (0: nodes at the twists'
   /// ends only), so that the rock meets the wire between the twists.
   int wire_beads = 0;
+  /// The wires bend as beams clamped in their nodes (single wires, twists,
+  /// selvedges; lacing stays a pin-jointed tie): bridge/laws/wire_beam.hpp,
+  /// E and the yield stress from the table's first point. false: the
+  /// paper's pin-jointed netting.
+  bool bending = false;
   /// Factor on the node masses (>= 1): a larger stable time step for a small
   /// error in the dynamics (docs/netting.md, Time step).
   double node_mass_scale = 1.0;

@@ -11,7 +11,7 @@ namespace gabion::micro {
 using bridge::Check;
 using bridge::JsonReader;
 
-NettingInput parseNetting(const JsonReader& r) {
+NettingInput parseNetting(const JsonReader& r, bool bending) {
   NettingInput in;
   MeshSpec& m = in.mesh;
   r.choice("mesh", {"hexagonal_double_twist"}, "hexagonal_double_twist");
@@ -28,6 +28,7 @@ NettingInput parseNetting(const JsonReader& r) {
   if (r.has("node_mass_kg")) m.node_mass_kg = r.number("node_mass_kg", Check::Positive);
   m.node_mass_scale = r.number("node_mass_scale", 1.0, Check::Positive);
   m.wire_beads = static_cast<int>(r.integer("wire_beads", 0, 0));
+  m.bending = r.boolean("bending", bending);
   if (m.wire_beads > 8) r.fail("wire_beads", "at most 8 beads per wire");
   if (m.node_mass_scale < 1.0) r.fail("node_mass_scale", "must be >= 1 (it scales the node masses up)");
   // Nodes sit at the ends of the wires: a node wider than half the shortest

@@ -15,7 +15,9 @@ struct NettingInput {
   Material contact;
 };
 
-/// Parses and checks a `netting` object; errors name the key.
-NettingInput parseNetting(const bridge::JsonReader& r);
+/// Parses and checks a `netting` object; errors name the key. `bending`: the
+/// default of its `bending` key (a cell's netting bends, a sheet's is the
+/// paper's pin-jointed one unless asked).
+NettingInput parseNetting(const bridge::JsonReader& r, bool bending = false);
 
 }  // namespace gabion::micro

@@ -163,7 +163,7 @@ TEST(CellFile, ARunSavesItsCellAndAnotherStartsFromIt) {
   auto r = gabion::testing::runGabion("run " + (dir / "make.json").string() + " -q -o " + (dir / "made").string());
   ASSERT_EQ(r.exit_code, 0) << r.output;
   const gabion::bridge::H5Reader cell(dir / "made" / "cell.h5");
-  EXPECT_EQ(cell.attribute("/", "format"), "gabion.cell/1");
+  EXPECT_EQ(cell.attribute("/", "format"), "gabion.cell/2");
   EXPECT_NE(cell.attribute("/", "summary").find("porosity"), std::string::npos);
   gabion::testing::writeFile(dir / "use.json", R"({"format": "gabion.case/1", "kind": "micro.scene",
     "gravity_m_s2": [0, 0, -9.81],
