@@ -16,7 +16,18 @@ BlockShapeIssue checkBlockShape(const BlockShape& s) {
 }
 
 BlockGeometry angularBlock(const BlockShape& shape, double size_m) {
-  const Eigen::Vector3d edges = size_m * Eigen::Vector3d(shape.long_ratio, 1.0, shape.short_ratio);
+  // The lattice is laid out for the unit block and scaled, so that every
+  // size has the same spheres (a count rounded from each size's own edges
+  // would flip at a tie, 1.5 for the default shape, between sizes).
+  BlockGeometry g = angularBlock(shape);
+  g.edges_m *= size_m;
+  for (Eigen::Vector3d& c : g.centers_m) c *= size_m;
+  for (double& r : g.radii_m) r *= size_m;
+  return g;
+}
+
+BlockGeometry angularBlock(const BlockShape& shape) {
+  const Eigen::Vector3d edges(shape.long_ratio, 1.0, shape.short_ratio);
   // Equal spheres: n along the long edge at spacing s = 2 r x spacing_ratio,
   // so that the lattice's outer length is (n - 1) s + 2 r = long edge.
   const int n_long = shape.spheres_along_long;
@@ -25,8 +36,8 @@ BlockGeometry angularBlock(const BlockShape& shape, double size_m) {
   BlockGeometry g;
   g.edges_m = edges;
   int n[3];
-  for (int c = 0; c < 3; ++c)  // as many spheres as fit along the edge (at least one)
-    n[c] = c == 0 ? n_long : std::max(1, 1 + static_cast<int>(std::lround((edges[c] - 2.0 * r) / s)));
+  for (int c = 0; c < 3; ++c)  // as many spheres as fit along the edge (at least one; a tie rounds up)
+    n[c] = c == 0 ? n_long : std::max(1, 1 + static_cast<int>(std::floor((edges[c] - 2.0 * r) / s + 0.5 + 1e-9)));
   // The lattice spans exactly the edges: spacing per axis from its own count.
   Eigen::Vector3d half, step;
   for (int c = 0; c < 3; ++c) {
@@ -50,7 +61,7 @@ BlockGeometry angularBlock(const BlockShape& shape, double size_m) {
         // Depth inside each face, and the chamfers of edges and corners.
         Eigen::Vector3d d;
         for (int c = 0; c < 3; ++c) d[c] = half[c] - std::fabs(x[c]);
-        const double eps = 1e-9 * size_m;
+        const double eps = 1e-9;  // (the unit block)
         const bool edge_ok =
             d.x() + d.y() >= depth - eps && d.y() + d.z() >= depth - eps && d.x() + d.z() >= depth - eps;
         const bool corner_ok = d.sum() >= std::min(1.5 * depth, deepest.sum()) - eps;

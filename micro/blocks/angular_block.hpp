@@ -49,5 +49,7 @@ struct BlockGeometry {
   Eigen::Vector3d edges_m = Eigen::Vector3d::Zero();  ///< outer edge lengths of the lattice (m)
 };
 BlockGeometry angularBlock(const BlockShape& shape, double size_m);
+/// The unit block (intermediate edge 1): every size is it, scaled.
+BlockGeometry angularBlock(const BlockShape& shape);
 
 }  // namespace gabion::micro

@@ -17,6 +17,7 @@
 #include "micro/cell/porosity.hpp"
 #include "micro/netting/mesh.hpp"
 #include "micro/netting/netting_input.hpp"
+#include "micro/rigid_body.hpp"
 #include "micro/scene_run.hpp"
 
 namespace gabion::micro {
@@ -43,6 +44,9 @@ struct CellCase {
     Vec3 direction = Vec3::UnitZ();  // of the shaking, unit
     double friction = -1.0;          // the rock's friction while shaking (< 0: its own)
   } vibration;
+  struct {
+    double pressure_Pa = 10000.0, speed_m_s = 0.2, max_duration_s = 0.5;
+  } closing;
   struct {
     double max_duration_s = 2.0, kinetic_ratio = 1e-6, max_bulge_m = 0.02, max_settlement_m = 0.02;
   } standing;
@@ -88,6 +92,11 @@ CellCase parseCase(const bridge::JsonDocument& doc) {
     if (!(c.vibration.direction.norm() > 0.0)) v->fail("direction", "must not be zero");
     c.vibration.direction.normalize();
     c.vibration.friction = v->number("friction", c.rock.friction, Check::NonNegative);
+  }
+  if (const auto k = root.optionalObject("closing")) {
+    c.closing.pressure_Pa = k->number("pressure_Pa", c.closing.pressure_Pa, Check::Positive);
+    c.closing.speed_m_s = k->number("speed_m_s", c.closing.speed_m_s, Check::Positive);
+    c.closing.max_duration_s = k->number("max_duration_s", c.closing.max_duration_s, Check::Positive);
   }
   if (const auto s = root.optionalObject("standing")) {
     c.standing.max_duration_s = s->number("max_duration_s", c.standing.max_duration_s, Check::Positive);
@@ -316,8 +325,8 @@ bridge::RunOutcome run(const bridge::JsonDocument& doc, const bridge::RunContext
     if (force > 0.0) {
       press.program.kind = WallProgram::Kind::Servo;
       press.program.target_force_N = force;
-      press.program.max_speed_m_s = 0.05;
-      press.program.gain_m_s_N = 0.05 / force;
+      press.program.max_speed_m_s = 0.5;  // (down onto the heap the fill left, then it holds the force)
+      press.program.gain_m_s_N = 0.5 / force;
     }
     vib.walls.push_back(press);
   }
@@ -338,12 +347,58 @@ bridge::RunOutcome run(const bridge::JsonDocument& doc, const bridge::RunContext
   if (vibration.outcome.status != bridge::RunOutcome::Status::Ok)
     return failed(vibration, {{"stages", {{"fill", fill.outcome.results}, {"vibration", vibration.outcome.results}}}});
 
-  // --- 3. Closing and standing: the lid's nodes are laced on over the fill,
-  // the formwork and plate are taken away, the floor stays as the rigid base.
-  Scene stand = vibration.state;
-  stand.materials[kRock] = c.rock;  // its own friction again
-  // The vibrator stops: the cell starts its standing test at rest.
-  // The rim is untied from the formwork.
+  // --- 3. Closing: the vibrator stops and the plate presses the fill down
+  // to the rim (a force servo at closing.pressure_Pa x edge^2, at most
+  // closing.speed_m_s) until its face reaches the cell's top face, or the
+  // time limit. Blocks whose centre still stands above the top face are then
+  // taken off: the fill is levelled with the rim before the lid goes on.
+  Scene close = vibration.state;
+  close.materials[kRock] = c.rock;  // its own friction again
+  for (WallSpec& w : close.walls) w.program = WallProgram{};
+  const std::size_t press_wall = close.walls.size() - 1;
+  {
+    WallProgram& pr = close.walls[press_wall].program;
+    const double force = c.closing.pressure_Pa * e * e;
+    pr.kind = WallProgram::Kind::Servo;
+    pr.target_force_N = force;
+    pr.max_speed_m_s = c.closing.speed_m_s;
+    pr.gain_m_s_N = c.closing.speed_m_s / force;
+  }
+  close.run.duration_s = c.closing.max_duration_s;
+  const double top_face = close.walls[0].point_m.z() + 2 * r + e;  // (the floor where the vibration left it)
+  double press_force = 0.0;
+  SceneRunHooks close_hooks;
+  close_hooks.done = [&](const Engine& eng) {
+    press_force = eng.wallForce(press_wall).z();  // the rock pushes it up
+    return eng.wallPosition(press_wall).z() <= top_face;
+  };
+  StageRun closing = runStage("closing", std::move(close), file, ctx, close_hooks);
+  if (closing.outcome.status != bridge::RunOutcome::Status::Ok)
+    return failed(closing, {{"stages",
+                             {{"fill", fill.outcome.results},
+                              {"vibration", vibration.outcome.results},
+                              {"closing", closing.outcome.results}}}});
+  const double press_gap = closing.state.walls[press_wall].point_m.z() - top_face;
+  double rock_mass = fill_report["mass_kg"].get<double>(), levelled_mass = 0.0;
+  std::size_t levelled = 0;
+  {
+    std::vector<BlockSpec> kept;
+    for (const BlockSpec& b : closing.state.blocks) {
+      const MassProperties m = clusterMassProperties(b.member_centers_m, b.member_radii_m, c.rock.density_kg_m3);
+      if ((b.position_m + b.orientation * m.center_m).z() > top_face) {
+        ++levelled, levelled_mass += m.mass_kg;
+        continue;
+      }
+      kept.push_back(b);
+    }
+    closing.state.blocks = kept;
+    rock_mass -= levelled_mass;
+  }
+
+  // --- 4. Standing: the lid's nodes are laced on over the fill, the
+  // formwork and plate are taken away, the floor stays as the rigid base.
+  Scene stand = closing.state;
+  // The cell starts its standing test at rest; the rim is untied from the formwork.
   for (SphereSpec& sp : stand.spheres) sp.velocity_m_s.setZero(), sp.angular_velocity_rad_s.setZero(), sp.fixed = false;
   for (BlockSpec& b : stand.blocks) b.velocity_m_s.setZero(), b.angular_velocity_rad_s.setZero();
   {
@@ -351,7 +406,7 @@ bridge::RunOutcome run(const bridge::JsonDocument& doc, const bridge::RunContext
     const double floor_z = stand.walls[0].point_m.z();
     stand.walls.resize(1);
     stand.walls[0].program = WallProgram{};
-    const double top = rockTop(vibration.state);
+    const double top = rockTop(stand);
     // The lid lies on the rim's plane, or on the fill where it stands higher.
     const double lift =
         std::max(0.0, top + r - (n.origin.z() + n.box.node_m[n.box.faces[1][0]].z())) + (floor_z + 2 * r);
@@ -385,7 +440,7 @@ bridge::RunOutcome run(const bridge::JsonDocument& doc, const bridge::RunContext
   stand_hooks.done = [&](const Engine& eng) {
     if (std::isnan(reference)) {
       // m g h over all bodies, h above the base: the potential less its value at the base.
-      double mass = fill_report["mass_kg"].get<double>();
+      double mass = rock_mass;
       for (const SphereSpec& sp : stand.spheres) mass += sp.fixed ? 0.0 : sphereMass(stand, sp);
       reference = eng.energy().gravity_potential_J - mass * -c.gravity.z() * eng.wallPosition(0).z();
     }
@@ -397,6 +452,7 @@ bridge::RunOutcome run(const bridge::JsonDocument& doc, const bridge::RunContext
     return failed(standing, {{"stages",
                               {{"fill", fill.outcome.results},
                                {"vibration", vibration.outcome.results},
+                               {"closing", closing.outcome.results},
                                {"standing", standing.outcome.results}}}});
 
   // --- The cell as it stands.
@@ -431,7 +487,11 @@ bridge::RunOutcome run(const bridge::JsonDocument& doc, const bridge::RunContext
   res["porosity_after_vibration"] = porosity_vibrated;
   res["target_porosity"] = c.target_porosity;
   res["blocks"] = fin.blocks.size();
-  res["mass_kg"] = fill_report["mass_kg"];
+  res["mass_kg"] = rock_mass;
+  res["closing"] = {{"press_gap_m", press_gap},
+                    {"press_force_N", press_force},
+                    {"levelled_blocks", levelled},
+                    {"levelled_mass_kg", levelled_mass}};
   res["height_m"] = height;
   res["bulge_m"] = bulge;
   res["settlement_m"] = settlement;
@@ -444,14 +504,16 @@ bridge::RunOutcome run(const bridge::JsonDocument& doc, const bridge::RunContext
   res["block_fills"] = nlohmann::json::array({fill_report});
   writeGradingFigures(ctx.outdir, res["block_fills"]);
   nlohmann::json stages;
-  for (const auto& [name, st] :
-       {std::pair<std::string, const StageRun*>{"fill", &fill}, {"vibration", &vibration}, {"standing", &standing}}) {
+  for (const auto& [name, st] : {std::pair<std::string, const StageRun*>{"fill", &fill},
+                                 {"vibration", &vibration},
+                                 {"closing", &closing},
+                                 {"standing", &standing}}) {
     nlohmann::json j = st->outcome.results;
     j["wall_time_s"] = st->wall_s;
     stages[name] = j;
   }
   res["stages"] = stages;
-  res["wall_time_s"] = fill.wall_s + vibration.wall_s + standing.wall_s;
+  res["wall_time_s"] = fill.wall_s + vibration.wall_s + closing.wall_s + standing.wall_s;
   // The porosity through the vibration, against the target.
   if (!vib_t.empty()) {
     bridge::PlotSpec plot;
@@ -474,8 +536,10 @@ bridge::RunOutcome run(const bridge::JsonDocument& doc, const bridge::RunContext
       << res["mass_kg"].get<double>() << " kg\n";
   rep << "standing: bulge " << 1000 * bulge << " mm, settlement " << 1000 * settlement << " mm, kinetic ratio "
       << ke_ratio << " -> " << (stands ? "stands" : "DOES NOT STAND") << "\n";
-  rep << "stages (wall s): fill " << fill.wall_s << ", vibration " << vibration.wall_s << ", standing "
-      << standing.wall_s << "\n";
+  rep << "closing: plate " << 1000 * press_gap << " mm above the rim at " << press_force << " N; " << levelled
+      << " blocks (" << levelled_mass << " kg) above it taken off\n";
+  rep << "stages (wall s): fill " << fill.wall_s << ", vibration " << vibration.wall_s << ", closing " << closing.wall_s
+      << ", standing " << standing.wall_s << "\n";
   out.report = rep.str();
   return out;
 }

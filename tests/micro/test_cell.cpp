@@ -26,6 +26,7 @@ std::string smallCell(const std::string& extra = "") {
  "netting": {"contact": {"normal_stiffness_N_m": 1e6, "shear_stiffness_N_m": 2.5e5, "friction": 0.5, "local_damping": 0.1}},
  "fill": {"max_duration_s": 0.35},
  "vibration": {"max_duration_s": 0.1, "check_interval_s": 0.05},
+ "closing": {"max_duration_s": 0.1},
  "standing": {"max_duration_s": 0.1},
  "run": {"output_interval_s": 0.05, "series_interval_s": 0.005})" +
          extra + "}";
@@ -43,8 +44,8 @@ TEST(MicroCell, SmallCellIsFilledVibratedClosedAndStoodWithItsLedgerClosed) {
   ASSERT_EQ(a.exit_code, 0) << a.output;
   const nlohmann::json s = summaryOf(dir / "a");
   const nlohmann::json& r = s.contains("results") ? s["results"] : s;
-  // 39.6 kg of rock: (1 - 0.436) x 2600 kg/m3 x 0.027 m3, to within half a block.
-  EXPECT_NEAR(r["mass_kg"].get<double>(), 0.564 * 2600 * 0.027, 1.0);
+  // 39.6 kg of rock filled: (1 - 0.436) x 2600 kg/m3 x 0.027 m3, to within half a block.
+  EXPECT_NEAR(r["block_fills"][0]["mass_kg"].get<double>(), 0.564 * 2600 * 0.027, 1.0);
   EXPECT_GT(r["blocks"].get<int>(), 20);
   for (const char* key :
        {"porosity", "porosity_after_gravity", "porosity_after_vibration", "height_m", "bulge_m", "settlement_m"}) {
@@ -55,7 +56,7 @@ TEST(MicroCell, SmallCellIsFilledVibratedClosedAndStoodWithItsLedgerClosed) {
   EXPECT_GT(r["porosity_after_gravity"].get<double>(), 0.40);
   EXPECT_LT(r["porosity_after_gravity"].get<double>(), 0.70);
   EXPECT_TRUE(r.contains("stands"));
-  for (const char* stage : {"fill", "vibration", "standing"}) {
+  for (const char* stage : {"fill", "vibration", "closing", "standing"}) {
     const nlohmann::json& st = r["stages"][stage];
     EXPECT_EQ(st["step_status"], "ok") << stage;
     EXPECT_LT(std::fabs(st["energy"]["balance_rel_error"].get<double>()), 0.01) << stage;
@@ -63,6 +64,30 @@ TEST(MicroCell, SmallCellIsFilledVibratedClosedAndStoodWithItsLedgerClosed) {
   }
   EXPECT_TRUE(std::filesystem::exists(dir / "a" / "cell.h5"));
   EXPECT_TRUE(std::filesystem::exists(dir / "a" / "vibration.png"));
+  // What the closing levelled off is what the cell lacks of its fill.
+  const nlohmann::json& closing = r["closing"];
+  EXPECT_NEAR(r["mass_kg"].get<double>() + closing["levelled_mass_kg"].get<double>(),
+              r["block_fills"][0]["mass_kg"].get<double>(), 1e-6);
+  EXPECT_EQ(r["blocks"].get<std::size_t>() + closing["levelled_blocks"].get<std::size_t>(),
+            r["block_fills"][0]["blocks"].get<std::size_t>());
+
+  // The basket stands through the fill: its rim is held, so its side faces
+  // keep their height (with a free rim the netting's nodes sink by 5 cm on
+  // average in this fill, bending wires or not). Mean height of the
+  // netting's nodes, first frame against last.
+  {
+    const gabion::bridge::H5Reader h(dir / "a" / "fill" / "result.h5");
+    const std::vector<double> x = h.read("/bodies/position_m"), ends = h.read("/links/ends");
+    const std::size_t frames = h.dims("/bodies/position_m")[0], bodies = h.dims("/bodies/position_m")[1];
+    std::vector<bool> node(bodies, false);
+    for (const double k : ends) node[static_cast<std::size_t>(k)] = true;
+    double z0 = 0.0, z1 = 0.0;
+    std::size_t count = 0;
+    for (std::size_t k = 0; k < bodies; ++k)
+      if (node[k]) z0 += x[3 * k + 2], z1 += x[3 * ((frames - 1) * bodies + k) + 2], ++count;
+    EXPECT_GT(count, 100u);
+    EXPECT_NEAR(z1 / count, z0 / count, 0.01) << "the basket's nodes sank by " << (z0 - z1) / count << " m";
+  }
 
   // The same seed (and thread count): the same cell, to the last bit.
   const auto b = runGabion("run -q " + (dir / "cell.json").string() + " -o " + (dir / "b").string());
@@ -84,6 +109,8 @@ TEST(MicroCell, BadInputIsNamed) {
       {"unknown", smallCell(R"(, "vibration": {"frequency": 20})"), "/vibration/frequency"},
       {"direction", smallCell(R"(, "vibration": {"direction": [0, 0, 0]})"), "/vibration/direction"},
       {"friction", smallCell(R"(, "vibration": {"friction": -0.1})"), "/vibration/friction"},
+      {"closing", smallCell(R"(, "closing": {"pressure_Pa": 0})"), "/closing/pressure_Pa"},
+      {"bending", smallCell(R"(, "netting": {"bending": 1})"), "/netting/bending"},
   };
   for (const auto& c : cases) {
     writeFile(dir / (c.name + ".json"), c.text);
