@@ -505,6 +505,10 @@ void Engine::computeContactForces(bool measure) {
 // wall forces of the step held, with the bending wires' forces and torques
 // (once per step, from the step's start).
 
+namespace {
+constexpr std::size_t kSerialLinks = 8192;
+}  // namespace
+
 void Engine::advanceLinkedNodes(bool measure) {
   if (nodes_.empty()) return;
   const std::size_t T = scratch_.size(), nl = links_.size();
@@ -524,15 +528,24 @@ void Engine::advanceLinkedNodes(bool measure) {
   nodes_rebuilds_ = rebuilds_;
   if (links_.hasBeams()) nodes_.addBeams(links_);
   const double h = dt_ / substeps_;
+  const std::size_t T_links = nl < kSerialLinks ? 1 : T;
   for (int k = 0; k < substeps_; ++k) {
     const bool last = k + 1 == substeps_, m = measure && last;
-    parallel(StageProfile::kLinks, [&](int task) {
+    // (a netting of a few thousand wires is evaluated faster by one thread
+    // than split: a sub-step's work is then shorter than waking a worker)
+    const auto links_job = [&](int task) {
       const auto t = static_cast<std::size_t>(task);
       WorkerScratch& s = scratch_[t];
       s.link_elastic = s.link_rupture = s.link_plastic = 0.0;
       s.link_events.clear();
-      links_.evaluate(nodes_.x(), nodes_.y(), nodes_.z(), nl * t / T, nl * (t + 1) / T, time_ + k * h, m, s);
-    });
+      if (T_links == 1 && t > 0) return;
+      links_.evaluate(nodes_.x(), nodes_.y(), nodes_.z(), nl * t / T_links, nl * (t + 1) / T_links, time_ + k * h, m,
+                      s);
+    };
+    if (T_links == 1)
+      for (std::size_t t = 0; t < T; ++t) links_job(static_cast<int>(t));
+    else
+      parallel(StageProfile::kLinks, links_job);
     for (const WorkerScratch& s : scratch_) {
       if (m) energy_.elastic_link += s.link_elastic, energy_.link_plastic += s.link_plastic;
       energy_.link_rupture += s.link_rupture;

@@ -406,10 +406,17 @@ bridge::RunOutcome run(const bridge::JsonDocument& doc, const bridge::RunContext
     const double floor_z = stand.walls[0].point_m.z();
     stand.walls.resize(1);
     stand.walls[0].program = WallProgram{};
-    const double top = rockTop(stand);
-    // The lid lies on the rim's plane, or on the fill where it stands higher.
-    const double lift =
-        std::max(0.0, top + r - (n.origin.z() + n.box.node_m[n.box.faces[1][0]].z())) + (floor_z + 2 * r);
+    // The lid is laid on the fill: each of its nodes rests on the highest
+    // rock sphere or basket node under it (or at the rim's plane where there
+    // is none), and every wire of the lid takes its length as it lies (no
+    // pull at closing).
+    const double shift = floor_z + 2 * r;
+    std::vector<Vec3> rock_x;
+    std::vector<double> rock_r;
+    for (const SphereSpec& sp : stand.spheres) rock_x.push_back(sp.center_m), rock_r.push_back(sp.radius_m);
+    for (const BlockSpec& b : stand.blocks)
+      for (std::size_t m = 0; m < b.member_radii_m.size(); ++m)
+        rock_x.push_back(b.position_m + b.orientation * b.member_centers_m[m]), rock_r.push_back(b.member_radii_m[m]);
     std::vector<std::uint32_t> sphere_of(n.box.node_m.size(), 0);
     for (std::size_t k = 0; k < n.box.node_m.size(); ++k) {
       if (!n.lid_only[k]) {
@@ -418,17 +425,22 @@ bridge::RunOutcome run(const bridge::JsonDocument& doc, const bridge::RunContext
       }
       sphere_of[k] = static_cast<std::uint32_t>(stand.spheres.size());
       SphereSpec sp = nodeSphere(n, k, kNetting);
-      sp.center_m.z() += lift;
+      sp.center_m.z() += shift;
+      double rest = -1e300;
+      for (std::size_t m = 0; m < rock_x.size(); ++m) {
+        const double reach = rock_r[m] + r, dx = sp.center_m.x() - rock_x[m].x(), dy = sp.center_m.y() - rock_x[m].y();
+        const double d2 = dx * dx + dy * dy;
+        if (d2 < reach * reach) rest = std::max(rest, rock_x[m].z() + std::sqrt(reach * reach - d2));
+      }
+      if (rest > -1e300) sp.center_m.z() = rest;
       stand.spheres.push_back(sp);
     }
     for (const NettingLink& l : n.box.links) {
       if (!n.lid_only[l.a] && !n.lid_only[l.b]) continue;
       NettingLink b = l;
       b.a = sphere_of[l.a], b.b = sphere_of[l.b];
-      LinkSpec spec = linkSpec(c.netting.mesh, b, 0);
-      if (!n.lid_only[l.a] || !n.lid_only[l.b])  // a lace or shared wire to the rim: tied as it lies
-        spec.wire.rest_length_m = (stand.spheres[b.a].center_m - stand.spheres[b.b].center_m).norm();
-      stand.links.push_back(spec);
+      b.rest_length_m = (stand.spheres[b.a].center_m - stand.spheres[b.b].center_m).norm();
+      stand.links.push_back(linkSpec(c.netting.mesh, b, 0));
     }
   }
   stand.run.duration_s = c.standing.max_duration_s;
