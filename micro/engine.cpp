@@ -49,7 +49,8 @@ double criticalStep(const Scene& scene, const std::vector<MassProperties>& block
     if (sp.fixed) continue;
     const auto m = static_cast<std::size_t>(sp.material);
     const double mass = sphereMass(scene, sp);
-    dt = std::min({dt, std::sqrt(mass / kn_max[m]), std::sqrt(0.4 * mass / ks_max[m])});
+    const double inertia = sphereInertia(scene, sp);  // (turning against a contact at its surface)
+    dt = std::min({dt, std::sqrt(mass / kn_max[m]), std::sqrt(inertia / (ks_max[m] * sp.radius_m * sp.radius_m))});
   }
   for (std::size_t bi = 0; bi < scene.blocks.size(); ++bi) {
     const BlockSpec& spec = scene.blocks[bi];
@@ -106,7 +107,7 @@ Engine::Engine(const Scene& scene, int threads) {
     place(s, sp.center_m, sp.velocity_m_s, sp.angular_velocity_rad_s);
     p_.mass[s] = mass;
     p_.inv_mass[s] = 1.0 / mass;
-    p_.inv_inertia[s] = 1.0 / (0.4 * mass * sp.radius_m * sp.radius_m);
+    p_.inv_inertia[s] = 1.0 / sphereInertia(scene, sp);
     p_.inv_body_mass[s] = 1.0 / mass;
     p_.alpha[s] = m.local_damping;
   }

@@ -117,7 +117,7 @@ double criticalLinkStep(const Scene& scene) {
 
 double criticalBeamStep(const Scene& scene) {
   // A node's sway against its beams' shear stiffness, and its turn against
-  // their end stiffness (4 E I / L each) with the inertia of its sphere.
+  // their end stiffness (4 E I / L each) with its moment of inertia.
   std::vector<double> k_sway(scene.spheres.size(), 0.0), k_turn(scene.spheres.size(), 0.0);
   for (const LinkSpec& l : scene.links) {
     if (l.law != LinkSpec::Law::Wire || !l.beam.active()) continue;
@@ -129,7 +129,7 @@ double criticalBeamStep(const Scene& scene) {
     const SphereSpec& sp = scene.spheres[s];
     if (sp.fixed || !(k_turn[s] > 0.0)) continue;
     const double m = sphereMass(scene, sp);
-    dt = std::min({dt, std::sqrt(m / k_sway[s]), std::sqrt(0.4 * m * sp.radius_m * sp.radius_m / k_turn[s])});
+    dt = std::min({dt, std::sqrt(m / k_sway[s]), std::sqrt(sphereInertia(scene, sp) / k_turn[s])});
   }
   return dt;
 }

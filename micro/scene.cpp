@@ -287,6 +287,11 @@ double sphereMass(const Scene& scene, const SphereSpec& sphere) {
   return scene.materials[static_cast<std::size_t>(sphere.material)].density_kg_m3 * sphereVolume(sphere.radius_m);
 }
 
+double sphereInertia(const Scene& scene, const SphereSpec& sphere) {
+  if (sphere.inertia_kg_m2 > 0.0) return sphere.inertia_kg_m2;
+  return 0.4 * sphereMass(scene, sphere) * sphere.radius_m * sphere.radius_m;
+}
+
 std::string wallName(const Scene& scene, std::size_t w) {
   const std::string& name = scene.walls[w].name;
   return name.empty() ? "wall_" + std::to_string(w) : name;
@@ -330,6 +335,8 @@ void validateScene(const Scene& s, const std::string& file) {
     if (!finite(sp.velocity_m_s)) fail(at("spheres", k, "velocity_m_s"), "must be finite");
     if (!finite(sp.angular_velocity_rad_s)) fail(at("spheres", k, "angular_velocity_rad_s"), "must be finite");
     if (!(sp.mass_kg >= 0.0 && std::isfinite(sp.mass_kg))) fail(at("spheres", k, "mass_kg"), "must be > 0");
+    if (!(sp.inertia_kg_m2 >= 0.0 && std::isfinite(sp.inertia_kg_m2)))
+      fail(at("spheres", k, "inertia_kg_m2"), "must be > 0");
     material(sp.material, at("spheres", k, "material"));
     group(sp.group, at("spheres", k, "group"));
   }

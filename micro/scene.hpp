@@ -46,6 +46,9 @@ struct SphereSpec {
   bool fixed = false;
   int group = 0;         ///< contact group, 0 .. 31 (Scene::no_contact_groups)
   double mass_kg = 0.0;  ///< > 0: this mass (a netting node carrying its wires); 0: density x volume
+  /// > 0: this moment of inertia (a netting node turning with the wire it
+  /// carries); 0: a solid sphere's, 2/5 m r^2.
+  double inertia_kg_m2 = 0.0;
 };
 
 /// A rigid multi-sphere block. Member centres are in body coordinates; the
@@ -176,6 +179,8 @@ RunSpec parseRun(const bridge::JsonReader& run, double default_duration_s = 0.0)
 
 /// Mass of a free sphere (kg): its own mass_kg, or its material's density x volume.
 double sphereMass(const Scene& scene, const SphereSpec& sphere);
+/// Moment of inertia of a sphere (kg m^2): its own, or 2/5 m r^2.
+double sphereInertia(const Scene& scene, const SphereSpec& sphere);
 
 /// The name of wall w: its own, or wall_<w> if it has none.
 std::string wallName(const Scene& scene, std::size_t w);

@@ -156,6 +156,7 @@ SphereSpec nodeSphere(const CellNetting& n, std::size_t k, int material) {
   sp.center_m = n.origin + n.box.node_m[k];
   sp.radius_m = n.box.node_radius_m;
   sp.mass_kg = n.box.node_mass_kg[k];
+  sp.inertia_kg_m2 = n.box.node_inertia_kg_m2[k];
   sp.material = material;
   sp.group = 1;
   return sp;

@@ -77,13 +77,13 @@ void writeCellFile(const std::filesystem::path& path, const Scene& in, const Eng
   }
   // Spheres: static attributes from the input, state from the engine.
   {
-    std::vector<double> x, v, w, r, mass;
+    std::vector<double> x, v, w, r, mass, inertia;
     std::vector<long long> material, group, fixed;
     for (std::size_t s = 0; s < in.spheres.size(); ++s) {
       const SphereSpec& sp = in.spheres[s];
       const BodyState b = engine.body(s);
       push3(x, b.position_m), push3(v, b.velocity_m_s), push3(w, b.angular_velocity_rad_s);
-      r.push_back(sp.radius_m), mass.push_back(sphereMass(in, sp));
+      r.push_back(sp.radius_m), mass.push_back(sphereMass(in, sp)), inertia.push_back(sphereInertia(in, sp));
       material.push_back(sp.material), group.push_back(sp.group), fixed.push_back(sp.fixed ? 1 : 0);
     }
     const std::size_t n = in.spheres.size();
@@ -92,6 +92,7 @@ void writeCellFile(const std::filesystem::path& path, const Scene& in, const Eng
     h5.write("/spheres/angular_velocity_rad_s", w, {n, 3}, "rad/s");
     h5.write("/spheres/radius_m", r, "m");
     h5.write("/spheres/mass_kg", mass, "kg");
+    h5.write("/spheres/inertia_kg_m2", inertia, "kg m2");
     h5.writeInts("/spheres/material", material);
     h5.writeInts("/spheres/group", group);
     h5.writeInts("/spheres/fixed", fixed);
@@ -240,12 +241,13 @@ void loadCellFile(const std::filesystem::path& path, Scene& scene) {
   {
     const auto x = count("/spheres/center_m", ns, 3), v = count("/spheres/velocity_m_s", ns, 3),
                w = count("/spheres/angular_velocity_rad_s", ns, 3), r = count("/spheres/radius_m", ns, 1),
-               m = count("/spheres/mass_kg", ns, 1), material = count("/spheres/material", ns, 1),
-               group = count("/spheres/group", ns, 1), fixed = count("/spheres/fixed", ns, 1);
+               m = count("/spheres/mass_kg", ns, 1), inertia = count("/spheres/inertia_kg_m2", ns, 1),
+               material = count("/spheres/material", ns, 1), group = count("/spheres/group", ns, 1),
+               fixed = count("/spheres/fixed", ns, 1);
     for (std::size_t s = 0; s < ns; ++s) {
       SphereSpec sp;
       sp.center_m = at3(x, s), sp.velocity_m_s = at3(v, s), sp.angular_velocity_rad_s = at3(w, s);
-      sp.radius_m = r[s], sp.mass_kg = m[s], sp.material = mat(material[s]);
+      sp.radius_m = r[s], sp.mass_kg = m[s], sp.inertia_kg_m2 = inertia[s], sp.material = mat(material[s]);
       sp.group = static_cast<int>(group[s]), sp.fixed = fixed[s] != 0.0;
       scene.spheres.push_back(sp);
     }

@@ -242,20 +242,26 @@ Netting closedBox(const MeshSpec& mesh, double edge_m, bool open_top) {
 
 void assignNodeMasses(const MeshSpec& mesh, Netting& net) {
   net.node_radius_m = mesh.nodeRadius();
-  net.node_mass_kg.assign(net.node_m.size(), mesh.node_mass_kg);
-  if (mesh.node_mass_kg <= 0.0) {
-    // The wire each node carries: half of each of its links (two wires in a twist).
-    for (const NettingLink& l : net.links) {
-      double d = mesh.wire_diameter_m, wires = 1.0;
-      if (l.kind == WireKind::Selvedge) d = mesh.selvedge_diameter_m;
-      if (l.kind == WireKind::Lacing) d = mesh.lacing_diameter_m;
-      if (l.kind == WireKind::DoubleTwist) wires = 2.0;
-      const double half = 0.5 * wires * mesh.steel_density_kg_m3 * bridge::wireSection(d) * l.rest_length_m;
-      net.node_mass_kg[l.a] += half;
-      net.node_mass_kg[l.b] += half;
-    }
+  // The wire each node carries: half of each of its links (two wires in a
+  // twist), a rod of length L / 2 turning about the node: (m / 2) (L / 2)^2 / 3.
+  std::vector<double> wire(net.node_m.size(), 0.0), turn(net.node_m.size(), 0.0);
+  for (const NettingLink& l : net.links) {
+    double d = mesh.wire_diameter_m, wires = 1.0;
+    if (l.kind == WireKind::Selvedge) d = mesh.selvedge_diameter_m;
+    if (l.kind == WireKind::Lacing) d = mesh.lacing_diameter_m;
+    if (l.kind == WireKind::DoubleTwist) wires = 2.0;
+    const double half = 0.5 * wires * mesh.steel_density_kg_m3 * bridge::wireSection(d) * l.rest_length_m;
+    const double I = half * 0.25 * l.rest_length_m * l.rest_length_m / 3.0;
+    wire[l.a] += half, wire[l.b] += half, turn[l.a] += I, turn[l.b] += I;
   }
-  for (double& m : net.node_mass_kg) m *= mesh.node_mass_scale;
+  net.node_mass_kg.assign(net.node_m.size(), 0.0);
+  net.node_inertia_kg_m2.assign(net.node_m.size(), 0.0);
+  for (std::size_t k = 0; k < net.node_m.size(); ++k) {
+    const double m = mesh.node_mass_kg > 0.0 ? mesh.node_mass_kg : wire[k];
+    net.node_mass_kg[k] = m * mesh.node_mass_scale;
+    // (a node of no wire keeps the solid sphere's inertia)
+    net.node_inertia_kg_m2[k] = wire[k] > 0.0 ? turn[k] * (m / wire[k]) * mesh.node_mass_scale : 0.0;
+  }
 }
 
 LinkSpec linkSpec(const MeshSpec& mesh, const NettingLink& link, std::size_t first_sphere) {

@@ -66,6 +66,9 @@ struct NettingLink {
 struct Netting {
   std::vector<Vec3> node_m;
   std::vector<double> node_mass_kg;
+  /// Moment of inertia of every node (kg m^2): the wire pieces it carries,
+  /// each half of a link turning about the node as a rod about its end.
+  std::vector<double> node_inertia_kg_m2;
   double node_radius_m = 0.0;
   std::vector<NettingLink> links;
   /// A flat sheet: the nodes of its first row's bottom (y = 0) and of its last
@@ -94,7 +97,9 @@ Netting flatSheet(const MeshSpec& mesh, double width_m, double length_m);
 Netting closedBox(const MeshSpec& mesh, double edge_m, bool open_top = false);
 
 /// Fills in node masses (given, or the wire each node carries, times the
-/// mass scale) and the radius.
+/// mass scale), their moments of inertia (the wire pieces they carry, turning
+/// with them; a given node mass spreads over them in proportion) and the
+/// radius.
 void assignNodeMasses(const MeshSpec& mesh, Netting& net);
 
 /// The engine link of a netting link: a wire of its kind's diameter, a double

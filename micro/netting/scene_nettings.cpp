@@ -67,6 +67,7 @@ void addNettings(const JsonReader& root, Scene& scene) {
       sp.center_m = origin + net.node_m[k];
       sp.radius_m = net.node_radius_m;
       sp.mass_kg = net.node_mass_kg[k];
+      sp.inertia_kg_m2 = net.node_inertia_kg_m2[k];
       sp.material = material;
       sp.group = group;
       sp.fixed = fixed[k] != 0;
