@@ -95,7 +95,8 @@ struct WallProgram {
     VelocityTable,  ///< velocity piecewise linear in time through (table_time_s, table_velocity_m_s); the last value
                     ///< holds after the table
     Sinusoid,       ///< displacement amplitude_m sin(2 pi f t + phase) - sin(phase), along `direction`
-    Servo           ///< along the wall normal, speed gain x (target - measured normal force), at most max_speed
+    Servo           ///< along the wall normal, speed gain x (target - measured normal force), at most max_speed;
+                    ///< at max_speed towards the bodies while it touches nothing
   };
   Kind kind = Kind::Fixed;
   Vec3 velocity_m_s = Vec3::Zero();

@@ -70,9 +70,12 @@ Wall::Wall(const WallSpec& spec)
 void Wall::plan(double t, double dt) {
   if (program.kind == WallProgram::Kind::Servo) {
     // Velocity along the normal from the force error, at most max_speed:
-    // a wall that feels too little force moves towards the bodies.
-    const double speed = std::clamp(program.gain_m_s_N * (program.target_force_N - normalForce()),
-                                    -program.max_speed_m_s, program.max_speed_m_s);
+    // a wall that feels too little force moves towards the bodies. A wall
+    // that touches nothing closes in at max_speed.
+    const double force = normalForce();
+    const double speed = force == 0.0 ? program.max_speed_m_s
+                                      : std::clamp(program.gain_m_s_N * (program.target_force_N - force),
+                                                   -program.max_speed_m_s, program.max_speed_m_s);
     velocity = speed * n;
     step_displacement = velocity * dt;
     return;

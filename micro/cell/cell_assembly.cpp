@@ -326,8 +326,11 @@ bridge::RunOutcome run(const bridge::JsonDocument& doc, const bridge::RunContext
     if (force > 0.0) {
       press.program.kind = WallProgram::Kind::Servo;
       press.program.target_force_N = force;
-      press.program.max_speed_m_s = 0.5;  // (down onto the heap the fill left, then it holds the force)
-      press.program.gain_m_s_N = 0.5 / force;
+      // Down onto the heap the fill left at up to 0.5 m/s, then it holds the
+      // force with a gentle gain (a stiff servo's speed follows the contacts'
+      // chatter, and its work, force x speed, is then biased).
+      press.program.max_speed_m_s = 0.5;
+      press.program.gain_m_s_N = 0.05 / force;
     }
     vib.walls.push_back(press);
   }
