@@ -97,7 +97,7 @@ std::uint64_t runHash(int threads, int steps) {
 // so its bits depend on the CPU: there the runs must repeat, for each thread
 // count, and agree across thread counts, but the value is not pinned.
 TEST(MicroDeterminism, SameSceneAndThreadsGiveTheSameArrays) {
-  constexpr std::uint64_t kPinned = 0x3799e1c6f5fcd283ull;
+  constexpr std::uint64_t kPinned = 0xfc1fcd4cb719ee1aull;
   std::uint64_t first = 0;
   for (const int threads : {1, 2, 3}) {
     const std::uint64_t a = runHash(threads, 1500), b = runHash(threads, 1500);
