@@ -64,12 +64,13 @@ double criticalStep(const Scene& scene, const std::vector<MassProperties>& block
     dt = std::min({dt, std::sqrt(props.mass_kg / kn_max[m]),
                    std::sqrt(props.principal_moments_kg_m2.minCoeff() / (k_max[m] * lever * lever))});
   }
-  return dt;
+  // Netting nodes against their bending wires (which act once per step).
+  return std::min(dt, criticalBeamStep(scene));
 }
 }  // namespace
 
 double criticalTimeStep(const Scene& scene) {
-  return std::min(criticalStep(scene, blockMassProperties(scene)), criticalBeamStep(scene));
+  return criticalStep(scene, blockMassProperties(scene));
 }
 
 Engine::Engine(const Scene& scene, int threads) {
@@ -165,7 +166,7 @@ Engine::Engine(const Scene& scene, int threads) {
   grid_.assignClasses(p_);
   skin_m_ = scene.run.verlet_skin_ratio * grid_.finestMeanRadius();
 
-  dt_critical_ = std::min(criticalStep(scene, block_props), criticalBeamStep(scene));
+  dt_critical_ = criticalStep(scene, block_props);
   dt_link_critical_ = criticalLinkStep(scene);
   dt_safety_ = scene.run.dt_safety;
 
@@ -512,41 +513,40 @@ constexpr std::size_t kSerialLinks = 8192;
 
 void Engine::advanceLinkedNodes(bool measure) {
   if (nodes_.empty()) return;
-  const std::size_t T = scratch_.size(), nl = links_.size();
-  // The beams from the nodes' turn over the last step, then the held forces.
-  if (links_.hasBeams())
-    parallel(StageProfile::kLinks, [&](int task) {
+  const std::size_t nl = links_.size();
+  // A netting of a few thousand wires is evaluated faster by one thread than
+  // split: a sub-step's work is then shorter than handing it to a worker.
+  const std::size_t parts = nl < kSerialLinks ? 1 : scratch_.size();
+  const auto overLinks = [&](const auto& job) {  // job(scratch, first link, end)
+    for (WorkerScratch& s : scratch_) s.link_elastic = s.link_rupture = s.link_plastic = 0.0, s.link_events.clear();
+    const auto part = [&](int task) {
       const auto t = static_cast<std::size_t>(task);
-      WorkerScratch& s = scratch_[t];
-      s.link_elastic = s.link_plastic = 0.0;
-      links_.evaluateBeams(nodes_.x(), nodes_.y(), nodes_.z(), nodes_.turnX(), nodes_.turnY(), nodes_.turnZ(),
-                           nl * t / T, nl * (t + 1) / T, measure, s);
+      job(scratch_[t], nl * t / parts, nl * (t + 1) / parts);
+    };
+    if (parts == 1)
+      part(0);
+    else
+      parallel(StageProfile::kLinks, part);
+  };
+  // The beams from the nodes' turn over the last step, then the held forces.
+  if (links_.hasBeams()) {
+    overLinks([&](WorkerScratch& s, std::size_t l0, std::size_t l1) {
+      links_.evaluateBeams(nodes_.x(), nodes_.y(), nodes_.z(), nodes_.turnX(), nodes_.turnY(), nodes_.turnZ(), l0, l1,
+                           measure, s);
     });
-  if (links_.hasBeams() && measure)
-    for (const WorkerScratch& s : scratch_)
-      energy_.elastic_link += s.link_elastic, energy_.link_plastic += s.link_plastic;
+    if (measure)
+      for (const WorkerScratch& s : scratch_)
+        energy_.elastic_link += s.link_elastic, energy_.link_plastic += s.link_plastic;
+  }
   nodes_.hold(p_, rebuilds_ != nodes_rebuilds_);
   nodes_rebuilds_ = rebuilds_;
   if (links_.hasBeams()) nodes_.addBeams(links_);
   const double h = dt_ / substeps_;
-  const std::size_t T_links = nl < kSerialLinks ? 1 : T;
   for (int k = 0; k < substeps_; ++k) {
     const bool last = k + 1 == substeps_, m = measure && last;
-    // (a netting of a few thousand wires is evaluated faster by one thread
-    // than split: a sub-step's work is then shorter than waking a worker)
-    const auto links_job = [&](int task) {
-      const auto t = static_cast<std::size_t>(task);
-      WorkerScratch& s = scratch_[t];
-      s.link_elastic = s.link_rupture = s.link_plastic = 0.0;
-      s.link_events.clear();
-      if (T_links == 1 && t > 0) return;
-      links_.evaluate(nodes_.x(), nodes_.y(), nodes_.z(), nl * t / T_links, nl * (t + 1) / T_links, time_ + k * h, m,
-                      s);
-    };
-    if (T_links == 1)
-      for (std::size_t t = 0; t < T; ++t) links_job(static_cast<int>(t));
-    else
-      parallel(StageProfile::kLinks, links_job);
+    overLinks([&](WorkerScratch& s, std::size_t l0, std::size_t l1) {
+      links_.evaluate(nodes_.x(), nodes_.y(), nodes_.z(), l0, l1, time_ + k * h, m, s);
+    });
     for (const WorkerScratch& s : scratch_) {
       if (m) energy_.elastic_link += s.link_elastic, energy_.link_plastic += s.link_plastic;
       energy_.link_rupture += s.link_rupture;

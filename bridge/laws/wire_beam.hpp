@@ -87,11 +87,11 @@ struct WireBeamResponse {
 /// taking n0 to n1, then `twist` rad about n1. Applied to vectors normal to
 /// the wire.
 struct WireTurn {
-  Eigen::Vector3d n0, n1, axis;  // axis = n0 x n1
-  double c = 1.0, k = 0.5;       // n0 . n1, 1 / (1 + c)
-  double ct = 1.0, st = 0.0;     // cos and sin of the twist
-  WireTurn(const Eigen::Vector3d& from, const Eigen::Vector3d& to, double twist)
-      : n0(from), n1(to), axis(from.cross(to)), c(from.dot(to)) {
+  Eigen::Vector3d n1, axis;   // axis = n0 x n1
+  double c = 1.0, k = 0.5;    // n0 . n1, 1 / (1 + c)
+  double ct = 1.0, st = 0.0;  // cos and sin of the twist
+  WireTurn(const Eigen::Vector3d& n0, const Eigen::Vector3d& to, double twist)
+      : n1(to), axis(n0.cross(to)), c(n0.dot(to)) {
     k = c > -0.999 ? 1.0 / (1.0 + c) : 0.0;
     if (std::fabs(twist) < 1e-3) {  // (a step's twist: the series is exact to rounding)
       const double t2 = twist * twist;

@@ -226,17 +226,26 @@ double cellPorosity(const Engine& engine, std::size_t spheres, const Vec3& base,
   return 1.0 - solidFraction(x, r, base, base + Vec3::Constant(edge), spacing);
 }
 
-// The highest point of the rock in a scene (its blocks' member spheres, as placed).
-double rockTop(const Scene& s) {
-  double top = -1e300;
+// The member spheres of a scene's blocks as placed (centres, radii), appended.
+void blockSpheres(const Scene& s, std::vector<Vec3>& x, std::vector<double>& r) {
   for (const BlockSpec& b : s.blocks)
     for (std::size_t k = 0; k < b.member_radii_m.size(); ++k)
-      top = std::max(top, (b.position_m + b.orientation * b.member_centers_m[k]).z() + b.member_radii_m[k]);
+      x.push_back(b.position_m + b.orientation * b.member_centers_m[k]), r.push_back(b.member_radii_m[k]);
+}
+
+// The highest point of the rock in a scene (its blocks' member spheres, as placed).
+double rockTop(const Scene& s) {
+  std::vector<Vec3> x;
+  std::vector<double> r;
+  blockSpheres(s, x, r);
+  double top = -1e300;
+  for (std::size_t k = 0; k < x.size(); ++k) top = std::max(top, x[k].z() + r[k]);
   return top;
 }
 
 // A stage's run in OUTDIR/<name>: the scene run with the stage's hooks; the
 // state it ends in goes to `state`. A failure is in `outcome`, named by stage.
+// Its summary, with its wall time, joins `stages` (what the stages so far gave).
 struct StageRun {
   bridge::RunOutcome outcome;
   Scene state;
@@ -244,7 +253,7 @@ struct StageRun {
 };
 
 StageRun runStage(const std::string& name, Scene scene, const std::string& file, const bridge::RunContext& ctx,
-                  SceneRunHooks hooks) {
+                  SceneRunHooks hooks, nlohmann::json& stages) {
   StageRun out;
   bridge::RunContext sub = ctx;
   sub.outdir = ctx.outdir / name;
@@ -256,14 +265,16 @@ StageRun runStage(const std::string& name, Scene scene, const std::string& file,
   out.wall_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   if (out.outcome.status != bridge::RunOutcome::Status::Ok)
     out.outcome.message = "stage '" + name + "': " + out.outcome.message;
+  stages[name] = out.outcome.results;
+  stages[name]["wall_time_s"] = out.wall_s;
   return out;
 }
 
 // A stage that failed ends the run: its numerical failure, with what the
 // stages so far gave (each in its own folder).
-bridge::RunOutcome failed(const StageRun& st, const nlohmann::json& so_far) {
+bridge::RunOutcome failed(const StageRun& st, const nlohmann::json& stages) {
   bridge::RunOutcome out = st.outcome;
-  out.results = so_far;
+  out.results = {{"stages", stages}};
   return out;
 }
 
@@ -300,9 +311,9 @@ bridge::RunOutcome run(const bridge::JsonDocument& doc, const bridge::RunContext
     const double work = pe0 - eng.energy().gravity_potential_J;
     return eng.time() > 0.2 && work > 0.0 && kinetic(eng) < c.fill.settled_kinetic_ratio * work;
   };
-  StageRun fill = runStage("fill", std::move(scene), file, ctx, fill_hooks);
-  if (fill.outcome.status != bridge::RunOutcome::Status::Ok)
-    return failed(fill, {{"stages", {{"fill", fill.outcome.results}}}});
+  nlohmann::json stages;
+  StageRun fill = runStage("fill", std::move(scene), file, ctx, fill_hooks, stages);
+  if (fill.outcome.status != bridge::RunOutcome::Status::Ok) return failed(fill, stages);
   const double porosity_gravity = fill.outcome.results.value("porosity", NAN);
 
   // --- 2. Vibration: floor and formwork shake vertically together while a
@@ -347,9 +358,8 @@ bridge::RunOutcome run(const bridge::JsonDocument& doc, const bridge::RunContext
     vib_t.push_back(eng.time()), vib_n.push_back(porosity_vibrated);
     return porosity_vibrated <= c.target_porosity;
   };
-  StageRun vibration = runStage("vibration", std::move(vib), file, ctx, vib_hooks);
-  if (vibration.outcome.status != bridge::RunOutcome::Status::Ok)
-    return failed(vibration, {{"stages", {{"fill", fill.outcome.results}, {"vibration", vibration.outcome.results}}}});
+  StageRun vibration = runStage("vibration", std::move(vib), file, ctx, vib_hooks, stages);
+  if (vibration.outcome.status != bridge::RunOutcome::Status::Ok) return failed(vibration, stages);
 
   // --- 3. Closing: the vibrator stops and the plate presses the fill down
   // to the rim (a force servo at closing.pressure_Pa x edge^2, at most
@@ -376,12 +386,8 @@ bridge::RunOutcome run(const bridge::JsonDocument& doc, const bridge::RunContext
     press_force = eng.wallForce(press_wall).z();  // the rock pushes it up
     return eng.wallPosition(press_wall).z() <= top_face;
   };
-  StageRun closing = runStage("closing", std::move(close), file, ctx, close_hooks);
-  if (closing.outcome.status != bridge::RunOutcome::Status::Ok)
-    return failed(closing, {{"stages",
-                             {{"fill", fill.outcome.results},
-                              {"vibration", vibration.outcome.results},
-                              {"closing", closing.outcome.results}}}});
+  StageRun closing = runStage("closing", std::move(close), file, ctx, close_hooks, stages);
+  if (closing.outcome.status != bridge::RunOutcome::Status::Ok) return failed(closing, stages);
   const double press_gap = closing.state.walls[press_wall].point_m.z() - top_face;
   double rock_mass = fill_report["mass_kg"].get<double>(), levelled_mass = 0.0;
   std::size_t levelled = 0;
@@ -418,9 +424,7 @@ bridge::RunOutcome run(const bridge::JsonDocument& doc, const bridge::RunContext
     std::vector<Vec3> rock_x;
     std::vector<double> rock_r;
     for (const SphereSpec& sp : stand.spheres) rock_x.push_back(sp.center_m), rock_r.push_back(sp.radius_m);
-    for (const BlockSpec& b : stand.blocks)
-      for (std::size_t m = 0; m < b.member_radii_m.size(); ++m)
-        rock_x.push_back(b.position_m + b.orientation * b.member_centers_m[m]), rock_r.push_back(b.member_radii_m[m]);
+    blockSpheres(stand, rock_x, rock_r);
     std::vector<std::uint32_t> sphere_of(n.box.node_m.size(), 0);
     for (std::size_t k = 0; k < n.box.node_m.size(); ++k) {
       if (!n.lid_only[k]) {
@@ -463,13 +467,8 @@ bridge::RunOutcome run(const bridge::JsonDocument& doc, const bridge::RunContext
     ke_ratio = kinetic(eng) / reference;
     return eng.time() > 0.1 && ke_ratio < c.standing.kinetic_ratio;
   };
-  StageRun standing = runStage("standing", std::move(stand), file, ctx, stand_hooks);
-  if (standing.outcome.status != bridge::RunOutcome::Status::Ok)
-    return failed(standing, {{"stages",
-                              {{"fill", fill.outcome.results},
-                               {"vibration", vibration.outcome.results},
-                               {"closing", closing.outcome.results},
-                               {"standing", standing.outcome.results}}}});
+  StageRun standing = runStage("standing", std::move(stand), file, ctx, stand_hooks, stages);
+  if (standing.outcome.status != bridge::RunOutcome::Status::Ok) return failed(standing, stages);
 
   // --- The cell as it stands.
   const Scene& fin = standing.state;
@@ -519,15 +518,6 @@ bridge::RunOutcome run(const bridge::JsonDocument& doc, const bridge::RunContext
                      {"max_settlement_m", c.standing.max_settlement_m}};
   res["block_fills"] = nlohmann::json::array({fill_report});
   writeGradingFigures(ctx.outdir, res["block_fills"]);
-  nlohmann::json stages;
-  for (const auto& [name, st] : {std::pair<std::string, const StageRun*>{"fill", &fill},
-                                 {"vibration", &vibration},
-                                 {"closing", &closing},
-                                 {"standing", &standing}}) {
-    nlohmann::json j = st->outcome.results;
-    j["wall_time_s"] = st->wall_s;
-    stages[name] = j;
-  }
   res["stages"] = stages;
   res["wall_time_s"] = fill.wall_s + vibration.wall_s + closing.wall_s + standing.wall_s;
   // The porosity through the vibration, against the target.
