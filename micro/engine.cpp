@@ -48,8 +48,8 @@ double criticalStep(const Scene& scene, const std::vector<MassProperties>& block
     const SphereSpec& sp = scene.spheres[s];
     if (sp.fixed) continue;
     const auto m = static_cast<std::size_t>(sp.material);
-    const double mass = sphereMass(scene, sp);
-    const double inertia = sphereInertia(scene, sp);  // (turning against a contact at its surface)
+    const double mass = sphereInertialMass(scene, sp);
+    const double inertia = sphereInertialMoment(scene, sp);  // (turning against a contact at its surface)
     dt = std::min({dt, std::sqrt(mass / kn_max[m]), std::sqrt(inertia / (ks_max[m] * sp.radius_m * sp.radius_m))});
   }
   for (std::size_t bi = 0; bi < scene.blocks.size(); ++bi) {
@@ -104,14 +104,18 @@ Engine::Engine(const Scene& scene, int threads) {
       if (sp.velocity_m_s != Vec3::Zero() && !linked[s]) driven_.push_back(static_cast<std::uint32_t>(s));
       continue;
     }
-    const double mass = sphereMass(scene, sp);
+    // (its weight from its mass, its motion from its inertial mass: mass scaling)
+    const double inertial = sphereInertialMass(scene, sp);
     place(s, sp.center_m, sp.velocity_m_s, sp.angular_velocity_rad_s);
-    p_.mass[s] = mass;
-    p_.inv_mass[s] = 1.0 / mass;
-    p_.inv_inertia[s] = 1.0 / sphereInertia(scene, sp);
-    p_.inv_body_mass[s] = 1.0 / mass;
+    p_.mass[s] = sphereMass(scene, sp);
+    p_.inv_mass[s] = 1.0 / inertial;
+    p_.inv_inertia[s] = 1.0 / sphereInertialMoment(scene, sp);
+    p_.inv_body_mass[s] = 1.0 / inertial;
     p_.alpha[s] = m.local_damping;
   }
+  for (std::size_t s = 0; s < sphere_count_; ++s)
+    if (!linked[s]) loose_.push_back(static_cast<std::uint32_t>(s));
+  if (loose_.size() == members + sphere_count_) loose_.clear();
   std::size_t next = sphere_count_;
   const std::vector<MassProperties> block_props = blockMassProperties(scene);
   for (std::size_t bi = 0; bi < scene.blocks.size(); ++bi) {
@@ -620,7 +624,22 @@ void Engine::integrate(bool measure) {
     const auto t = static_cast<std::size_t>(task);
     const std::size_t b = n * t / workers, e = n * (t + 1) / workers;
     addForceBuffers(b, e);
-    scratch_[t].spheres = integrateSpheres(p_, b, e, dt_, gravity_, measure);
+    if (loose_.empty()) {
+      scratch_[t].spheres = integrateSpheres(p_, b, e, dt_, gravity_, measure);
+      return;
+    }
+    // Blocks and link nodes move in their own passes: only the loose spheres
+    // here (none in a cell of blocks in a netting), each worker those in its
+    // range, whose forces it has just completed.
+    SphereSums& sum = scratch_[t].spheres;
+    sum = SphereSums{};
+    for (const std::uint32_t id : loose_) {
+      const std::size_t i = p_.slot[id];
+      if (i < b || i >= e) continue;
+      const SphereSums s = integrateSpheres(p_, i, i + 1, dt_, gravity_, measure);
+      sum.local += s.local, sum.ke_t += s.ke_t, sum.ke_r += s.ke_r, sum.pe += s.pe, sum.finite += s.finite;
+      sum.max_d2 = std::max(sum.max_d2, s.max_d2);
+    }
   });
   SphereSums& sum = sums_;
   sum = SphereSums{};
@@ -687,7 +706,8 @@ void Engine::measureEnergy() {
   double worst = -1.0;
   std::string who;
   for (std::size_t i = 0; i < p_.size(); ++i) {
-    const double ke = p_.mass[i] * (p_.vx[i] * p_.vx[i] + p_.vy[i] * p_.vy[i] + p_.vz[i] * p_.vz[i]);
+    const double ke = (p_.inv_mass[i] > 0.0 ? 1.0 / p_.inv_mass[i] : 0.0) *
+                      (p_.vx[i] * p_.vx[i] + p_.vy[i] * p_.vy[i] + p_.vz[i] * p_.vz[i]);
     if (ke > worst) worst = ke, who = bodyName(p_.id[i]);
   }
   for (std::size_t b = 0; b < blocks_.size(); ++b)

@@ -177,6 +177,10 @@ class Engine {
   Particles p_;  // every sphere in contact detection, in cell order
   std::size_t sphere_count_ = 0;
   std::vector<std::uint32_t> driven_;  // ids of the fixed spheres that move
+  // ids of the spheres the free-sphere pass moves (not block members, not
+  // link nodes); empty when that is every particle (the pass then runs over
+  // the store's ranges, vectorised)
+  std::vector<std::uint32_t> loose_;
   std::vector<RigidBlock> blocks_;
   std::vector<Wall> walls_;
   Links links_;

@@ -58,7 +58,8 @@ SphereSums sphereLoop(Particles& p, std::size_t b, std::size_t e, double dt, con
     const double x0 = X[i], y0 = Y[i], z0 = Z[i];
     const double x1 = x0 + dt * vx, y1 = y0 + dt * vy, z1 = z0 + dt * vz;
     if (kMeasure) {
-      ke_t += 0.5 * m * (vx * vx + vy * vy + vz * vz);
+      // (m g is the weight; the kinetic energy is that of the inertial mass 1 / im: mass scaling)
+      ke_t += im > 0.0 ? 0.5 * (vx * vx + vy * vy + vz * vz) / im : 0.0;
       pe -= m * (gx * 0.5 * (x0 + x1) + gy * 0.5 * (y0 + y1) + gz * 0.5 * (z0 + z1));
       ke_r += ii > 0.0 ? 0.5 * (wx * wx + wy * wy + wz * wz) / ii : 0.0;
     }
@@ -109,9 +110,10 @@ SphereSums integrateBlock(RigidBlock& b, Particles& p, double dt, const Vec3& g,
     s.pe = -b.mass * g.dot(0.5 * (x0 + b.x));
   }
   s.finite = b.x.sum() + b.v.sum() + b.L.sum();
+  const Eigen::Matrix3d R = b.q.toRotationMatrix();  // (once for all the members)
   for (std::size_t k = 0; k < b.ids.size(); ++k) {
     const std::uint32_t i = p.slot[b.ids[k]];
-    const Vec3 arm = b.q * b.offsets[k];
+    const Vec3 arm = R * b.offsets[k];
     const Vec3 vm = b.v + b.omega.cross(arm);
     p.x[i] = b.x.x() + arm.x(), p.y[i] = b.x.y() + arm.y(), p.z[i] = b.x.z() + arm.z();
     p.vx[i] = vm.x(), p.vy[i] = vm.y(), p.vz[i] = vm.z();

@@ -111,7 +111,7 @@ double criticalLinkStep(const Scene& scene) {
   double dt = std::numeric_limits<double>::infinity();
   for (std::size_t s = 0; s < scene.spheres.size(); ++s)
     if (!scene.spheres[s].fixed && k_link[s] > 0.0)
-      dt = std::min(dt, std::sqrt(sphereMass(scene, scene.spheres[s]) / k_link[s]));
+      dt = std::min(dt, std::sqrt(sphereInertialMass(scene, scene.spheres[s]) / k_link[s]));
   return dt;
 }
 
@@ -128,8 +128,8 @@ double criticalBeamStep(const Scene& scene) {
   for (std::size_t s = 0; s < scene.spheres.size(); ++s) {
     const SphereSpec& sp = scene.spheres[s];
     if (sp.fixed || !(k_turn[s] > 0.0)) continue;
-    const double m = sphereMass(scene, sp);
-    dt = std::min({dt, std::sqrt(m / k_sway[s]), std::sqrt(sphereInertia(scene, sp) / k_turn[s])});
+    const double m = sphereInertialMass(scene, sp);
+    dt = std::min({dt, std::sqrt(m / k_sway[s]), std::sqrt(sphereInertialMoment(scene, sp) / k_turn[s])});
   }
   return dt;
 }

@@ -26,13 +26,15 @@ struct Particles {
   std::vector<double> wx, wy, wz;     ///< angular velocity (rad/s)
   std::vector<double> r;              ///< radius (m)
   std::vector<double> inv_body_mass;  ///< 1/m of the owning body (1/kg); 0: fixed (contact damping, pairs)
-  std::vector<double> mass, inv_mass, inv_inertia;  ///< free spheres only (else 0): the integrator's
-  std::vector<double> alpha;                        ///< Cundall local damping of free spheres (-)
-  std::vector<std::int32_t> body;                   ///< owning block, -1 for a free sphere
-  std::vector<std::uint32_t> mat;                   ///< material (32-bit: the vector kernels gather it)
-  std::vector<std::uint32_t> id;                    ///< stable id
-  std::vector<std::uint8_t> group;                  ///< contact group (0 .. kGroupCount-1)
-  std::vector<std::uint8_t> size_class;             ///< size class of the neighbour grid (micro/neighbour_grid.hpp)
+  /// free spheres only (else 0), for the integrator: mass gives the weight,
+  /// inv_mass and inv_inertia the motion (SphereSpec::mass_scale)
+  std::vector<double> mass, inv_mass, inv_inertia;
+  std::vector<double> alpha;             ///< Cundall local damping of free spheres (-)
+  std::vector<std::int32_t> body;        ///< owning block, -1 for a free sphere
+  std::vector<std::uint32_t> mat;        ///< material (32-bit: the vector kernels gather it)
+  std::vector<std::uint32_t> id;         ///< stable id
+  std::vector<std::uint8_t> group;       ///< contact group (0 .. kGroupCount-1)
+  std::vector<std::uint8_t> size_class;  ///< size class of the neighbour grid (micro/neighbour_grid.hpp)
 
   // --- scratch: recomputed, not carried through a re-sort
   std::vector<double> fx, fy, fz;  ///< force of this step (N)

@@ -153,6 +153,8 @@ Scene parseScene(const JsonReader& root) {
     sp.group = static_cast<int>(r.integer("group", 0, 0));
     if (sp.group > kMaxGroup) r.fail("group", "contact groups are 0 .. " + std::to_string(kMaxGroup));
     if (r.has("mass_kg")) sp.mass_kg = r.number("mass_kg", Check::Positive);
+    sp.mass_scale = r.number("mass_scale", 1.0, Check::Positive);
+    if (sp.mass_scale < 1.0) r.fail("mass_scale", "must be >= 1 (it scales the sphere's inertia up)");
     s.spheres.push_back(sp);
   }
 
@@ -292,6 +294,14 @@ double sphereInertia(const Scene& scene, const SphereSpec& sphere) {
   return 0.4 * sphereMass(scene, sphere) * sphere.radius_m * sphere.radius_m;
 }
 
+double sphereInertialMass(const Scene& scene, const SphereSpec& sphere) {
+  return sphere.mass_scale * sphereMass(scene, sphere);
+}
+
+double sphereInertialMoment(const Scene& scene, const SphereSpec& sphere) {
+  return sphere.mass_scale * sphereInertia(scene, sphere);
+}
+
 std::string wallName(const Scene& scene, std::size_t w) {
   const std::string& name = scene.walls[w].name;
   return name.empty() ? "wall_" + std::to_string(w) : name;
@@ -337,6 +347,7 @@ void validateScene(const Scene& s, const std::string& file) {
     if (!(sp.mass_kg >= 0.0 && std::isfinite(sp.mass_kg))) fail(at("spheres", k, "mass_kg"), "must be > 0");
     if (!(sp.inertia_kg_m2 >= 0.0 && std::isfinite(sp.inertia_kg_m2)))
       fail(at("spheres", k, "inertia_kg_m2"), "must be > 0");
+    if (!(sp.mass_scale >= 1.0 && std::isfinite(sp.mass_scale))) fail(at("spheres", k, "mass_scale"), "must be >= 1");
     material(sp.material, at("spheres", k, "material"));
     group(sp.group, at("spheres", k, "group"));
   }

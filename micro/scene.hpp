@@ -49,6 +49,11 @@ struct SphereSpec {
   /// > 0: this moment of inertia (a netting node turning with the wire it
   /// carries); 0: a solid sphere's, 2/5 m r^2.
   double inertia_kg_m2 = 0.0;
+  /// Mass scaling (>= 1): the sphere resists forces and torques with its
+  /// mass and moment times this, while its weight stays m g. A quasi-static
+  /// run then takes a step sqrt(mass_scale) times longer on this sphere's
+  /// account and ends in the same equilibrium (docs/micro.md, Mass scaling).
+  double mass_scale = 1.0;
 };
 
 /// A rigid multi-sphere block. Member centres are in body coordinates; the
@@ -96,7 +101,7 @@ struct WallProgram {
                     ///< holds after the table
     Sinusoid,       ///< displacement amplitude_m sin(2 pi f t + phase) - sin(phase), along `direction`
     Servo           ///< along the wall normal, speed gain x (target - measured normal force), at most max_speed;
-                    ///< at max_speed towards the bodies while it touches nothing
+                    ///< at max_speed towards the bodies until it first touches one
   };
   Kind kind = Kind::Fixed;
   Vec3 velocity_m_s = Vec3::Zero();
@@ -124,6 +129,9 @@ struct WallSpec {
   bool bounded = false;
   Vec3 axis_u = Vec3::UnitX();            ///< unit, in the plane (bounded walls)
   double half_u_m = 0.0, half_v_m = 0.0;  ///< half-lengths of the rectangle (m)
+  /// Contact groups the wall does not touch (bit g: group g), as a plate
+  /// over a cell passes over its netting.
+  std::uint32_t skip_groups = 0;
 };
 
 /// A box in which the porosity of the final packing is measured (`porosity`
@@ -182,6 +190,10 @@ RunSpec parseRun(const bridge::JsonReader& run, double default_duration_s = 0.0)
 double sphereMass(const Scene& scene, const SphereSpec& sphere);
 /// Moment of inertia of a sphere (kg m^2): its own, or 2/5 m r^2.
 double sphereInertia(const Scene& scene, const SphereSpec& sphere);
+/// The mass and moment a sphere moves with: sphereMass and sphereInertia x
+/// its mass_scale (its weight is sphereMass x g).
+double sphereInertialMass(const Scene& scene, const SphereSpec& sphere);
+double sphereInertialMoment(const Scene& scene, const SphereSpec& sphere);
 
 /// The name of wall w: its own, or wall_<w> if it has none.
 std::string wallName(const Scene& scene, std::size_t w);

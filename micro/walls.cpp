@@ -55,6 +55,7 @@ Wall::Wall(const WallSpec& spec)
       mat(spec.material),
       program(spec.program),
       bounded(spec.bounded),
+      skip_groups(spec.skip_groups),
       origin(spec.point_m),
       position(spec.point_m),
       force_position(spec.point_m),
@@ -71,11 +72,14 @@ void Wall::plan(double t, double dt) {
   if (program.kind == WallProgram::Kind::Servo) {
     // Velocity along the normal from the force error, at most max_speed:
     // a wall that feels too little force moves towards the bodies. A wall
-    // that touches nothing closes in at max_speed.
+    // that has touched nothing yet closes in at max_speed; once it has, it
+    // keeps to the gain (a wall that rushed back at max_speed whenever its
+    // bodies fell away from it, shaken, would hammer them).
     const double force = normalForce();
-    const double speed = force == 0.0 ? program.max_speed_m_s
-                                      : std::clamp(program.gain_m_s_N * (program.target_force_N - force),
-                                                   -program.max_speed_m_s, program.max_speed_m_s);
+    if (force != 0.0) touched = true;
+    const double speed = !touched ? program.max_speed_m_s
+                                  : std::clamp(program.gain_m_s_N * (program.target_force_N - force),
+                                               -program.max_speed_m_s, program.max_speed_m_s);
     velocity = speed * n;
     step_displacement = velocity * dt;
     return;
@@ -98,7 +102,7 @@ void wallCandidates(const Particles& p, std::vector<Wall>& walls, double skin, s
       const double lim_v = w.bounded ? w.half_v + skin : std::numeric_limits<double>::infinity();
       std::vector<std::uint32_t>& out = lists[b * nwalls + wi];
       for (std::size_t i = blockBegin(b); i < blockBegin(b + 1); ++i) {
-        if (p.inv_body_mass[i] == 0.0) continue;
+        if (p.inv_body_mass[i] == 0.0 || ((w.skip_groups >> p.group[i]) & 1u) != 0) continue;
         const Vec3 d(p.x[i] - q.x(), p.y[i] - q.y(), p.z[i] - q.z());
         const double dist = d.dot(w.n);
         if (dist >= p.r[i] + skin) continue;

@@ -200,6 +200,37 @@ TEST(MicroEngine, WallForceOfRestingSphereIsItsWeight) {
   EXPECT_NEAR(e.body(0).position_m.z(), 0.01 - sphereMass(0.01) * 9.81 / 1e5, 1e-8);
 }
 
+// Mass scaling (SphereSpec::mass_scale = 9): a sphere dropped onto the
+// floor from touching it swings about the overlap its own weight gives,
+// delta = m g / k, down to 2 delta, with the period of the scaled mass,
+// 2 pi sqrt(9 m / k), and its critical step 3 x the unscaled one. The ledger
+// (kinetic energy of the inertial mass, work of the true weight) closes.
+TEST(MicroEngine, MassScaledSphereSwingsSlowerUnderItsOwnWeight) {
+  Scene s;
+  s.materials = {material(1e5, 2.5e4, 0.5, 0.0)};
+  SphereSpec a;
+  a.radius_m = 0.01;
+  a.center_m = Vec3(0, 0, 0.01);
+  a.mass_scale = 9.0;
+  s.spheres = {a};
+  s.walls = {WallSpec{}};
+  Engine e(s, 1);
+  const double m = sphereMass(0.01), k = 1e5, delta = m * 9.81 / k;
+  EXPECT_NEAR(e.criticalDt(), 3.0 * std::min(std::sqrt(m / k), std::sqrt(0.4 * m / 2.5e4)), 1e-15);
+  // (the ledger's terms are taken half a step apart: an error of order omega dt = 0.002)
+  e.setDt(0.002 * e.criticalDt());
+  const double period = 2.0 * kPi * std::sqrt(9.0 * m / k);
+  double lowest = 1.0, at = 0.0, worst = 0.0;
+  for (int n = 0; e.time() < period; ++n) {
+    ASSERT_EQ(e.step(n % 10 == 0), StepStatus::Ok) << e.failure();
+    if (n % 10 == 0) worst = std::max(worst, std::fabs(e.energy().balance_rel_error));
+    if (e.body(0).position_m.z() < lowest) lowest = e.body(0).position_m.z(), at = e.time();
+  }
+  EXPECT_NEAR(0.01 - lowest, 2.0 * delta, 0.01 * delta);
+  EXPECT_NEAR(at, 0.5 * period, 0.01 * period);
+  EXPECT_LT(worst, 1e-3);
+}
+
 // An overlap beyond run.max_overlap_ratio (0.5 of the radius) stops the
 // step, and the failure names the bodies: soft spheres (k_n = 1e3 N/m) at
 // 5 m/s would reach v sqrt(m*/k) = 1.6 x their radius against a wall, 2.3 x
