@@ -126,7 +126,7 @@ void Links::evaluate(const double* X, const double* Y, const double* Z, std::siz
       fx_[l] = fy_[l] = fz_[l] = tension_[l] = 0.0;
       if (beam != kNoBeam) {
         // Its bending goes with it.
-        rupture += bridge::wireBeamElasticEnergy(beams_[beam], beam_state_[beam]);
+        rupture += bridge::wireBeamElasticEnergy(beams_[beam], beam_state_[beam], Vec3(ux_[l], uy_[l], uz_[l]));
         beam_state_[beam].shear_N.setZero(), beam_state_[beam].moment_N_m.setZero();
       }
       const std::uint32_t i = ka_[l];
@@ -167,7 +167,7 @@ void Links::evaluateBeams(const double* X, const double* Y, const double* Z, con
     const bridge::WireBeamParams& bp = beams_[beam];
     const bridge::WireBeamResponse r = bridge::wireBeamStep(bp, bs, c0, chord, ta, tb);
     beam_force_[beam] = r.force_b, torque_a_[beam] = r.torque_a, torque_b_[beam] = r.torque_b;
-    if (measure) elastic += bridge::wireBeamElasticEnergy(bp, bs);
+    if (measure) elastic += bridge::wireBeamElasticEnergy(bp, bs, chord.normalized());
   }
   s.link_elastic += elastic;
   s.link_plastic += plastic;

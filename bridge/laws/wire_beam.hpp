@@ -23,10 +23,16 @@
 ///   delta / L^3 with end moments 6 E I delta / L^2: the beam's exact
 ///   stiffness matrix for small deformations.
 ///
-/// Both actions are updated incrementally and turned with the wire (the
+/// - a torsional moment T (along the wire, on b; -T on a) grows with the
+///   relative spin of the nodes about the wire, k_t = G J / L = E I / ((1 +
+///   nu) L) for round wires (J = 2 I, G = E / (2 (1 + nu)), nu = 0.3 for
+///   steel). Without it a node on a straight wire (a bead) spins freely
+///   about the wire and keeps any spin it is given. T is held as the axial
+///   part of the moment vector.
+///
+/// All actions are updated incrementally and turned with the wire (the
 /// minimal rotation from its last direction to its new one, and its mean
-/// spin about itself), so a rigid motion of the pair stores nothing. Torsion
-/// is not resisted.
+/// spin about itself), so a rigid motion of the pair stores nothing.
 ///
 /// Plastic hinge: an end torque is at most the section's plastic moment
 /// M_p = sigma_y d^3 / 6 (times the wires in a twist). A step that would
@@ -47,6 +53,8 @@ struct WireBeamParams {
   double plastic_moment_N_m = std::numeric_limits<double>::infinity();  ///< M_p (N m)
   double length_m = 0.0;                                                ///< L, the lever of the shear force (m)
   bool active() const { return bending_N_m_rad > 0.0; }
+  /// Torsional stiffness (N m/rad): G J / L = E I / ((1 + nu) L), nu = 0.3.
+  double torsion_N_m_rad() const { return bending_N_m_rad / 1.3; }
   /// Rotational stiffness at one end with the other held (N m/rad): 4 E I / L.
   double endStiffness() const { return bending_N_m_rad + 0.25 * shear_N_m * length_m * length_m; }
 };
@@ -54,7 +62,7 @@ struct WireBeamParams {
 /// A beam's state: its actions now (on node b) and its plastic work so far.
 struct WireBeamState {
   Eigen::Vector3d shear_N = Eigen::Vector3d::Zero();
-  Eigen::Vector3d moment_N_m = Eigen::Vector3d::Zero();
+  Eigen::Vector3d moment_N_m = Eigen::Vector3d::Zero();  ///< bending (normal to the wire) + torsion (along it)
   double dissipated_J = 0.0;
 };
 
@@ -72,9 +80,12 @@ inline WireBeamParams wireBeam(double youngs_modulus_Pa, double yield_stress_Pa,
   return p;
 }
 
-/// Elastic energy held by a beam (J): |F_s|^2 / (2 k_s) + |M_b|^2 / (2 k_b).
-inline double wireBeamElasticEnergy(const WireBeamParams& p, const WireBeamState& s) {
-  return 0.5 * s.shear_N.squaredNorm() / p.shear_N_m + 0.5 * s.moment_N_m.squaredNorm() / p.bending_N_m_rad;
+/// Elastic energy held by a beam whose wire lies along the unit vector n
+/// (J): |F_s|^2 / (2 k_s) + |M_b|^2 / (2 k_b) + T^2 / (2 k_t).
+inline double wireBeamElasticEnergy(const WireBeamParams& p, const WireBeamState& s, const Eigen::Vector3d& n) {
+  const double t = s.moment_N_m.dot(n);
+  return 0.5 * s.shear_N.squaredNorm() / p.shear_N_m + 0.5 * (s.moment_N_m.squaredNorm() - t * t) / p.bending_N_m_rad +
+         0.5 * t * t / p.torsion_N_m_rad();
 }
 
 struct WireBeamResponse {
@@ -125,17 +136,18 @@ inline WireBeamResponse wireBeamStep(const WireBeamParams& p, WireBeamState& s, 
   // (the mean spin about the wire's middle direction, to second order)
   const WireTurn turn(n0, n1, 0.25 * sum.dot(n0 + n1));
   s.shear_N = turn(s.shear_N);
-  s.moment_N_m = turn(s.moment_N_m);
+  s.moment_N_m = turn(s.moment_N_m) + s.moment_N_m.dot(n0) * n1;  // (bending turned, torsion along the wire)
   // The wire's mid-point as each node carries it: b's relative to a's.
   Eigen::Vector3d slip = (c1 - c0) - 0.5 * sum.cross(mid);
   slip -= slip.dot(n1) * n1;
   s.shear_N -= p.shear_N_m * slip;
-  s.moment_N_m -= p.bending_N_m_rad * (rel - rel.dot(n1) * n1);
+  const double spin = rel.dot(n1);
+  s.moment_N_m -= p.bending_N_m_rad * (rel - spin * n1) + p.torsion_N_m_rad() * spin * n1;
   const Eigen::Vector3d lever = 0.5 * L1 * n1.cross(s.shear_N);
   const double peak2 = std::max((s.moment_N_m + lever).squaredNorm(), (s.moment_N_m - lever).squaredNorm());
   if (peak2 > p.plastic_moment_N_m * p.plastic_moment_N_m) {
     const double scale = p.plastic_moment_N_m / std::sqrt(peak2);
-    s.dissipated_J += (1.0 - scale * scale) * wireBeamElasticEnergy(p, s);
+    s.dissipated_J += (1.0 - scale * scale) * wireBeamElasticEnergy(p, s, n1);
     s.shear_N *= scale;
     s.moment_N_m *= scale;
   }

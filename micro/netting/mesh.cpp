@@ -7,6 +7,8 @@
 #include <set>
 #include <stdexcept>
 
+#include "bridge/laws/wire_beam.hpp"
+
 namespace gabion::micro {
 
 const char* wireKindName(WireKind kind) {
@@ -244,7 +246,16 @@ void assignNodeMasses(const MeshSpec& mesh, Netting& net) {
   net.node_radius_m = mesh.nodeRadius();
   // The wire each node carries: half of each of its links (two wires in a
   // twist), a rod of length L / 2 turning about the node: (m / 2) (L / 2)^2 / 3.
-  std::vector<double> wire(net.node_m.size(), 0.0), turn(net.node_m.size(), 0.0);
+  // With bending wires, a node's turn against its beams' end stiffness
+  // (4 E I / L each) must not be faster than its sway against their shear
+  // stiffness (12 E I / L^3): the lumped wire's own rotary inertia, of order
+  // m L^2 / 24, would set a step (L / 2.8)^2 times shorter for every node,
+  // and shorter still for the beads of short wires. Its rotary inertia is
+  // raised to m sum(4 E I / L) / sum(12 E I / L^3), about m L^2 / 3, as
+  // explicit beam codes scale theirs: the turn of a node is then no faster
+  // than its sway, the statics are unchanged.
+  const std::size_t nn = net.node_m.size();
+  std::vector<double> wire(nn, 0.0), turn(nn, 0.0), k_turn(nn, 0.0), k_sway(nn, 0.0);
   for (const NettingLink& l : net.links) {
     double d = mesh.wire_diameter_m, wires = 1.0;
     if (l.kind == WireKind::Selvedge) d = mesh.selvedge_diameter_m;
@@ -253,14 +264,21 @@ void assignNodeMasses(const MeshSpec& mesh, Netting& net) {
     const double half = 0.5 * wires * mesh.steel_density_kg_m3 * bridge::wireSection(d) * l.rest_length_m;
     const double I = half * 0.25 * l.rest_length_m * l.rest_length_m / 3.0;
     wire[l.a] += half, wire[l.b] += half, turn[l.a] += I, turn[l.b] += I;
+    if (mesh.bending && l.kind != WireKind::Lacing) {
+      const bridge::WireBeamParams b = bridge::wireBeam(1.0, 1.0, d, l.rest_length_m, wires);  // (E = 1: ratios)
+      k_turn[l.a] += b.endStiffness(), k_turn[l.b] += b.endStiffness();
+      k_sway[l.a] += b.shear_N_m, k_sway[l.b] += b.shear_N_m;
+    }
   }
-  net.node_mass_kg.assign(net.node_m.size(), 0.0);
-  net.node_inertia_kg_m2.assign(net.node_m.size(), 0.0);
-  for (std::size_t k = 0; k < net.node_m.size(); ++k) {
+  net.node_mass_kg.assign(nn, 0.0);
+  net.node_inertia_kg_m2.assign(nn, 0.0);
+  for (std::size_t k = 0; k < nn; ++k) {
     const double m = mesh.node_mass_kg > 0.0 ? mesh.node_mass_kg : wire[k];
-    net.node_mass_kg[k] = m * mesh.node_mass_scale;
+    net.node_mass_kg[k] = m;
     // (a node of no wire keeps the solid sphere's inertia)
-    net.node_inertia_kg_m2[k] = wire[k] > 0.0 ? turn[k] * (m / wire[k]) * mesh.node_mass_scale : 0.0;
+    double I = wire[k] > 0.0 ? turn[k] * (m / wire[k]) : 0.0;
+    if (k_sway[k] > 0.0) I = std::max(I, m * k_turn[k] / k_sway[k]);
+    net.node_inertia_kg_m2[k] = I;
   }
 }
 

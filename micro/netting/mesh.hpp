@@ -46,8 +46,9 @@ struct MeshSpec {
   /// E and the yield stress from the table's first point. false: the
   /// paper's pin-jointed netting.
   bool bending = false;
-  /// Factor on the node masses (>= 1): a larger stable time step for a small
-  /// error in the dynamics (docs/netting.md, Time step).
+  /// Mass scaling of the nodes (>= 1, SphereSpec::mass_scale): their inertia
+  /// times this, their weight unchanged; a larger stable time step for a
+  /// small error in the dynamics (docs/netting.md, Time step).
   double node_mass_scale = 1.0;
 
   double nodeRadius() const { return node_radius_m > 0.0 ? node_radius_m : 4.0 * wire_diameter_m; }

@@ -11,9 +11,10 @@ namespace gabion::micro {
 using bridge::Check;
 using bridge::JsonReader;
 
-NettingInput parseNetting(const JsonReader& r, bool bending) {
+NettingInput parseNetting(const JsonReader& r, const MeshSpec& defaults) {
   NettingInput in;
   MeshSpec& m = in.mesh;
+  m = defaults;
   r.choice("mesh", {"hexagonal_double_twist"}, "hexagonal_double_twist");
   m.opening_m = r.number("opening_m", m.opening_m, Check::Positive);
   m.twist_length_m = r.number("twist_length_m", m.twist_length_m, Check::Positive);
@@ -26,9 +27,9 @@ NettingInput parseNetting(const JsonReader& r, bool bending) {
   m.steel_density_kg_m3 = r.number("steel_density_kg_m3", m.steel_density_kg_m3, Check::Positive);
   if (r.has("node_radius_m")) m.node_radius_m = r.number("node_radius_m", Check::Positive);
   if (r.has("node_mass_kg")) m.node_mass_kg = r.number("node_mass_kg", Check::Positive);
-  m.node_mass_scale = r.number("node_mass_scale", 1.0, Check::Positive);
-  m.wire_beads = static_cast<int>(r.integer("wire_beads", 0, 0));
-  m.bending = r.boolean("bending", bending);
+  m.node_mass_scale = r.number("node_mass_scale", m.node_mass_scale, Check::Positive);
+  m.wire_beads = static_cast<int>(r.integer("wire_beads", m.wire_beads, 0));
+  m.bending = r.boolean("bending", m.bending);
   if (m.wire_beads > 8) r.fail("wire_beads", "at most 8 beads per wire");
   if (m.node_mass_scale < 1.0) r.fail("node_mass_scale", "must be >= 1 (it scales the node masses up)");
   // Nodes sit at the ends of the wires: a node wider than half the shortest

@@ -15,9 +15,10 @@ struct NettingInput {
   Material contact;
 };
 
-/// Parses and checks a `netting` object; errors name the key. `bending`: the
-/// default of its `bending` key (a cell's netting bends, a sheet's is the
-/// paper's pin-jointed one unless asked).
-NettingInput parseNetting(const bridge::JsonReader& r, bool bending = false);
+/// Parses and checks a `netting` object; errors name the key. `defaults`:
+/// the mesh whose values the keys left out take (a sheet's netting is the
+/// paper's pin-jointed one unless asked; a cell's bends, has beads and
+/// scaled node masses: micro/cell/cell_assembly.cpp).
+NettingInput parseNetting(const bridge::JsonReader& r, const MeshSpec& defaults = MeshSpec{});
 
 }  // namespace gabion::micro

@@ -68,6 +68,7 @@ void addNettings(const JsonReader& root, Scene& scene) {
       sp.radius_m = net.node_radius_m;
       sp.mass_kg = net.node_mass_kg[k];
       sp.inertia_kg_m2 = net.node_inertia_kg_m2[k];
+      sp.mass_scale = in.mesh.node_mass_scale;
       sp.material = material;
       sp.group = group;
       sp.fixed = fixed[k] != 0;

@@ -62,6 +62,7 @@ Scene buildScene(const TensileCase& c, const Netting& net) {
     sp.radius_m = net.node_radius_m;
     sp.mass_kg = net.node_mass_kg[k];
     sp.inertia_kg_m2 = net.node_inertia_kg_m2[k];
+    sp.mass_scale = c.netting.mesh.node_mass_scale;
     s.spheres.push_back(sp);
   }
   for (const std::uint32_t k : net.bottom_edge) s.spheres[k].fixed = true;

@@ -40,7 +40,8 @@ TEST(WireBeamLaw, TurnAndSwayGiveTheBeamStiffnessMatrix) {
     EXPECT_NEAR(r.torque_a.z(), -2 * kEI * phi / L, 1e-9 * kEI * phi / L);
     EXPECT_NEAR(r.force_b.y(), 6 * kEI * phi / (L * L), 1e-9 * kEI * phi / (L * L));
     // Work done = stored energy: (1/2) tau phi.
-    EXPECT_NEAR(gabion::bridge::wireBeamElasticEnergy(p, s), 0.5 * 4 * kEI * phi * phi / L, 1e-9 * kEI * phi * phi / L);
+    EXPECT_NEAR(gabion::bridge::wireBeamElasticEnergy(p, s, n), 0.5 * 4 * kEI * phi * phi / L,
+                1e-9 * kEI * phi * phi / L);
   }
   {
     WireBeamState s;
@@ -52,6 +53,28 @@ TEST(WireBeamLaw, TurnAndSwayGiveTheBeamStiffnessMatrix) {
   }
 }
 
+// One end spun by phi about the wire with the other held: the torsion G J
+// phi / L = E I phi / ((1 + nu) L) on both ends (opposite), no shear, and
+// the energy (1/2) k_t phi^2. Spun both together (the pair turning rigidly
+// about the wire), nothing is stored: a bead keeps no free spin and gains
+// no spurious one.
+TEST(WireBeamLaw, SpinAboutTheWireGivesTheTorsionOfARoundWire) {
+  const double L = 0.025, phi = 1e-4;
+  const WireBeamParams p = gabion::bridge::wireBeam(kE, kYield, kD, L);
+  const double kt = kEI / (1.3 * L);
+  const Vec3 n = Vec3::UnitX();
+  WireBeamState s;
+  const auto r = gabion::bridge::wireBeamStep(p, s, L * n, L * n, Vec3::Zero(), Vec3(phi, 0, 0));
+  EXPECT_NEAR(r.torque_b.x(), -kt * phi, 1e-9 * kt * phi);
+  EXPECT_NEAR(r.torque_a.x(), kt * phi, 1e-9 * kt * phi);
+  EXPECT_NEAR(r.force_b.norm(), 0.0, 1e-12);
+  EXPECT_NEAR(r.torque_b.y(), 0.0, 1e-12);
+  EXPECT_NEAR(gabion::bridge::wireBeamElasticEnergy(p, s, n), 0.5 * kt * phi * phi, 1e-9 * kt * phi * phi);
+  WireBeamState rigid;
+  gabion::bridge::wireBeamStep(p, rigid, L * n, L * n, Vec3(phi, 0, 0), Vec3(phi, 0, 0));
+  EXPECT_EQ(rigid.moment_N_m.norm(), 0.0);
+}
+
 // A bent beam turned rigidly (chord and both nodes by the same rotation, in
 // many small increments) keeps its actions' sizes and turns them with it.
 // The update is second-order accurate: 10,000 increments of 1.3e-4 rad
@@ -61,7 +84,7 @@ TEST(WireBeamLaw, RigidRotationStoresNothingAndTurnsTheActions) {
   const WireBeamParams p = gabion::bridge::wireBeam(kE, kYield, kD, L);
   WireBeamState s;
   gabion::bridge::wireBeamStep(p, s, L * Vec3::UnitX(), L * Vec3::UnitX(), Vec3::Zero(), Vec3(0, 0.001, 0));
-  const double e0 = gabion::bridge::wireBeamElasticEnergy(p, s);
+  const double e0 = gabion::bridge::wireBeamElasticEnergy(p, s, Vec3::UnitX());
   const Vec3 axis = Vec3(1, 2, 3).normalized();
   const int n = 10000;
   const double total = 1.3;  // rad
@@ -73,7 +96,7 @@ TEST(WireBeamLaw, RigidRotationStoresNothingAndTurnsTheActions) {
     gabion::bridge::wireBeamStep(p, s, chord, next, turn, turn);
     chord = next;
   }
-  EXPECT_NEAR(gabion::bridge::wireBeamElasticEnergy(p, s), e0, 1e-5 * e0);
+  EXPECT_NEAR(gabion::bridge::wireBeamElasticEnergy(p, s, chord.normalized()), e0, 1e-5 * e0);
   WireBeamState ref;
   gabion::bridge::wireBeamStep(p, ref, L * Vec3::UnitX(), L * Vec3::UnitX(), Vec3::Zero(), Vec3(0, 0.001, 0));
   const Eigen::AngleAxisd all(total, axis);
@@ -100,7 +123,7 @@ TEST(WireBeamLaw, PlasticHingeHoldsThePlasticMomentAndDissipatesTheRest) {
   }
   EXPECT_NEAR(-tau, Mp, 1e-9 * Mp);
   EXPECT_GT(s.dissipated_J, 0.0);
-  EXPECT_NEAR(gabion::bridge::wireBeamElasticEnergy(p, s) + s.dissipated_J, work, 2e-3 * work);
+  EXPECT_NEAR(gabion::bridge::wireBeamElasticEnergy(p, s, Vec3::UnitX()) + s.dissipated_J, work, 2e-3 * work);
 }
 
 // A wire cantilever of n segments along x, clamped at the root (a fixed
@@ -148,20 +171,24 @@ TEST(MicroWireBeam, CantileverDeflectsAsEulerBernoulli) {
 }
 
 // Undamped, the same cantilever swings under gravity: kinetic, gravity and
-// the beams' stored energy exchange with a ledger that closes.
+// the beams' stored energy exchange with a ledger that closes. The ledger's
+// drift is measured against the largest energy the beams stored (at the top
+// of each swing the energy moved is nearly zero, and a relative error there
+// is rounding over nothing).
 TEST(MicroWireBeam, SwingingCantileverKeepsItsEnergy) {
   Scene s = cantilever(8, 0.2, 0.004, 0.0);
   Engine e(s, 1);
   e.setDt(s.run.dt_safety * e.criticalDt());
-  double worst = 0.0, stored = 0.0;
+  double e0 = 0.0, drift = 0.0, stored = 0.0;
   for (int k = 0; e.time() < 0.5; ++k) {
     ASSERT_EQ(e.step(k % 20 == 0), StepStatus::Ok) << e.failure();
     if (k % 20) continue;
-    worst = std::max(worst, std::fabs(e.energy().balance_rel_error));
+    if (k == 0) e0 = e.energy().total_J;
+    drift = std::max(drift, std::fabs(e.energy().total_J - e0));
     stored = std::max(stored, e.energy().elastic_link_J);
   }
   EXPECT_GT(stored, 0.0);
-  EXPECT_LT(worst, 1e-3);
+  EXPECT_LT(drift, 1e-3 * stored);
 }
 
 }  // namespace
