@@ -37,6 +37,8 @@ struct CellCase {
   double mass_kg = 0.0;  // rock to fill the cell to the target porosity
   struct {
     double max_duration_s = 2.0, settled_kinetic_ratio = 1e-3;
+    double friction = -1.0;  // the rock's friction while it falls in (< 0: its own)
+    double overfill = 0.03;  // rock beyond the target's mass, as a fraction of it
   } fill;
   struct {
     double frequency_hz = 20.0, amplitude_m = 0.002, max_duration_s = 1.5, check_interval_s = 0.05;
@@ -46,6 +48,7 @@ struct CellCase {
   } vibration;
   struct {
     double pressure_Pa = 10000.0, speed_m_s = 0.2, max_duration_s = 0.5;
+    bool vibrate = true;  // the shaking goes on while the plate presses (the fill at its shaking friction)
   } closing;
   struct {
     double max_duration_s = 2.0, kinetic_ratio = 1e-6, max_bulge_m = 0.02, max_settlement_m = 0.02;
@@ -57,6 +60,19 @@ struct CellCase {
 Material parseNamedMaterial(const std::string& name, const JsonReader& r) {
   Material m = parseMaterial(name, r);
   m.name = name;
+  return m;
+}
+
+// A cell's netting, unless the case says otherwise: wires that bend (a
+// pin-jointed net is a mechanism under the fill), one bead on every single
+// wire (the rock meets the wire between the twists instead of passing the
+// wire's line into the opening) and node masses scaled by 8 (their inertia;
+// docs/cell.md, Time step).
+MeshSpec cellMeshDefaults() {
+  MeshSpec m;
+  m.bending = true;
+  m.wire_beads = 1;
+  m.node_mass_scale = 8.0;
   return m;
 }
 
@@ -73,15 +89,21 @@ CellCase parseCase(const bridge::JsonDocument& doc) {
   c.formwork = c.rock;
   c.formwork.name = "formwork";
   if (const auto f = root.optionalObject("formwork")) c.formwork = parseNamedMaterial("formwork", *f);
-  c.netting = parseNetting(root.object("netting"), true);
+  c.netting = parseNetting(root.object("netting"), cellMeshDefaults());
   c.netting.contact.name = "netting";
   c.blocks = root.object("blocks");
-  c.mass_kg = (1.0 - c.target_porosity) * c.rock.density_kg_m3 * std::pow(c.edge_m, 3);
+
   if (c.netting.mesh.opening_m > c.edge_m) root.fail("edge_m", "the cell must be at least one mesh opening wide");
   if (const auto f = root.optionalObject("fill")) {
     c.fill.max_duration_s = f->number("max_duration_s", c.fill.max_duration_s, Check::Positive);
     c.fill.settled_kinetic_ratio = f->number("settled_kinetic_ratio", c.fill.settled_kinetic_ratio, Check::Positive);
+    c.fill.friction = f->number("friction", c.rock.friction, Check::NonNegative);
+    c.fill.overfill = f->number("overfill", c.fill.overfill, Check::NonNegative);
+    if (c.fill.overfill > 0.2) f->fail("overfill", "at most 0.2 (20 % more rock than the target porosity takes)");
   }
+  // The rock to fill the cell to the target porosity, and the overfill that
+  // the closing presses down (blocks the plate cannot press in are taken off).
+  c.mass_kg = (1.0 - c.target_porosity) * c.rock.density_kg_m3 * std::pow(c.edge_m, 3) * (1.0 + c.fill.overfill);
   if (const auto v = root.optionalObject("vibration")) {
     c.vibration.frequency_hz = v->number("frequency_hz", c.vibration.frequency_hz, Check::Positive);
     c.vibration.amplitude_m = v->number("amplitude_m", c.vibration.amplitude_m, Check::Positive);
@@ -97,6 +119,7 @@ CellCase parseCase(const bridge::JsonDocument& doc) {
     c.closing.pressure_Pa = k->number("pressure_Pa", c.closing.pressure_Pa, Check::Positive);
     c.closing.speed_m_s = k->number("speed_m_s", c.closing.speed_m_s, Check::Positive);
     c.closing.max_duration_s = k->number("max_duration_s", c.closing.max_duration_s, Check::Positive);
+    c.closing.vibrate = k->boolean("vibrate", c.closing.vibrate);
   }
   if (const auto s = root.optionalObject("standing")) {
     c.standing.max_duration_s = s->number("max_duration_s", c.standing.max_duration_s, Check::Positive);
@@ -121,6 +144,7 @@ struct CellNetting {
   std::vector<std::uint32_t> basket_of;   // box node -> basket sphere index (basket nodes)
   std::vector<std::uint32_t> basket_ids;  // basket sphere -> box node
   Vec3 origin;
+  double mass_scale = 1.0;  // of the nodes (netting.node_mass_scale)
 };
 
 CellNetting makeNetting(const CellCase& c, const std::string& file) {
@@ -132,6 +156,7 @@ CellNetting makeNetting(const CellCase& c, const std::string& file) {
     throw bridge::InputError(file, "/edge_m", e.what());
   }
   n.origin = Vec3::Constant(-r);
+  n.mass_scale = c.netting.mesh.node_mass_scale;
   const std::size_t nn = n.box.node_m.size();
   std::vector<int> faces_of(nn, 0);
   for (std::size_t f = 0; f < 6; ++f)
@@ -153,6 +178,7 @@ CellNetting makeNetting(const CellCase& c, const std::string& file) {
 
 SphereSpec nodeSphere(const CellNetting& n, std::size_t k, int material) {
   SphereSpec sp;
+  sp.mass_scale = n.mass_scale;
   sp.center_m = n.origin + n.box.node_m[k];
   sp.radius_m = n.box.node_radius_m;
   sp.mass_kg = n.box.node_mass_kg[k];
@@ -183,6 +209,7 @@ Scene fillScene(const CellCase& c, const CellNetting& n, nlohmann::json& fill_re
   Scene s;
   s.gravity_m_s2 = c.gravity;
   s.materials = {c.rock, c.formwork, c.netting.contact};
+  if (c.fill.friction >= 0.0) s.materials[kRock].friction = c.fill.friction;
   s.run = c.run;
   s.run.duration_s = c.fill.max_duration_s;
   for (const std::uint32_t k : n.basket_ids) {
@@ -219,11 +246,23 @@ void rockSpheres(const Engine& engine, std::size_t spheres, std::vector<Vec3>& x
   r.erase(r.begin(), r.begin() + static_cast<std::ptrdiff_t>(spheres));
 }
 
-double cellPorosity(const Engine& engine, std::size_t spheres, const Vec3& base, double edge, double spacing) {
+// The cell's porosity, 1 - (volume of rock) / edge^3, with the rock that
+// the netting holds below the rim: inside the faces, and in the mesh
+// openings out to `pocket` beyond them (the formwork's planes). pocket = 0:
+// the rock inside the faces only.
+double cellPorosity(const std::vector<Vec3>& x, const std::vector<double>& r, const Vec3& base, double edge,
+                    double spacing, double pocket) {
+  const Vec3 lo = base - Vec3(pocket, pocket, 0.0), hi = base + Vec3(edge + pocket, edge + pocket, edge);
+  const double region = (hi - lo).prod();
+  return 1.0 - solidFraction(x, r, lo, hi, spacing) * region / (edge * edge * edge);
+}
+
+double cellPorosity(const Engine& engine, std::size_t spheres, const Vec3& base, double edge, double spacing,
+                    double pocket) {
   std::vector<Vec3> x;
   std::vector<double> r;
   rockSpheres(engine, spheres, x, r);
-  return 1.0 - solidFraction(x, r, base, base + Vec3::Constant(edge), spacing);
+  return cellPorosity(x, r, base, edge, spacing, pocket);
 }
 
 // The member spheres of a scene's blocks as placed (centres, radii), appended.
@@ -314,7 +353,15 @@ bridge::RunOutcome run(const bridge::JsonDocument& doc, const bridge::RunContext
   nlohmann::json stages;
   StageRun fill = runStage("fill", std::move(scene), file, ctx, fill_hooks, stages);
   if (fill.outcome.status != bridge::RunOutcome::Status::Ok) return failed(fill, stages);
-  const double porosity_gravity = fill.outcome.results.value("porosity", NAN);
+  const double pocket = 2 * r;  // (the mesh openings reach out to the formwork)
+  double porosity_gravity = NAN;
+  {
+    std::vector<Vec3> x;
+    std::vector<double> rr;
+    blockSpheres(fill.state, x, rr);
+    porosity_gravity =
+        cellPorosity(x, rr, Vec3(0, 0, fill.state.walls[0].point_m.z() + 2 * r), e, c.porosity_spacing_m, pocket);
+  }
 
   // --- 2. Vibration: floor and formwork shake vertically together while a
   // plate presses the fill with the surcharge; until the porosity inside the
@@ -327,12 +374,16 @@ bridge::RunOutcome run(const bridge::JsonDocument& doc, const bridge::RunContext
     w.program.frequency_hz = c.vibration.frequency_hz;
   }
   {
-    // The plate: a bounded wall over the cell's opening (it misses the rim's nodes).
+    // The plate: a bounded wall over the whole formwork that touches the
+    // rock only (it passes over the rim's nodes). Were it only as wide as
+    // the opening, a stone bulging into a side opening would slip under its
+    // edge and come out inside it, half its radius deep in the plate.
     const double top = rockTop(fill.state);
     WallSpec press = wall("press", Vec3(0.5 * e, 0.5 * e, std::max(top, e) + 0.002), -Vec3::UnitZ(), kFormwork);
     press.bounded = true;
     press.axis_u = Vec3::UnitX();
-    press.half_u_m = press.half_v_m = 0.5 * e;
+    press.half_u_m = press.half_v_m = 0.5 * e + 2 * r;
+    press.skip_groups = 1u << 1;  // (the netting's nodes are group 1: nodeSphere)
     const double force = c.vibration.surcharge_Pa * e * e;
     if (force > 0.0) {
       press.program.kind = WallProgram::Kind::Servo;
@@ -354,21 +405,25 @@ bridge::RunOutcome run(const bridge::JsonDocument& doc, const bridge::RunContext
     if (eng.time() + 1e-12 < next_check) return false;
     next_check += c.vibration.check_interval_s;
     const double floor_dz = eng.wallPosition(0).z() + 2 * r;
-    porosity_vibrated = cellPorosity(eng, basket, Vec3(0, 0, floor_dz), e, 2.0 * c.porosity_spacing_m);
+    porosity_vibrated = cellPorosity(eng, basket, Vec3(0, 0, floor_dz), e, 2.0 * c.porosity_spacing_m, pocket);
     vib_t.push_back(eng.time()), vib_n.push_back(porosity_vibrated);
     return porosity_vibrated <= c.target_porosity;
   };
   StageRun vibration = runStage("vibration", std::move(vib), file, ctx, vib_hooks, stages);
   if (vibration.outcome.status != bridge::RunOutcome::Status::Ok) return failed(vibration, stages);
 
-  // --- 3. Closing: the vibrator stops and the plate presses the fill down
-  // to the rim (a force servo at closing.pressure_Pa x edge^2, at most
-  // closing.speed_m_s) until its face reaches the cell's top face, or the
-  // time limit. Blocks whose centre still stands above the top face are then
-  // taken off: the fill is levelled with the rim before the lid goes on.
+  // --- 3. Closing: the plate presses the fill down to the rim (a force
+  // servo at closing.pressure_Pa x edge^2, at most closing.speed_m_s) while
+  // the shaking goes on (closing.vibrate; else it stops and the rock has its
+  // own friction again), until the plate's face reaches the cell's top face,
+  // or the time limit. Blocks whose centre still stands above the top face
+  // are then taken off: the fill is levelled with the rim before the lid
+  // goes on.
   Scene close = vibration.state;
-  close.materials[kRock] = c.rock;  // its own friction again
-  for (WallSpec& w : close.walls) w.program = WallProgram{};
+  if (!c.closing.vibrate) {
+    close.materials[kRock] = c.rock;
+    for (WallSpec& w : close.walls) w.program = WallProgram{};
+  }
   const std::size_t press_wall = close.walls.size() - 1;
   {
     WallProgram& pr = close.walls[press_wall].program;
@@ -379,15 +434,17 @@ bridge::RunOutcome run(const bridge::JsonDocument& doc, const bridge::RunContext
     pr.gain_m_s_N = c.closing.speed_m_s / force;
   }
   close.run.duration_s = c.closing.max_duration_s;
-  const double top_face = close.walls[0].point_m.z() + 2 * r + e;  // (the floor where the vibration left it)
+  // (the cell's top face over the floor, where the shaking has it)
+  const auto topFace = [&](double floor_z) { return floor_z + 2 * r + e; };
   double press_force = 0.0;
   SceneRunHooks close_hooks;
   close_hooks.done = [&](const Engine& eng) {
     press_force = eng.wallForce(press_wall).z();  // the rock pushes it up
-    return eng.wallPosition(press_wall).z() <= top_face;
+    return eng.wallPosition(press_wall).z() <= topFace(eng.wallPosition(0).z());
   };
   StageRun closing = runStage("closing", std::move(close), file, ctx, close_hooks, stages);
   if (closing.outcome.status != bridge::RunOutcome::Status::Ok) return failed(closing, stages);
+  const double top_face = topFace(closing.state.walls[0].point_m.z());
   const double press_gap = closing.state.walls[press_wall].point_m.z() - top_face;
   double rock_mass = fill_report["mass_kg"].get<double>(), levelled_mass = 0.0;
   std::size_t levelled = 0;
@@ -408,6 +465,7 @@ bridge::RunOutcome run(const bridge::JsonDocument& doc, const bridge::RunContext
   // --- 4. Standing: the lid's nodes are laced on over the fill, the
   // formwork and plate are taken away, the floor stays as the rigid base.
   Scene stand = closing.state;
+  stand.materials[kRock] = c.rock;  // its own friction again
   // The cell starts its standing test at rest; the rim is untied from the formwork.
   for (SphereSpec& sp : stand.spheres) sp.velocity_m_s.setZero(), sp.angular_velocity_rad_s.setZero(), sp.fixed = false;
   for (BlockSpec& b : stand.blocks) b.velocity_m_s.setZero(), b.angular_velocity_rad_s.setZero();
@@ -492,12 +550,16 @@ bridge::RunOutcome run(const bridge::JsonDocument& doc, const bridge::RunContext
   settlement = lid_z0 - lid_z1;
   const double height = lid_z1 - r - base;
   const Engine final_state(fin, 1);  // the cell as it stands, for its porosity and its file
-  const double porosity = cellPorosity(final_state, fin.spheres.size(), Vec3(0, 0, base), e, c.porosity_spacing_m);
+  const double porosity =
+      cellPorosity(final_state, fin.spheres.size(), Vec3(0, 0, base), e, c.porosity_spacing_m, pocket);
+  const double porosity_in_faces =
+      cellPorosity(final_state, fin.spheres.size(), Vec3(0, 0, base), e, c.porosity_spacing_m, 0.0);
   const bool at_rest = ke_ratio < c.standing.kinetic_ratio;
   const bool stands = at_rest && bulge < c.standing.max_bulge_m && settlement < c.standing.max_settlement_m;
 
   nlohmann::json& res = out.results;
   res["porosity"] = porosity;
+  res["porosity_in_faces"] = porosity_in_faces;
   res["porosity_after_gravity"] = porosity_gravity;
   res["porosity_after_vibration"] = porosity_vibrated;
   res["target_porosity"] = c.target_porosity;
@@ -538,8 +600,8 @@ bridge::RunOutcome run(const bridge::JsonDocument& doc, const bridge::RunContext
   rep.setf(std::ios::fixed);
   rep.precision(3);
   rep << "cell: porosity " << porosity << " (after gravity " << porosity_gravity << ", after vibration "
-      << porosity_vibrated << ", target " << c.target_porosity << "); " << fin.blocks.size() << " blocks, "
-      << res["mass_kg"].get<double>() << " kg\n";
+      << porosity_vibrated << ", target " << c.target_porosity << "; inside the faces " << porosity_in_faces << "); "
+      << fin.blocks.size() << " blocks, " << res["mass_kg"].get<double>() << " kg\n";
   rep << "standing: bulge " << 1000 * bulge << " mm, settlement " << 1000 * settlement << " mm, kinetic ratio "
       << ke_ratio << " -> " << (stands ? "stands" : "DOES NOT STAND") << "\n";
   rep << "closing: plate " << 1000 * press_gap << " mm above the rim at " << press_force << " N; " << levelled

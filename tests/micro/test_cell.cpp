@@ -44,8 +44,8 @@ TEST(MicroCell, SmallCellIsFilledVibratedClosedAndStoodWithItsLedgerClosed) {
   ASSERT_EQ(a.exit_code, 0) << a.output;
   const nlohmann::json s = summaryOf(dir / "a");
   const nlohmann::json& r = s.contains("results") ? s["results"] : s;
-  // 39.6 kg of rock filled: (1 - 0.436) x 2600 kg/m3 x 0.027 m3, to within half a block.
-  EXPECT_NEAR(r["block_fills"][0]["mass_kg"].get<double>(), 0.564 * 2600 * 0.027, 1.0);
+  // 40.8 kg of rock filled: (1 - 0.436) x 2600 kg/m3 x 0.027 m3 and 3 % overfill, to within half a block.
+  EXPECT_NEAR(r["block_fills"][0]["mass_kg"].get<double>(), 0.564 * 2600 * 0.027 * 1.03, 1.0);
   EXPECT_GT(r["blocks"].get<int>(), 20);
   for (const char* key :
        {"porosity", "porosity_after_gravity", "porosity_after_vibration", "height_m", "bulge_m", "settlement_m"}) {
@@ -95,6 +95,53 @@ TEST(MicroCell, SmallCellIsFilledVibratedClosedAndStoodWithItsLedgerClosed) {
   const gabion::bridge::H5Reader ha(dir / "a" / "cell.h5"), hb(dir / "b" / "cell.h5");
   for (const char* d : {"/blocks/position_m", "/blocks/orientation", "/spheres/center_m", "/links/plastic_strain"})
     EXPECT_EQ(ha.read(d), hb.read(d)) << d;
+}
+
+// The same 0.3 m cell of about 75 blocks of 60-90 mm, run through its
+// stages as the default case runs them (their default time limits; laid in
+// and shaken at friction 0.1). `stages`: the stages' objects.
+std::string fullSmallCell(const std::string& stages = R"("fill": {"friction": 0.1}, "vibration": {"friction": 0.1})") {
+  return R"({"format": "gabion.case/1", "kind": "micro.cell", "edge_m": 0.3, "seed": 3,
+ "rock": {"density_kg_m3": 2600, "normal_stiffness_N_m": 1e6, "shear_stiffness_N_m": 2.5e5, "friction": 0.5,
+          "local_damping": 0.1, "viscous_damping_ratio": 0.1},
+ "blocks": {"grading": {"sieve_m": [0.06, 0.075, 0.09], "passing_percent": [0, 50, 100]}},
+ "netting": {"contact": {"normal_stiffness_N_m": 1e6, "shear_stiffness_N_m": 2.5e5, "friction": 0.5, "local_damping": 0.1}},
+ "run": {"output_interval_s": 0.1, "series_interval_s": 0.01}, )" +
+         stages + "}";
+}
+
+// The small cell reaches the target porosity and stands. The vibration stops
+// at its first check at or below the target (measured on a grid of 4 mm,
+// good to 0.002), and the closing, which goes on shaking under 10 kPa,
+// compacts it by about one point more: the cell ends within 0.015 of the
+// target. Left alone it comes to rest (kinetic energy below 1e-6 of the work
+// of gravity) within the 2 cm limits of bulge and settlement, every stage
+// with its ledger closed to 1 %. Gravity alone (the blocks laid in at the
+// rock's own friction, no shaking) leaves it several points looser, as the
+// paper's gravity filling (0.50 against 0.436).
+TEST(MicroCell, SmallCellReachesTheTargetPorosityAndStands) {
+  const auto dir = scratchDir("cell_full");
+  writeFile(dir / "cell.json", fullSmallCell());
+  const auto a = runGabion("run -q " + (dir / "cell.json").string() + " -o " + (dir / "a").string());
+  ASSERT_EQ(a.exit_code, 0) << a.output;
+  const nlohmann::json r = summaryOf(dir / "a");
+  const double target = r["target_porosity"].get<double>();
+  EXPECT_LE(r["porosity_after_vibration"].get<double>(), target);
+  EXPECT_NEAR(r["porosity"].get<double>(), target, 0.015);
+  EXPECT_TRUE(r["stands"].get<bool>()) << r["standing"].dump();
+  EXPECT_LT(r["standing"]["kinetic_ratio"].get<double>(), 1e-6);
+  EXPECT_LT(r["bulge_m"].get<double>(), 0.02);
+  EXPECT_LT(std::fabs(r["settlement_m"].get<double>()), 0.02);
+  for (const char* stage : {"fill", "vibration", "closing", "standing"})
+    EXPECT_LT(std::fabs(r["stages"][stage]["energy"]["balance_rel_error"].get<double>()), 0.01) << stage;
+
+  writeFile(dir / "gravity.json",
+            fullSmallCell(R"("vibration": {"max_duration_s": 0}, "closing": {"max_duration_s": 0.01},
+ "standing": {"max_duration_s": 0.01})"));
+  const auto g = runGabion("run -q " + (dir / "gravity.json").string() + " -o " + (dir / "g").string());
+  ASSERT_EQ(g.exit_code, 0) << g.output;
+  const double gravity = summaryOf(dir / "g")["porosity_after_gravity"].get<double>();
+  EXPECT_GT(gravity, r["porosity"].get<double>() + 0.03) << "gravity only " << gravity;
 }
 
 TEST(MicroCell, BadInputIsNamed) {
