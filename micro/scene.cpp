@@ -124,6 +124,7 @@ WallProgram parseProgram(const JsonReader& r) {
     p.target_force_N = r.number("target_force_N", Check::NonNegative);
     p.max_speed_m_s = r.number("max_speed_m_s", Check::Positive);
     p.gain_m_s_N = r.number("gain_m_s_N", Check::Positive);
+    p.approach_after_s = r.number("approach_after_s", p.approach_after_s, Check::NonNegative);
   }
   return p;
 }

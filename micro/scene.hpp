@@ -101,7 +101,7 @@ struct WallProgram {
                     ///< holds after the table
     Sinusoid,       ///< displacement amplitude_m sin(2 pi f t + phase) - sin(phase), along `direction`
     Servo           ///< along the wall normal, speed gain x (target - measured normal force), at most max_speed;
-                    ///< at max_speed towards the bodies until it first touches one
+                    ///< at max_speed towards the bodies once it has touched nothing for approach_after_s
   };
   Kind kind = Kind::Fixed;
   Vec3 velocity_m_s = Vec3::Zero();
@@ -114,6 +114,10 @@ struct WallProgram {
   double target_force_N = 0.0;  ///< normal force the bodies exert on the wall (N), >= 0
   double max_speed_m_s = 0.0;   ///< servo speed limit (m/s), > 0
   double gain_m_s_N = 0.0;      ///< servo gain (m/s per N), > 0
+  /// A servo that has felt no force for this long (s) closes in at
+  /// max_speed; a shorter loss of contact (bodies shaken away from it and
+  /// back) keeps it on its gain, so that it does not hammer them.
+  double approach_after_s = 0.02;
 };
 
 /// A rigid plane; bodies stay on the side `normal` points to. Infinite, or

@@ -72,14 +72,16 @@ void Wall::plan(double t, double dt) {
   if (program.kind == WallProgram::Kind::Servo) {
     // Velocity along the normal from the force error, at most max_speed:
     // a wall that feels too little force moves towards the bodies. A wall
-    // that has touched nothing yet closes in at max_speed; once it has, it
-    // keeps to the gain (a wall that rushed back at max_speed whenever its
-    // bodies fell away from it, shaken, would hammer them).
+    // that has touched nothing for approach_after_s closes in at max_speed;
+    // a shorter loss of contact keeps it on its gain (a wall that rushed back
+    // at max_speed whenever its bodies fell away from it, shaken, would
+    // hammer them).
     const double force = normalForce();
-    if (force != 0.0) touched = true;
-    const double speed = !touched ? program.max_speed_m_s
-                                  : std::clamp(program.gain_m_s_N * (program.target_force_N - force),
-                                               -program.max_speed_m_s, program.max_speed_m_s);
+    untouched_s = force != 0.0 ? 0.0 : untouched_s + dt;
+    const double speed = untouched_s > program.approach_after_s
+                             ? program.max_speed_m_s
+                             : std::clamp(program.gain_m_s_N * (program.target_force_N - force), -program.max_speed_m_s,
+                                          program.max_speed_m_s);
     velocity = speed * n;
     step_displacement = velocity * dt;
     return;

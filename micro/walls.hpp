@@ -51,7 +51,7 @@ struct Wall {
   Vec3 u = Vec3::UnitX(), v = Vec3::UnitY();  ///< in-plane axes of a bounded wall
   double half_u = 0.0, half_v = 0.0;          ///< half-lengths (m)
   std::uint32_t skip_groups = 0;              ///< contact groups it does not touch (bits)
-  bool touched = false;                       ///< a servo that has felt a force (it then keeps to its gain)
+  double untouched_s = 1e300;                 ///< how long a servo has felt no force (s)
 
   Vec3 origin = Vec3::Zero();             ///< point at t = 0 (m)
   Vec3 position = Vec3::Zero();           ///< point now (m)
