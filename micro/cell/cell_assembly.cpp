@@ -92,7 +92,6 @@ CellCase parseCase(const bridge::JsonDocument& doc) {
   c.netting = parseNetting(root.object("netting"), cellMeshDefaults());
   c.netting.contact.name = "netting";
   c.blocks = root.object("blocks");
-
   if (c.netting.mesh.opening_m > c.edge_m) root.fail("edge_m", "the cell must be at least one mesh opening wide");
   if (const auto f = root.optionalObject("fill")) {
     c.fill.max_duration_s = f->number("max_duration_s", c.fill.max_duration_s, Check::Positive);
