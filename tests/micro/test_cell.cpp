@@ -113,12 +113,13 @@ std::string fullSmallCell(const std::string& stages = R"("fill": {"friction": 0.
 // The small cell reaches the target porosity and stands. The vibration stops
 // at its first check at or below the target (measured on a grid of 4 mm,
 // good to 0.002), and the closing, which goes on shaking under 10 kPa,
-// compacts it by about one point more: the cell ends within 0.015 of the
-// target. Left alone it comes to rest (kinetic energy below 1e-6 of the work
-// of gravity) within the 2 cm limits of bulge and settlement, every stage
-// with its ledger closed to 1 %. Gravity alone (the blocks laid in at the
-// rock's own friction, no shaking) leaves it several points looser, as the
-// paper's gravity filling (0.50 against 0.436).
+// compacts it further, by 0.4 to 1.5 points in the runs of docs/cell.md: the
+// cell ends between 0.02 below the target and 0.005 above it. Left alone it
+// comes to rest (kinetic energy below 1e-6 of the work of gravity) within
+// the 2 cm limits of bulge and settlement, every stage with its ledger closed
+// to 1 %. Gravity alone (the blocks laid in at the rock's own friction, no
+// shaking) leaves it several points looser, as the paper's gravity filling
+// (0.50 against 0.436).
 TEST(MicroCell, SmallCellReachesTheTargetPorosityAndStands) {
   const auto dir = scratchDir("cell_full");
   writeFile(dir / "cell.json", fullSmallCell());
@@ -127,7 +128,8 @@ TEST(MicroCell, SmallCellReachesTheTargetPorosityAndStands) {
   const nlohmann::json r = summaryOf(dir / "a");
   const double target = r["target_porosity"].get<double>();
   EXPECT_LE(r["porosity_after_vibration"].get<double>(), target);
-  EXPECT_NEAR(r["porosity"].get<double>(), target, 0.015);
+  EXPECT_GT(r["porosity"].get<double>(), target - 0.02);
+  EXPECT_LT(r["porosity"].get<double>(), target + 0.005);
   EXPECT_TRUE(r["stands"].get<bool>()) << r["standing"].dump();
   EXPECT_LT(r["standing"]["kinetic_ratio"].get<double>(), 1e-6);
   EXPECT_LT(r["bulge_m"].get<double>(), 0.02);
