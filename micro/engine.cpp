@@ -115,7 +115,7 @@ Engine::Engine(const Scene& scene, int threads) {
   }
   for (std::size_t s = 0; s < sphere_count_; ++s)
     if (!linked[s]) loose_.push_back(static_cast<std::uint32_t>(s));
-  if (loose_.size() == members + sphere_count_) loose_.clear();
+  all_loose_ = loose_.size() == members + sphere_count_;
   std::size_t next = sphere_count_;
   const std::vector<MassProperties> block_props = blockMassProperties(scene);
   for (std::size_t bi = 0; bi < scene.blocks.size(); ++bi) {
@@ -624,7 +624,7 @@ void Engine::integrate(bool measure) {
     const auto t = static_cast<std::size_t>(task);
     const std::size_t b = n * t / workers, e = n * (t + 1) / workers;
     addForceBuffers(b, e);
-    if (loose_.empty()) {
+    if (all_loose_) {
       scratch_[t].spheres = integrateSpheres(p_, b, e, dt_, gravity_, measure);
       return;
     }

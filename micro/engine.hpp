@@ -178,9 +178,10 @@ class Engine {
   std::size_t sphere_count_ = 0;
   std::vector<std::uint32_t> driven_;  // ids of the fixed spheres that move
   // ids of the spheres the free-sphere pass moves (not block members, not
-  // link nodes); empty when that is every particle (the pass then runs over
-  // the store's ranges, vectorised)
+  // link nodes); when that is every particle (all_loose_) the pass runs over
+  // the store's ranges, vectorised
   std::vector<std::uint32_t> loose_;
+  bool all_loose_ = true;
   std::vector<RigidBlock> blocks_;
   std::vector<Wall> walls_;
   Links links_;
