@@ -113,8 +113,9 @@ std::string fullSmallCell(const std::string& stages = R"("fill": {"friction": 0.
 // The small cell reaches the target porosity and stands. The vibration stops
 // at its first check at or below the target (measured on a grid of 4 mm,
 // good to 0.002), and the closing, which goes on shaking under 10 kPa,
-// compacts it further, by 0.4 to 1.5 points in the runs of docs/cell.md: the
-// cell ends between 0.02 below the target and 0.005 above it. Left alone it
+// compacts it further (the default cells of docs/cell.md end up to 1.9
+// points below what their shaking reached): the cell ends between 0.02
+// below the target and 0.005 above it. Left alone it
 // comes to rest (kinetic energy below 1e-6 of the work of gravity) within
 // the 2 cm limits of bulge and settlement, every stage with its ledger closed
 // to 1 %. Gravity alone (the blocks laid in at the rock's own friction, no
