@@ -636,18 +636,12 @@ void Engine::integrate(bool measure) {
     for (const std::uint32_t id : loose_) {
       const std::size_t i = p_.slot[id];
       if (i < b || i >= e) continue;
-      const SphereSums s = integrateSpheres(p_, i, i + 1, dt_, gravity_, measure);
-      sum.local += s.local, sum.ke_t += s.ke_t, sum.ke_r += s.ke_r, sum.pe += s.pe, sum.finite += s.finite;
-      sum.max_d2 = std::max(sum.max_d2, s.max_d2);
+      sum.add(integrateSpheres(p_, i, i + 1, dt_, gravity_, measure));
     }
   });
   SphereSums& sum = sums_;
   sum = SphereSums{};
-  const auto add = [&](const SphereSums& s) {
-    sum.local += s.local, sum.ke_t += s.ke_t, sum.ke_r += s.ke_r, sum.pe += s.pe, sum.finite += s.finite;
-    sum.max_d2 = std::max(sum.max_d2, s.max_d2);
-  };
-  for (const WorkerScratch& w : scratch_) add(w.spheres);
+  for (const WorkerScratch& w : scratch_) sum.add(w.spheres);
   // Driven spheres (fixed, moving): the work they did on the bodies over this step.
   for (const std::uint32_t id : driven_) {
     const std::uint32_t i = p_.slot[id];
@@ -657,7 +651,7 @@ void Engine::integrate(bool measure) {
     std::vector<SphereSums> per_block(blocks_.size());
     forBlocks(StageProfile::kIntegrate, blocks_.size(),
               [&](std::size_t b) { per_block[b] = integrateBlock(blocks_[b], p_, dt_, gravity_, measure); });
-    for (const SphereSums& s : per_block) add(s);
+    for (const SphereSums& s : per_block) sum.add(s);
   }
 }
 

@@ -5,6 +5,7 @@
 /// its share of the wall contacts, link forces and integration sums, and the
 /// first failure it saw. Partial results are reduced in worker order, so a
 /// run repeats bit for bit for a given thread count.
+#include <algorithm>
 #include <cstdint>
 #include <string>
 #include <vector>
@@ -41,6 +42,11 @@ struct ContactSet {
 /// A worker's sums over its free spheres in the integration.
 struct SphereSums {
   double local = 0.0, ke_t = 0.0, ke_r = 0.0, pe = 0.0, finite = 0.0, max_d2 = 0.0;
+  /// Adds another pass's sums (the largest displacement: the larger).
+  void add(const SphereSums& s) {
+    local += s.local, ke_t += s.ke_t, ke_r += s.ke_r, pe += s.pe, finite += s.finite;
+    max_d2 = std::max(max_d2, s.max_d2);
+  }
 };
 
 /// A link that broke at this step (micro/links.hpp).
