@@ -230,11 +230,8 @@ Scene fillScene(const CellCase& c, const CellNetting& n, nlohmann::json& fill_re
              wall("x_plus", Vec3(e + 2 * r, 0, 0), -Vec3::UnitX(), kFormwork),
              wall("y_minus", Vec3(0, -2 * r, 0), Vec3::UnitY(), kFormwork),
              wall("y_plus", Vec3(0, e + 2 * r, 0), -Vec3::UnitY(), kFormwork)};
-  s.porosity.enabled = true;
-  s.porosity.min_m = Vec3::Zero();
-  s.porosity.max_m = Vec3::Constant(e);
-  s.porosity.spacing_m = c.porosity_spacing_m;
-  s.porosity.blocks_only = true;
+  // (no porosity box of the scene's: the cell measures its own porosity,
+  // with the rock in the mesh openings, where each stage ends)
   return s;
 }
 
