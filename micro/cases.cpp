@@ -4,6 +4,9 @@
 
 #include "micro/cell/cell_assembly.hpp"
 #include "micro/engine.hpp"
+#include "micro/lab/compression_test.hpp"
+#include "micro/lab/impact_test.hpp"
+#include "micro/lab/shear_test.hpp"
 #include "micro/netting/tensile_test.hpp"
 #include "micro/scene.hpp"
 #include "micro/scene_run.hpp"
@@ -30,7 +33,11 @@ std::vector<bridge::CaseKind> caseKinds() {
   return {{"micro.scene", "fine DEM of explicit spheres, rigid multi-sphere blocks and planar walls (docs/micro.md)",
            checkScene, runSceneCase},
           nettingTensileKind(),
-          cellKind()};
+          cellKind(),
+          lab::confinedCompressionKind(),
+          lab::unconfinedCompressionKind(),
+          lab::unconfinedImpactKind(),
+          lab::interfaceShearKind()};
 }
 
 }  // namespace gabion::micro

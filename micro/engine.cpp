@@ -775,6 +775,9 @@ std::size_t Engine::wallIndex(const std::string& name) const {
     if (walls_[w].name == name) return w;
   return walls_.size();
 }
+void Engine::setWallProgram(std::size_t w, const WallProgram& program) {
+  walls_[w].program = program;
+}
 Vec3 Engine::sphereForce(std::size_t s) const {
   const std::uint32_t i = p_.slot[s];
   return {p_.fx[i], p_.fy[i], p_.fz[i]};

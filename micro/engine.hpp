@@ -117,6 +117,9 @@ class Engine {
   Vec3 wallForce(std::size_t w) const;
   /// Position of wall w's point at the time of the last force evaluation (m).
   Vec3 wallPosition(std::size_t w) const;
+  /// Gives wall w a new program from the next step on; it moves on from
+  /// where it is (a test that reverses its plate, or stops it).
+  void setWallProgram(std::size_t w, const WallProgram& program);
 
   std::size_t linkCount() const { return links_.size(); }
   bool linkBroken(std::size_t l) const { return links_.broken(l); }

@@ -205,6 +205,7 @@ bridge::RunOutcome runScene(Scene scene, const std::string& file, const bridge::
     if (measure) {
       record(t);
       if (hooks.record) hooks.record(engine, t);
+      if (hooks.control) hooks.control(engine);
       ended = hooks.done && hooks.done(engine);
     }
     if ((n + 1) % output_every == 0 || n + 1 == steps || ended) snapshot(engine.time());

@@ -20,6 +20,9 @@ struct SceneRunHooks {
   std::string label = "micro.scene";  ///< shown on the progress line
   /// After each series sample (engine state after the step that started at t).
   std::function<void(const Engine&, double t)> record;
+  /// After each series sample, before `done`: the test steers its walls
+  /// (Engine::setWallProgram), e.g. to unload and reload.
+  std::function<void(Engine&)> control;
   /// After each series sample: true when the test is over (the run ends
   /// there with ended_by = "test").
   std::function<bool(const Engine&)> done;

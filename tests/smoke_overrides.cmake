@@ -8,3 +8,14 @@ set(GABION_SMOKE_SET_micro_netting_tensile_paper --set test.max_displacement_m=0
 set(GABION_SMOKE_SET_micro_netting_box --set run.duration_s=0.02)
 set(GABION_SMOKE_SET_micro_block_fill --set run.duration_s=0.01)
 set(GABION_SMOKE_SET_micro_cell --set fill.max_duration_s=0.01 --set vibration.max_duration_s=0.005 --set standing.max_duration_s=0.005)
+# The lab tests start from the cell the micro_cell smoke run leaves (a
+# fixture: that run goes first), with a short loading each.
+set(GABION_SMOKE_CELL ${CMAKE_CURRENT_BINARY_DIR}/smoke/micro_cell/cell.h5)
+set(GABION_SMOKE_SET_micro_cc --set cell=${GABION_SMOKE_CELL} --set loading.strain=0.004 --set loading.unload_at_strain=[0.002])
+set(GABION_SMOKE_SET_micro_uc --set cell=${GABION_SMOKE_CELL} --set loading.strain=0.004)
+set(GABION_SMOKE_SET_micro_uci --set cell=${GABION_SMOKE_CELL} --set velocities_m_s=[8] --set boulder.diameter_m=0.3 --set run.duration_s=0.005)
+set(GABION_SMOKE_SET_micro_shear --set cell=${GABION_SMOKE_CELL} --set shear.displacement_m=0.001 --set shear.max_settle_s=0.01)
+set(GABION_SMOKE_FIXTURE_micro_cell cell_file)
+foreach(lab micro_cc micro_uc micro_uci micro_shear)
+  set(GABION_SMOKE_NEEDS_${lab} cell_file)
+endforeach()

@@ -1,0 +1,348 @@
+#include "micro/lab/compression_test.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <sstream>
+
+#include "bridge/errors.hpp"
+#include "bridge/output.hpp"
+#include "bridge/plot.hpp"
+#include "micro/lab/force_drops.hpp"
+#include "micro/lab/lab_setup.hpp"
+#include "micro/scene_run.hpp"
+
+namespace gabion::micro::lab {
+namespace {
+
+using bridge::Check;
+using bridge::JsonReader;
+
+// The netting's nodes are group 1 in a micro.cell (nodeSphere); the plates
+// touch both rock and netting.
+struct CompressionCase {
+  bool confined = true;  // micro.cc (six walls) or micro.uc (two plates)
+  LabSetup setup;
+  double velocity_m_s = 0.1;  // of the lid
+  double strain = 0.15;       // the lid's travel over the sample's height
+  std::vector<double> unload_at;  // strains where the lid reverses
+  double unload_to = 0.1;         // ... until the force is this fraction of the force there
+  double max_kinetic_ratio = 0.01;
+  bool strict = false;
+  double drop_fraction = 0.05, drop_window_s = 0.02;  // micro.uc
+};
+
+CompressionCase parseCase(const bridge::JsonDocument& doc, bool confined) {
+  const JsonReader root = doc.root();
+  CompressionCase c;
+  c.confined = confined;
+  if (const auto l = root.optionalObject("loading")) {
+    c.velocity_m_s = l->number("velocity_m_s", c.velocity_m_s, Check::Positive);
+    c.strain = l->number("strain", c.strain, Check::Positive);
+    if (c.strain > 0.6) l->fail("strain", "must be <= 0.6 (the lid's travel over the cell's height)");
+    if (l->has("unload_at_strain")) {
+      c.unload_at = l->numbers("unload_at_strain", Check::Positive);
+      for (std::size_t k = 0; k < c.unload_at.size(); ++k)
+        if (c.unload_at[k] >= c.strain || (k > 0 && c.unload_at[k] <= c.unload_at[k - 1]))
+          l->fail("unload_at_strain", "must increase, and stay below the final strain " + std::to_string(c.strain));
+    }
+    c.unload_to = l->number("unload_to_force_fraction", c.unload_to, Check::UnitOpen);
+  }
+  if (const auto q = root.optionalObject("quasi_static")) {
+    c.max_kinetic_ratio = q->number("max_kinetic_ratio", c.max_kinetic_ratio, Check::Positive);
+    c.strict = q->boolean("strict", c.strict);
+  }
+  if (!confined)
+    if (const auto d = root.optionalObject("drops")) {
+      c.drop_fraction = d->number("min_fraction", c.drop_fraction, Check::Positive);
+      if (c.drop_fraction >= 1.0) d->fail("min_fraction", "must be < 1");
+      c.drop_window_s = d->number("window_s", c.drop_window_s, Check::Positive);
+    }
+  // Long enough for the loading and each unloading-reloading cycle; the test
+  // ends when the lid reaches the final strain. The series every 1 ms.
+  const double travel = 0.55 * c.strain;  // (m, for a cell up to 0.55 m high; longer: give run.duration_s)
+  double back = 0.0;
+  for (const double s : c.unload_at) back += 2.0 * 0.55 * s;
+  c.setup = parseLabSetup(root, 8.0, 1.2 * (travel + back) / c.velocity_m_s, 1e-3);
+  return c;
+}
+
+// Where the walls go: the sample's extent, the lid on top.
+Scene buildScene(const CompressionCase& c, const Sample& sample) {
+  Scene s = sample.scene;
+  const auto plate = [&](const std::string& name, const Vec3& point, const Vec3& normal) {
+    WallSpec w;
+    w.name = name;
+    w.point_m = point;
+    w.normal = normal;
+    w.material = sample.plate_material;
+    s.walls.push_back(w);
+  };
+  const Vec3 lo = sample.lo, hi = sample.hi;
+  plate("base", lo, Vec3::UnitZ());
+  if (c.confined) {
+    plate("x_minus", lo, Vec3::UnitX());
+    plate("x_plus", hi, -Vec3::UnitX());
+    plate("y_minus", lo, Vec3::UnitY());
+    plate("y_plus", hi, -Vec3::UnitY());
+  }
+  plate("lid", hi, -Vec3::UnitZ());
+  s.walls.back().program.kind = WallProgram::Kind::Velocity;
+  s.walls.back().program.velocity_m_s = Vec3(0, 0, -c.velocity_m_s);
+  return s;
+}
+
+void check(const bridge::JsonDocument& doc, bool confined) {
+  const CompressionCase c = parseCase(doc, confined);
+  checkCells(c.setup);
+  if (c.setup.cells.front().generate.empty()) {
+    const Sample sample = loadSample(c.setup.cells.front().file, c.setup);
+    const Scene s = buildScene(c, sample);
+    validateScene(s, doc.file());
+    chooseDt(s, criticalTimeStep(s), doc.file());
+  }
+}
+
+struct Curves {
+  std::vector<double> time, displacement, force, base_force, lateral, kinetic, work;
+  std::vector<std::vector<double>> side;  // x_minus, x_plus, y_minus, y_plus
+};
+
+// Least-squares slope through the origin of y against x.
+double slopeThroughOrigin(const std::vector<double>& x, const std::vector<double>& y) {
+  double xy = 0.0, xx = 0.0;
+  for (std::size_t k = 0; k < x.size(); ++k) xy += x[k] * y[k], xx += x[k] * x[k];
+  return xx > 0.0 ? xy / xx : NAN;
+}
+
+// The exponent b of F = a u^b over the loading branch where u is between a
+// fifth of its largest value and that value (log-log least squares): near 1
+// for a quasi-linear curve, above 1 for a convex one.
+double powerLawExponent(const std::vector<double>& u, const std::vector<double>& f) {
+  double umax = 0.0;
+  for (const double x : u) umax = std::max(umax, x);
+  double sx = 0, sy = 0, sxx = 0, sxy = 0, n = 0, reached = 0.0;
+  for (std::size_t k = 0; k < u.size(); ++k) {
+    if (u[k] < reached) continue;  // (unloading and reloading: the first loading only)
+    reached = u[k];
+    if (u[k] < 0.2 * umax || !(f[k] > 0.0)) continue;
+    const double x = std::log(u[k]), y = std::log(f[k]);
+    sx += x, sy += y, sxx += x * x, sxy += x * y, n += 1;
+  }
+  const double d = n * sxx - sx * sx;
+  return n >= 3 && d > 0.0 ? (n * sxy - sx * sy) / d : NAN;
+}
+
+bridge::RunOutcome runOne(const CompressionCase& c, const Sample& sample, const bridge::RunContext& ctx,
+                          const std::string& file) {
+  Scene scene = buildScene(c, sample);
+  const double height = sample.hi.z() - sample.lo.z();
+  const double target = c.strain * height;
+  const std::size_t nwalls = scene.walls.size(), lid = nwalls - 1;
+  // The run lasts as long as the loading and cycles need at this height.
+  double travel = target;
+  for (const double s : c.unload_at) travel += 2.0 * s * height;
+  if (!c.setup.duration_given) scene.run.duration_s = 1.2 * travel / c.velocity_m_s;
+
+  Curves cv;
+  cv.side.resize(4);
+  struct Cycle {
+    double strain, force_N, displacement_m, stiffness_N_m = NAN;
+    double u_low = NAN, f_low = NAN;
+  };
+  std::vector<Cycle> cycles;
+  std::size_t next_cycle = 0;
+  bool unloading = false;
+  double z0 = NAN;
+  SceneRunHooks hooks;
+  hooks.label = c.confined ? "micro.cc" : "micro.uc";
+  hooks.record = [&](const Engine& e, double) {
+    if (std::isnan(z0)) z0 = sample.hi.z();
+    const double u = z0 - e.wallPosition(lid).z();
+    cv.time.push_back(e.time());
+    cv.displacement.push_back(u);
+    cv.force.push_back(e.wallForce(lid).z());
+    cv.base_force.push_back(-e.wallForce(0).z());
+    if (c.confined) {
+      const double f[4] = {-e.wallForce(1).x(), e.wallForce(2).x(), -e.wallForce(3).y(), e.wallForce(4).y()};
+      for (int k = 0; k < 4; ++k) cv.side[static_cast<std::size_t>(k)].push_back(f[k]);
+      cv.lateral.push_back(0.25 * (f[0] + f[1] + f[2] + f[3]));
+    }
+    cv.kinetic.push_back(e.energy().kinetic_translational_J + e.energy().kinetic_rotational_J);
+    cv.work.push_back(e.energy().wall_work_J);
+  };
+  // Unloading and reloading: at each unload strain the lid goes back up at
+  // its speed until the force falls to unload_to of what it was there.
+  hooks.control = [&](Engine& e) {
+    const double u = cv.displacement.back(), f = cv.force.back();
+    WallProgram p;
+    p.kind = WallProgram::Kind::Velocity;
+    if (!unloading && next_cycle < c.unload_at.size() && u >= c.unload_at[next_cycle] * height) {
+      cycles.push_back({c.unload_at[next_cycle], f, u});
+      ++next_cycle;
+      unloading = true;
+      p.velocity_m_s = Vec3(0, 0, c.velocity_m_s);
+      e.setWallProgram(lid, p);
+    } else if (unloading && f <= c.unload_to * cycles.back().force_N) {
+      Cycle& cy = cycles.back();
+      cy.u_low = u, cy.f_low = f;
+      if (cy.displacement_m > u) cy.stiffness_N_m = (cy.force_N - f) / (cy.displacement_m - u);
+      unloading = false;
+      p.velocity_m_s = Vec3(0, 0, -c.velocity_m_s);
+      e.setWallProgram(lid, p);
+    }
+  };
+  hooks.done = [&](const Engine&) { return !unloading && cv.displacement.back() >= target; };
+  hooks.write = [&](const Engine&, bridge::H5Writer& h5) {
+    const std::string g = c.confined ? "/curves/axial/" : "/curves/uc/";
+    h5.write(g + "time_s", cv.time, "s");
+    h5.write(g + "displacement_m", cv.displacement, "m");
+    h5.write(g + "force_N", cv.force, "N");
+    h5.write(g + "base_force_N", cv.base_force, "N");
+    if (c.confined) {
+      h5.write("/curves/lateral/axial_force_N", cv.force, "N");
+      h5.write("/curves/lateral/lateral_force_N", cv.lateral, "N");
+      const char* names[4] = {"x_minus", "x_plus", "y_minus", "y_plus"};
+      for (std::size_t k = 0; k < 4; ++k) h5.write(std::string("/curves/lateral/") + names[k] + "_N", cv.side[k], "N");
+    }
+  };
+  bridge::RunOutcome out = runScene(std::move(scene), file, ctx, hooks);
+  nlohmann::json& r = out.results;
+  if (cv.force.empty()) return out;
+
+  QuasiStatic qs;
+  for (std::size_t k = 0; k < cv.kinetic.size(); ++k) qs.add(cv.kinetic[k], cv.work[k]);
+  const double ratio = qs.ratio();
+  const auto peak = std::max_element(cv.force.begin(), cv.force.end()) - cv.force.begin();
+  r["height_m"] = height;
+  r["width_m"] = {sample.hi.x() - sample.lo.x(), sample.hi.y() - sample.lo.y()};
+  r["mass_kg"] = sample.mass_kg;
+  r["velocity_m_s"] = c.velocity_m_s;
+  r["peak_force_N"] = cv.force[static_cast<std::size_t>(peak)];
+  r["displacement_at_peak_m"] = cv.displacement[static_cast<std::size_t>(peak)];
+  r["final_displacement_m"] = cv.displacement.back();
+  r["final_strain"] = cv.displacement.back() / height;
+  r["final_force_N"] = cv.force.back();
+  r["secant_stiffness_N_m"] = cv.displacement.back() > 0.0 ? cv.force.back() / cv.displacement.back() : NAN;
+  r["power_law_exponent"] = powerLawExponent(cv.displacement, cv.force);
+  r["kinetic_to_work_ratio"] = ratio;
+  r["quasi_static"] = ratio <= c.max_kinetic_ratio;
+  r["reached_strain"] = out.results["ended_by"] == "test";
+  nlohmann::json warnings = nlohmann::json::array();
+  if (!(ratio <= c.max_kinetic_ratio)) {
+    std::ostringstream w;
+    w << "the test left its quasi-static range: kinetic energy up to " << ratio << " of the lid's work (limit "
+      << c.max_kinetic_ratio << "); lower loading.velocity_m_s or raise netting_mass_scale";
+    warnings.push_back(w.str());
+  }
+  if (c.confined) {
+    std::vector<double> fa, fl;
+    double reached = 0.0;
+    for (std::size_t k = 0; k < cv.force.size(); ++k)
+      if (cv.displacement[k] >= reached) reached = cv.displacement[k], fa.push_back(cv.force[k]), fl.push_back(cv.lateral[k]);
+    r["lateral_reaction_coefficient"] = slopeThroughOrigin(fa, fl);
+    nlohmann::json cy = nlohmann::json::array();
+    for (const Cycle& k : cycles)
+      cy.push_back({{"strain", k.strain},
+                    {"displacement_m", k.displacement_m},
+                    {"force_N", k.force_N},
+                    {"unloaded_to_N", k.f_low},
+                    {"unloaded_to_displacement_m", k.u_low},
+                    {"unloading_stiffness_N_m", k.stiffness_N_m}});
+    r["cycles"] = cy;
+  } else {
+    double fmax = 0.0;
+    for (const double f : cv.force) fmax = std::max(fmax, f);
+    const auto drops = forceDrops(cv.time, cv.displacement, cv.force, c.drop_fraction, c.drop_window_s, 0.02 * fmax);
+    nlohmann::json d = nlohmann::json::array();
+    for (const ForceDrop& x : drops)
+      d.push_back({{"time_s", x.time_s},
+                   {"displacement_m", x.displacement_m},
+                   {"force_before_N", x.force_before_N},
+                   {"force_after_N", x.force_after_N},
+                   {"size_N", x.size_N()}});
+    r["force_drops"] = d;
+    r["drop_count"] = drops.size();
+  }
+  r["warnings"] = warnings;
+
+  // Figures: the axial curve (with the drops), and the lateral reactions.
+  {
+    bridge::PlotSpec plot;
+    plot.title = c.confined ? "Confined compression (CC)" : "Unconfined compression (UC)";
+    plot.x_label = "lid displacement (mm)";
+    plot.y_label = "axial force (kN)";
+    bridge::PlotSeries s{"lid force", {}, {}, bridge::PlotSeries::Style::Line};
+    for (std::size_t k = 0; k < cv.force.size(); ++k)
+      s.x.push_back(1000.0 * cv.displacement[k]), s.y.push_back(1e-3 * cv.force[k]);
+    plot.series.push_back(s);
+    if (!c.confined && !r["force_drops"].empty()) {
+      bridge::PlotSeries d{"force drops", {}, {}, bridge::PlotSeries::Style::Markers};
+      for (const auto& x : r["force_drops"])
+        d.x.push_back(1000.0 * x["displacement_m"].get<double>()), d.y.push_back(1e-3 * x["force_before_N"].get<double>());
+      plot.series.push_back(d);
+    }
+    bridge::writePlotPng(ctx.outdir / (c.confined ? "cc_curve.png" : "uc_curve.png"), plot);
+  }
+  if (c.confined) {
+    bridge::PlotSpec plot;
+    plot.title = "CC: lateral wall reactions";
+    plot.x_label = "axial force (kN)";
+    plot.y_label = "lateral force (kN)";
+    bridge::PlotSeries s{"mean of the four lateral walls", {}, {}, bridge::PlotSeries::Style::Line};
+    for (std::size_t k = 0; k < cv.force.size(); ++k) s.x.push_back(1e-3 * cv.force[k]), s.y.push_back(1e-3 * cv.lateral[k]);
+    plot.series.push_back(s);
+    const double kr = r["lateral_reaction_coefficient"].get<double>();
+    double fmax = 0.0;
+    for (const double f : cv.force) fmax = std::max(fmax, f);
+    plot.series.push_back({"coefficient " + std::to_string(kr).substr(0, 5),
+                           {0.0, 1e-3 * fmax},
+                           {0.0, 1e-3 * kr * fmax},
+                           bridge::PlotSeries::Style::Line});
+    bridge::writePlotPng(ctx.outdir / "cc_lateral.png", plot);
+  }
+  std::ostringstream rep;
+  rep.precision(4);
+  rep << hooks.label << ": peak " << r["peak_force_N"].get<double>() << " N at "
+      << 1000.0 * r["displacement_at_peak_m"].get<double>() << " mm; final strain " << r["final_strain"].get<double>()
+      << ", force " << r["final_force_N"].get<double>() << " N";
+  if (c.confined) rep << "; lateral reaction coefficient " << r["lateral_reaction_coefficient"].get<double>();
+  else rep << "; " << r["drop_count"].get<std::size_t>() << " force drops";
+  rep << "; kinetic/work " << ratio << (r["quasi_static"].get<bool>() ? " (quasi-static)" : " (NOT quasi-static)")
+      << "\n";
+  out.report = rep.str() + out.report;
+  if (c.strict && !r["quasi_static"].get<bool>() && out.status == bridge::RunOutcome::Status::Ok) {
+    out.status = bridge::RunOutcome::Status::NumericalFailure;
+    out.message = warnings.front().get<std::string>() + " (quasi_static.strict)";
+  }
+  return out;
+}
+
+bridge::RunOutcome run(const bridge::JsonDocument& doc, const bridge::RunContext& ctx, bool confined) {
+  const CompressionCase c = parseCase(doc, confined);
+  const std::string file = doc.file();
+  const std::vector<std::string> keys =
+      confined ? std::vector<std::string>{"peak_force_N", "final_force_N", "secant_stiffness_N_m",
+                                          "lateral_reaction_coefficient", "kinetic_to_work_ratio"}
+               : std::vector<std::string>{"peak_force_N", "displacement_at_peak_m", "drop_count",
+                                          "kinetic_to_work_ratio"};
+  return runReplicates(
+      c.setup, ctx, confined ? "micro.cc" : "micro.uc", {"test"},
+      [&](const Sample& s, std::size_t, const bridge::RunContext& rc) { return runOne(c, s, rc, file); }, keys);
+}
+
+}  // namespace
+
+bridge::CaseKind confinedCompressionKind() {
+  return {"micro.cc",
+          "confined compression of a cell between six rigid walls, the lid driven down (docs/lab.md)",
+          [](const bridge::JsonDocument& d) { check(d, true); },
+          [](const bridge::JsonDocument& d, const bridge::RunContext& ctx) { return run(d, ctx, true); }};
+}
+
+bridge::CaseKind unconfinedCompressionKind() {
+  return {"micro.uc", "unconfined compression of a cell between two plates, the netting alone confining (docs/lab.md)",
+          [](const bridge::JsonDocument& d) { check(d, false); },
+          [](const bridge::JsonDocument& d, const bridge::RunContext& ctx) { return run(d, ctx, false); }};
+}
+
+}  // namespace gabion::micro::lab

@@ -1,0 +1,426 @@
+#include "micro/lab/lab_setup.hpp"
+
+#include <algorithm>
+#include <atomic>
+#include <cmath>
+#include <fstream>
+#include <iterator>
+#include <sstream>
+#include <thread>
+
+#include "bridge/errors.hpp"
+#include "bridge/output.hpp"
+#include "micro/cell/cell_assembly.hpp"
+#include "micro/cell/cell_file.hpp"
+#include "micro/rigid_body.hpp"
+
+namespace gabion::micro::lab {
+namespace {
+
+namespace fs = std::filesystem;
+using bridge::Check;
+using bridge::JsonReader;
+
+}  // namespace
+
+MaterialChange parseMaterialChange(const std::string& name, const JsonReader& r) {
+  MaterialChange c;
+  c.name = name;
+  c.pointer = r.pointer();
+  const auto opt = [&](const char* key, Check check, std::optional<double>& out) {
+    if (r.has(key)) out = r.number(key, check);
+  };
+  opt("normal_stiffness_N_m", Check::Positive, c.normal_stiffness_N_m);
+  opt("shear_stiffness_N_m", Check::Positive, c.shear_stiffness_N_m);
+  opt("friction", Check::NonNegative, c.friction);
+  opt("normal_force_limit_N", Check::Positive, c.normal_force_limit_N);
+  opt("local_damping", Check::UnitOpen, c.local_damping);
+  opt("viscous_damping_ratio", Check::UnitOpen, c.viscous_damping_ratio);
+  return c;
+}
+
+namespace {
+
+CellSource parseSource(const JsonReader& root, const fs::path& dir) {
+  CellSource s;
+  const nlohmann::json& v = root.raw("cell");
+  if (v.is_string()) {
+    s.file = dir / root.string("cell");
+    return s;
+  }
+  if (!v.is_object())
+    root.fail("cell", "give a cell file (\"cell.h5\"), or {\"file\": ...}, or {\"case\": \"micro_cell.json\"}");
+  const JsonReader c = root.object("cell");
+  if (c.has("file") == c.has("case")) c.failHere("give either \"file\" (a cell file) or \"case\" (a micro.cell case)");
+  if (c.has("file")) {
+    s.file = dir / c.string("file");
+    if (c.has("seed")) c.fail("seed", "only for a generated cell (\"case\")");
+    return s;
+  }
+  s.generate = dir / c.string("case");
+  if (!fs::is_regular_file(s.generate)) c.fail("case", "no such case file " + s.generate.string());
+  if (c.has("seed")) s.seed = static_cast<std::uint64_t>(c.integer("seed", 0));
+  return s;
+}
+
+// The micro.cell case of `source`, with its seed, checked as `gabion check` would.
+bridge::JsonDocument loadCellCase(const CellSource& source, const std::string& file, const std::string& pointer) {
+  bridge::JsonDocument doc = bridge::JsonDocument::load(source.generate);
+  const JsonReader root = doc.root();
+  if (root.string("format") != "gabion.case/1") root.fail("format", "expected 'gabion.case/1'");
+  if (root.string("kind") != "micro.cell")
+    throw bridge::InputError(file, pointer, source.generate.string() + " is not a micro.cell case");
+  if (source.seed) doc.applySet("seed=" + std::to_string(*source.seed));
+  cellKind().check(doc);
+  if (root.has("description")) root.string("description");
+  doc.finish();
+  return doc;
+}
+
+}  // namespace
+
+void MaterialChange::applyTo(Material& m) const {
+  if (normal_stiffness_N_m) m.normal_stiffness_N_m = *normal_stiffness_N_m;
+  if (shear_stiffness_N_m) m.shear_stiffness_N_m = *shear_stiffness_N_m;
+  if (friction) m.friction = *friction;
+  if (normal_force_limit_N) m.normal_force_limit_N = *normal_force_limit_N;
+  if (local_damping) m.local_damping = *local_damping;
+  if (viscous_damping_ratio) m.viscous_damping_ratio = *viscous_damping_ratio;
+}
+
+LabSetup parseLabSetup(const JsonReader& root, double default_mass_scale, double default_duration_s,
+                       double default_series_s) {
+  LabSetup s;
+  s.file = root.file();
+  const fs::path dir = fs::path(root.file()).parent_path();
+  // The cell: one source, or a list of cell files (one per replicate).
+  if (root.has("cell") && root.raw("cell").is_array()) {
+    const nlohmann::json& list = root.raw("cell");
+    if (list.empty()) root.fail("cell", "an empty list of cell files");
+    for (std::size_t k = 0; k < list.size(); ++k) {
+      if (!list[k].is_string()) root.fail("cell", "a list of cells holds cell file names (entry " + std::to_string(k) + ")");
+      s.cells.push_back({dir / list[k].get<std::string>(), {}, {}, 0.0});
+    }
+    if (root.has("replicates") && root.integer("replicates", 1) != static_cast<long long>(list.size()))
+      root.fail("replicates", "a list of cell files makes one replicate per file");
+  } else {
+    const CellSource first = parseSource(root, dir);
+    const auto n = root.integer("replicates", 1, 1);
+    if (n > 64) root.fail("replicates", "at most 64");
+    if (n > 1 && first.generate.empty())
+      root.fail("replicates",
+                "replicates need cells of different seeds: give \"cell\": {\"case\": \"micro_cell.json\"}, or a list "
+                "of cell files");
+    std::uint64_t seed0 = 0;
+    if (!first.generate.empty() && !first.seed) {
+      // the case's own seed, for the replicates' seeds after it
+      const bridge::JsonDocument doc = bridge::JsonDocument::load(first.generate);
+      const auto it = doc.json().find("seed");
+      seed0 = it != doc.json().end() && it->is_number_unsigned() ? it->get<std::uint64_t>() : 1;
+    }
+    for (long long k = 0; k < n; ++k) {
+      CellSource c = first;
+      if (!c.generate.empty()) c.seed = (first.seed ? *first.seed : seed0) + static_cast<std::uint64_t>(k);
+      s.cells.push_back(c);
+    }
+  }
+  if (const auto m = root.optionalObject("materials"))
+    for (const auto& [name, r] : m->members()) s.changes.push_back(parseMaterialChange(name, r));
+  if (const auto p = root.optionalObject("plates")) s.plates = parseMaterialChange("plates", *p);
+  s.plates.name = "plates";
+  s.netting_mass_scale = root.number("netting_mass_scale", default_mass_scale, Check::Positive);
+  if (s.netting_mass_scale < 1.0) root.fail("netting_mass_scale", "must be >= 1 (1: no scaling)");
+  s.gravity = root.vec3("gravity_m_s2", s.gravity);
+  if (const auto r = root.optionalObject("run")) {
+    s.run = parseRun(*r, default_duration_s);
+    s.duration_given = r->has("duration_s");
+    if (!r->has("series_interval_s")) s.run.series_interval_s = std::min(default_series_s, s.run.duration_s);
+    if (!r->has("output_interval_s")) s.run.output_interval_s = s.run.duration_s / 50.0;
+  } else {
+    s.run.duration_s = default_duration_s;
+    s.run.series_interval_s = std::min(default_series_s, default_duration_s);
+    s.run.output_interval_s = default_duration_s / 50.0;
+  }
+  return s;
+}
+
+Sample loadSample(const fs::path& cell_file, const LabSetup& setup) {
+  Sample out;
+  out.cell_file = cell_file;
+  Scene& s = out.scene;
+  if (!fs::exists(cell_file)) throw bridge::InputError(setup.file, "/cell", "no cell file " + cell_file.string());
+  loadCellFile(cell_file, s);
+  s.gravity_m_s2 = setup.gravity;
+  s.run = setup.run;
+  const auto find = [&](const std::string& name) {
+    const auto it =
+        std::find_if(s.materials.begin(), s.materials.end(), [&](const Material& m) { return m.name == name; });
+    return it == s.materials.end() ? -1 : static_cast<int>(it - s.materials.begin());
+  };
+  std::string names;
+  for (const Material& m : s.materials) names += (names.empty() ? "" : ", ") + m.name;
+  for (const MaterialChange& c : setup.changes) {
+    const int k = find(c.name);
+    if (k < 0)
+      throw bridge::InputError(setup.file, c.pointer,
+                               "the cell (" + cell_file.string() + ") has no material '" + c.name + "' (it has " +
+                                   names + ")");
+    c.applyTo(s.materials[static_cast<std::size_t>(k)]);
+  }
+  // The plates: the cell's formwork material (steel in a micro.cell), made
+  // frictionless (their reactions are then normal forces only), with the
+  // test's changes.
+  Material plate = s.materials[static_cast<std::size_t>(std::max(0, find("formwork")))];
+  plate.friction = 0.0;
+  plate.name = "plates";
+  setup.plates.applyTo(plate);
+  out.plate_material = static_cast<int>(s.materials.size());
+  s.materials.push_back(plate);
+  out.rock_material = std::max(0, find("rock"));
+  out.netting_material = find("netting");
+  try {
+    const std::string text = bridge::H5Reader(cell_file).attribute("/", "summary");
+    out.cell_summary = nlohmann::json::parse(text);
+  } catch (const std::exception&) {
+    out.cell_summary = nlohmann::json::object();
+  }
+  // The netting's nodes (the spheres links join) take the test's mass scaling.
+  std::vector<char> node(s.spheres.size(), 0);
+  for (const LinkSpec& l : s.links) node[l.a] = node[l.b] = 1;
+  for (std::size_t k = 0; k < s.spheres.size(); ++k)
+    if (node[k]) s.spheres[k].mass_scale = setup.netting_mass_scale, ++out.netting_nodes;
+  // Extent and mass.
+  out.lo = Vec3::Constant(1e300), out.hi = Vec3::Constant(-1e300);
+  const auto reach = [&](const Vec3& x, double r) {
+    out.lo = out.lo.cwiseMin(x - Vec3::Constant(r));
+    out.hi = out.hi.cwiseMax(x + Vec3::Constant(r));
+  };
+  for (const SphereSpec& sp : s.spheres) {
+    reach(sp.center_m, sp.radius_m);
+    if (!sp.fixed) out.mass_kg += sphereMass(s, sp);
+  }
+  for (const BlockSpec& b : s.blocks) {
+    for (std::size_t k = 0; k < b.member_radii_m.size(); ++k)
+      reach(b.position_m + b.orientation * b.member_centers_m[k], b.member_radii_m[k]);
+    const double density = s.materials[static_cast<std::size_t>(b.material)].density_kg_m3;
+    if (!b.fixed) out.mass_kg += clusterMassProperties(b.member_centers_m, b.member_radii_m, density, 1e-3).mass_kg;
+  }
+  if (s.spheres.empty() && s.blocks.empty())
+    throw bridge::InputError(cell_file.string(), "", "the cell file holds no bodies");
+  return out;
+}
+
+double checkCells(const LabSetup& setup) {
+  double edge = 0.0;
+  for (std::size_t k = 0; k < setup.cells.size(); ++k) {
+    const CellSource& c = setup.cells[k];
+    double e = 0.0;
+    if (c.generate.empty()) {
+      const Sample sample = loadSample(c.file, setup);
+      e = std::min(sample.hi.x() - sample.lo.x(), sample.hi.y() - sample.lo.y());
+    } else {
+      if (!fs::exists(c.generate))
+        throw bridge::InputError(setup.file, "/cell/case", "no such case file " + c.generate.string());
+      const bridge::JsonDocument doc = loadCellCase(c, setup.file, "/cell/case");
+      const auto it = doc.json().find("edge_m");
+      e = it != doc.json().end() && it->is_number() ? it->get<double>() : 0.5;
+      if (k > 0) continue;  // (the same case for every replicate, with another seed)
+    }
+    if (k == 0) edge = e;
+  }
+  return edge;
+}
+
+fs::path generateCell(const CellSource& source, const fs::path& dir, const bridge::RunContext& ctx) {
+  bridge::JsonDocument doc = loadCellCase(source, source.generate.string(), "");
+  const std::string text = doc.json().dump(1);
+  const fs::path cell = dir / "cell.h5", stamp = dir / "case.json";
+  // The same case and seed made this cell already: take it.
+  if (fs::exists(cell) && fs::exists(stamp)) {
+    std::ifstream in(stamp);
+    const std::string before((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+    if (before == text) return cell;
+  }
+  fs::create_directories(dir);
+  fs::remove(stamp);
+  bridge::RunContext sub = ctx;
+  sub.outdir = dir;
+  sub.case_file = source.generate;
+  sub.may_release_case = false;
+  const bridge::RunOutcome out = cellKind().run(doc, sub);
+  nlohmann::json summary = out.results;
+  summary["format"] = "gabion.summary/1";
+  summary["kind"] = "micro.cell";
+  summary["status"] = out.status == bridge::RunOutcome::Status::Ok ? "ok" : "numerical_failure";
+  summary["case_file"] = source.generate.string();
+  summary["case"] = doc.json();
+  bridge::writeJsonAtomic(dir / "summary.json", summary);
+  if (out.status != bridge::RunOutcome::Status::Ok)
+    throw bridge::NumericalError(0, 0.0, "generating the cell (" + dir.string() + "): " + out.message);
+  std::ofstream(stamp) << text;
+  return cell;
+}
+
+double QuasiStatic::ratio() const {
+  if (work_.empty()) return NAN;
+  const double final_work = work_.back();
+  double worst = 0.0;
+  bool any = false;
+  for (std::size_t k = 0; k < work_.size(); ++k)
+    if (work_[k] > 0.1 * final_work && work_[k] > 0.0) worst = std::max(worst, kinetic_[k] / work_[k]), any = true;
+  return any ? worst : NAN;
+}
+
+namespace {
+
+// Runs job(k) for k = 0 .. n-1 on up to `threads` threads (the calling one
+// included), each k claimed by whichever thread comes free first.
+template <class Job>
+void parallelFor(std::size_t n, int threads, const Job& job) {
+  std::atomic<std::size_t> next{0};
+  const auto worker = [&](bool first) {
+    for (std::size_t k; (k = next++) < n;) job(k, first);
+  };
+  std::vector<std::thread> pool;
+  const std::size_t workers = std::min<std::size_t>(n, static_cast<std::size_t>(std::max(1, threads)));
+  for (std::size_t w = 1; w < workers; ++w) pool.emplace_back(worker, false);
+  worker(true);
+  for (std::thread& t : pool) t.join();
+}
+
+nlohmann::json scatterOf(const std::vector<double>& v) {
+  double mean = 0.0, var = 0.0;
+  for (const double x : v) mean += x / static_cast<double>(v.size());
+  for (const double x : v) var += (x - mean) * (x - mean);
+  const double sd = v.size() > 1 ? std::sqrt(var / static_cast<double>(v.size() - 1)) : 0.0;
+  const auto [mn, mx] = std::minmax_element(v.begin(), v.end());
+  return {{"mean", mean}, {"std", sd}, {"min", *mn}, {"max", *mx}, {"count", v.size()},
+          {"cv", mean != 0.0 ? sd / std::fabs(mean) : 0.0}};
+}
+
+}  // namespace
+
+bridge::RunOutcome runReplicates(const LabSetup& setup, const bridge::RunContext& ctx, const std::string& label,
+                                 const std::vector<std::string>& variants, const TestRun& test,
+                                 const std::vector<std::string>& scatter_keys) {
+  const std::size_t nr = setup.cells.size(), nv = variants.size(), n = nr * nv;
+  // The cells: generated first where they come from a case (in parallel),
+  // each once whatever the number of variants.
+  std::vector<fs::path> files(nr);
+  std::vector<std::string> errors(n);
+  std::vector<std::string> cell_errors(nr);
+  parallelFor(nr, nr > 1 ? ctx.threads : 1, [&](std::size_t k, bool first) {
+    const CellSource& c = setup.cells[k];
+    if (c.generate.empty()) {
+      files[k] = c.file;
+      return;
+    }
+    bridge::RunContext rc = ctx;
+    rc.threads = nr > 1 ? 1 : ctx.threads;
+    rc.progress = first && ctx.progress;
+    const std::string name = nr > 1 || c.seed ? "cell_seed" + std::to_string(*c.seed) : "cell";
+    try {
+      files[k] = generateCell(c, ctx.outdir / name, rc);
+    } catch (const std::exception& e) {  // (a thread must not throw; the case was checked before)
+      cell_errors[k] = e.what();
+    }
+  });
+  std::vector<bridge::RunOutcome> outs(n);
+  const auto folder = [&](std::size_t j) {
+    std::string f = nv > 1 ? variants[j % nv] : "";
+    if (nr > 1) f += (f.empty() ? "" : "_") + std::string("replicate_") + std::to_string(j / nv);
+    return f;
+  };
+  const auto one = [&](std::size_t j, const bridge::RunContext& rc) {
+    const std::size_t k = j / nv;
+    if (!cell_errors[k].empty()) {
+      outs[j].status = bridge::RunOutcome::Status::NumericalFailure;
+      outs[j].message = cell_errors[k];
+      return;
+    }
+    fs::create_directories(rc.outdir);
+    const Sample sample = loadSample(files[k], setup);
+    try {
+      outs[j] = test(sample, j % nv, rc);
+    } catch (const bridge::NumericalError& e) {
+      outs[j].status = bridge::RunOutcome::Status::NumericalFailure;
+      outs[j].message = e.what();
+    }
+    outs[j].results["cell_file"] = files[k].string();
+    if (setup.cells[k].seed) outs[j].results["cell_seed"] = *setup.cells[k].seed;
+  };
+  if (n == 1) {
+    one(0, ctx);
+    return outs[0];
+  }
+  // Several runs in parallel, one engine thread each; every one writes its own folder.
+  parallelFor(n, ctx.threads, [&](std::size_t j, bool first) {
+    bridge::RunContext rc = ctx;
+    rc.threads = 1;
+    rc.progress = first && ctx.progress;
+    rc.outdir = ctx.outdir / folder(j);
+    try {
+      one(j, rc);
+    } catch (const std::exception& e) {
+      errors[j] = e.what();
+      return;
+    }
+    nlohmann::json summary = outs[j].results;
+    summary["format"] = "gabion.summary/1";
+    summary["kind"] = label;
+    summary["status"] = outs[j].status == bridge::RunOutcome::Status::Ok ? "ok" : "numerical_failure";
+    if (!outs[j].message.empty()) summary["message"] = outs[j].message;
+    bridge::writeJsonAtomic(rc.outdir / "summary.json", summary);
+  });
+
+  bridge::RunOutcome out;
+  nlohmann::json list = nlohmann::json::array();
+  std::string failures;
+  for (std::size_t j = 0; j < n; ++j) {
+    nlohmann::json r = {{"folder", folder(j)}, {"variant", variants[j % nv]}, {"replicate", j / nv}};
+    const std::string message = !errors[j].empty() ? errors[j] : outs[j].message;
+    if (!errors[j].empty() || outs[j].status != bridge::RunOutcome::Status::Ok) {
+      r["status"] = errors[j].empty() ? "numerical_failure" : "error";
+      r["message"] = message;
+      failures += folder(j) + ": " + message + "; ";
+    } else {
+      r["status"] = "ok";
+      for (const std::string& key : scatter_keys)
+        if (outs[j].results.contains(key)) r[key] = outs[j].results[key];
+    }
+    if (outs[j].results.contains("cell_seed")) r["cell_seed"] = outs[j].results["cell_seed"];
+    list.push_back(r);
+  }
+  out.results["runs"] = list;
+  // The scatter of each headline value over each variant's replicates.
+  nlohmann::json scatter = nlohmann::json::object();
+  std::ostringstream report;
+  report.precision(4);
+  report << label << ": " << nv << (nv == 1 ? " variant" : " variants") << " x " << nr
+         << (nr == 1 ? " cell" : " replicate cells") << "\n";
+  for (std::size_t v = 0; v < nv; ++v) {
+    nlohmann::json per = nlohmann::json::object();
+    for (const std::string& key : scatter_keys) {
+      std::vector<double> x;
+      for (std::size_t k = 0; k < nr; ++k) {
+        const nlohmann::json& r = list[k * nv + v];
+        if (r.contains(key) && r[key].is_number()) x.push_back(r[key].get<double>());
+      }
+      if (x.empty()) continue;
+      per[key] = scatterOf(x);
+      report << "  " << (nv > 1 ? variants[v] + " " : "") << key << ": " << per[key]["mean"].get<double>();
+      if (nr > 1) report << " +- " << per[key]["std"].get<double>() << " (" << x.size() << " cells)";
+      report << "\n";
+    }
+    scatter[variants[v]] = per;
+  }
+  out.results["scatter"] = scatter;
+  out.report = report.str();
+  if (!failures.empty()) {
+    out.status = bridge::RunOutcome::Status::NumericalFailure;
+    out.message = failures;
+  }
+  return out;
+}
+
+}  // namespace gabion::micro::lab

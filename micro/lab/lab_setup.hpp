@@ -1,0 +1,115 @@
+#pragma once
+/// \file
+/// What every virtual lab test of a cell shares (docs/lab.md): where its
+/// cell comes from (a cell file, or a micro.cell case generated first), the
+/// changes it makes to the cell's materials, the rig's plates, the netting's
+/// mass scaling, replicates on cells of different seeds run in parallel
+/// with their scatter, and the measures every test reports (how quasi-static
+/// it stayed).
+#include <cstdint>
+#include <filesystem>
+#include <functional>
+#include <nlohmann/json.hpp>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "bridge/json_reader.hpp"
+#include "bridge/run.hpp"
+#include "micro/scene.hpp"
+
+namespace gabion::micro::lab {
+
+/// Where one replicate's cell comes from.
+struct CellSource {
+  std::filesystem::path file;      ///< a cell file (gabion.cell/2) to start from, or
+  std::filesystem::path generate;  ///< a micro.cell case, generated first into OUTDIR/cell[_<seed>]
+  std::optional<std::uint64_t> seed;  ///< the generated cell's seed (absent: the case's own)
+  double edge_m = 0.0;                ///< the cell's edge as its case gives it (generated cells; for checks)
+};
+
+/// A change to one of the cell's materials (`"materials": {"rock": {...}}`):
+/// the keys given replace the file's values.
+struct MaterialChange {
+  std::string name, pointer;
+  std::optional<double> normal_stiffness_N_m, shear_stiffness_N_m, friction, normal_force_limit_N, local_damping,
+      viscous_damping_ratio;
+  void applyTo(Material& m) const;
+};
+
+/// Reads a material change: any of normal_stiffness_N_m, shear_stiffness_N_m,
+/// friction, normal_force_limit_N, local_damping, viscous_damping_ratio.
+MaterialChange parseMaterialChange(const std::string& name, const bridge::JsonReader& r);
+
+/// The keys every lab test shares (docs/lab.md, Common keys).
+struct LabSetup {
+  std::string file;                     ///< the case file, for messages
+  std::vector<CellSource> cells;        ///< one per replicate
+  std::vector<MaterialChange> changes;  ///< to the cell's materials
+  MaterialChange plates;                ///< to the rig's plates (by default the cell's formwork material, frictionless)
+  double netting_mass_scale = 1.0;      ///< inertia scaling of the netting's nodes (>= 1)
+  Vec3 gravity = Vec3(0, 0, -9.81);
+  RunSpec run;
+  bool duration_given = false;  ///< run.duration_s given (else the test sets it from its loading)
+};
+
+/// Reads "cell", "replicates", "materials", "plates", "netting_mass_scale",
+/// "gravity_m_s2" and "run" (duration default_duration_s, series every
+/// default_series_s unless given).
+LabSetup parseLabSetup(const bridge::JsonReader& root, double default_mass_scale, double default_duration_s,
+                       double default_series_s);
+
+/// One cell, ready for a test: its bodies, links and materials (with the
+/// test's changes), the rig's plate material, and where its bodies reach.
+struct Sample {
+  Scene scene;  ///< the cell's bodies and links, the setup's gravity and run; no walls
+  int plate_material = 0, rock_material = 0, netting_material = -1;
+  Vec3 lo = Vec3::Zero(), hi = Vec3::Zero();  ///< extent of every body, radii included (m)
+  double mass_kg = 0.0;                       ///< blocks and free spheres
+  std::size_t netting_nodes = 0;              ///< spheres of the netting (those links join)
+  nlohmann::json cell_summary;                ///< what the run that made the cell reported
+  std::filesystem::path cell_file;
+};
+
+/// Loads a cell file for a test. Errors (a missing, foreign or damaged file,
+/// a material change naming a material the cell does not have) are
+/// InputErrors naming the case file and field, or the cell file.
+Sample loadSample(const std::filesystem::path& cell_file, const LabSetup& setup);
+
+/// Checks what can be checked before anything runs: every cell file loads,
+/// every cell case passes its own check. Returns the first cell's edge (m).
+double checkCells(const LabSetup& setup);
+
+/// Generates the cell of `source` into `dir` (micro.cell), unless `dir`
+/// already holds the cell of the same case and seed. Returns its cell file.
+/// Throws NumericalError when the generation failed.
+std::filesystem::path generateCell(const CellSource& source, const std::filesystem::path& dir,
+                                   const bridge::RunContext& ctx);
+
+/// How far a test stayed from quasi-static: the largest ratio of the kinetic
+/// energy to the work done on the sample, once that work exceeds a tenth of
+/// its final value (before, both are at the scale of the cell's own rest).
+class QuasiStatic {
+ public:
+  void add(double kinetic_J, double work_J) { kinetic_.push_back(kinetic_J), work_.push_back(work_J); }
+  double ratio() const;
+
+ private:
+  std::vector<double> kinetic_, work_;
+};
+
+/// One run of a test: builds its scene from the sample for `variant` (e.g.
+/// one impact velocity of several) and runs it into ctx.outdir.
+using TestRun = std::function<bridge::RunOutcome(const Sample&, std::size_t variant, const bridge::RunContext&)>;
+
+/// Runs a test for every variant (names, e.g. "v20") on every replicate's
+/// cell (cells from a case are generated first, in parallel). One run goes
+/// into ctx.outdir; several into ctx.outdir/<variant>[_replicate_<k>], in
+/// parallel (a thread each, up to ctx.threads), each with its summary.json,
+/// and the summary lists them with the mean, standard deviation and range
+/// of each of `scatter_keys` over the replicates of each variant.
+bridge::RunOutcome runReplicates(const LabSetup& setup, const bridge::RunContext& ctx, const std::string& label,
+                                 const std::vector<std::string>& variants, const TestRun& test,
+                                 const std::vector<std::string>& scatter_keys);
+
+}  // namespace gabion::micro::lab

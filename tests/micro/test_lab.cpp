@@ -1,0 +1,218 @@
+// The virtual lab tests of a cell (micro/lab/, docs/lab.md): the force-drop
+// detector on curves whose drops are known; CC, UC, UCI and shear run end to
+// end on a small generated cell and obey the balances they must (the base
+// carries the lid's force and the cell's weight; the boulder's lost
+// momentum is the impulse of the force on it); replicates give a scatter;
+// bad input names its field before anything runs.
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <fstream>
+#include <nlohmann/json.hpp>
+#include <string>
+
+#include "../support/run_gabion.hpp"
+#include "bridge/output.hpp"
+#include "micro/lab/force_drops.hpp"
+
+namespace {
+
+using gabion::micro::lab::forceDrops;
+using gabion::testing::runGabion;
+using gabion::testing::scratchDir;
+using gabion::testing::writeFile;
+
+nlohmann::json summaryOf(const std::filesystem::path& dir) {
+  std::ifstream in(dir / "summary.json");
+  return nlohmann::json::parse(in);
+}
+
+// A force rising at 10 kN/s with 1 % chatter, a sudden fall of 30 % within
+// 4 ms at t = 0.5 s, and a slow fall of 30 % over 0.2 s from t = 1 s.
+TEST(LabForceDrops, FindsTheSuddenDropAndNotTheSlowSoftening) {
+  std::vector<double> t, u, f;
+  for (int k = 0; k <= 1500; ++k) {
+    const double time = 1e-3 * k;
+    double force = 10000.0 * time;
+    if (time > 0.5) force -= 0.3 * 5000.0 * std::min(1.0, (time - 0.5) / 0.004);
+    if (time > 1.0) force -= 0.3 * force * std::min(1.0, (time - 1.0) / 0.2);
+    force *= 1.0 + 0.01 * std::sin(2.0 * k);  // chatter, well below the 5 % threshold
+    t.push_back(time), u.push_back(0.1 * time), f.push_back(force);
+  }
+  const auto drops = forceDrops(t, u, f, 0.05, 0.02, 100.0);
+  ASSERT_EQ(drops.size(), 1u);
+  EXPECT_NEAR(drops[0].time_s, 0.5, 0.003);
+  EXPECT_NEAR(drops[0].displacement_m, 0.05, 0.0003);
+  // 1500 N fell, to within the chatter (1 % of 5 kN on either side).
+  EXPECT_NEAR(drops[0].size_N(), 1500.0, 120.0);
+  // The chatter alone is no drop; nor a drop below the least force.
+  EXPECT_TRUE(forceDrops(t, u, f, 0.05, 0.02, 2000.0).empty());
+}
+
+// The 0.3 m cell of tests/micro/test_cell.cpp with short stages: about 45
+// blocks of 60-90 mm in a netting basket.
+std::string smallCell() {
+  return R"({"format": "gabion.case/1", "kind": "micro.cell", "edge_m": 0.3, "seed": 3,
+ "rock": {"density_kg_m3": 2600, "normal_stiffness_N_m": 1e6, "shear_stiffness_N_m": 2.5e5, "friction": 0.5,
+          "local_damping": 0.1, "viscous_damping_ratio": 0.1},
+ "blocks": {"grading": {"sieve_m": [0.06, 0.075, 0.09], "passing_percent": [0, 50, 100]}},
+ "netting": {"contact": {"normal_stiffness_N_m": 1e6, "shear_stiffness_N_m": 2.5e5, "friction": 0.5, "local_damping": 0.1}},
+ "fill": {"max_duration_s": 0.35, "friction": 0.1},
+ "vibration": {"max_duration_s": 0.1, "check_interval_s": 0.05},
+ "closing": {"max_duration_s": 0.1},
+ "standing": {"max_duration_s": 0.1},
+ "run": {"output_interval_s": 0.05, "series_interval_s": 0.005}})";
+}
+
+std::string labCase(const std::string& kind, const std::string& rest) {
+  return R"({"format": "gabion.case/1", "kind": ")" + kind + R"(", "cell": "cell/cell.h5")" + rest + "}";
+}
+
+TEST(MicroLab, TheFourTestsRunOnASmallCellAndKeepTheirBalances) {
+  const auto dir = scratchDir("lab_four");
+  writeFile(dir / "cell.json", smallCell());
+  const auto g = runGabion("run -q " + (dir / "cell.json").string() + " -o " + (dir / "cell").string());
+  ASSERT_EQ(g.exit_code, 0) << g.output;
+
+  // A change to a material the cell does not have is named.
+  writeFile(dir / "granite.json", labCase("micro.cc", R"(, "materials": {"granite": {"friction": 0.3}})"));
+  const auto bad = runGabion("check " + (dir / "granite.json").string());
+  EXPECT_EQ(bad.exit_code, 2) << bad.output;
+  EXPECT_NE(bad.output.find("/materials/granite"), std::string::npos) << bad.output;
+
+  // CC to 10 % with one unloading at 5 %.
+  writeFile(dir / "cc.json",
+            labCase("micro.cc", R"(, "loading": {"velocity_m_s": 0.1, "strain": 0.1, "unload_at_strain": [0.05]})"));
+  const auto cc = runGabion("run -q " + (dir / "cc.json").string() + " -o " + (dir / "cc").string());
+  ASSERT_EQ(cc.exit_code, 0) << cc.output;
+  {
+    const nlohmann::json r = summaryOf(dir / "cc");
+    EXPECT_TRUE(r["reached_strain"].get<bool>());
+    EXPECT_NEAR(r["final_strain"].get<double>(), 0.1, 0.005);
+    const double kl = r["lateral_reaction_coefficient"].get<double>();
+    EXPECT_GT(kl, 0.0);
+    EXPECT_LT(kl, 1.0);
+    // The unloading branch is stiffer than the loading secant (elastic
+    // unloading of a packing that yielded on the way).
+    ASSERT_EQ(r["cycles"].size(), 1u);
+    const nlohmann::json& cy = r["cycles"][0];
+    EXPECT_GT(cy["unloading_stiffness_N_m"].get<double>(), cy["force_N"].get<double>() / cy["displacement_m"].get<double>());
+    EXPECT_LT(std::fabs(r["energy"]["balance_rel_error"].get<double>()), 0.01);
+    // Vertical balance at the end, the lateral plates frictionless: the base
+    // carries the lid's force and the cell's weight, to within the cell's
+    // inertia (a kinetic/work ratio of a few per cent).
+    const gabion::bridge::H5Reader h(dir / "cc" / "result.h5");
+    const auto lid = h.read("/curves/axial/force_N"), base = h.read("/curves/axial/base_force_N");
+    const double weight = 9.81 * r["mass_kg"].get<double>();
+    EXPECT_NEAR(base.back() - lid.back(), weight, 0.05 * lid.back()) << "lid " << lid.back() << ", base " << base.back();
+    EXPECT_EQ(h.read("/curves/lateral/axial_force_N"), lid);
+    EXPECT_TRUE(std::filesystem::exists(dir / "cc" / "cc_curve.png"));
+  }
+
+  // UC to 10 %.
+  writeFile(dir / "uc.json", labCase("micro.uc", R"(, "loading": {"velocity_m_s": 0.2, "strain": 0.1})"));
+  const auto uc = runGabion("run -q " + (dir / "uc.json").string() + " -o " + (dir / "uc").string());
+  ASSERT_EQ(uc.exit_code, 0) << uc.output;
+  {
+    const nlohmann::json r = summaryOf(dir / "uc");
+    EXPECT_GT(r["peak_force_N"].get<double>(), 0.0);
+    EXPECT_TRUE(r["force_drops"].is_array());
+    EXPECT_EQ(r["drop_count"].get<std::size_t>(), r["force_drops"].size());
+    const gabion::bridge::H5Reader h(dir / "uc" / "result.h5");
+    EXPECT_FALSE(h.has("/curves/axial/force_N"));  // (a UC curve is not a CC curve for the fitting)
+    EXPECT_TRUE(h.has("/curves/uc/force_N"));
+  }
+
+  // UCI at 6 m/s: a 0.3 m boulder.
+  writeFile(dir / "uci.json", labCase("micro.uci", R"(, "velocity_m_s": 6, "boulder": {"diameter_m": 0.3})"));
+  const auto uci = runGabion("run -q " + (dir / "uci.json").string() + " -o " + (dir / "uci").string());
+  ASSERT_EQ(uci.exit_code, 0) << uci.output;
+  {
+    const nlohmann::json r = summaryOf(dir / "uci");
+    for (const char* key : {"peak_force_N", "peak_base_force_N", "max_penetration_m", "contact_duration_s",
+                            "rebound_velocity_m_s", "broken_links"})
+      ASSERT_TRUE(r.contains(key)) << key;
+    EXPECT_TRUE(r["touched"].get<bool>());
+    EXPECT_TRUE(r["impact_over"].get<bool>());
+    EXPECT_GT(r["max_penetration_m"].get<double>(), 0.0);
+    EXPECT_GT(r["contact_duration_s"].get<double>(), 0.0);
+    // The boulder's momentum: m (v_end - v_0) = integral of (F - m g) dt over
+    // the series (trapezoids at 0.1 ms; the force is the one each sample
+    // read, so the rule's error is of the order of the change within a sample).
+    const gabion::bridge::H5Reader h(dir / "uci" / "result.h5");
+    const auto t = h.read("/curves/impact/time_s"), f = h.read("/curves/impact/force_N"),
+               v = h.read("/curves/impact/boulder_velocity_m_s");
+    const double m = r["boulder_mass_kg"].get<double>();
+    double impulse = 0.0;
+    for (std::size_t k = 1; k < t.size(); ++k) impulse += 0.5 * (f[k] + f[k - 1] - 2.0 * m * 9.81) * (t[k] - t[k - 1]);
+    EXPECT_NEAR(m * (v.back() - v.front()), impulse, 0.03 * m * 6.0);
+  }
+
+  // Shear: 10 mm under 10 kPa.
+  writeFile(dir / "shear.json",
+            labCase("micro.shear", R"(, "shear": {"normal_stress_Pa": 10000, "displacement_m": 0.01, "velocity_m_s": 0.05})"));
+  const auto sh = runGabion("run -q " + (dir / "shear.json").string() + " -o " + (dir / "shear").string());
+  ASSERT_EQ(sh.exit_code, 0) << sh.output;
+  {
+    const nlohmann::json r = summaryOf(dir / "shear");
+    EXPECT_GT(r["friction_coefficient"].get<double>(), 0.0);
+    EXPECT_LT(r["friction_coefficient"].get<double>(), 2.0);
+    EXPECT_GT(r["tangential_stiffness_N_m"].get<double>(), 0.0);
+    // The servo held the normal load: the interface carries the lid's force
+    // and the upper cell's weight to within 10 %.
+    EXPECT_NEAR(r["mean_normal_force_N"].get<double>(), r["lid_force_N"].get<double>() + r["upper_cell_weight_N"].get<double>(),
+                0.1 * r["lid_force_N"].get<double>());
+  }
+}
+
+TEST(MicroLab, ReplicatesOnCellsOfDifferentSeedsGiveAScatter) {
+  const auto dir = scratchDir("lab_replicates");
+  writeFile(dir / "cell.json", smallCell());
+  writeFile(dir / "uc.json", R"({"format": "gabion.case/1", "kind": "micro.uc", "cell": {"case": "cell.json"},
+ "replicates": 2, "loading": {"velocity_m_s": 0.2, "strain": 0.05}})");
+  const auto r = runGabion("run -q --threads 2 " + (dir / "uc.json").string() + " -o " + (dir / "out").string());
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  const nlohmann::json s = summaryOf(dir / "out");
+  ASSERT_EQ(s["runs"].size(), 2u);
+  EXPECT_EQ(s["runs"][0]["cell_seed"], 3);
+  EXPECT_EQ(s["runs"][1]["cell_seed"], 4);
+  for (const char* d : {"cell_seed3", "cell_seed4", "replicate_0", "replicate_1"})
+    EXPECT_TRUE(std::filesystem::exists(dir / "out" / d / "summary.json")) << d;
+  const nlohmann::json& peak = s["scatter"]["test"]["peak_force_N"];
+  EXPECT_EQ(peak["count"], 2);
+  EXPECT_GT(peak["std"].get<double>(), 0.0);  // two packings, two curves
+  // Each replicate's cell is its seed's: not the same blocks.
+  const gabion::bridge::H5Reader a(dir / "out" / "cell_seed3" / "cell.h5"), b(dir / "out" / "cell_seed4" / "cell.h5");
+  EXPECT_NE(a.read("/blocks/position_m"), b.read("/blocks/position_m"));
+}
+
+TEST(MicroLab, BadInputIsNamedBeforeAnythingRuns) {
+  const auto dir = scratchDir("lab_bad");
+  writeFile(dir / "cell.json", smallCell());
+  const struct {
+    std::string name, text, pointer;
+  } cases[] = {
+      {"missing", labCase("micro.cc", ""), "/cell"},
+      {"case", R"({"format": "gabion.case/1", "kind": "micro.cc", "cell": {"case": "nowhere.json"}})", "/cell/case"},
+      {"replicates", R"({"format": "gabion.case/1", "kind": "micro.cc", "cell": "x.h5", "replicates": 3})",
+       "/replicates"},
+      {"cycles", labCase("micro.cc", R"(, "loading": {"strain": 0.1, "unload_at_strain": [0.2]})"),
+       "/loading/unload_at_strain"},
+      {"strain", labCase("micro.uc", R"(, "loading": {"strain": 0.9})"), "/loading/strain"},
+      {"boulder",
+       R"({"format": "gabion.case/1", "kind": "micro.uci", "cell": {"case": "cell.json"}, "boulder": {"diameter_m": 0.4}})",
+       "/boulder/diameter_m"},
+      {"velocity", labCase("micro.uci", R"(, "velocity_m_s": -3)"), "/velocity_m_s"},
+      {"stress", labCase("micro.shear", R"(, "shear": {"normal_stress_Pa": 5e6})"), "/shear/normal_stress_Pa"},
+      {"scale", labCase("micro.cc", R"(, "netting_mass_scale": 0.5)"), "/netting_mass_scale"},
+  };
+  for (const auto& c : cases) {
+    writeFile(dir / (c.name + ".json"), c.text);
+    const auto r = runGabion("run " + (dir / (c.name + ".json")).string() + " -o " + (dir / c.name).string());
+    EXPECT_EQ(r.exit_code, 2) << c.name << ": " << r.output;
+    EXPECT_NE(r.output.find(c.pointer), std::string::npos) << c.name << ": " << r.output;
+    EXPECT_FALSE(std::filesystem::exists(dir / c.name / "summary.json")) << c.name;
+  }
+}
+
+}  // namespace
