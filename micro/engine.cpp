@@ -27,9 +27,7 @@ std::vector<MassProperties> blockMassProperties(const Scene& scene) {
 // reach of the body from its centre (R for a sphere, I = 0.4 m R^2).
 double criticalStep(const Scene& scene, const std::vector<MassProperties>& block_props) {
   const std::size_t nmat = scene.materials.size();
-  std::vector<PairLaw> laws(nmat * nmat);
-  for (std::size_t a = 0; a < nmat; ++a)
-    for (std::size_t b = 0; b < nmat; ++b) laws[a * nmat + b] = mixMaterials(scene.materials[a], scene.materials[b]);
+  const std::vector<PairLaw> laws = pairLawTable(scene.materials, scene.contact_pairs);
   std::vector<bool> present(nmat, false);
   for (const auto& sp : scene.spheres) present[static_cast<std::size_t>(sp.material)] = true;
   for (const auto& b : scene.blocks) present[static_cast<std::size_t>(b.material)] = true;
@@ -75,7 +73,7 @@ double criticalTimeStep(const Scene& scene) {
 
 Engine::Engine(const Scene& scene, int threads) {
   validateScene(scene);
-  laws_ = MaterialLaws(scene.materials);
+  laws_ = MaterialLaws(scene.materials, scene.contact_pairs);
   gravity_ = scene.gravity_m_s2;
   max_overlap_ratio_ = scene.run.max_overlap_ratio;
   runaway_factor_ = scene.run.energy_runaway_factor;

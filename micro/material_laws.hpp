@@ -1,6 +1,7 @@
 #pragma once
 /// \file
-/// The contact laws of every pair of the scene's materials (mixMaterials),
+/// The contact laws of every pair of the scene's materials (mixMaterials and
+/// the scene's contact pairs),
 /// as a table of PairLaw and as flat arrays that the vector kernels gather
 /// from, with the rare features any of them uses: the kernels are compiled
 /// without the others (a case pays only for what it uses).
@@ -13,6 +14,27 @@
 
 namespace gabion::micro {
 
+/// The laws of every pair of materials (nmat x nmat, row-major): the mixing
+/// rule (mixMaterials), then each contact pair's given values, both orders.
+inline std::vector<PairLaw> pairLawTable(const std::vector<Material>& materials,
+                                         const std::vector<ContactPair>& pairs = {}) {
+  const std::size_t n = materials.size();
+  std::vector<PairLaw> table(n * n);
+  for (std::size_t a = 0; a < n; ++a)
+    for (std::size_t b = 0; b < n; ++b) table[a * n + b] = mixMaterials(materials[a], materials[b]);
+  for (const ContactPair& p : pairs)
+    for (const std::size_t k : {static_cast<std::size_t>(p.a) * n + static_cast<std::size_t>(p.b),
+                                static_cast<std::size_t>(p.b) * n + static_cast<std::size_t>(p.a)}) {
+      PairLaw& l = table[k];
+      if (p.normal_stiffness_N_m) l.normal.stiffness_N_m = *p.normal_stiffness_N_m;
+      if (p.shear_stiffness_N_m) l.tangential.stiffness_N_m = *p.shear_stiffness_N_m;
+      if (p.friction) l.tangential.friction = *p.friction;
+      if (p.normal_force_limit_N) l.normal.force_limit_N = *p.normal_force_limit_N;
+      if (p.viscous_damping_ratio) l.damping_ratio = *p.viscous_damping_ratio;
+    }
+  return table;
+}
+
 struct MaterialLaws {
   std::size_t nmat = 0;
   std::vector<PairLaw> pair;                      ///< nmat x nmat, row-major
@@ -22,10 +44,8 @@ struct MaterialLaws {
   bool uniform = false;  ///< every particle has one material: the kernels read law0 instead of gathering
   std::uint32_t law0 = 0;
 
-  explicit MaterialLaws(const std::vector<Material>& materials = {}) : nmat(materials.size()) {
-    pair.resize(nmat * nmat);
-    for (std::size_t a = 0; a < nmat; ++a)
-      for (std::size_t b = 0; b < nmat; ++b) pair[a * nmat + b] = mixMaterials(materials[a], materials[b]);
+  explicit MaterialLaws(const std::vector<Material>& materials = {}, const std::vector<ContactPair>& pairs = {})
+      : nmat(materials.size()), pair(pairLawTable(materials, pairs)) {
     for (const PairLaw& l : pair) {
       kn.push_back(l.normal.stiffness_N_m);
       flim.push_back(l.normal.force_limit_N);

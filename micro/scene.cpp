@@ -46,6 +46,48 @@ Material parseMaterial(const std::string& name, const JsonReader& r) {
   return m;
 }
 
+ContactPairInput parseContactPair(const JsonReader& r) {
+  ContactPairInput in;
+  in.file = r.file();
+  in.pointer = r.pointer();
+  const nlohmann::json& names = r.raw("materials");
+  if (!names.is_array() || names.size() != 2 || !names[0].is_string() || !names[1].is_string())
+    r.fail("materials", "expected the names of two materials, e.g. [\"rock\", \"netting\"]");
+  in.name_a = names[0].get<std::string>(), in.name_b = names[1].get<std::string>();
+  ContactPair& p = in.pair;
+  const auto opt = [&](const char* key, Check check, std::optional<double>& out) {
+    if (r.has(key)) out = r.number(key, check);
+  };
+  opt("normal_stiffness_N_m", Check::Positive, p.normal_stiffness_N_m);
+  opt("shear_stiffness_N_m", Check::Positive, p.shear_stiffness_N_m);
+  opt("friction", Check::NonNegative, p.friction);
+  opt("viscous_damping_ratio", Check::UnitOpen, p.viscous_damping_ratio);
+  if (r.has("normal_force_limit_N")) {
+    const nlohmann::json& v = r.raw("normal_force_limit_N");
+    if (v.is_string()) {
+      if (v.get<std::string>() != "none") r.fail("normal_force_limit_N", "a force (N) > 0, or \"none\" (no cap)");
+      p.normal_force_limit_N = std::numeric_limits<double>::infinity();
+    } else {
+      p.normal_force_limit_N = r.number("normal_force_limit_N", Check::Positive);
+    }
+  }
+  return in;
+}
+
+ContactPair resolveContactPair(const ContactPairInput& in, const std::vector<Material>& materials) {
+  ContactPair p = in.pair;
+  std::string known;
+  for (const Material& m : materials) known += (known.empty() ? "" : ", ") + m.name;
+  const auto index = [&](const std::string& name, int k) {
+    for (std::size_t m = 0; m < materials.size(); ++m)
+      if (materials[m].name == name) return static_cast<int>(m);
+    throw bridge::InputError(in.file, in.pointer + "/materials/" + std::to_string(k),
+                             "unknown material '" + name + "' (known: " + known + ")");
+  };
+  p.a = index(in.name_a, 0), p.b = index(in.name_b, 1);
+  return p;
+}
+
 RunSpec parseRun(const JsonReader& run, double default_duration_s) {
   RunSpec rs;
   rs.duration_s = default_duration_s > 0.0 ? run.number("duration_s", default_duration_s, Check::Positive)
@@ -274,6 +316,8 @@ Scene parseScene(const JsonReader& root) {
       s.no_contact_groups.emplace_back(static_cast<int>(g), static_cast<int>(h));
     }
   }
+  for (const JsonReader& r : root.objects("contact_pairs"))
+    s.contact_pairs.push_back(resolveContactPair(parseContactPair(r), s.materials));
   if (s.spheres.empty() && s.blocks.empty()) root.failHere("the scene has no spheres and no blocks");
 
   s.run = parseRun(root.object("run"));
@@ -421,6 +465,21 @@ void validateScene(const Scene& s, const std::string& file) {
   for (std::size_t k = 0; k < s.no_contact_groups.size(); ++k) {
     group(s.no_contact_groups[k].first, "/no_contact_groups/" + std::to_string(k) + "/0");
     group(s.no_contact_groups[k].second, "/no_contact_groups/" + std::to_string(k) + "/1");
+  }
+  for (std::size_t k = 0; k < s.contact_pairs.size(); ++k) {
+    const ContactPair& p = s.contact_pairs[k];
+    const std::string at_k = "/contact_pairs/" + std::to_string(k) + "/";
+    material(p.a, at_k + "materials/0");
+    material(p.b, at_k + "materials/1");
+    const auto positive = [&](const std::optional<double>& v, const char* key) {
+      if (v && !(*v > 0.0 && std::isfinite(*v))) fail(at_k + key, "must be > 0");
+    };
+    positive(p.normal_stiffness_N_m, "normal_stiffness_N_m");
+    positive(p.shear_stiffness_N_m, "shear_stiffness_N_m");
+    if (p.friction && !(*p.friction >= 0.0 && std::isfinite(*p.friction))) fail(at_k + "friction", "must be >= 0");
+    if (p.normal_force_limit_N && !(*p.normal_force_limit_N > 0.0)) fail(at_k + "normal_force_limit_N", "must be > 0");
+    if (p.viscous_damping_ratio && !(*p.viscous_damping_ratio >= 0.0 && *p.viscous_damping_ratio < 1.0))
+      fail(at_k + "viscous_damping_ratio", "must be in [0, 1)");
   }
   const RunSpec& rs = s.run;
   // (0: an engine built in code, stepped by its caller)

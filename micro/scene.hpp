@@ -7,6 +7,7 @@
 #include <Eigen/Core>
 #include <Eigen/Geometry>
 #include <limits>
+#include <optional>
 #include <string>
 #include <utility>
 #include <vector>
@@ -32,6 +33,33 @@ struct Material {
   double local_damping = 0.0;                                             ///< Cundall alpha (-), in [0, 1)
   double viscous_damping_ratio = 0.0;                                     ///< zeta, fraction of critical (-), in [0, 1)
 };
+
+/// The contact law of one pair of materials, given in place of what the
+/// mixing rule makes of them (`contact_pairs` of a scene; docs/micro.md): each
+/// value given replaces the mixed one; a normal force limit of infinity
+/// removes the cap. (A cap on the rock's own contacts, its crushing, that
+/// the wires pressing on it do not take: rock with netting, uncapped.)
+struct ContactPair {
+  int a = 0, b = 0;  ///< material indices (either order)
+  std::optional<double> normal_stiffness_N_m, shear_stiffness_N_m, friction, normal_force_limit_N,
+      viscous_damping_ratio;
+};
+
+/// A `contact_pairs` entry as read: its two material names, where it is
+/// (file, JSON pointer), and its values (pair.a and pair.b not yet set).
+struct ContactPairInput {
+  std::string name_a, name_b, file, pointer;
+  ContactPair pair;
+};
+
+/// Reads one entry: {"materials": ["rock", "netting"], and any of
+/// normal_stiffness_N_m, shear_stiffness_N_m, friction, normal_force_limit_N
+/// (a number, or "none"), viscous_damping_ratio}.
+ContactPairInput parseContactPair(const bridge::JsonReader& r);
+
+/// Sets the entry's material indices from the names of `materials`; an
+/// unknown name is an InputError naming the entry's file and pointer.
+ContactPair resolveContactPair(const ContactPairInput& in, const std::vector<Material>& materials);
 
 /// A free sphere.
 struct SphereSpec {
@@ -170,6 +198,8 @@ struct Scene {
   std::vector<LinkSpec> links;
   /// Pairs of contact groups whose particles never touch.
   std::vector<std::pair<int, int>> no_contact_groups;
+  /// Laws given for pairs of materials in place of the mixing rule's.
+  std::vector<ContactPair> contact_pairs;
   RunSpec run;
   PorosityBox porosity;
   /// Write the final state as OUTDIR/cell.h5 (micro/cell/cell_file.hpp).

@@ -22,8 +22,8 @@ using bridge::JsonReader;
 struct CompressionCase {
   bool confined = true;  // micro.cc (six walls) or micro.uc (two plates)
   LabSetup setup;
-  double velocity_m_s = 0.1;  // of the lid
-  double strain = 0.15;       // the lid's travel over the sample's height
+  double velocity_m_s = 0.1;      // of the lid
+  double strain = 0.15;           // the lid's travel over the sample's height
   std::vector<double> unload_at;  // strains where the lid reverses
   double unload_to = 0.1;         // ... until the force is this fraction of the force there
   double max_kinetic_ratio = 0.01;
@@ -40,7 +40,7 @@ CompressionCase parseCase(const bridge::JsonDocument& doc, bool confined) {
     c.strain = l->number("strain", c.strain, Check::Positive);
     if (c.strain > 0.6) l->fail("strain", "must be <= 0.6 (the lid's travel over the cell's height)");
     if (l->has("unload_at_strain")) {
-      c.unload_at = l->numbers("unload_at_strain", Check::Positive);
+      c.unload_at = l->numbers("unload_at_strain", Check::Positive, 0);
       for (std::size_t k = 0; k < c.unload_at.size(); ++k)
         if (c.unload_at[k] >= c.strain || (k > 0 && c.unload_at[k] <= c.unload_at[k - 1]))
           l->fail("unload_at_strain", "must increase, and stay below the final strain " + std::to_string(c.strain));
@@ -114,22 +114,37 @@ double slopeThroughOrigin(const std::vector<double>& x, const std::vector<double
   return xx > 0.0 ? xy / xx : NAN;
 }
 
-// The exponent b of F = a u^b over the loading branch where u is between a
-// fifth of its largest value and that value (log-log least squares): near 1
-// for a quasi-linear curve, above 1 for a convex one.
-double powerLawExponent(const std::vector<double>& u, const std::vector<double>& f) {
-  double umax = 0.0;
-  for (const double x : u) umax = std::max(umax, x);
-  double sx = 0, sy = 0, sxx = 0, sxy = 0, n = 0, reached = 0.0;
-  for (std::size_t k = 0; k < u.size(); ++k) {
-    if (u[k] < reached) continue;  // (unloading and reloading: the first loading only)
-    reached = u[k];
-    if (u[k] < 0.2 * umax || !(f[k] > 0.0)) continue;
-    const double x = std::log(u[k]), y = std::log(f[k]);
+// The shape of the first loading: the seating displacement u_s, where the
+// force first reaches 2 % of its largest value (the lid taking up the slack
+// of the netting over the fill), and the exponent b of F = a (u - u_s)^b
+// where u - u_s is between a fifth of its largest value and that value
+// (log-log least squares): near 1 for a quasi-linear curve, above 1 for a
+// convex one.
+struct CurveShape {
+  double seating_m = NAN, exponent = NAN;
+};
+
+CurveShape curveShape(const std::vector<double>& u, const std::vector<double>& f) {
+  std::vector<double> lu, lf;  // the first loading (u while it increases)
+  for (std::size_t k = 0; k < u.size() && (k == 0 || u[k] >= u[k - 1]); ++k) lu.push_back(u[k]), lf.push_back(f[k]);
+  CurveShape out;
+  double fmax = 0.0;
+  for (const double x : lf) fmax = std::max(fmax, x);
+  std::size_t seat = 0;
+  while (seat < lf.size() && lf[seat] < 0.02 * fmax) ++seat;
+  if (seat >= lf.size()) return out;
+  out.seating_m = lu[seat];
+  const double span = lu.back() - lu[seat];
+  double sx = 0, sy = 0, sxx = 0, sxy = 0, n = 0;
+  for (std::size_t k = seat; k < lu.size(); ++k) {
+    const double d = lu[k] - lu[seat];
+    if (d < 0.2 * span || !(lf[k] > 0.0)) continue;
+    const double x = std::log(d), y = std::log(lf[k]);
     sx += x, sy += y, sxx += x * x, sxy += x * y, n += 1;
   }
-  const double d = n * sxx - sx * sx;
-  return n >= 3 && d > 0.0 ? (n * sxy - sx * sy) / d : NAN;
+  const double det = n * sxx - sx * sx;
+  if (n >= 3 && det > 0.0) out.exponent = (n * sxy - sx * sy) / det;
+  return out;
 }
 
 bridge::RunOutcome runOne(const CompressionCase& c, const Sample& sample, const bridge::RunContext& ctx,
@@ -223,7 +238,9 @@ bridge::RunOutcome runOne(const CompressionCase& c, const Sample& sample, const 
   r["final_strain"] = cv.displacement.back() / height;
   r["final_force_N"] = cv.force.back();
   r["secant_stiffness_N_m"] = cv.displacement.back() > 0.0 ? cv.force.back() / cv.displacement.back() : NAN;
-  r["power_law_exponent"] = powerLawExponent(cv.displacement, cv.force);
+  const CurveShape shape = curveShape(cv.displacement, cv.force);
+  r["seating_displacement_m"] = shape.seating_m;
+  r["power_law_exponent"] = shape.exponent;
   r["kinetic_to_work_ratio"] = ratio;
   r["quasi_static"] = ratio <= c.max_kinetic_ratio;
   r["reached_strain"] = out.results["ended_by"] == "test";
@@ -238,7 +255,8 @@ bridge::RunOutcome runOne(const CompressionCase& c, const Sample& sample, const 
     std::vector<double> fa, fl;
     double reached = 0.0;
     for (std::size_t k = 0; k < cv.force.size(); ++k)
-      if (cv.displacement[k] >= reached) reached = cv.displacement[k], fa.push_back(cv.force[k]), fl.push_back(cv.lateral[k]);
+      if (cv.displacement[k] >= reached)
+        reached = cv.displacement[k], fa.push_back(cv.force[k]), fl.push_back(cv.lateral[k]);
     r["lateral_reaction_coefficient"] = slopeThroughOrigin(fa, fl);
     nlohmann::json cy = nlohmann::json::array();
     for (const Cycle& k : cycles)
@@ -278,7 +296,8 @@ bridge::RunOutcome runOne(const CompressionCase& c, const Sample& sample, const 
     if (!c.confined && !r["force_drops"].empty()) {
       bridge::PlotSeries d{"force drops", {}, {}, bridge::PlotSeries::Style::Markers};
       for (const auto& x : r["force_drops"])
-        d.x.push_back(1000.0 * x["displacement_m"].get<double>()), d.y.push_back(1e-3 * x["force_before_N"].get<double>());
+        d.x.push_back(1000.0 * x["displacement_m"].get<double>()),
+            d.y.push_back(1e-3 * x["force_before_N"].get<double>());
       plot.series.push_back(d);
     }
     bridge::writePlotPng(ctx.outdir / (c.confined ? "cc_curve.png" : "uc_curve.png"), plot);
@@ -289,7 +308,8 @@ bridge::RunOutcome runOne(const CompressionCase& c, const Sample& sample, const 
     plot.x_label = "axial force (kN)";
     plot.y_label = "lateral force (kN)";
     bridge::PlotSeries s{"mean of the four lateral walls", {}, {}, bridge::PlotSeries::Style::Line};
-    for (std::size_t k = 0; k < cv.force.size(); ++k) s.x.push_back(1e-3 * cv.force[k]), s.y.push_back(1e-3 * cv.lateral[k]);
+    for (std::size_t k = 0; k < cv.force.size(); ++k)
+      s.x.push_back(1e-3 * cv.force[k]), s.y.push_back(1e-3 * cv.lateral[k]);
     plot.series.push_back(s);
     const double kr = r["lateral_reaction_coefficient"].get<double>();
     double fmax = 0.0;
@@ -305,8 +325,10 @@ bridge::RunOutcome runOne(const CompressionCase& c, const Sample& sample, const 
   rep << hooks.label << ": peak " << r["peak_force_N"].get<double>() << " N at "
       << 1000.0 * r["displacement_at_peak_m"].get<double>() << " mm; final strain " << r["final_strain"].get<double>()
       << ", force " << r["final_force_N"].get<double>() << " N";
-  if (c.confined) rep << "; lateral reaction coefficient " << r["lateral_reaction_coefficient"].get<double>();
-  else rep << "; " << r["drop_count"].get<std::size_t>() << " force drops";
+  if (c.confined)
+    rep << "; lateral reaction coefficient " << r["lateral_reaction_coefficient"].get<double>();
+  else
+    rep << "; " << r["drop_count"].get<std::size_t>() << " force drops";
   rep << "; kinetic/work " << ratio << (r["quasi_static"].get<bool>() ? " (quasi-static)" : " (NOT quasi-static)")
       << "\n";
   out.report = rep.str() + out.report;
@@ -321,10 +343,10 @@ bridge::RunOutcome run(const bridge::JsonDocument& doc, const bridge::RunContext
   const CompressionCase c = parseCase(doc, confined);
   const std::string file = doc.file();
   const std::vector<std::string> keys =
-      confined ? std::vector<std::string>{"peak_force_N", "final_force_N", "secant_stiffness_N_m",
-                                          "lateral_reaction_coefficient", "kinetic_to_work_ratio"}
-               : std::vector<std::string>{"peak_force_N", "displacement_at_peak_m", "drop_count",
-                                          "kinetic_to_work_ratio"};
+      confined
+          ? std::vector<std::string>{"peak_force_N", "final_force_N", "secant_stiffness_N_m",
+                                     "lateral_reaction_coefficient", "kinetic_to_work_ratio"}
+          : std::vector<std::string>{"peak_force_N", "displacement_at_peak_m", "drop_count", "kinetic_to_work_ratio"};
   return runReplicates(
       c.setup, ctx, confined ? "micro.cc" : "micro.uc", {"test"},
       [&](const Sample& s, std::size_t, const bridge::RunContext& rc) { return runOne(c, s, rc, file); }, keys);
@@ -333,8 +355,7 @@ bridge::RunOutcome run(const bridge::JsonDocument& doc, const bridge::RunContext
 }  // namespace
 
 bridge::CaseKind confinedCompressionKind() {
-  return {"micro.cc",
-          "confined compression of a cell between six rigid walls, the lid driven down (docs/lab.md)",
+  return {"micro.cc", "confined compression of a cell between six rigid walls, the lid driven down (docs/lab.md)",
           [](const bridge::JsonDocument& d) { check(d, true); },
           [](const bridge::JsonDocument& d, const bridge::RunContext& ctx) { return run(d, ctx, true); }};
 }

@@ -21,8 +21,10 @@ std::vector<ForceDrop> forceDrops(const std::vector<double>& t, const std::vecto
     // lowest is a window old.
     std::size_t low = k;
     for (std::size_t j = k + 1; j < n; ++j) {
-      if (f[j] < f[low]) low = j;
-      else if (f[j] - f[low] > 0.5 * min_fraction * f[peak] || t[j] - t[low] > window_s) break;
+      if (f[j] < f[low])
+        low = j;
+      else if (f[j] - f[low] > 0.5 * min_fraction * f[peak] || t[j] - t[low] > window_s)
+        break;
     }
     out.push_back({t[peak], u[peak], f[peak], f[low]});
     from = low;

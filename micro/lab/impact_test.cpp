@@ -180,6 +180,10 @@ bridge::RunOutcome runOne(const ImpactCase& c, const Sample& sample, double v0, 
     h5.write("/curves/impact/velocity_m_s", std::vector<double>{v0}, "m/s");
   };
   bridge::RunOutcome out = runScene(std::move(pl.scene), file, ctx, hooks);
+  if (out.status != bridge::RunOutcome::Status::Ok && out.message.find("overlap") != std::string::npos)
+    out.message +=
+        " (the boulder crushes what it meets at this contact stiffness: docs/lab.md, Impact velocity "
+        "and contact stiffness)";
   nlohmann::json& r = out.results;
   r["velocity_m_s"] = v0;
   r["boulder_mass_kg"] = pl.mass_kg;
@@ -212,7 +216,8 @@ bridge::RunOutcome runOne(const ImpactCase& c, const Sample& sample, double v0, 
   r["touched"] = touched;
   r["impact_over"] = out.results["ended_by"] == "test";
   nlohmann::json warnings = nlohmann::json::array();
-  if (!touched) warnings.push_back("the boulder never touched the cell within run.duration_s");
+  if (!touched)
+    warnings.push_back("the boulder never touched the cell within run.duration_s");
   else if (!r["impact_over"].get<bool>())
     warnings.push_back("the impact was not over at the end of run.duration_s: lengthen it");
   r["warnings"] = warnings;
@@ -245,8 +250,8 @@ bridge::RunOutcome runOne(const ImpactCase& c, const Sample& sample, double v0, 
   }
   std::ostringstream rep;
   rep.precision(4);
-  rep << hooks.label << ": peak force " << peak << " N (base " << peak_base << " N), penetration "
-      << 1000.0 * max_pen << " mm, contact " << 1000.0 * duration << " ms, rebound " << rebound << " m/s, "
+  rep << hooks.label << ": peak force " << peak << " N (base " << peak_base << " N), penetration " << 1000.0 * max_pen
+      << " mm, contact " << 1000.0 * duration << " ms, rebound " << rebound << " m/s, "
       << out.results["broken_links"].get<std::size_t>() << " broken links\n";
   out.report = rep.str() + out.report;
   return out;
@@ -262,13 +267,12 @@ bridge::CaseKind unconfinedImpactKind() {
             const std::string file = doc.file();
             std::vector<std::string> names;
             for (const double v : c.velocities_m_s) names.push_back(variantName(v));
-            return runReplicates(
-                c.setup, ctx, "micro.uci", names,
-                [&](const Sample& s, std::size_t v, const bridge::RunContext& rc) {
-                  return runOne(c, s, c.velocities_m_s[v], rc, file);
-                },
-                {"peak_force_N", "peak_base_force_N", "max_penetration_m", "contact_duration_s",
-                 "rebound_velocity_m_s", "broken_links"});
+            return runReplicates(c.setup, ctx, "micro.uci", names,
+                                 [&](const Sample& s, std::size_t v, const bridge::RunContext& rc) {
+                                   return runOne(c, s, c.velocities_m_s[v], rc, file);
+                                 },
+                                 {"peak_force_N", "peak_base_force_N", "max_penetration_m", "contact_duration_s",
+                                  "rebound_velocity_m_s", "broken_links"});
           }};
 }
 

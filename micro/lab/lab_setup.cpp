@@ -98,7 +98,8 @@ LabSetup parseLabSetup(const JsonReader& root, double default_mass_scale, double
     const nlohmann::json& list = root.raw("cell");
     if (list.empty()) root.fail("cell", "an empty list of cell files");
     for (std::size_t k = 0; k < list.size(); ++k) {
-      if (!list[k].is_string()) root.fail("cell", "a list of cells holds cell file names (entry " + std::to_string(k) + ")");
+      if (!list[k].is_string())
+        root.fail("cell", "a list of cells holds cell file names (entry " + std::to_string(k) + ")");
       s.cells.push_back({dir / list[k].get<std::string>(), {}, {}, 0.0});
     }
     if (root.has("replicates") && root.integer("replicates", 1) != static_cast<long long>(list.size()))
@@ -126,6 +127,7 @@ LabSetup parseLabSetup(const JsonReader& root, double default_mass_scale, double
   }
   if (const auto m = root.optionalObject("materials"))
     for (const auto& [name, r] : m->members()) s.changes.push_back(parseMaterialChange(name, r));
+  for (const JsonReader& r : root.objects("contact_pairs")) s.pairs.push_back(parseContactPair(r));
   if (const auto p = root.optionalObject("plates")) s.plates = parseMaterialChange("plates", *p);
   s.plates.name = "plates";
   s.netting_mass_scale = root.number("netting_mass_scale", default_mass_scale, Check::Positive);
@@ -162,9 +164,9 @@ Sample loadSample(const fs::path& cell_file, const LabSetup& setup) {
   for (const MaterialChange& c : setup.changes) {
     const int k = find(c.name);
     if (k < 0)
-      throw bridge::InputError(setup.file, c.pointer,
-                               "the cell (" + cell_file.string() + ") has no material '" + c.name + "' (it has " +
-                                   names + ")");
+      throw bridge::InputError(
+          setup.file, c.pointer,
+          "the cell (" + cell_file.string() + ") has no material '" + c.name + "' (it has " + names + ")");
     c.applyTo(s.materials[static_cast<std::size_t>(k)]);
   }
   // The plates: the cell's formwork material (steel in a micro.cell), made
@@ -176,6 +178,7 @@ Sample loadSample(const fs::path& cell_file, const LabSetup& setup) {
   setup.plates.applyTo(plate);
   out.plate_material = static_cast<int>(s.materials.size());
   s.materials.push_back(plate);
+  for (const ContactPairInput& in : setup.pairs) s.contact_pairs.push_back(resolveContactPair(in, s.materials));
   out.rock_material = std::max(0, find("rock"));
   out.netting_material = find("netting");
   try {
@@ -294,8 +297,8 @@ nlohmann::json scatterOf(const std::vector<double>& v) {
   for (const double x : v) var += (x - mean) * (x - mean);
   const double sd = v.size() > 1 ? std::sqrt(var / static_cast<double>(v.size() - 1)) : 0.0;
   const auto [mn, mx] = std::minmax_element(v.begin(), v.end());
-  return {{"mean", mean}, {"std", sd}, {"min", *mn}, {"max", *mx}, {"count", v.size()},
-          {"cv", mean != 0.0 ? sd / std::fabs(mean) : 0.0}};
+  return {{"mean", mean}, {"std", sd},         {"min", *mn},
+          {"max", *mx},   {"count", v.size()}, {"cv", mean != 0.0 ? sd / std::fabs(mean) : 0.0}};
 }
 
 }  // namespace

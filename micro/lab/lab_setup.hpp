@@ -22,8 +22,8 @@ namespace gabion::micro::lab {
 
 /// Where one replicate's cell comes from.
 struct CellSource {
-  std::filesystem::path file;      ///< a cell file (gabion.cell/2) to start from, or
-  std::filesystem::path generate;  ///< a micro.cell case, generated first into OUTDIR/cell[_<seed>]
+  std::filesystem::path file;         ///< a cell file (gabion.cell/2) to start from, or
+  std::filesystem::path generate;     ///< a micro.cell case, generated first into OUTDIR/cell[_<seed>]
   std::optional<std::uint64_t> seed;  ///< the generated cell's seed (absent: the case's own)
   double edge_m = 0.0;                ///< the cell's edge as its case gives it (generated cells; for checks)
 };
@@ -46,6 +46,7 @@ struct LabSetup {
   std::string file;                     ///< the case file, for messages
   std::vector<CellSource> cells;        ///< one per replicate
   std::vector<MaterialChange> changes;  ///< to the cell's materials
+  std::vector<ContactPairInput> pairs;  ///< laws for pairs of materials (the cell's and "plates")
   MaterialChange plates;                ///< to the rig's plates (by default the cell's formwork material, frictionless)
   double netting_mass_scale = 1.0;      ///< inertia scaling of the netting's nodes (>= 1)
   Vec3 gravity = Vec3(0, 0, -9.81);
@@ -53,7 +54,7 @@ struct LabSetup {
   bool duration_given = false;  ///< run.duration_s given (else the test sets it from its loading)
 };
 
-/// Reads "cell", "replicates", "materials", "plates", "netting_mass_scale",
+/// Reads "cell", "replicates", "materials", "contact_pairs", "plates", "netting_mass_scale",
 /// "gravity_m_s2" and "run" (duration default_duration_s, series every
 /// default_series_s unless given).
 LabSetup parseLabSetup(const bridge::JsonReader& root, double default_mass_scale, double default_duration_s,

@@ -179,8 +179,10 @@ bridge::RunOutcome runOne(const ShearCase& c, const Sample& sample, const bridge
   hooks.control = [&](Engine& e) {
     if (pushing) return;
     const double f = e.wallForce(rig.lid).z();
-    if (std::fabs(f - target) > 0.1 * target) held_since = NAN;
-    else if (std::isnan(held_since)) held_since = e.time();
+    if (std::fabs(f - target) > 0.1 * target)
+      held_since = NAN;
+    else if (std::isnan(held_since))
+      held_since = e.time();
     if ((!std::isnan(held_since) && e.time() - held_since > 0.02) || e.time() > c.settle_s) {
       pushing = true;
       t_push = e.time();
@@ -192,7 +194,9 @@ bridge::RunOutcome runOne(const ShearCase& c, const Sample& sample, const bridge
       e.setWallProgram(rig.pusher, p);
     }
   };
-  hooks.done = [&](const Engine&) { return pushing && !sr.displacement.empty() && sr.displacement.back() >= c.displacement_m; };
+  hooks.done = [&](const Engine&) {
+    return pushing && !sr.displacement.empty() && sr.displacement.back() >= c.displacement_m;
+  };
   hooks.write = [&](const Engine&, bridge::H5Writer& h5) {
     h5.write("/curves/shear/time_s", sr.time, "s");
     h5.write("/curves/shear/displacement_m", sr.displacement, "m");
@@ -259,8 +263,8 @@ bridge::RunOutcome runOne(const ShearCase& c, const Sample& sample, const bridge
                        " of its initial stiffness over the last quarter (the friction coefficient is then the one "
                        "mobilised so far); raise shear.displacement_m");
   if (!held)
-    warnings.push_back("the lid did not reach its force of " + std::to_string(target) + " N within shear.max_settle_s (" +
-                       std::to_string(c.settle_s) +
+    warnings.push_back("the lid did not reach its force of " + std::to_string(target) +
+                       " N within shear.max_settle_s (" + std::to_string(c.settle_s) +
                        " s): the upper cell, confined by its netting alone, was still giving way under it; lower "
                        "shear.normal_stress_Pa or raise shear.max_settle_s");
   r["warnings"] = warnings;
@@ -290,18 +294,18 @@ bridge::RunOutcome runOne(const ShearCase& c, const Sample& sample, const bridge
 }  // namespace
 
 bridge::CaseKind interfaceShearKind() {
-  return {"micro.shear",
-          "interface shear: a cell on another under a normal load held by a servo, the upper one pushed sideways "
-          "(docs/lab.md)",
-          check, [](const bridge::JsonDocument& doc, const bridge::RunContext& ctx) {
-            const ShearCase c = parseCase(doc);
-            const std::string file = doc.file();
-            return runReplicates(
-                c.setup, ctx, "micro.shear", {"test"},
-                [&](const Sample& s, std::size_t, const bridge::RunContext& rc) { return runOne(c, s, rc, file); },
-                {"friction_coefficient", "peak_friction_coefficient", "tangential_stiffness_N_m",
-                 "kinetic_to_work_ratio"});
-          }};
+  return {
+      "micro.shear",
+      "interface shear: a cell on another under a normal load held by a servo, the upper one pushed sideways "
+      "(docs/lab.md)",
+      check, [](const bridge::JsonDocument& doc, const bridge::RunContext& ctx) {
+        const ShearCase c = parseCase(doc);
+        const std::string file = doc.file();
+        return runReplicates(
+            c.setup, ctx, "micro.shear", {"test"},
+            [&](const Sample& s, std::size_t, const bridge::RunContext& rc) { return runOne(c, s, rc, file); },
+            {"friction_coefficient", "peak_friction_coefficient", "tangential_stiffness_N_m", "kinetic_to_work_ratio"});
+      }};
 }
 
 }  // namespace gabion::micro::lab

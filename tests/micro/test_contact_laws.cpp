@@ -5,11 +5,14 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <limits>
+#include <vector>
 
 #include "bridge/laws/contact_damping.hpp"
 #include "bridge/laws/contact_normal.hpp"
 #include "bridge/laws/contact_tangential.hpp"
 #include "micro/contact.hpp"
+#include "micro/material_laws.hpp"
 
 namespace {
 
@@ -171,6 +174,37 @@ TEST(ContactMixing, SeriesStiffnessMinFrictionMeanDamping) {
   EXPECT_DOUBLE_EQ(ab.tangential.friction, 0.3);
   EXPECT_DOUBLE_EQ(ab.normal.force_limit_N, 100.0);
   EXPECT_DOUBLE_EQ(ab.damping_ratio, 0.3);
+}
+
+// A contact pair replaces the values it gives for that pair only, in both
+// orders; the rest of the table is the mixing rule's. Here: the rock caps
+// its own contacts at 100 N, and its contacts with the netting are uncapped.
+TEST(ContactMixing, AContactPairReplacesTheMixedValuesOfThatPairOnly) {
+  const double inf = std::numeric_limits<double>::infinity();
+  const std::vector<micro::Material> m = {{"rock", 2600, 1e6, 2.5e5, 0.5, 100.0, 0.1, 0.1},
+                                          {"netting", 7850, 1e6, 2.5e5, 0.4, inf, 0.1, 0.0},
+                                          {"plates", 7850, 1e6, 2.5e5, 0.0, inf, 0.0, 0.0}};
+  micro::ContactPair p;
+  p.a = 1, p.b = 0;
+  p.normal_force_limit_N = inf;
+  p.friction = 0.2;
+  const auto mixed = micro::pairLawTable(m), table = micro::pairLawTable(m, {p});
+  for (const std::size_t k : {std::size_t{1}, std::size_t{3}}) {  // (rock, netting) and (netting, rock)
+    EXPECT_DOUBLE_EQ(mixed[k].normal.force_limit_N, 100.0);
+    EXPECT_EQ(table[k].normal.force_limit_N, inf);
+    EXPECT_DOUBLE_EQ(table[k].tangential.friction, 0.2);
+    EXPECT_DOUBLE_EQ(table[k].normal.stiffness_N_m, mixed[k].normal.stiffness_N_m);
+    EXPECT_DOUBLE_EQ(table[k].damping_ratio, mixed[k].damping_ratio);
+  }
+  for (std::size_t k = 0; k < table.size(); ++k) {
+    if (k == 1 || k == 3) continue;
+    EXPECT_EQ(table[k].normal.force_limit_N, mixed[k].normal.force_limit_N) << k;
+    EXPECT_EQ(table[k].tangential.friction, mixed[k].tangential.friction) << k;
+  }
+  EXPECT_DOUBLE_EQ(table[0].normal.force_limit_N, 100.0);  // the rock with itself keeps its cap
+  const micro::MaterialLaws laws(m, {p});
+  EXPECT_EQ(laws.flim[1], inf);
+  EXPECT_DOUBLE_EQ(laws.flim[0], 100.0);
 }
 
 }  // namespace

@@ -106,6 +106,11 @@ TEST(MicroSceneCli, BadInputsExit2NamingTheField) {
   std::string nan = scene();
   nan.replace(nan.find("\"gravity_m_s2\": [0, 0, -9.81]"), 29, "\"gravity_m_s2\": [0, 0, NaN]");
   std::string bad_material = scene(", \"material\": \"steel\"");
+  const auto withPairs = [](const std::string& pairs) {
+    std::string t = scene();
+    t.insert(t.find("\"run\":"), "\"contact_pairs\": " + pairs + ",\n ");
+    return t;
+  };
   const std::vector<BadCase> cases = {
       {"missing", missing, "/materials/rock/friction"},
       {"unknown", scene(", \"colour\": \"red\""), "/spheres/0/colour"},
@@ -116,6 +121,11 @@ TEST(MicroSceneCli, BadInputsExit2NamingTheField) {
       {"unknown_run_key", scene("", ", \"dt_safty\": 0.1"), "/run/dt_safty"},
       {"bad_overlap", scene("", ", \"max_overlap_ratio\": 2"), "/run/max_overlap_ratio"},
       {"bad_damping", scene("", "", ", \"local_damping\": 1.5"), "/materials/rock/local_damping"},
+      {"pair_material", withPairs(R"([{"materials": ["rock", "steel"], "friction": 0.2}])"),
+       "/contact_pairs/0/materials/1"},
+      {"pair_cap", withPairs(R"([{"materials": ["rock", "rock"], "normal_force_limit_N": "never"}])"),
+       "/contact_pairs/0/normal_force_limit_N"},
+      {"pair_names", withPairs(R"([{"materials": ["rock"]}])"), "/contact_pairs/0/materials"},
   };
   for (const auto& c : cases) {
     std::string text = c.text;
