@@ -26,8 +26,10 @@ namespace {
 std::vector<std::string> split(const std::string& s, char sep) {
   std::vector<std::string> out(1);
   for (const char c : s) {
-    if (c == sep) out.emplace_back();
-    else out.back().push_back(c);
+    if (c == sep)
+      out.emplace_back();
+    else
+      out.back().push_back(c);
   }
   return out;
 }
@@ -75,7 +77,8 @@ int plot(int argc, char** argv) {
     if (eq == std::string::npos || f.size() < 3) return 2;
     const double xs = f.size() > 3 ? std::atof(f[3].c_str()) : 1.0, ys = f.size() > 4 ? std::atof(f[4].c_str()) : 1.0;
     const gabion::bridge::H5Reader h(f[0]);
-    gabion::bridge::PlotSeries s{arg.substr(0, eq), h.read(f[1]), h.read(f[2]), gabion::bridge::PlotSeries::Style::Line};
+    gabion::bridge::PlotSeries s{arg.substr(0, eq), h.read(f[1]), h.read(f[2]),
+                                 gabion::bridge::PlotSeries::Style::Line};
     for (double& v : s.x) v *= xs;
     for (double& v : s.y) v *= ys;
     spec.series.push_back(s);

@@ -151,7 +151,11 @@ Sample loadSample(const fs::path& cell_file, const LabSetup& setup) {
   out.cell_file = cell_file;
   Scene& s = out.scene;
   if (!fs::exists(cell_file)) throw bridge::InputError(setup.file, "/cell", "no cell file " + cell_file.string());
-  loadCellFile(cell_file, s);
+  try {
+    loadCellFile(cell_file, s);
+  } catch (const bridge::InputError& e) {  // (named from the case's field that gave the file)
+    throw bridge::InputError(setup.file, "/cell", cell_file.string() + ": " + e.message());
+  }
   s.gravity_m_s2 = setup.gravity;
   s.run = setup.run;
   const auto find = [&](const std::string& name) {

@@ -252,6 +252,15 @@ TEST(MicroLab, ReplicatesOnCellsOfDifferentSeedsGiveAScatter) {
   // Each replicate's cell is its seed's: not the same blocks.
   const gabion::bridge::H5Reader a(dir / "out" / "cell_seed3" / "cell.h5"), b(dir / "out" / "cell_seed4" / "cell.h5");
   EXPECT_NE(a.read("/blocks/position_m"), b.read("/blocks/position_m"));
+  // Run again into the same folder: the cells are taken as they are (their
+  // case and seed unchanged), and the same tests give the same curves.
+  const auto cell_time = std::filesystem::last_write_time(dir / "out" / "cell_seed3" / "cell.h5");
+  const std::vector<double> first =
+      gabion::bridge::H5Reader(dir / "out" / "replicate_1" / "result.h5").read("/curves/uc/force_N");
+  const auto again = runGabion("run -q --threads 2 " + (dir / "uc.json").string() + " -o " + (dir / "out").string());
+  ASSERT_EQ(again.exit_code, 0) << again.output;
+  EXPECT_EQ(std::filesystem::last_write_time(dir / "out" / "cell_seed3" / "cell.h5"), cell_time);
+  EXPECT_EQ(gabion::bridge::H5Reader(dir / "out" / "replicate_1" / "result.h5").read("/curves/uc/force_N"), first);
 }
 
 TEST(MicroLab, BadInputIsNamedBeforeAnythingRuns) {
@@ -274,6 +283,15 @@ TEST(MicroLab, BadInputIsNamedBeforeAnythingRuns) {
       {"stress", labCase("micro.shear", R"(, "shear": {"normal_stress_Pa": 5e6})"), "/shear/normal_stress_Pa"},
       {"scale", labCase("micro.cc", R"(, "netting_mass_scale": 0.5)"), "/netting_mass_scale"},
   };
+  // A file that is not HDF5, and an HDF5 file that is not a cell file.
+  writeFile(dir / "text.h5", "not a cell");
+  writeFile(dir / "text.json", R"({"format": "gabion.case/1", "kind": "micro.uc", "cell": "text.h5"})");
+  {
+    const auto r = runGabion("check " + (dir / "text.json").string());
+    EXPECT_EQ(r.exit_code, 2) << r.output;
+    EXPECT_NE(r.output.find("/cell"), std::string::npos) << r.output;
+    EXPECT_NE(r.output.find("text.h5"), std::string::npos) << r.output;
+  }
   for (const auto& c : cases) {
     writeFile(dir / (c.name + ".json"), c.text);
     const auto r = runGabion("run " + (dir / (c.name + ".json")).string() + " -o " + (dir / c.name).string());
