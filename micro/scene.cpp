@@ -88,6 +88,15 @@ ContactPair resolveContactPair(const ContactPairInput& in, const std::vector<Mat
   return p;
 }
 
+WallSpec fixedWall(const std::string& name, const Vec3& point, const Vec3& normal, int material) {
+  WallSpec w;
+  w.name = name;
+  w.point_m = point;
+  w.normal = normal;
+  w.material = material;
+  return w;
+}
+
 RunSpec parseRun(const JsonReader& run, double default_duration_s) {
   RunSpec rs;
   rs.duration_s = default_duration_s > 0.0 ? run.number("duration_s", default_duration_s, Check::Positive)

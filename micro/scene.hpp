@@ -229,6 +229,10 @@ double sphereInertia(const Scene& scene, const SphereSpec& sphere);
 double sphereInertialMass(const Scene& scene, const SphereSpec& sphere);
 double sphereInertialMoment(const Scene& scene, const SphereSpec& sphere);
 
+/// A fixed, infinite wall: the plane through `point` with unit `normal`
+/// (towards the bodies), of `material`.
+WallSpec fixedWall(const std::string& name, const Vec3& point, const Vec3& normal, int material);
+
 /// The name of wall w: its own, or wall_<w> if it has none.
 std::string wallName(const Scene& scene, std::size_t w);
 

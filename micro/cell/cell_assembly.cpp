@@ -187,15 +187,6 @@ SphereSpec nodeSphere(const CellNetting& n, std::size_t k, int material) {
   return sp;
 }
 
-WallSpec wall(const std::string& name, const Vec3& point, const Vec3& normal, int material) {
-  WallSpec w;
-  w.name = name;
-  w.point_m = point;
-  w.normal = normal;
-  w.material = material;
-  return w;
-}
-
 enum Mat { kRock = 0, kFormwork = 1, kNetting = 2 };
 
 // Stage 1: the basket in its formwork (floor and four sides just outside the
@@ -225,11 +216,11 @@ Scene fillScene(const CellCase& c, const CellNetting& n, nlohmann::json& fill_re
   // The blocks: a column over the cell, tall enough for any loose layout.
   fill_report = addBlockFill(*c.blocks, s, kRock, Vec3(0.002, 0.002, 0.002), Vec3(e - 0.002, e - 0.002, 12.0 * e),
                              c.mass_kg, c.seed, [&](const std::string& m) { c.blocks->failHere(m); });
-  s.walls = {wall("floor", Vec3(0, 0, -2 * r), Vec3::UnitZ(), kFormwork),
-             wall("x_minus", Vec3(-2 * r, 0, 0), Vec3::UnitX(), kFormwork),
-             wall("x_plus", Vec3(e + 2 * r, 0, 0), -Vec3::UnitX(), kFormwork),
-             wall("y_minus", Vec3(0, -2 * r, 0), Vec3::UnitY(), kFormwork),
-             wall("y_plus", Vec3(0, e + 2 * r, 0), -Vec3::UnitY(), kFormwork)};
+  s.walls = {fixedWall("floor", Vec3(0, 0, -2 * r), Vec3::UnitZ(), kFormwork),
+             fixedWall("x_minus", Vec3(-2 * r, 0, 0), Vec3::UnitX(), kFormwork),
+             fixedWall("x_plus", Vec3(e + 2 * r, 0, 0), -Vec3::UnitX(), kFormwork),
+             fixedWall("y_minus", Vec3(0, -2 * r, 0), Vec3::UnitY(), kFormwork),
+             fixedWall("y_plus", Vec3(0, e + 2 * r, 0), -Vec3::UnitY(), kFormwork)};
   // (no porosity box of the scene's: the cell measures its own porosity,
   // with the rock in the mesh openings, where each stage ends)
   return s;
@@ -375,7 +366,7 @@ bridge::RunOutcome run(const bridge::JsonDocument& doc, const bridge::RunContext
     // the opening, a stone bulging into a side opening would slip under its
     // edge and come out inside it, half its radius deep in the plate.
     const double top = rockTop(fill.state);
-    WallSpec press = wall("press", Vec3(0.5 * e, 0.5 * e, std::max(top, e) + 0.002), -Vec3::UnitZ(), kFormwork);
+    WallSpec press = fixedWall("press", Vec3(0.5 * e, 0.5 * e, std::max(top, e) + 0.002), -Vec3::UnitZ(), kFormwork);
     press.bounded = true;
     press.axis_u = Vec3::UnitX();
     press.half_u_m = press.half_v_m = 0.5 * e + 2 * r;

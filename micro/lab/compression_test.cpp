@@ -70,12 +70,7 @@ CompressionCase parseCase(const bridge::JsonDocument& doc, bool confined) {
 Scene buildScene(const CompressionCase& c, const Sample& sample) {
   Scene s = sample.scene;
   const auto plate = [&](const std::string& name, const Vec3& point, const Vec3& normal) {
-    WallSpec w;
-    w.name = name;
-    w.point_m = point;
-    w.normal = normal;
-    w.material = sample.plate_material;
-    s.walls.push_back(w);
+    s.walls.push_back(fixedWall(name, point, normal, sample.plate_material));
   };
   const Vec3 lo = sample.lo, hi = sample.hi;
   plate("base", lo, Vec3::UnitZ());

@@ -90,12 +90,7 @@ Placement buildScene(const ImpactCase& c, const Sample& sample, double velocity)
   p.boulder = s.spheres.size();
   p.mass_kg = b.mass_kg;
   s.spheres.push_back(b);
-  WallSpec base;
-  base.name = "base";
-  base.point_m = sample.lo;
-  base.normal = Vec3::UnitZ();
-  base.material = sample.plate_material;
-  s.walls.push_back(base);
+  s.walls.push_back(fixedWall("base", sample.lo, Vec3::UnitZ(), sample.plate_material));
   return p;
 }
 

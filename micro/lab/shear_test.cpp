@@ -42,15 +42,6 @@ ShearCase parseCase(const bridge::JsonDocument& doc) {
   return c;
 }
 
-WallSpec plate(const std::string& name, const Vec3& point, const Vec3& normal, int material) {
-  WallSpec w;
-  w.name = name;
-  w.point_m = point;
-  w.normal = normal;
-  w.material = material;
-  return w;
-}
-
 struct Rig {
   Scene scene;
   std::size_t top_first_sphere = 0, top_first_block = 0;
@@ -95,11 +86,11 @@ Rig buildRig(const ShearCase& c, const Sample& sample) {
   const Vec3 lo = sample.lo, hi = sample.hi, mid = 0.5 * (lo + hi);
   const int m = sample.plate_material;
   const auto lowerPlate = [&](const std::string& name, const Vec3& point, const Vec3& normal) {
-    s.walls.push_back(plate(name, point, normal, m));
+    s.walls.push_back(fixedWall(name, point, normal, m));
     s.walls.back().skip_groups = upper_groups;
   };
   const auto upperPlate = [&](const std::string& name, const Vec3& point, const Vec3& normal) {
-    s.walls.push_back(plate(name, point, normal, m));
+    s.walls.push_back(fixedWall(name, point, normal, m));
     s.walls.back().skip_groups = lower_groups;
   };
   lowerPlate("base", lo, Vec3::UnitZ());
@@ -113,7 +104,7 @@ Rig buildRig(const ShearCase& c, const Sample& sample) {
   upperPlate("pusher", lo + up, Vec3::UnitX());
   // The lid: a servo holding the normal force on the upper cell's top face.
   rig.lid = s.walls.size();
-  WallSpec lid = plate("lid", Vec3(mid.x(), mid.y(), hi.z() + h), -Vec3::UnitZ(), m);
+  WallSpec lid = fixedWall("lid", Vec3(mid.x(), mid.y(), hi.z() + h), -Vec3::UnitZ(), m);
   lid.skip_groups = lower_groups;
   const double force = c.normal_stress_Pa * (hi.x() - lo.x()) * (hi.y() - lo.y());
   lid.program.kind = WallProgram::Kind::Servo;
