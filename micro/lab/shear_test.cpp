@@ -20,7 +20,7 @@ struct ShearCase {
   LabSetup setup;
   double normal_stress_Pa = 10000.0;  // on the top cell's face, by the servo plate
   double speed_m_s = 0.05;            // of the pushing plate
-  double displacement_m = 0.05;       // its travel once the normal load holds
+  double displacement_m = 0.1;        // its travel once the normal load holds
   double settle_s = 1.0;              // the longest the normal load may take to hold
   double max_kinetic_ratio = 0.01;
 };

@@ -111,6 +111,21 @@ TEST(MicroLab, TheFourTestsRunOnASmallCellAndKeepTheirBalances) {
     EXPECT_TRUE(std::filesystem::exists(dir / "cc" / "cc_curve.png"));
   }
 
+  // A lid fast enough to leave the quasi-static range is a warning with the
+  // measured ratio, and with "strict" a failure (exit 3) that says so.
+  writeFile(
+      dir / "fast.json",
+      labCase("micro.cc", R"(, "loading": {"velocity_m_s": 2, "strain": 0.05}, "quasi_static": {"strict": true})"));
+  const auto fast = runGabion("run -q " + (dir / "fast.json").string() + " -o " + (dir / "fast").string());
+  EXPECT_EQ(fast.exit_code, 3) << fast.output;
+  EXPECT_NE(fast.output.find("quasi-static"), std::string::npos) << fast.output;
+  {
+    const nlohmann::json r = summaryOf(dir / "fast");
+    EXPECT_FALSE(r["quasi_static"].get<bool>());
+    EXPECT_GT(r["kinetic_to_work_ratio"].get<double>(), 0.01);
+    EXPECT_EQ(r["warnings"].size(), 1u);
+  }
+
   // UC to 10 %.
   writeFile(dir / "uc.json", labCase("micro.uc", R"(, "loading": {"velocity_m_s": 0.2, "strain": 0.1})"));
   const auto uc = runGabion("run -q " + (dir / "uc.json").string() + " -o " + (dir / "uc").string());
