@@ -246,6 +246,12 @@ double JsonReader::number(const std::string& key, double fallback, Check check) 
   return v == nullptr ? fallback : checkedNumber(key, *v, check);
 }
 
+std::optional<double> JsonReader::optionalNumber(const std::string& key, Check check) const {
+  const Json* v = find(key);
+  if (v == nullptr) return std::nullopt;
+  return checkedNumber(key, *v, check);
+}
+
 long long JsonReader::integer(const std::string& key, long long minimum) const {
   const Json& v = required(key);
   if (!v.is_number_integer()) fail(key, "expected an integer, got " + typeName(v));

@@ -73,6 +73,9 @@ class JsonReader {
   double number(const std::string& key, Check check = Check::Finite) const;
   /// An optional number: `fallback` when absent.
   double number(const std::string& key, double fallback, Check check = Check::Finite) const;
+  /// An optional number with no default: empty when absent (a change that
+  /// replaces a value only where one is given).
+  std::optional<double> optionalNumber(const std::string& key, Check check = Check::Finite) const;
   /// A required integer >= minimum.
   long long integer(const std::string& key, long long minimum) const;
   long long integer(const std::string& key, long long fallback, long long minimum) const;

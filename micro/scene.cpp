@@ -55,13 +55,10 @@ ContactPairInput parseContactPair(const JsonReader& r) {
     r.fail("materials", "expected the names of two materials, e.g. [\"rock\", \"netting\"]");
   in.name_a = names[0].get<std::string>(), in.name_b = names[1].get<std::string>();
   ContactPair& p = in.pair;
-  const auto opt = [&](const char* key, Check check, std::optional<double>& out) {
-    if (r.has(key)) out = r.number(key, check);
-  };
-  opt("normal_stiffness_N_m", Check::Positive, p.normal_stiffness_N_m);
-  opt("shear_stiffness_N_m", Check::Positive, p.shear_stiffness_N_m);
-  opt("friction", Check::NonNegative, p.friction);
-  opt("viscous_damping_ratio", Check::UnitOpen, p.viscous_damping_ratio);
+  p.normal_stiffness_N_m = r.optionalNumber("normal_stiffness_N_m", Check::Positive);
+  p.shear_stiffness_N_m = r.optionalNumber("shear_stiffness_N_m", Check::Positive);
+  p.friction = r.optionalNumber("friction", Check::NonNegative);
+  p.viscous_damping_ratio = r.optionalNumber("viscous_damping_ratio", Check::UnitOpen);
   if (r.has("normal_force_limit_N")) {
     const nlohmann::json& v = r.raw("normal_force_limit_N");
     if (v.is_string()) {

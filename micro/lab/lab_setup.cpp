@@ -27,15 +27,12 @@ MaterialChange parseMaterialChange(const std::string& name, const JsonReader& r)
   MaterialChange c;
   c.name = name;
   c.pointer = r.pointer();
-  const auto opt = [&](const char* key, Check check, std::optional<double>& out) {
-    if (r.has(key)) out = r.number(key, check);
-  };
-  opt("normal_stiffness_N_m", Check::Positive, c.normal_stiffness_N_m);
-  opt("shear_stiffness_N_m", Check::Positive, c.shear_stiffness_N_m);
-  opt("friction", Check::NonNegative, c.friction);
-  opt("normal_force_limit_N", Check::Positive, c.normal_force_limit_N);
-  opt("local_damping", Check::UnitOpen, c.local_damping);
-  opt("viscous_damping_ratio", Check::UnitOpen, c.viscous_damping_ratio);
+  c.normal_stiffness_N_m = r.optionalNumber("normal_stiffness_N_m", Check::Positive);
+  c.shear_stiffness_N_m = r.optionalNumber("shear_stiffness_N_m", Check::Positive);
+  c.friction = r.optionalNumber("friction", Check::NonNegative);
+  c.normal_force_limit_N = r.optionalNumber("normal_force_limit_N", Check::Positive);
+  c.local_damping = r.optionalNumber("local_damping", Check::UnitOpen);
+  c.viscous_damping_ratio = r.optionalNumber("viscous_damping_ratio", Check::UnitOpen);
   return c;
 }
 
