@@ -223,8 +223,6 @@ double checkCells(const LabSetup& setup) {
       const Sample sample = loadSample(c.file, setup);
       e = std::min(sample.hi.x() - sample.lo.x(), sample.hi.y() - sample.lo.y());
     } else {
-      if (!fs::exists(c.generate))
-        throw bridge::InputError(setup.file, "/cell/case", "no such case file " + c.generate.string());
       const bridge::JsonDocument doc = loadCellCase(c, setup.file, "/cell/case");
       const auto it = doc.json().find("edge_m");
       e = it != doc.json().end() && it->is_number() ? it->get<double>() : 0.5;
@@ -322,7 +320,7 @@ bridge::RunOutcome runReplicates(const LabSetup& setup, const bridge::RunContext
     bridge::RunContext rc = ctx;
     rc.threads = nr > 1 ? 1 : ctx.threads;
     rc.progress = first && ctx.progress;
-    const std::string name = nr > 1 || c.seed ? "cell_seed" + std::to_string(*c.seed) : "cell";
+    const std::string name = nr > 1 ? "cell_seed" + std::to_string(*c.seed) : "cell";
     try {
       files[k] = generateCell(c, ctx.outdir / name, rc);
     } catch (const std::exception& e) {  // (a thread must not throw; the case was checked before)

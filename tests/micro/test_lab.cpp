@@ -276,6 +276,17 @@ TEST(MicroLab, ReplicatesOnCellsOfDifferentSeedsGiveAScatter) {
   ASSERT_EQ(again.exit_code, 0) << again.output;
   EXPECT_EQ(std::filesystem::last_write_time(dir / "out" / "cell_seed3" / "cell.h5"), cell_time);
   EXPECT_EQ(gabion::bridge::H5Reader(dir / "out" / "replicate_1" / "result.h5").read("/curves/uc/force_N"), first);
+
+  // One cell generated from a case: into OUT/cell, the test's files beside it.
+  writeFile(dir / "one.json",
+            R"({"format": "gabion.case/1", "kind": "micro.uc", "cell": {"case": "cell.json", "seed": 4},
+ "loading": {"velocity_m_s": 0.2, "strain": 0.05}})");
+  const auto one = runGabion("run -q " + (dir / "one.json").string() + " -o " + (dir / "one").string());
+  ASSERT_EQ(one.exit_code, 0) << one.output;
+  EXPECT_TRUE(std::filesystem::exists(dir / "one" / "cell" / "cell.h5"));
+  EXPECT_EQ(summaryOf(dir / "one")["cell_seed"], 4);
+  // The same seed as replicate 1: the same cell, the same curve.
+  EXPECT_EQ(gabion::bridge::H5Reader(dir / "one" / "result.h5").read("/curves/uc/force_N"), first);
 }
 
 TEST(MicroLab, BadInputIsNamedBeforeAnythingRuns) {
