@@ -162,12 +162,10 @@ bridge::RunOutcome runOne(const CompressionCase& c, const Sample& sample, const 
   std::vector<Cycle> cycles;
   std::size_t next_cycle = 0;
   bool unloading = false;
-  double z0 = NAN;
   SceneRunHooks hooks;
   hooks.label = c.confined ? "micro.cc" : "micro.uc";
   hooks.record = [&](const Engine& e, double) {
-    if (std::isnan(z0)) z0 = sample.hi.z();
-    const double u = z0 - e.wallPosition(lid).z();
+    const double u = sample.hi.z() - e.wallPosition(lid).z();  // (the lid started at the top of the cell)
     cv.time.push_back(e.time());
     cv.displacement.push_back(u);
     cv.force.push_back(e.wallForce(lid).z());

@@ -137,7 +137,8 @@ bridge::RunOutcome runOne(const ImpactCase& c, const Sample& sample, double v0, 
   for (const BlockSpec& b : pl.scene.blocks)
     for (const double r : b.member_radii_m) rmin = std::min(rmin, r);
   const double dt = chooseDt(pl.scene, criticalTimeStep(pl.scene), file);
-  if (v0 * dt > 0.1 * rmin) pl.scene.run.dt_s = 0.1 * rmin / v0;
+  const bool limited = v0 * dt > 0.1 * rmin;
+  if (limited) pl.scene.run.dt_s = 0.1 * rmin / v0;
 
   struct Series {
     std::vector<double> time, force, base_force, penetration, velocity;
@@ -184,6 +185,7 @@ bridge::RunOutcome runOne(const ImpactCase& c, const Sample& sample, double v0, 
   r["boulder_mass_kg"] = pl.mass_kg;
   r["boulder_diameter_m"] = c.diameter_m;
   r["impact_energy_J"] = 0.5 * pl.mass_kg * v0 * v0;
+  r["dt_limited_by_boulder_speed"] = limited;  // (a step of a tenth of the smallest radius at v0)
   r["cell_mass_kg"] = sample.mass_kg;
   if (sr.time.empty()) return out;
   double peak_base = 0.0, max_pen = 0.0, t_peak = NAN;

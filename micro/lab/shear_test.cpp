@@ -44,8 +44,7 @@ ShearCase parseCase(const bridge::JsonDocument& doc) {
 
 struct Rig {
   Scene scene;
-  std::size_t top_first_sphere = 0, top_first_block = 0;
-  double top_mass_kg = 0.0, height_m = 0.0;
+  double top_mass_kg = 0.0;
   std::size_t pusher = 0, lid = 0;
 };
 
@@ -64,10 +63,8 @@ Rig buildRig(const ShearCase& c, const Sample& sample) {
   Scene& s = rig.scene;
   s = sample.scene;
   const double h = sample.hi.z() - sample.lo.z();
-  rig.height_m = h;
   const Vec3 up(0, 0, h);
-  rig.top_first_sphere = s.spheres.size();
-  rig.top_first_block = s.blocks.size();
+  const std::size_t first = s.spheres.size();  // (the upper copy's spheres come after the lower's)
   std::uint32_t lower_groups = 0, upper_groups = 0;
   for (SphereSpec sp : sample.scene.spheres) {
     lower_groups |= 1u << sp.group;
@@ -81,7 +78,7 @@ Rig buildRig(const ShearCase& c, const Sample& sample) {
     upper_groups |= 1u << b.group;
     s.blocks.push_back(b);
   }
-  for (LinkSpec l : sample.scene.links) l.a += rig.top_first_sphere, l.b += rig.top_first_sphere, s.links.push_back(l);
+  for (LinkSpec l : sample.scene.links) l.a += first, l.b += first, s.links.push_back(l);
   rig.top_mass_kg = sample.mass_kg;
   const Vec3 lo = sample.lo, hi = sample.hi, mid = 0.5 * (lo + hi);
   const int m = sample.plate_material;
