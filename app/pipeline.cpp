@@ -379,7 +379,7 @@ bridge::RunOutcome runStages(const JsonDocument& doc, const bridge::RunContext& 
                               ctx.outdir / "law.json");
     json row = {{"velocity_m_s", v}, {"folder", dir.filename().string()}};
     // macro.impact always reports these: a missing key is a broken contract, not a blank cell.
-    for (const char* key : {"input_energy_J", "peak_force_N", "max_penetration_m", "contact_duration_s",
+    for (const char* key : {"outcome", "input_energy_J", "peak_force_N", "max_penetration_m", "contact_duration_s",
                             "rebound_velocity_m_s", "balance_rel_error"})
       row[key] = out.results.at(key);
     impacts.push_back(row);
@@ -433,12 +433,13 @@ bridge::RunOutcome runStages(const JsonDocument& doc, const bridge::RunContext& 
     << "material `" << c.structure_material << "` replaced by the calibrated one; laws the CC test cannot identify "
     << "(interface, impact) are carried from `" << base_law.string() << "`, as its provenance records.\n\n"
     << "![axial](4_fit/fit_axial.png)\n![lateral](4_fit/fit_lateral.png)\n\n"
-    << "## 3. Structure impacts (macro)\n\n| velocity (m/s) | energy (kJ) | peak force (kN) | penetration (mm) | "
-       "duration (ms) | energy balance error |\n|---|---|---|---|---|---|\n";
+    << "## 3. Structure impacts (macro)\n\n| velocity (m/s) | energy (kJ) | outcome | peak force (kN) | penetration "
+       "(mm) | "
+       "duration (ms) | energy balance error |\n|---|---|---|---|---|---|---|\n";
   for (const auto& row : impacts)
     r << "| " << fmt(row.at("velocity_m_s").get<double>()) << " | " << fmt(row.at("input_energy_J").get<double>() / 1e3)
-      << " | " << fmt(row.at("peak_force_N").get<double>() / 1e3) << " | "
-      << fmt(row.at("max_penetration_m").get<double>() * 1e3) << " | "
+      << " | " << row.at("outcome").get<std::string>() << " | " << fmt(row.at("peak_force_N").get<double>() / 1e3)
+      << " | " << fmt(row.at("max_penetration_m").get<double>() * 1e3) << " | "
       << fmt(row.at("contact_duration_s").get<double>() * 1e3) << " | "
       << fmt(row.at("balance_rel_error").get<double>(), 2) << " |\n";
   r << "\n![force](impact_force_time.png)\n";

@@ -123,6 +123,9 @@ RunSettings readRun(const JsonReader& root, bool sweep) {
   if (!r) return s;
   s.kinematics = r->choice("kinematics", {"x-only", "3d"}, "x-only") == "3d" ? Kinematics::ThreeD : Kinematics::XOnly;
   s.duration_s = r->number("duration_s", s.duration_s, Check::Positive);
+  s.max_duration_s = r->number("max_duration_s", 20.0 * s.duration_s, Check::Positive);
+  if (s.max_duration_s < s.duration_s) r->fail("max_duration_s", "must be >= duration_s");
+  s.rebound_restitution = r->number("rebound_restitution", s.rebound_restitution, Check::UnitOpen);
   s.time_step_fraction = r->number("time_step_fraction", s.time_step_fraction, Check::Positive);
   if (s.time_step_fraction > 1.0) r->fail("time_step_fraction", "must be <= 1 (a fraction of the critical time step)");
   if (r->has("time_step_s")) s.time_step_s = r->number("time_step_s", Check::Positive);

@@ -24,6 +24,20 @@ std::string fmt(double v) {
 
 }  // namespace
 
+const char* outcomeName(Outcome o) {
+  switch (o) {
+    case Outcome::Stopped:
+      return "stopped";
+    case Outcome::Rebounded:
+      return "rebounded";
+    case Outcome::Perforated:
+      return "perforated";
+    case Outcome::Unfinished:
+      break;
+  }
+  return "unfinished";
+}
+
 long long relax(Model& model, double dt, long long max_steps, double tolerance_J, bool& converged) {
   // Damping rate a tenth of the highest frequency: strong for the slow modes
   // that hold the residual motion, harmless for the stability of the fast ones.
@@ -59,7 +73,15 @@ ImpactResult runImpact(Model& model, const BoulderSpec& boulder, const RunSettin
     return res;
   }
   const Vec3 dir = boulder.velocity_m_s.normalized();
-  const auto nsteps = static_cast<long long>(std::ceil(run.duration_s / dt - 1e-9));
+  const double v0 = boulder.velocity_m_s.norm();
+  const double t_max = run.max_duration_s > 0.0 ? run.max_duration_s : 20.0 * run.duration_s;
+  const auto nsteps = static_cast<long long>(std::ceil(t_max / dt - 1e-9));
+  // The structure's back plane along the boulder's path: beyond it (the
+  // boulder wholly past it) the boulder went through.
+  double back_plane = -INFINITY;
+  for (const int b : s.back_nodes)
+    back_plane = std::max(back_plane, s.x0[static_cast<std::size_t>(b)] + 0.5 * s.edge_m);
+  double t_away = -1.0;  // since when the boulder has been away from the structure, moving back
   const Energy e_before = model.energy();
   const double t0 = model.time_s();
   const std::size_t n = s.nodeCount();
@@ -77,13 +99,19 @@ ImpactResult runImpact(Model& model, const BoulderSpec& boulder, const RunSettin
   long long k = 0;
   for (; k < nsteps; ++k) {
     const StepStatus st = model.step(dt);
+    // The step evaluated forces at x(n), t(n) = time - dt.
+    const double t = model.time_s() - dt - t0;
+    if (st == StepStatus::Perforation) {  // an answer, not a failure
+      res.outcome = Outcome::Perforated;
+      res.end_time_s = t;
+      ++k;
+      break;
+    }
     if (st != StepStatus::Ok) {
       res.ok = false;
       res.message = model.failure();
       break;
     }
-    // The step evaluated forces at x(n), t(n) = time - dt.
-    const double t = model.time_s() - dt - t0;
     const Energy& e = model.energy();
     const double e_now =
         e.kinetic_J + e.elastic_J + (e.plastic_J - e_before.plastic_J) + (e.friction_J - e_before.friction_J);
@@ -152,10 +180,8 @@ ImpactResult runImpact(Model& model, const BoulderSpec& boulder, const RunSettin
         rec->friction_J.push_back(e.friction_J - e_before.friction_J);
         rec->back_displacement_m.push_back(maxOver(s.back_nodes, ux));
       }
-      // Evenly spaced; the last one at the last step (t = duration - dt).
-      if (next_snap < snap_count &&
-          (t + 0.5 * dt >= run.duration_s * static_cast<double>(next_snap) / static_cast<double>(snap_count - 1) ||
-           k == nsteps - 1)) {
+      // Every duration_s / (snapshots - 1), for as long as the impact lasts.
+      if (t + 0.5 * dt >= run.duration_s * static_cast<double>(next_snap) / static_cast<double>(snap_count - 1)) {
         rec->snap_time_s.push_back(rec->time_offset_s + t);
         for (std::size_t i = 0; i < n; ++i) {
           rec->snap_displacement_m.push_back(ux[i]);
@@ -166,7 +192,33 @@ ImpactResult runImpact(Model& model, const BoulderSpec& boulder, const RunSettin
         ++next_snap;
       }
     }
+    // The outcome, once the boulder has touched: it passed the back plane;
+    // it has been away, moving back, for half as long as it was in contact
+    // (the face does not catch it up again) and its speed back tells
+    // rebounded from stopped; or it rests on the structure, everything at
+    // rest and the face no longer pushing it.
+    if (!touched) continue;
+    const double back_speed = -model.boulderVelocity().dot(dir);
+    if (model.boulderPositionAtForces().dot(dir) - boulder.diameter_m * 0.5 > back_plane) {
+      res.outcome = Outcome::Perforated;
+    } else if (!contact && back_speed > 0.0) {
+      if (t_away < 0.0) t_away = t;
+      const double in_contact_for = t_away - t_start;
+      if (t - t_away >= std::max(run.separated_for_ratio * in_contact_for, 20.0 * dt))
+        res.outcome = back_speed >= run.rebound_restitution * v0 ? Outcome::Rebounded : Outcome::Stopped;
+    } else {
+      t_away = -1.0;
+      // (at rest, and pushed no more: at its deepest the boulder is at rest too, pushed hardest)
+      if (contact && e.kinetic_J < 1e-6 * res.input_energy_J && force < 1e-3 * res.peak_force_N)
+        res.outcome = Outcome::Stopped;
+    }
+    if (res.outcome != Outcome::Unfinished) {
+      res.end_time_s = t;
+      ++k;
+      break;
+    }
   }
+  if (res.ok && res.outcome == Outcome::Unfinished) res.end_time_s = static_cast<double>(k) * dt;
   res.steps = k;  // steps of this impact (up to a failure)
   if (!res.ok) {
     model.removeBoulder();
@@ -177,10 +229,20 @@ ImpactResult runImpact(Model& model, const BoulderSpec& boulder, const RunSettin
     res.contact_at_end = in_contact;
     res.contact_duration_s = t_end - t_start;
     res.time_of_peak_s -= t_start;
-    res.last_separation_s = in_contact ? run.duration_s : res.last_separation_s - t_start;
+    res.last_separation_s = in_contact ? res.end_time_s - t_start : res.last_separation_s - t_start;
   } else {
     res.ok = false;
-    res.message = "the boulder never touched the structure within duration_s = " + fmt(run.duration_s) + " s";
+    res.message = "the boulder never touched the structure within max_duration_s = " + fmt(t_max) + " s";
+  }
+  if (rec != nullptr && (rec->snap_time_s.empty() || rec->snap_time_s.back() < rec->time_offset_s + res.end_time_s)) {
+    // The state the impact ended in.
+    rec->snap_time_s.push_back(rec->time_offset_s + res.end_time_s);
+    for (std::size_t i = 0; i < n; ++i) {
+      rec->snap_displacement_m.push_back(model.ux()[i]);
+      rec->snap_displacement_m.push_back(model.uy()[i]);
+      rec->snap_displacement_m.push_back(model.uz()[i]);
+      rec->snap_axial_force_N.push_back(model.cellAxialForce()[i]);
+    }
   }
   const Energy& e = model.energy();
   res.kinetic_J = e.kinetic_J;

@@ -12,15 +12,30 @@
 
 namespace gabion::macro {
 
+/// How an impact ends (docs/macro.md, Outcome).
+enum class Outcome {
+  Stopped,    ///< the boulder came to rest on the structure, or left it at less than `rebound_restitution` of its speed
+  Rebounded,  ///< it left the structure, moving back at `rebound_restitution` of its speed or more
+  Perforated,  ///< its centre entered a front cell, or it passed the structure's back plane
+  Unfinished   ///< none of these within max_duration_s
+};
+const char* outcomeName(Outcome o);
+
 /// How an impact is run (defaults documented in docs/macro.md).
 struct RunSettings {
   Kinematics kinematics = Kinematics::XOnly;
-  double duration_s = 0.2;          ///< simulated time per impact (s)
-  double time_step_fraction = 0.1;  ///< dt = fraction x critical time step
-  double time_step_s = 0.0;         ///< explicit dt (s); 0: from the fraction
-  int series_every_steps = 1;       ///< series sampling (steps)
-  int snapshots = 41;               ///< node snapshots per impact (evenly spaced, >= 2)
-  bool relax = true;                ///< bring the structure to rest after each impact
+  /// Simulated time per impact (s): the impact ends at its outcome, before
+  /// this time or after it, up to max_duration_s (the results do not depend
+  /// on it); the snapshots are spread over it.
+  double duration_s = 0.2;
+  double max_duration_s = 0.0;        ///< the longest an impact runs (s); 0: 20 x duration_s
+  double rebound_restitution = 0.05;  ///< speed back over speed in above which the boulder rebounded
+  double separated_for_ratio = 0.5;   ///< the boulder has left for good once away this long over the contact's duration
+  double time_step_fraction = 0.1;    ///< dt = fraction x critical time step
+  double time_step_s = 0.0;           ///< explicit dt (s); 0: from the fraction
+  int series_every_steps = 1;         ///< series sampling (steps)
+  int snapshots = 41;                 ///< node snapshots per impact (evenly spaced, >= 2)
+  bool relax = true;                  ///< bring the structure to rest after each impact
   long long relax_max_steps = 200000;
   double relax_tolerance = 1e-10;   ///< rest: structure kinetic energy < this x impact energy
   double max_balance_error = 0.05;  ///< an energy balance error above this stops the run (numerical failure)
@@ -29,7 +44,9 @@ struct RunSettings {
 /// The results of one impact.
 struct ImpactResult {
   bool ok = true;
-  std::string message;                ///< why it failed
+  std::string message;  ///< why it failed
+  Outcome outcome = Outcome::Unfinished;
+  double end_time_s = 0.0;            ///< when the impact ended, from its start (its outcome, or max_duration_s)
   double input_energy_J = 0.0;        ///< boulder kinetic energy before contact (J)
   double peak_force_N = 0.0;          ///< largest contact force on the boulder (N)
   double time_of_peak_s = 0.0;        ///< from the first contact (s)
@@ -64,10 +81,11 @@ struct Recording {
   double time_offset_s = 0.0;  ///< added to the impact's own time (impacts follow one another)
 };
 
-/// Runs one impact of `boulder` on `model` for run.duration_s; relaxes the
-/// structure afterwards when run.relax. Failures (time step above the
-/// critical one, non-finite state, perforation, energy balance runaway) give
-/// ok = false and a message; the model is then left as it was at the failure.
+/// Runs one impact of `boulder` on `model` until its outcome (at most
+/// run.max_duration_s); relaxes the structure afterwards when run.relax. A
+/// perforation is an outcome; failures (time step above the critical one,
+/// non-finite state, energy balance runaway, a boulder that never touches)
+/// give ok = false and a message, the model then left as it was.
 ImpactResult runImpact(Model& model, const BoulderSpec& boulder, const RunSettings& run, int impact_index,
                        Recording* recording);
 

@@ -107,6 +107,8 @@ json toJson(const ImpactResult& r) {
   json j;
   j["status"] = r.ok ? "ok" : "failed";
   if (!r.message.empty()) j["message"] = r.message;
+  if (r.ok) j["outcome"] = outcomeName(r.outcome);
+  j["end_time_s"] = r.end_time_s;
   j["input_energy_J"] = r.input_energy_J;
   j["peak_force_N"] = r.peak_force_N;
   j["time_of_peak_s"] = r.time_of_peak_s;
@@ -150,7 +152,7 @@ bridge::RunOutcome runImpactCase(const JsonDocument& doc, const bridge::RunConte
   bridge::RunOutcome out;
   bridge::Progress progress(ctx.progress, "macro.impact");
   for (std::size_t i = 0; i < p.c.impacts.size(); ++i) {
-    rec.time_offset_s = static_cast<double>(i) * p.c.run.duration_s;
+    if (i > 0) rec.time_offset_s += results.back().end_time_s;  // (each impact's series after the last one's)
     results.push_back(runImpact(model, p.c.impacts[i], p.c.run, static_cast<int>(i), &rec));
     progress.update(static_cast<double>(i + 1), static_cast<double>(p.c.impacts.size()), model.steps());
     if (!results.back().ok) {

@@ -8,6 +8,7 @@
 #include <cmath>
 #include <fstream>
 #include <iomanip>
+#include <map>
 #include <sstream>
 #include <stdexcept>
 #include <thread>
@@ -158,13 +159,16 @@ bridge::RunOutcome runSweepCase(const JsonDocument& doc, const bridge::RunContex
   // Table: CSV and HDF5, one row per point in grid order.
   std::ostringstream csv;
   csv << std::setprecision(10);
-  csv << "index,velocity_m_s,mass_kg,aim_y_m,aim_z_m,cells_x,cells_y,cells_z,impact_energy_J,status,peak_force_N,"
+  csv << "index,velocity_m_s,mass_kg,aim_y_m,aim_z_m,cells_x,cells_y,cells_z,impact_energy_J,status,outcome,peak_force_"
+         "N,"
          "max_penetration_m,contact_duration_s,rebound_velocity_m_s,max_back_face_displacement_m,plastic_energy_J,"
          "friction_energy_J,balance_rel_error,message\n";
-  std::vector<std::vector<double>> cols(17);
+  std::vector<std::vector<double>> cols(18);
   std::size_t failed = 0;
   double worst_balance = 0.0;
   std::vector<double> ok_energy, ok_peak, ok_pen, ok_mass;
+  std::vector<Outcome> ok_outcome;
+  std::map<std::string, int> outcomes;
   for (std::size_t i = 0; i < np; ++i) {
     const Point& pt = p.points[i];
     const ImpactResult& r = results[i];
@@ -172,7 +176,7 @@ bridge::RunOutcome runSweepCase(const JsonDocument& doc, const bridge::RunContex
     if (!r.ok) ++failed;
     const double nan = std::nan("");
     auto val = [&](double v) { return r.ok ? v : nan; };
-    const double row[17] = {static_cast<double>(i),
+    const double row[18] = {static_cast<double>(i),
                             pt.velocity_m_s,
                             pt.mass_kg,
                             pt.aim_y_m,
@@ -188,10 +192,12 @@ bridge::RunOutcome runSweepCase(const JsonDocument& doc, const bridge::RunContex
                             val(r.rebound_velocity_m_s),
                             val(r.max_back_face_displacement_m),
                             val(r.plastic_J),
-                            val(r.friction_J)};
-    for (std::size_t c = 0; c < 17; ++c) cols[c].push_back(row[c]);
+                            val(r.friction_J),
+                            r.ok ? static_cast<double>(r.outcome) : nan};
+    for (std::size_t c = 0; c < 18; ++c) cols[c].push_back(row[c]);
     csv << i << ',' << pt.velocity_m_s << ',' << pt.mass_kg << ',' << pt.aim_y_m << ',' << pt.aim_z_m << ',' << size[0]
-        << ',' << size[1] << ',' << size[2] << ',' << pt.energy_J << ',' << (r.ok ? "ok" : "failed");
+        << ',' << size[1] << ',' << size[2] << ',' << pt.energy_J << ',' << (r.ok ? "ok" : "failed") << ','
+        << (r.ok ? outcomeName(r.outcome) : "");
     if (r.ok) {
       csv << ',' << r.peak_force_N << ',' << r.max_penetration_m << ',' << r.contact_duration_s << ','
           << r.rebound_velocity_m_s << ',' << r.max_back_face_displacement_m << ',' << r.plastic_J << ','
@@ -201,13 +207,15 @@ bridge::RunOutcome runSweepCase(const JsonDocument& doc, const bridge::RunContex
       ok_peak.push_back(r.peak_force_N);
       ok_pen.push_back(r.max_penetration_m);
       ok_mass.push_back(pt.mass_kg);
+      ok_outcome.push_back(r.outcome);
+      ++outcomes[outcomeName(r.outcome)];
     } else {
       csv << ",,,,,,,," << csvQuote(r.message) << "\n";
     }
   }
   bridge::writeTextAtomic(ctx.outdir / "sweep.csv", csv.str());
   {
-    static const char* names[17] = {"index",
+    static const char* names[18] = {"index",
                                     "velocity_m_s",
                                     "mass_kg",
                                     "aim_y_m",
@@ -223,12 +231,14 @@ bridge::RunOutcome runSweepCase(const JsonDocument& doc, const bridge::RunContex
                                     "rebound_velocity_m_s",
                                     "max_back_face_displacement_m",
                                     "plastic_energy_J",
-                                    "friction_energy_J"};
-    static const char* units[17] = {"", "m/s", "kg", "m", "m",   "",  "",  "", "J",
-                                    "", "N",   "m",  "s", "m/s", "m", "J", "J"};
+                                    "friction_energy_J",
+                                    "outcome"};
+    static const char* units[18] = {"", "m/s", "kg", "m", "m",   "",  "",  "",  "J",
+                                    "", "N",   "m",  "s", "m/s", "m", "J", "J", ""};
     bridge::H5Writer h5(ctx.outdir / "result.h5");
     h5.attribute("/", "format", "gabion.macro.sweep/1");
-    for (std::size_t c = 0; c < 17; ++c) h5.write(std::string("/table/") + names[c], cols[c], units[c]);
+    for (std::size_t c = 0; c < 18; ++c) h5.write(std::string("/table/") + names[c], cols[c], units[c]);
+    h5.attribute("/table/outcome", "values", "0 stopped, 1 rebounded, 2 perforated, 3 unfinished");
     h5.commit();
   }
   json files = json::array({"sweep.csv", "result.h5"});
@@ -262,6 +272,16 @@ bridge::RunOutcome runSweepCase(const JsonDocument& doc, const bridge::RunContex
       force.series.push_back(sf);
       pen.series.push_back(sp);
     }
+    // Perforated points are marked over their mass's (their penetration is
+    // where the boulder was when it went through).
+    bridge::PlotSeries pf{"perforated", {}, {}, bridge::PlotSeries::Style::Markers};
+    bridge::PlotSeries pp = pf;
+    for (std::size_t i = 0; i < ok_energy.size(); ++i)
+      if (ok_outcome[i] == Outcome::Perforated) {
+        pf.x.push_back(ok_energy[i] / 1e3), pf.y.push_back(ok_peak[i] / 1e3);
+        pp.x.push_back(ok_energy[i] / 1e3), pp.y.push_back(ok_pen[i] * 1e3);
+      }
+    if (!pf.x.empty()) force.series.push_back(pf), pen.series.push_back(pp);
     bridge::writePlotPng(ctx.outdir / "chart_peak_force.png", force);
     bridge::writePlotPng(ctx.outdir / "chart_penetration.png", pen);
     files.push_back("chart_peak_force.png");
@@ -271,6 +291,7 @@ bridge::RunOutcome runSweepCase(const JsonDocument& doc, const bridge::RunContex
   bridge::RunOutcome out;
   out.results["points"] = np;
   out.results["failed_points"] = failed;
+  out.results["outcomes"] = outcomes;
   out.results["balance_rel_error"] = worst_balance;
   out.results["sweep_wall_time_s"] = wall;
   out.results["points_per_second"] = wall > 0.0 ? static_cast<double>(np) / wall : 0.0;

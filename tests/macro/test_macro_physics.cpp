@@ -239,3 +239,77 @@ TEST(MacroDeterminism, SameInputSameResult) {
   EXPECT_EQ(a.plastic_J, b.plastic_J);
   EXPECT_EQ(a.max_penetration_m, b.max_penetration_m);
 }
+
+// Every impact ends with an outcome (docs/macro.md, Outcome), constructed
+// here so that each can only be what it is:
+// - an elastic face on a rigid support gives the boulder its speed back:
+//   rebounded, at v0 (restitution 1, within the time step's error);
+// - at 2 m/s, a face that yields at 3 kN (2.6 % of the force an elastic one
+//   would reach) keeps nearly all the energy within 0.11 m, less than the
+//   boulder's radius: it comes back at fy / sqrt(k M), 2.6 % of its speed,
+//   under the 5 % of a rebound: stopped;
+// - a wall of light, weak cells lets the boulder through: its centre enters
+//   a front cell, perforated (an answer, not a failure).
+TEST(MacroOutcome, StoppedReboundedPerforatedOnConstructedCases) {
+  const double M = 170.0, v0 = 10.0, k = 2e7;
+  {
+    Structure s = buildStructure(grid(1, 1, 1), oneMaterial(epp(1e13, 1e15), epp(k, 1e12), 1e9));
+    Model model(s, Kinematics::XOnly);
+    const ImpactResult r = runImpact(model, boulderAt(s, 0, 0, M, v0), quickRun(0.05, 0.02), 0, nullptr);
+    ASSERT_TRUE(r.ok) << r.message;
+    EXPECT_EQ(r.outcome, Outcome::Rebounded);
+    EXPECT_NEAR(r.rebound_velocity_m_s, v0, 0.01 * v0);
+  }
+  {
+    const double fy = 3000.0, v = 2.0;
+    Structure s = buildStructure(grid(1, 1, 1), oneMaterial(epp(1e13, 1e15), epp(k, fy), 1e9));
+    Model model(s, Kinematics::XOnly);
+    const ImpactResult r = runImpact(model, boulderAt(s, 0, 0, M, v), quickRun(0.05, 0.02), 0, nullptr);
+    ASSERT_TRUE(r.ok) << r.message;
+    EXPECT_EQ(r.outcome, Outcome::Stopped);
+    EXPECT_NEAR(r.rebound_velocity_m_s, fy / std::sqrt(k * M), 0.01 * fy / std::sqrt(k * M));
+    EXPECT_NEAR(r.max_penetration_m, 0.5 * M * v * v / fy + 0.5 * fy / k, 0.01 * r.max_penetration_m);
+  }
+  {
+    Structure s = buildStructure(grid(2, 1, 1), oneMaterial(epp(1e6, 1e3), epp(1e6, 1e3), 10.0));
+    Model model(s, Kinematics::XOnly);
+    const ImpactResult r = runImpact(model, boulderAt(s, 0, 0, 2000.0, 20.0), quickRun(0.05, 0.05), 0, nullptr);
+    ASSERT_TRUE(r.ok) << r.message;
+    EXPECT_EQ(r.outcome, Outcome::Perforated);
+    EXPECT_GT(r.max_penetration_m, 0.0);
+  }
+}
+
+// The results do not depend on the duration asked for: an impact runs to its
+// outcome, past duration_s when it must, and stops there when it comes first.
+TEST(MacroOutcome, MaximaAndOutcomeDoNotDependOnTheDuration) {
+  Structure s = buildStructure(grid(3, 2, 2), oneMaterial(epp(2e7, 1e5), epp(2e7, 8e4), 183.0));
+  std::vector<ImpactResult> r;
+  for (const double duration : {0.02, 0.1, 0.4}) {
+    Model model(s, Kinematics::XOnly);
+    r.push_back(runImpact(model, boulderAt(s, 0, 0, 170.0, 15.0), quickRun(duration, 0.05), 0, nullptr));
+    ASSERT_TRUE(r.back().ok) << r.back().message;
+    EXPECT_NE(r.back().outcome, Outcome::Unfinished);
+  }
+  for (std::size_t i = 1; i < r.size(); ++i) {
+    EXPECT_EQ(r[i].outcome, r[0].outcome);
+    EXPECT_EQ(r[i].max_penetration_m, r[0].max_penetration_m);
+    EXPECT_EQ(r[i].max_back_face_displacement_m, r[0].max_back_face_displacement_m);
+    EXPECT_EQ(r[i].end_time_s, r[0].end_time_s);
+    EXPECT_EQ(r[i].peak_force_N, r[0].peak_force_N);
+  }
+  EXPECT_GT(r[0].end_time_s, 0.02);  // (it ran past the shortest duration)
+}
+
+// A run that reaches no outcome within max_duration_s says so.
+TEST(MacroOutcome, NoOutcomeWithinTheLongestRunIsUnfinished) {
+  Structure s = buildStructure(grid(3, 1, 1), oneMaterial(epp(2e7, 1e5), epp(2e7, 8e4), 183.0));
+  Model model(s, Kinematics::XOnly);
+  RunSettings run = quickRun(0.001, 0.05);
+  run.max_duration_s = 0.001;
+  const ImpactResult r = runImpact(model, boulderAt(s, 0, 0, 170.0, 15.0), run, 0, nullptr);
+  ASSERT_TRUE(r.ok) << r.message;
+  EXPECT_EQ(r.outcome, Outcome::Unfinished);
+  EXPECT_GE(r.end_time_s, 0.001);
+  EXPECT_LT(r.end_time_s, 0.001 + r.time_step_s * 1.0001);
+}
