@@ -103,13 +103,30 @@ void readAim(const JsonReader& r, BoulderSpec& b, bool& given) {
 
 BoulderSpec readBoulder(const JsonReader& r, bool& aim_given) {
   BoulderSpec b;
-  b.diameter_m = r.number("diameter_m", Check::Positive);
-  if (r.has("mass_kg") == r.has("density_kg_m3")) r.fail("mass_kg", "give exactly one of mass_kg and density_kg_m3");
-  if (r.has("mass_kg")) {
+  // Any two of diameter, mass and density give the third; all three must agree.
+  const int given = int{r.has("diameter_m")} + int{r.has("mass_kg")} + int{r.has("density_kg_m3")};
+  if (given < 2) r.failHere("give two of diameter_m, mass_kg and density_kg_m3 (the third follows)");
+  const double volume_per_d3 = M_PI / 6.0;  // a sphere's volume over its diameter cubed
+  if (!r.has("diameter_m")) {
     b.mass_kg = r.number("mass_kg", Check::Positive);
+    b.density_kg_m3 = r.number("density_kg_m3", Check::Positive);
+    b.diameter_m = std::cbrt(b.mass_kg / (b.density_kg_m3 * volume_per_d3));
   } else {
-    const double rad = 0.5 * b.diameter_m;
-    b.mass_kg = r.number("density_kg_m3", Check::Positive) * 4.0 / 3.0 * M_PI * rad * rad * rad;
+    b.diameter_m = r.number("diameter_m", Check::Positive);
+    const double volume = volume_per_d3 * b.diameter_m * b.diameter_m * b.diameter_m;
+    if (r.has("mass_kg")) {
+      b.mass_kg = r.number("mass_kg", Check::Positive);
+      b.density_kg_m3 = b.mass_kg / volume;
+      if (r.has("density_kg_m3")) {
+        const double rho = r.number("density_kg_m3", Check::Positive);
+        if (std::fabs(rho - b.density_kg_m3) > 1e-3 * rho)
+          r.fail("density_kg_m3", "disagrees with mass_kg and diameter_m (they give " +
+                                      std::to_string(b.density_kg_m3) + " kg/m3): give two of the three");
+      }
+    } else {
+      b.density_kg_m3 = r.number("density_kg_m3", Check::Positive);
+      b.mass_kg = b.density_kg_m3 * volume;
+    }
   }
   readVelocity(r, b, true);
   readAim(r, b, aim_given);
@@ -180,7 +197,7 @@ ImpactCase readImpactCase(const JsonDocument& doc, const std::optional<std::file
       bool given = aim;
       readVelocity(r, b, false);
       readAim(r, b, given);
-      if (r.has("mass_kg")) b.mass_kg = r.number("mass_kg", Check::Positive);
+      if (r.has("mass_kg")) b.setMass(r.number("mass_kg", Check::Positive), r.boolean("keep_diameter", false));
       c.impacts.push_back(b);
       c.aim_given.push_back(given);
     }
@@ -242,6 +259,7 @@ SweepSpec readSweep(const JsonReader& sw) {
   };
   s.velocity_m_s = axis("velocity_m_s", Check::Positive);
   s.mass_kg = axis("mass_kg", Check::Positive);
+  s.keep_diameter = sw.boolean("keep_diameter", false);
   if (sw.has("aim_point_m")) {
     const auto& list = sw.raw("aim_point_m");
     if (!list.is_array() || list.empty()) sw.fail("aim_point_m", "expected a list of [y, z] points (m)");

@@ -28,8 +28,9 @@ struct ImpactCase {
 
 /// One sweep axis: values in the order given.
 struct SweepSpec {
-  std::vector<double> velocity_m_s;                    ///< speeds along the boulder's direction; empty: the case's
-  std::vector<double> mass_kg;                         ///< boulder masses at the case's diameter; empty: the case's
+  std::vector<double> velocity_m_s;  ///< speeds along the boulder's direction; empty: the case's
+  std::vector<double> mass_kg;       ///< boulder masses; empty: the case's
+  bool keep_diameter = false;        ///< a mass changes the boulder's density, not (at its density) its diameter
   std::vector<std::pair<double, double>> aim_point_m;  ///< (y, z); empty: the case's aim
   std::vector<std::array<int, 3>> cells;               ///< structure sizes (x, y, z); empty: the case's
   bool chart = true;                                   ///< write the design charts

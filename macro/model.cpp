@@ -6,6 +6,15 @@
 
 namespace gabion::macro {
 
+void BoulderSpec::setMass(double mass, bool keep_diameter) {
+  const double pi = 3.14159265358979323846;
+  mass_kg = mass;
+  if (keep_diameter)
+    density_kg_m3 = mass / (pi / 6.0 * diameter_m * diameter_m * diameter_m);
+  else
+    diameter_m = std::cbrt(6.0 * mass / (pi * density_kg_m3));
+}
+
 namespace {
 
 // One link's cell law (bridge::elasticPlasticResponse, the return mapping

@@ -27,6 +27,10 @@ using Vec3 = Eigen::Vector3d;
 struct BoulderSpec {
   double diameter_m = 0.5;        ///< (m)
   double mass_kg = 170.0;         ///< (kg)
+  double density_kg_m3 = 2597.0;  ///< mass over the sphere's volume (kg/m3)
+  /// Gives it another mass: its diameter follows at its density, unless
+  /// `keep_diameter` (its density follows).
+  void setMass(double mass, bool keep_diameter);
   Vec3 velocity_m_s{20.0, 0, 0};  ///< velocity vector (m/s); its x component must be > 0
   double aim_y_m = 0.0;           ///< where the centre's path meets the front plane (m)
   double aim_z_m = 0.0;           ///< (m)

@@ -103,7 +103,7 @@ ImpactResult runPoint(const Plan& p, const Point& pt) {
   }
   BoulderSpec b = p.c.impacts.front();
   b.velocity_m_s = b.velocity_m_s.normalized() * pt.velocity_m_s;
-  b.mass_kg = pt.mass_kg;
+  b.setMass(pt.mass_kg, p.sweep.keep_diameter);
   b.aim_y_m = pt.aim_y_m;
   b.aim_z_m = pt.aim_z_m;
   try {
@@ -159,11 +159,12 @@ bridge::RunOutcome runSweepCase(const JsonDocument& doc, const bridge::RunContex
   // Table: CSV and HDF5, one row per point in grid order.
   std::ostringstream csv;
   csv << std::setprecision(10);
-  csv << "index,velocity_m_s,mass_kg,aim_y_m,aim_z_m,cells_x,cells_y,cells_z,impact_energy_J,status,outcome,peak_force_"
+  csv << "index,velocity_m_s,mass_kg,boulder_diameter_m,aim_y_m,aim_z_m,cells_x,cells_y,cells_z,impact_energy_J,status,"
+         "outcome,peak_force_"
          "N,"
          "max_penetration_m,contact_duration_s,rebound_velocity_m_s,max_back_face_displacement_m,plastic_energy_J,"
          "friction_energy_J,balance_rel_error,message\n";
-  std::vector<std::vector<double>> cols(18);
+  std::vector<std::vector<double>> cols(19);
   std::size_t failed = 0;
   double worst_balance = 0.0;
   std::vector<double> ok_energy, ok_peak, ok_pen, ok_mass;
@@ -176,9 +177,12 @@ bridge::RunOutcome runSweepCase(const JsonDocument& doc, const bridge::RunContex
     if (!r.ok) ++failed;
     const double nan = std::nan("");
     auto val = [&](double v) { return r.ok ? v : nan; };
-    const double row[18] = {static_cast<double>(i),
+    BoulderSpec boulder = p.c.impacts.front();  // (its diameter at this mass)
+    boulder.setMass(pt.mass_kg, p.sweep.keep_diameter);
+    const double row[19] = {static_cast<double>(i),
                             pt.velocity_m_s,
                             pt.mass_kg,
+                            boulder.diameter_m,
                             pt.aim_y_m,
                             pt.aim_z_m,
                             static_cast<double>(size[0]),
@@ -194,10 +198,10 @@ bridge::RunOutcome runSweepCase(const JsonDocument& doc, const bridge::RunContex
                             val(r.plastic_J),
                             val(r.friction_J),
                             r.ok ? static_cast<double>(r.outcome) : nan};
-    for (std::size_t c = 0; c < 18; ++c) cols[c].push_back(row[c]);
-    csv << i << ',' << pt.velocity_m_s << ',' << pt.mass_kg << ',' << pt.aim_y_m << ',' << pt.aim_z_m << ',' << size[0]
-        << ',' << size[1] << ',' << size[2] << ',' << pt.energy_J << ',' << (r.ok ? "ok" : "failed") << ','
-        << (r.ok ? outcomeName(r.outcome) : "");
+    for (std::size_t c = 0; c < 19; ++c) cols[c].push_back(row[c]);
+    csv << i << ',' << pt.velocity_m_s << ',' << pt.mass_kg << ',' << boulder.diameter_m << ',' << pt.aim_y_m << ','
+        << pt.aim_z_m << ',' << size[0] << ',' << size[1] << ',' << size[2] << ',' << pt.energy_J << ','
+        << (r.ok ? "ok" : "failed") << ',' << (r.ok ? outcomeName(r.outcome) : "");
     if (r.ok) {
       csv << ',' << r.peak_force_N << ',' << r.max_penetration_m << ',' << r.contact_duration_s << ','
           << r.rebound_velocity_m_s << ',' << r.max_back_face_displacement_m << ',' << r.plastic_J << ','
@@ -215,9 +219,10 @@ bridge::RunOutcome runSweepCase(const JsonDocument& doc, const bridge::RunContex
   }
   bridge::writeTextAtomic(ctx.outdir / "sweep.csv", csv.str());
   {
-    static const char* names[18] = {"index",
+    static const char* names[19] = {"index",
                                     "velocity_m_s",
                                     "mass_kg",
+                                    "boulder_diameter_m",
                                     "aim_y_m",
                                     "aim_z_m",
                                     "cells_x",
@@ -233,11 +238,11 @@ bridge::RunOutcome runSweepCase(const JsonDocument& doc, const bridge::RunContex
                                     "plastic_energy_J",
                                     "friction_energy_J",
                                     "outcome"};
-    static const char* units[18] = {"", "m/s", "kg", "m", "m",   "",  "",  "",  "J",
+    static const char* units[19] = {"", "m/s", "kg", "m", "m",   "m", "",  "",  "", "J",
                                     "", "N",   "m",  "s", "m/s", "m", "J", "J", ""};
     bridge::H5Writer h5(ctx.outdir / "result.h5");
     h5.attribute("/", "format", "gabion.macro.sweep/1");
-    for (std::size_t c = 0; c < 18; ++c) h5.write(std::string("/table/") + names[c], cols[c], units[c]);
+    for (std::size_t c = 0; c < 19; ++c) h5.write(std::string("/table/") + names[c], cols[c], units[c]);
     h5.attribute("/table/outcome", "values", "0 stopped, 1 rebounded, 2 perforated, 3 unfinished");
     h5.commit();
   }

@@ -216,6 +216,33 @@ TEST(MacroCli, SweepIsDeterministicAndRecordsFailures) {
   EXPECT_NE(csv[0].find("aim point outside the front face"), std::string::npos);
 }
 
+// A boulder is a sphere of one density: any two of diameter, mass and
+// density give the third, and a sweep over mass changes the diameter at the
+// boulder's density (a 2,000 kg boulder of 0.5 m would be 30 t/m3), or with
+// keep_diameter the density.
+TEST(MacroCli, BoulderMassDiameterAndDensityAgree) {
+  const auto dir = scratchDir("macro_boulder");
+  json c = readJson(kSource + "/cases/macro_sweep.json");
+  c["law_file"] = kSource + "/cases/laws/illustrative.json";
+  c["boulder"] = {{"mass_kg", 1000.0 * M_PI / 6.0 * 2.6}, {"density_kg_m3", 2600}, {"velocity_m_s", 10}};  // 1 m
+  c["sweep"] = {
+      {"velocity_m_s", {10}}, {"mass_kg", {2600.0 * M_PI / 6.0 * 0.125, 2600.0 * M_PI / 6.0 * 8.0}}, {"chart", false}};
+  writeFile(dir / "sweep.json", c.dump());
+  auto r = runGabion("run " + (dir / "sweep.json").string() + " -q -o " + (dir / "a").string());
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  std::vector<double> d = gabion::bridge::H5Reader(dir / "a" / "result.h5").read("/table/boulder_diameter_m");
+  ASSERT_EQ(d.size(), 2u);
+  EXPECT_NEAR(d[0], 0.5, 1e-9);  // 170 kg at 2,600 kg/m3
+  EXPECT_NEAR(d[1], 2.0, 1e-9);  // 8 times the mass: twice the diameter
+  c["sweep"]["keep_diameter"] = true;
+  writeFile(dir / "keep.json", c.dump());
+  r = runGabion("run " + (dir / "keep.json").string() + " -q -o " + (dir / "b").string());
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  d = gabion::bridge::H5Reader(dir / "b" / "result.h5").read("/table/boulder_diameter_m");
+  EXPECT_NEAR(d[0], 1.0, 1e-9);
+  EXPECT_NEAR(d[1], 1.0, 1e-9);
+}
+
 // Bad input exits with 2 and names the file and the field.
 TEST(MacroCli, BadInputNamesTheField) {
   const auto dir = scratchDir("macro_bad");
@@ -251,6 +278,8 @@ TEST(MacroCli, BadInputNamesTheField) {
       {"unknown_material", [](json& c) { c["structure"]["material"]["core"] = "granite"; }, "/structure"},
       {"no_laws", [](json& c) { c.erase("law_file"); }, "/law_file"},
       {"bad_kinematics", [](json& c) { c["run"]["kinematics"] = "2d"; }, "/run/kinematics"},
+      {"boulder_disagrees", [](json& c) { c["boulder"]["mass_kg"] = 2000; }, "/boulder/density_kg_m3"},
+      {"boulder_underdetermined", [](json& c) { c["boulder"].erase("density_kg_m3"); }, "/boulder"},
   };
   for (const auto& b : bad) {
     json c = base;
