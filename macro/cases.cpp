@@ -10,6 +10,9 @@ std::vector<bridge::CaseKind> caseKinds() {
        checkImpactCase, runImpactCase},
       {"macro.sweep", "a grid of macro impacts (velocity, mass, aim point, structure size) run in parallel",
        checkSweepCase, runSweepCase},
+      {"macro.capacity",
+       "the largest impact energy a structure holds with the acceptance criteria met (bisection over velocity or mass)",
+       checkCapacityCase, runCapacityCase},
   };
 }
 

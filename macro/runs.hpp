@@ -1,8 +1,9 @@
 #pragma once
 /// \file
-/// The two case kinds of the macro module: `macro.impact` (one structure,
-/// one impact or a list of impacts, full result files) and `macro.sweep` (a
-/// grid of impacts run in parallel, a table and design charts).
+/// The case kinds of the macro module: `macro.impact` (one structure, one
+/// impact or a list of impacts, full result files), `macro.sweep` (a grid of
+/// impacts run in parallel, a table and design charts) and `macro.capacity`
+/// (the largest impact energy that meets the acceptance criteria).
 #include "bridge/run.hpp"
 #include "macro/impact.hpp"
 
@@ -17,6 +18,11 @@ bridge::RunOutcome runImpactCase(const bridge::JsonDocument& doc, const bridge::
 void checkSweepCase(const bridge::JsonDocument& doc);
 /// Runs a macro.sweep case; writes sweep.csv, result.h5 and the design charts.
 bridge::RunOutcome runSweepCase(const bridge::JsonDocument& doc, const bridge::RunContext& ctx);
+
+/// Validates a macro.capacity case.
+void checkCapacityCase(const bridge::JsonDocument& doc);
+/// Runs a macro.capacity case: bisection over the boulder's velocity or mass.
+bridge::RunOutcome runCapacityCase(const bridge::JsonDocument& doc, const bridge::RunContext& ctx);
 
 /// The summary entries of one impact.
 nlohmann::json toJson(const ImpactResult& r);

@@ -6,6 +6,7 @@
 #include <fstream>
 #include <functional>
 #include <nlohmann/json.hpp>
+#include <tuple>
 
 #include "bridge/json_reader.hpp"
 #include "bridge/output.hpp"
@@ -241,6 +242,75 @@ TEST(MacroCli, BoulderMassDiameterAndDensityAgree) {
   d = gabion::bridge::H5Reader(dir / "b" / "result.h5").read("/table/boulder_diameter_m");
   EXPECT_NEAR(d[0], 1.0, 1e-9);
   EXPECT_NEAR(d[1], 1.0, 1e-9);
+}
+
+// The capacity query (cases/macro_capacity.json) against a fine sweep of the
+// same wall: every swept impact below the capacity meets the criteria, every
+// one above the bracket (capacity x (1 + tolerance)) fails one. A range in
+// which nothing meets them is an answer naming the criterion, not a failure.
+TEST(MacroCli, CapacityAgreesWithAFineSweep) {
+  const auto dir = scratchDir("macro_capacity");
+  json c = readJson(kSource + "/cases/macro_capacity.json");
+  c["law_file"] = kSource + "/cases/laws/illustrative.json";
+  writeFile(dir / "capacity.json", c.dump());
+  auto r = runGabion("run " + (dir / "capacity.json").string() + " -q -o " + (dir / "cap").string());
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  const json cap = readJson(dir / "cap" / "summary.json");
+  ASSERT_TRUE(cap.at("converged").get<bool>());
+  const double e_cap = cap.at("capacity_energy_J").get<double>(), tol = c["capacity"]["tolerance"].get<double>();
+  const double pen_max = c["capacity"]["criteria"]["max_penetration_m"].get<double>();
+  const double back_max = c["capacity"]["criteria"]["max_back_face_displacement_m"].get<double>();
+
+  json sw = c;
+  sw["kind"] = "macro.sweep";
+  sw.erase("capacity");
+  sw["sweep"] = {{"velocity_m_s", {{"from", 2}, {"to", 60}, {"count", 59}}}, {"chart", false}};
+  writeFile(dir / "sweep.json", sw.dump());
+  r = runGabion("run " + (dir / "sweep.json").string() + " -q -o " + (dir / "sweep").string());
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  const gabion::bridge::H5Reader h5(dir / "sweep" / "result.h5");
+  const auto energy = h5.read("/table/impact_energy_J"), outcome = h5.read("/table/outcome"),
+             pen = h5.read("/table/max_penetration_m"), back = h5.read("/table/max_back_face_displacement_m");
+  int below = 0, above = 0;
+  for (std::size_t i = 0; i < energy.size(); ++i) {
+    const bool held = outcome[i] == 0.0 || outcome[i] == 1.0;  // stopped or rebounded
+    const bool met = held && pen[i] <= pen_max && back[i] <= back_max;
+    if (energy[i] <= e_cap) {
+      EXPECT_TRUE(met) << energy[i] << " J";
+      ++below;
+    }
+    if (energy[i] >= e_cap * (1.0 + tol)) {
+      EXPECT_FALSE(met) << energy[i] << " J";
+      ++above;
+    }
+  }
+  EXPECT_GT(below, 10);
+  EXPECT_GT(above, 10);
+
+  c["capacity"]["range"] = {50, 60};
+  writeFile(dir / "none.json", c.dump());
+  r = runGabion("run " + (dir / "none.json").string() + " -q -o " + (dir / "none").string());
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  const json none = readJson(dir / "none" / "summary.json");
+  EXPECT_TRUE(none.at("capacity_energy_J").is_null());
+  EXPECT_EQ(none.at("governing_criterion"), "penetration");
+
+  for (const auto& [name, edit, pointer] :
+       std::vector<std::tuple<std::string, std::function<void(json&)>, std::string>>{
+           {"inverted",
+            [](json& x) {
+              x["capacity"]["range"] = {40, 20};
+            },
+            "/capacity/range"},
+           {"limit", [](json& x) { x["capacity"]["criteria"]["max_penetration_m"] = -1; },
+            "/capacity/criteria/max_penetration_m"}}) {
+    json bad = c;
+    edit(bad);
+    writeFile(dir / (name + ".json"), bad.dump());
+    const auto b = runGabion("check " + (dir / (name + ".json")).string());
+    EXPECT_EQ(b.exit_code, 2) << name << ": " << b.output;
+    EXPECT_NE(b.output.find(pointer), std::string::npos) << name << ": " << b.output;
+  }
 }
 
 // Bad input exits with 2 and names the file and the field.

@@ -1,0 +1,235 @@
+// The macro.capacity case kind: the largest impact energy a structure takes
+// with every acceptance criterion met (the boulder held, the back face and
+// the penetration within their limits), found by bisection over the
+// boulder's velocity or mass (docs/macro.md, Capacity).
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <sstream>
+
+#include "bridge/errors.hpp"
+#include "bridge/output.hpp"
+#include "bridge/plot.hpp"
+#include "macro/case_reader.hpp"
+#include "macro/runs.hpp"
+
+namespace gabion::macro {
+
+using bridge::Check;
+using bridge::JsonDocument;
+using bridge::JsonReader;
+using nlohmann::json;
+
+namespace {
+
+struct Criteria {
+  double max_back_face_m = std::numeric_limits<double>::infinity();
+  double max_penetration_m = std::numeric_limits<double>::infinity();
+};
+
+struct CapacitySpec {
+  bool over_mass = false;  // else over velocity
+  double lo = 0.0, hi = 0.0;
+  Criteria criteria;
+  double tolerance = 0.01;  // on the energy bracket, relative
+  int max_evaluations = 60;
+  bool keep_diameter = false;
+};
+
+struct Plan {
+  ImpactCase c;
+  CapacitySpec spec;
+  Structure structure;
+};
+
+Plan plan(const JsonDocument& doc, const std::optional<std::filesystem::path>& law) {
+  Plan p;
+  p.c = readImpactCase(doc, law, true);
+  const JsonReader r = doc.root().object("capacity");
+  CapacitySpec& s = p.spec;
+  const std::string over = r.choice("over", {"velocity_m_s", "mass_kg"}, "velocity_m_s");
+  s.over_mass = over == "mass_kg";
+  const std::vector<double> range = r.numbers("range", Check::Positive, 2);
+  if (range.size() != 2) r.fail("range", "expected [lowest, highest] of " + over);
+  if (!(range[0] < range[1])) r.fail("range", "the lowest must be below the highest");
+  s.lo = range[0], s.hi = range[1];
+  if (const auto c = r.optionalObject("criteria")) {
+    s.criteria.max_back_face_m =
+        c->number("max_back_face_displacement_m", s.criteria.max_back_face_m, Check::Positive);
+    s.criteria.max_penetration_m = c->number("max_penetration_m", s.criteria.max_penetration_m, Check::Positive);
+  }
+  s.tolerance = r.number("tolerance", s.tolerance, Check::Positive);
+  if (s.tolerance >= 0.5) r.fail("tolerance", "must be < 0.5 (the bracket's width over its energy)");
+  s.max_evaluations = static_cast<int>(r.integer("max_evaluations", s.max_evaluations, 3));
+  s.keep_diameter = r.boolean("keep_diameter", false);
+  try {
+    p.structure = buildStructure(p.c.structure, p.c.laws);
+  } catch (const std::invalid_argument& e) {
+    throw bridge::InputError(doc.file(), "/structure", e.what());
+  }
+  resolveAims(doc, p.c, p.structure);
+  return p;
+}
+
+// One impact at x (a velocity or a mass) and what it says of the criteria.
+struct Evaluation {
+  double x = 0.0, energy_J = 0.0;
+  ImpactResult result;
+  bool met = false;
+  std::string failed;  // the criterion it failed by the most ("held", "back_face", "penetration")
+};
+
+Evaluation evaluate(const Plan& p, double x) {
+  Evaluation ev;
+  ev.x = x;
+  BoulderSpec b = p.c.impacts.front();
+  if (p.spec.over_mass)
+    b.setMass(x, p.spec.keep_diameter);
+  else
+    b.velocity_m_s = b.velocity_m_s.normalized() * x;
+  ev.energy_J = 0.5 * b.mass_kg * b.velocity_m_s.squaredNorm();
+  Model model(p.structure, p.c.run.kinematics);
+  ev.result = runImpact(model, b, p.c.run, 0, nullptr);
+  if (!ev.result.ok) return ev;
+  const ImpactResult& r = ev.result;
+  const bool held = r.outcome == Outcome::Stopped || r.outcome == Outcome::Rebounded;
+  const double back = r.max_back_face_displacement_m / p.spec.criteria.max_back_face_m;
+  const double pen = r.max_penetration_m / p.spec.criteria.max_penetration_m;
+  ev.met = held && back <= 1.0 && pen <= 1.0;
+  if (!held)
+    ev.failed = "held";
+  else if (back > 1.0 || pen > 1.0)
+    ev.failed = back >= pen ? "back_face" : "penetration";
+  return ev;
+}
+
+json toJson(const Evaluation& e, const CapacitySpec& s) {
+  json j = {{s.over_mass ? "mass_kg" : "velocity_m_s", e.x}, {"energy_J", e.energy_J}, {"met", e.met}};
+  if (!e.result.ok) {
+    j["status"] = "failed", j["message"] = e.result.message;
+    return j;
+  }
+  j["outcome"] = outcomeName(e.result.outcome);
+  j["max_penetration_m"] = e.result.max_penetration_m;
+  j["max_back_face_displacement_m"] = e.result.max_back_face_displacement_m;
+  j["peak_force_N"] = e.result.peak_force_N;
+  if (!e.failed.empty()) j["failed"] = e.failed;
+  return j;
+}
+
+const char* criterionText(const std::string& c) {
+  if (c == "held") return "the boulder is held (not perforated, and finished)";
+  if (c == "back_face") return "the back face's displacement";
+  return "the penetration";
+}
+
+}  // namespace
+
+void checkCapacityCase(const JsonDocument& doc) {
+  plan(doc, std::nullopt);
+}
+
+bridge::RunOutcome runCapacityCase(const JsonDocument& doc, const bridge::RunContext& ctx) {
+  const Plan p = plan(doc, ctx.law_file);
+  const CapacitySpec& s = p.spec;
+  std::vector<Evaluation> evals;
+  bridge::RunOutcome out;
+  const auto run = [&](double x) -> const Evaluation& {
+    evals.push_back(evaluate(p, x));
+    if (!evals.back().result.ok)
+      throw bridge::NumericalError(0, 0.0,
+                                   "the impact at " + std::to_string(x) + " failed: " + evals.back().result.message);
+    return evals.back();
+  };
+  // The energy grows with x (as x^2 over velocity, as x over mass): bisect
+  // between a point that meets every criterion and one that does not, until
+  // the bracket's energies are within `tolerance` of each other.
+  const Evaluation lo = run(s.lo);
+  const Evaluation hi = run(s.hi);
+  json& r = out.results;
+  const char* key = s.over_mass ? "mass_kg" : "velocity_m_s";
+  std::ostringstream answer;
+  answer.precision(4);
+  if (!lo.met) {
+    r["capacity_energy_J"] = nullptr;
+    r["governing_criterion"] = lo.failed;
+    answer << "no impact in the range meets the criteria: at the lowest, " << s.lo << " (" << lo.energy_J / 1e3
+           << " kJ), " << criterionText(lo.failed) << " already fails";
+  } else if (hi.met) {
+    r["capacity_energy_J"] = hi.energy_J;
+    r[key] = s.hi;
+    r["governing_criterion"] = nullptr;
+    r["capacity_is_at_least"] = true;
+    answer << "every criterion is met up to the highest of the range, " << s.hi << " (" << hi.energy_J / 1e3
+           << " kJ): the capacity is at least that";
+  } else {
+    double a = s.lo, b = s.hi;
+    Evaluation good = lo, bad = hi;
+    while ((bad.energy_J - good.energy_J) > s.tolerance * good.energy_J &&
+           static_cast<int>(evals.size()) < s.max_evaluations) {
+      const double mid = s.over_mass ? 0.5 * (a + b) : std::sqrt(0.5 * (a * a + b * b));  // (mid-energy)
+      const Evaluation e = run(mid);
+      if (e.met)
+        a = mid, good = e;
+      else
+        b = mid, bad = e;
+    }
+    r["capacity_energy_J"] = good.energy_J;
+    r[key] = good.x;
+    r["bracket_energy_J"] = {good.energy_J, bad.energy_J};
+    r["governing_criterion"] = bad.failed;
+    r["converged"] = (bad.energy_J - good.energy_J) <= s.tolerance * good.energy_J;
+    const ImpactResult& g = good.result;
+    json margin = json::object();
+    if (std::isfinite(s.criteria.max_back_face_m))
+      margin["back_face"] = 1.0 - g.max_back_face_displacement_m / s.criteria.max_back_face_m;
+    if (std::isfinite(s.criteria.max_penetration_m))
+      margin["penetration"] = 1.0 - g.max_penetration_m / s.criteria.max_penetration_m;
+    r["margins_at_capacity"] = margin;
+    answer << "capacity " << good.energy_J / 1e3 << " kJ (" << key << " " << good.x << "; "
+           << outcomeName(g.outcome) << ", penetration " << 1e3 * g.max_penetration_m << " mm, back face "
+           << 1e3 * g.max_back_face_displacement_m << " mm); above it " << criterionText(bad.failed)
+           << " governs (at " << bad.energy_J / 1e3 << " kJ)";
+  }
+  r["answer"] = answer.str();
+  r["criteria"] = {{"held", true},
+                   {"max_back_face_displacement_m",
+                    std::isfinite(s.criteria.max_back_face_m) ? json(s.criteria.max_back_face_m) : json(nullptr)},
+                   {"max_penetration_m",
+                    std::isfinite(s.criteria.max_penetration_m) ? json(s.criteria.max_penetration_m) : json(nullptr)}};
+  json list = json::array();
+  for (const Evaluation& e : evals) list.push_back(toJson(e, s));
+  r["evaluations"] = list;
+  r["tolerance"] = s.tolerance;
+
+  // The evaluations against energy, with the limits.
+  std::vector<Evaluation> sorted = evals;
+  std::sort(sorted.begin(), sorted.end(), [](const Evaluation& x, const Evaluation& y) { return x.energy_J < y.energy_J; });
+  bridge::PlotSpec plot;
+  plot.title = "Capacity: the impacts the search ran";
+  plot.x_label = "impact energy (kJ)";
+  plot.y_label = "displacement (mm)";
+  bridge::PlotSeries pen{"max penetration", {}, {}, bridge::PlotSeries::Style::LineMarkers};
+  bridge::PlotSeries back{"max back-face displacement", {}, {}, bridge::PlotSeries::Style::LineMarkers};
+  for (const Evaluation& e : sorted) {
+    pen.x.push_back(e.energy_J / 1e3), pen.y.push_back(1e3 * e.result.max_penetration_m);
+    back.x.push_back(e.energy_J / 1e3), back.y.push_back(1e3 * e.result.max_back_face_displacement_m);
+  }
+  plot.series = {pen, back};
+  const double e0 = sorted.front().energy_J / 1e3, e1 = sorted.back().energy_J / 1e3;
+  if (std::isfinite(s.criteria.max_penetration_m))
+    plot.series.push_back({"penetration limit", {e0, e1}, {1e3 * s.criteria.max_penetration_m, 1e3 * s.criteria.max_penetration_m},
+                           bridge::PlotSeries::Style::Line});
+  if (std::isfinite(s.criteria.max_back_face_m))
+    plot.series.push_back({"back-face limit", {e0, e1}, {1e3 * s.criteria.max_back_face_m, 1e3 * s.criteria.max_back_face_m},
+                           bridge::PlotSeries::Style::Line});
+  bridge::PlotSeries held{"not held (perforated or unfinished)", {}, {}, bridge::PlotSeries::Style::Markers};
+  for (const Evaluation& e : sorted)
+    if (e.failed == "held") held.x.push_back(e.energy_J / 1e3), held.y.push_back(1e3 * e.result.max_penetration_m);
+  if (!held.x.empty()) plot.series.push_back(held);
+  bridge::writePlotPng(ctx.outdir / "capacity.png", plot);
+  out.report = "macro.capacity: " + answer.str() + " (" + std::to_string(evals.size()) + " impacts)\n";
+  return out;
+}
+
+}  // namespace gabion::macro
