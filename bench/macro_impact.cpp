@@ -97,9 +97,10 @@ void sweep(const std::string& law, int threads, int points) {
   const double wall = seconds(t0);
   const double cpu = static_cast<double>(std::clock() - c0) / CLOCKS_PER_SEC;  // all threads
   std::printf(
-      "sweep: %d points (10x10x10 wall, 0.2 s each), %d threads: %.1f s wall (%.1f points/s), %.1f s CPU "
-      "(all threads), failed %s, max balance error %.2e, files in %s\n",
+      "sweep: %d points (10x10x10 wall, each to its outcome), %d threads: %.1f s wall (%.1f points/s), %.1f s CPU "
+      "(all threads), failed %s, outcomes %s, max balance error %.2e, files in %s\n",
       nm * nv, threads, wall, nm * nv / wall, cpu, out.results.at("failed_points").dump().c_str(),
+      out.results.at("outcomes").dump().c_str(),
       out.results.at("balance_rel_error").get<double>(), ctx.outdir.string().c_str());
 }
 
