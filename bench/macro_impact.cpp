@@ -100,8 +100,8 @@ void sweep(const std::string& law, int threads, int points) {
       "sweep: %d points (10x10x10 wall, each to its outcome), %d threads: %.1f s wall (%.1f points/s), %.1f s CPU "
       "(all threads), failed %s, outcomes %s, max balance error %.2e, files in %s\n",
       nm * nv, threads, wall, nm * nv / wall, cpu, out.results.at("failed_points").dump().c_str(),
-      out.results.at("outcomes").dump().c_str(),
-      out.results.at("balance_rel_error").get<double>(), ctx.outdir.string().c_str());
+      out.results.at("outcomes").dump().c_str(), out.results.at("balance_rel_error").get<double>(),
+      ctx.outdir.string().c_str());
 }
 
 }  // namespace

@@ -54,8 +54,7 @@ Plan plan(const JsonDocument& doc, const std::optional<std::filesystem::path>& l
   if (!(range[0] < range[1])) r.fail("range", "the lowest must be below the highest");
   s.lo = range[0], s.hi = range[1];
   if (const auto c = r.optionalObject("criteria")) {
-    s.criteria.max_back_face_m =
-        c->number("max_back_face_displacement_m", s.criteria.max_back_face_m, Check::Positive);
+    s.criteria.max_back_face_m = c->number("max_back_face_displacement_m", s.criteria.max_back_face_m, Check::Positive);
     s.criteria.max_penetration_m = c->number("max_penetration_m", s.criteria.max_penetration_m, Check::Positive);
   }
   s.tolerance = r.number("tolerance", s.tolerance, Check::Positive);
@@ -186,10 +185,9 @@ bridge::RunOutcome runCapacityCase(const JsonDocument& doc, const bridge::RunCon
     if (std::isfinite(s.criteria.max_penetration_m))
       margin["penetration"] = 1.0 - g.max_penetration_m / s.criteria.max_penetration_m;
     r["margins_at_capacity"] = margin;
-    answer << "capacity " << good.energy_J / 1e3 << " kJ (" << key << " " << good.x << "; "
-           << outcomeName(g.outcome) << ", penetration " << 1e3 * g.max_penetration_m << " mm, back face "
-           << 1e3 * g.max_back_face_displacement_m << " mm); above it " << criterionText(bad.failed)
-           << " governs (at " << bad.energy_J / 1e3 << " kJ)";
+    answer << "capacity " << good.energy_J / 1e3 << " kJ (" << key << " " << good.x << "; " << outcomeName(g.outcome)
+           << ", penetration " << 1e3 * g.max_penetration_m << " mm, back face " << 1e3 * g.max_back_face_displacement_m
+           << " mm); above it " << criterionText(bad.failed) << " governs (at " << bad.energy_J / 1e3 << " kJ)";
   }
   r["answer"] = answer.str();
   r["criteria"] = {{"held", true},
@@ -201,10 +199,14 @@ bridge::RunOutcome runCapacityCase(const JsonDocument& doc, const bridge::RunCon
   for (const Evaluation& e : evals) list.push_back(toJson(e, s));
   r["evaluations"] = list;
   r["tolerance"] = s.tolerance;
+  double worst = 0.0;  // (the energy balance of every impact run)
+  for (const Evaluation& e : evals) worst = std::max(worst, e.result.balance_rel_error);
+  r["balance_rel_error"] = worst;
 
   // The evaluations against energy, with the limits.
   std::vector<Evaluation> sorted = evals;
-  std::sort(sorted.begin(), sorted.end(), [](const Evaluation& x, const Evaluation& y) { return x.energy_J < y.energy_J; });
+  std::sort(sorted.begin(), sorted.end(),
+            [](const Evaluation& x, const Evaluation& y) { return x.energy_J < y.energy_J; });
   bridge::PlotSpec plot;
   plot.title = "Capacity: the impacts the search ran";
   plot.x_label = "impact energy (kJ)";
@@ -218,10 +220,14 @@ bridge::RunOutcome runCapacityCase(const JsonDocument& doc, const bridge::RunCon
   plot.series = {pen, back};
   const double e0 = sorted.front().energy_J / 1e3, e1 = sorted.back().energy_J / 1e3;
   if (std::isfinite(s.criteria.max_penetration_m))
-    plot.series.push_back({"penetration limit", {e0, e1}, {1e3 * s.criteria.max_penetration_m, 1e3 * s.criteria.max_penetration_m},
+    plot.series.push_back({"penetration limit",
+                           {e0, e1},
+                           {1e3 * s.criteria.max_penetration_m, 1e3 * s.criteria.max_penetration_m},
                            bridge::PlotSeries::Style::Line});
   if (std::isfinite(s.criteria.max_back_face_m))
-    plot.series.push_back({"back-face limit", {e0, e1}, {1e3 * s.criteria.max_back_face_m, 1e3 * s.criteria.max_back_face_m},
+    plot.series.push_back({"back-face limit",
+                           {e0, e1},
+                           {1e3 * s.criteria.max_back_face_m, 1e3 * s.criteria.max_back_face_m},
                            bridge::PlotSeries::Style::Line});
   bridge::PlotSeries held{"not held (perforated or unfinished)", {}, {}, bridge::PlotSeries::Style::Markers};
   for (const Evaluation& e : sorted)

@@ -287,6 +287,11 @@ SweepSpec readSweep(const JsonReader& sw) {
     }
   }
   s.chart = sw.boolean("chart", true);
+  if (const auto l = sw.optionalObject("limits")) {
+    s.limit_peak_force_N = l->number("peak_force_N", s.limit_peak_force_N, Check::Positive);
+    s.limit_penetration_m = l->number("max_penetration_m", s.limit_penetration_m, Check::Positive);
+    s.limit_back_face_m = l->number("max_back_face_displacement_m", s.limit_back_face_m, Check::Positive);
+  }
   return s;
 }
 

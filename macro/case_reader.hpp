@@ -5,6 +5,7 @@
 /// boulder, impacts, run settings. Formats in docs/macro.md.
 #include <array>
 #include <filesystem>
+#include <limits>
 #include <optional>
 #include <string>
 #include <vector>
@@ -34,6 +35,10 @@ struct SweepSpec {
   std::vector<std::pair<double, double>> aim_point_m;  ///< (y, z); empty: the case's aim
   std::vector<std::array<int, 3>> cells;               ///< structure sizes (x, y, z); empty: the case's
   bool chart = true;                                   ///< write the design charts
+  /// Limit lines on the charts (`limits`; infinity: none).
+  double limit_peak_force_N = std::numeric_limits<double>::infinity();
+  double limit_penetration_m = std::numeric_limits<double>::infinity();
+  double limit_back_face_m = std::numeric_limits<double>::infinity();
 };
 
 /// Reads the laws, structure, boulder and run of a macro case. `law_override`

@@ -167,7 +167,7 @@ bridge::RunOutcome runSweepCase(const JsonDocument& doc, const bridge::RunContex
   std::vector<std::vector<double>> cols(19);
   std::size_t failed = 0;
   double worst_balance = 0.0;
-  std::vector<double> ok_energy, ok_peak, ok_pen, ok_mass;
+  std::vector<double> ok_energy, ok_peak, ok_pen, ok_back, ok_mass;
   std::vector<Outcome> ok_outcome;
   std::map<std::string, int> outcomes;
   for (std::size_t i = 0; i < np; ++i) {
@@ -210,6 +210,7 @@ bridge::RunOutcome runSweepCase(const JsonDocument& doc, const bridge::RunContex
       ok_energy.push_back(pt.energy_J);
       ok_peak.push_back(r.peak_force_N);
       ok_pen.push_back(r.max_penetration_m);
+      ok_back.push_back(r.max_back_face_displacement_m);
       ok_mass.push_back(pt.mass_kg);
       ok_outcome.push_back(r.outcome);
       ++outcomes[outcomeName(r.outcome)];
@@ -248,49 +249,53 @@ bridge::RunOutcome runSweepCase(const JsonDocument& doc, const bridge::RunContex
   }
   json files = json::array({"sweep.csv", "result.h5"});
   if (p.sweep.chart && !ok_energy.empty()) {
-    bridge::PlotSpec force;
-    force.title = "Peak contact force against impact energy";
-    force.x_label = "impact energy (kJ)";
-    force.y_label = "peak force (kN)";
-    bridge::PlotSpec pen;
-    pen.title = "Boulder penetration against impact energy";
-    pen.x_label = "impact energy (kJ)";
-    pen.y_label = "max penetration (mm)";
-    // One series per boulder mass (up to 8 masses; beyond, one series).
+    // Three design charts against impact energy: one series per boulder
+    // mass (up to 8 masses; beyond, one series), perforated points marked
+    // over them (their penetration is where the boulder was when it went
+    // through), and the sweep's limit where one is given.
     std::vector<double> masses;
     for (std::size_t i = 0; i < ok_mass.size(); ++i)
       if (std::find(masses.begin(), masses.end(), ok_mass[i]) == masses.end()) masses.push_back(ok_mass[i]);
     const bool by_mass = masses.size() <= 8;
     if (!by_mass) masses = {0.0};
-    for (double m : masses) {
-      std::ostringstream label;
-      label << "m = " << m << " kg";
-      bridge::PlotSeries sf{by_mass ? label.str() : "sweep points", {}, {}, bridge::PlotSeries::Style::Markers};
-      bridge::PlotSeries sp = sf;
-      for (std::size_t i = 0; i < ok_energy.size(); ++i) {
-        if (by_mass && ok_mass[i] != m) continue;
-        sf.x.push_back(ok_energy[i] / 1e3);
-        sf.y.push_back(ok_peak[i] / 1e3);
-        sp.x.push_back(ok_energy[i] / 1e3);
-        sp.y.push_back(ok_pen[i] * 1e3);
+    const double e_lo = *std::min_element(ok_energy.begin(), ok_energy.end()) / 1e3;
+    const double e_hi = *std::max_element(ok_energy.begin(), ok_energy.end()) / 1e3;
+    struct Chart {
+      const char *file, *title, *y_label;
+      const std::vector<double>* y;
+      double scale, limit;
+    };
+    const Chart charts[3] = {{"chart_peak_force.png", "Peak contact force against impact energy", "peak force (kN)",
+                              &ok_peak, 1e-3, p.sweep.limit_peak_force_N},
+                             {"chart_penetration.png", "Boulder penetration against impact energy",
+                              "max penetration (mm)", &ok_pen, 1e3, p.sweep.limit_penetration_m},
+                             {"chart_back_face.png", "Back-face displacement against impact energy",
+                              "max back-face displacement (mm)", &ok_back, 1e3, p.sweep.limit_back_face_m}};
+    for (const Chart& ch : charts) {
+      bridge::PlotSpec plot;
+      plot.title = ch.title;
+      plot.x_label = "impact energy (kJ)";
+      plot.y_label = ch.y_label;
+      for (double m : masses) {
+        std::ostringstream label;
+        label << "m = " << m << " kg";
+        bridge::PlotSeries series{by_mass ? label.str() : "sweep points", {}, {}, bridge::PlotSeries::Style::Markers};
+        for (std::size_t i = 0; i < ok_energy.size(); ++i)
+          if (!by_mass || ok_mass[i] == m)
+            series.x.push_back(ok_energy[i] / 1e3), series.y.push_back((*ch.y)[i] * ch.scale);
+        plot.series.push_back(series);
       }
-      force.series.push_back(sf);
-      pen.series.push_back(sp);
+      bridge::PlotSeries perforated{"perforated", {}, {}, bridge::PlotSeries::Style::Markers};
+      for (std::size_t i = 0; i < ok_energy.size(); ++i)
+        if (ok_outcome[i] == Outcome::Perforated)
+          perforated.x.push_back(ok_energy[i] / 1e3), perforated.y.push_back((*ch.y)[i] * ch.scale);
+      if (!perforated.x.empty()) plot.series.push_back(perforated);
+      if (std::isfinite(ch.limit))
+        plot.series.push_back(
+            {"limit", {e_lo, e_hi}, {ch.limit * ch.scale, ch.limit * ch.scale}, bridge::PlotSeries::Style::Line});
+      bridge::writePlotPng(ctx.outdir / ch.file, plot);
+      files.push_back(ch.file);
     }
-    // Perforated points are marked over their mass's (their penetration is
-    // where the boulder was when it went through).
-    bridge::PlotSeries pf{"perforated", {}, {}, bridge::PlotSeries::Style::Markers};
-    bridge::PlotSeries pp = pf;
-    for (std::size_t i = 0; i < ok_energy.size(); ++i)
-      if (ok_outcome[i] == Outcome::Perforated) {
-        pf.x.push_back(ok_energy[i] / 1e3), pf.y.push_back(ok_peak[i] / 1e3);
-        pp.x.push_back(ok_energy[i] / 1e3), pp.y.push_back(ok_pen[i] * 1e3);
-      }
-    if (!pf.x.empty()) force.series.push_back(pf), pen.series.push_back(pp);
-    bridge::writePlotPng(ctx.outdir / "chart_peak_force.png", force);
-    bridge::writePlotPng(ctx.outdir / "chart_penetration.png", pen);
-    files.push_back("chart_peak_force.png");
-    files.push_back("chart_penetration.png");
   }
 
   bridge::RunOutcome out;
