@@ -15,6 +15,10 @@ double maxOver(const std::vector<int>& nodes, const std::vector<double>& u) {
   return nodes.empty() ? 0.0 : m;
 }
 
+// The boulder has left for good once it has been away, moving back, for
+// this fraction of the time it was in contact (and 20 steps at least).
+constexpr double kAwayOverContact = 0.5;
+
 std::string fmt(double v) {
   std::ostringstream s;
   s.precision(4);
@@ -95,6 +99,17 @@ ImpactResult runImpact(Model& model, const BoulderSpec& boulder, const RunSettin
   double e_ref = 0.0;
   const long long snap_count = std::max(2, run.snapshots);
   long long next_snap = 0;
+
+  // A snapshot of the nodes (displacement, axial force) at impact time t.
+  const auto snapshot = [&](double t) {
+    rec->snap_time_s.push_back(rec->time_offset_s + t);
+    for (std::size_t i = 0; i < n; ++i) {
+      rec->snap_displacement_m.push_back(model.ux()[i]);
+      rec->snap_displacement_m.push_back(model.uy()[i]);
+      rec->snap_displacement_m.push_back(model.uz()[i]);
+      rec->snap_axial_force_N.push_back(model.cellAxialForce()[i]);
+    }
+  };
 
   long long k = 0;
   for (; k < nsteps; ++k) {
@@ -182,13 +197,7 @@ ImpactResult runImpact(Model& model, const BoulderSpec& boulder, const RunSettin
       }
       // Every duration_s / (snapshots - 1), for as long as the impact lasts.
       if (t + 0.5 * dt >= run.duration_s * static_cast<double>(next_snap) / static_cast<double>(snap_count - 1)) {
-        rec->snap_time_s.push_back(rec->time_offset_s + t);
-        for (std::size_t i = 0; i < n; ++i) {
-          rec->snap_displacement_m.push_back(ux[i]);
-          rec->snap_displacement_m.push_back(model.uy()[i]);
-          rec->snap_displacement_m.push_back(model.uz()[i]);
-          rec->snap_axial_force_N.push_back(ax[i]);
-        }
+        snapshot(t);
         ++next_snap;
       }
     }
@@ -204,7 +213,7 @@ ImpactResult runImpact(Model& model, const BoulderSpec& boulder, const RunSettin
     } else if (!contact && back_speed > 0.0) {
       if (t_away < 0.0) t_away = t;
       const double in_contact_for = t_away - t_start;
-      if (t - t_away >= std::max(run.separated_for_ratio * in_contact_for, 20.0 * dt))
+      if (t - t_away >= std::max(kAwayOverContact * in_contact_for, 20.0 * dt))
         res.outcome = back_speed >= run.rebound_restitution * v0 ? Outcome::Rebounded : Outcome::Stopped;
     } else {
       t_away = -1.0;
@@ -234,16 +243,9 @@ ImpactResult runImpact(Model& model, const BoulderSpec& boulder, const RunSettin
     res.ok = false;
     res.message = "the boulder never touched the structure within max_duration_s = " + fmt(t_max) + " s";
   }
-  if (rec != nullptr && (rec->snap_time_s.empty() || rec->snap_time_s.back() < rec->time_offset_s + res.end_time_s)) {
-    // The state the impact ended in.
-    rec->snap_time_s.push_back(rec->time_offset_s + res.end_time_s);
-    for (std::size_t i = 0; i < n; ++i) {
-      rec->snap_displacement_m.push_back(model.ux()[i]);
-      rec->snap_displacement_m.push_back(model.uy()[i]);
-      rec->snap_displacement_m.push_back(model.uz()[i]);
-      rec->snap_axial_force_N.push_back(model.cellAxialForce()[i]);
-    }
-  }
+  // The state the impact ended in.
+  if (rec != nullptr && (rec->snap_time_s.empty() || rec->snap_time_s.back() < rec->time_offset_s + res.end_time_s))
+    snapshot(res.end_time_s);
   const Energy& e = model.energy();
   res.kinetic_J = e.kinetic_J;
   res.elastic_J = e.elastic_J;
