@@ -228,6 +228,10 @@ ImpactResult runImpact(Model& model, const BoulderSpec& boulder, const RunSettin
     }
   }
   if (res.ok && res.outcome == Outcome::Unfinished) res.end_time_s = static_cast<double>(k) * dt;
+  if (touched) {
+    res.final_penetration_m = std::max(0.0, model.boulderPositionAtForces().dot(dir) - touch_proj);
+    res.max_penetration_m = std::max(res.max_penetration_m, res.final_penetration_m);  // (a perforating step's too)
+  }
   res.steps = k;  // steps of this impact (up to a failure)
   if (!res.ok) {
     model.removeBoulder();
@@ -261,6 +265,8 @@ ImpactResult runImpact(Model& model, const BoulderSpec& boulder, const RunSettin
         relax(model, dt, run.relax_max_steps, run.relax_tolerance * res.input_energy_J, res.relax_converged);
     res.residual_back_face_displacement_m = maxOver(s.back_nodes, model.ux());
     res.residual_front_face_displacement_m = maxOver(s.front.node, model.ux());
+    for (const int node : s.front.node)
+      if (model.ux()[static_cast<std::size_t>(node)] > 0.1 * s.edge_m) ++res.front_cells_pushed_in;
   }
   return res;
 }

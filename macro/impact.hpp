@@ -51,6 +51,7 @@ struct ImpactResult {
   double peak_force_N = 0.0;          ///< largest contact force on the boulder (N)
   double time_of_peak_s = 0.0;        ///< from the first contact (s)
   double max_penetration_m = 0.0;     ///< boulder travel into the structure after first contact (m)
+  double final_penetration_m = 0.0;   ///< where the boulder was at the outcome, from where it touched (>= 0, m)
   double max_indentation_m = 0.0;     ///< largest indentation of the impact law (m)
   double contact_duration_s = 0.0;    ///< the first contact: first touch to first separation (s)
   int contact_episodes = 0;           ///< contacts: 1 + later re-contacts (the boulder catching up with the face)
@@ -61,6 +62,7 @@ struct ImpactResult {
   double max_front_face_displacement_m = 0.0;       ///< largest x displacement of a front cell (m)
   double residual_back_face_displacement_m = 0.0;   ///< after relaxation (largest back cell, m)
   double residual_front_face_displacement_m = 0.0;  ///< after relaxation (largest front cell, m)
+  int front_cells_pushed_in = 0;  ///< after relaxation: front cells pushed back by more than a tenth of an edge
   bool relaxed = false, relax_converged = false;
   long long relax_steps = 0;
   int loaded_cells = 0;  ///< cells whose axial force exceeded 10 % of the peak boulder force

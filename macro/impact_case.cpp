@@ -113,6 +113,7 @@ json toJson(const ImpactResult& r) {
   j["peak_force_N"] = r.peak_force_N;
   j["time_of_peak_s"] = r.time_of_peak_s;
   j["max_penetration_m"] = r.max_penetration_m;
+  j["final_penetration_m"] = r.final_penetration_m;
   j["max_indentation_m"] = r.max_indentation_m;
   j["contact_duration_s"] = r.contact_duration_s;
   j["contact_episodes"] = r.contact_episodes;
@@ -124,6 +125,7 @@ json toJson(const ImpactResult& r) {
   if (r.relaxed) {
     j["residual_back_face_displacement_m"] = r.residual_back_face_displacement_m;
     j["residual_front_face_displacement_m"] = r.residual_front_face_displacement_m;
+    j["front_cells_pushed_in"] = r.front_cells_pushed_in;
     j["relax_steps"] = r.relax_steps;
     j["relax_converged"] = r.relax_converged;
   }
