@@ -20,6 +20,15 @@
 #include "bridge/plot_font.hpp"
 
 namespace gabion::bridge {
+
+PlotSeries scaledSeries(const std::string& label, const std::vector<double>& x, const std::vector<double>& y,
+                        double x_scale, double y_scale, PlotSeries::Style style) {
+  PlotSeries s{label, {}, {}, style};
+  for (std::size_t k = 0; k < x.size() && k < y.size(); ++k)
+    s.x.push_back(x_scale * x[k]), s.y.push_back(y_scale * y[k]);
+  return s;
+}
+
 namespace {
 
 struct Rgb {

@@ -18,6 +18,11 @@ struct PlotSeries {
   int color_rgb = -1;  ///< 0xRRGGBB, or -1: the palette colour of the series' index
 };
 
+/// A series of (x_scale * x[k], y_scale * y[k]): data in SI units drawn in
+/// the chart's (mm, kN, ...).
+PlotSeries scaledSeries(const std::string& label, const std::vector<double>& x, const std::vector<double>& y,
+                        double x_scale, double y_scale, PlotSeries::Style style = PlotSeries::Style::Line);
+
 /// A 2-D chart.
 struct PlotSpec {
   std::string title;

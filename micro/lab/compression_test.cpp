@@ -282,10 +282,7 @@ bridge::RunOutcome runOne(const CompressionCase& c, const Sample& sample, const 
     plot.title = c.confined ? "Confined compression (CC)" : "Unconfined compression (UC)";
     plot.x_label = "lid displacement (mm)";
     plot.y_label = "axial force (kN)";
-    bridge::PlotSeries s{"lid force", {}, {}, bridge::PlotSeries::Style::Line};
-    for (std::size_t k = 0; k < cv.force.size(); ++k)
-      s.x.push_back(1000.0 * cv.displacement[k]), s.y.push_back(1e-3 * cv.force[k]);
-    plot.series.push_back(s);
+    plot.series.push_back(bridge::scaledSeries("lid force", cv.displacement, cv.force, 1000.0, 1e-3));
     if (!c.confined && !r["force_drops"].empty()) {
       bridge::PlotSeries d{"force drops", {}, {}, bridge::PlotSeries::Style::Markers};
       for (const auto& x : r["force_drops"])
@@ -300,10 +297,7 @@ bridge::RunOutcome runOne(const CompressionCase& c, const Sample& sample, const 
     plot.title = "CC: lateral wall reactions";
     plot.x_label = "axial force (kN)";
     plot.y_label = "lateral force (kN)";
-    bridge::PlotSeries s{"mean of the four lateral walls", {}, {}, bridge::PlotSeries::Style::Line};
-    for (std::size_t k = 0; k < cv.force.size(); ++k)
-      s.x.push_back(1e-3 * cv.force[k]), s.y.push_back(1e-3 * cv.lateral[k]);
-    plot.series.push_back(s);
+    plot.series.push_back(bridge::scaledSeries("mean of the four lateral walls", cv.force, cv.lateral, 1e-3, 1e-3));
     const double kr = r["lateral_reaction_coefficient"].get<double>();
     double fmax = 0.0;
     for (const double f : cv.force) fmax = std::max(fmax, f);

@@ -261,13 +261,8 @@ bridge::RunOutcome runOne(const ShearCase& c, const Sample& sample, const bridge
     plot.title = "Interface shear under " + std::to_string(c.normal_stress_Pa / 1000.0).substr(0, 5) + " kPa";
     plot.x_label = "shear displacement (mm)";
     plot.y_label = "force (kN)";
-    bridge::PlotSeries t{"tangential (pusher)", {}, {}, bridge::PlotSeries::Style::Line};
-    bridge::PlotSeries nn{"normal on the interface", {}, {}, bridge::PlotSeries::Style::Line};
-    for (std::size_t k = 0; k < n; ++k) {
-      t.x.push_back(1000.0 * sr.displacement[k]), t.y.push_back(1e-3 * sr.force[k]);
-      nn.x.push_back(1000.0 * sr.displacement[k]), nn.y.push_back(1e-3 * sr.normal[k]);
-    }
-    plot.series = {t, nn};
+    plot.series = {bridge::scaledSeries("tangential (pusher)", sr.displacement, sr.force, 1000.0, 1e-3),
+                   bridge::scaledSeries("normal on the interface", sr.displacement, sr.normal, 1000.0, 1e-3)};
     bridge::writePlotPng(ctx.outdir / "shear_curve.png", plot);
   }
   std::ostringstream rep;

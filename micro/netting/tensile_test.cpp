@@ -205,10 +205,7 @@ bridge::RunOutcome run(const bridge::JsonDocument& doc, const bridge::RunContext
                  std::to_string(net.length_m).substr(0, 4) + " m long";
     plot.x_label = "pull displacement (mm)";
     plot.y_label = "pulling force (kN)";
-    bridge::PlotSeries s{"force", {}, {}, bridge::PlotSeries::Style::Line};
-    for (std::size_t k = 0; k < curve.force.size(); ++k)
-      s.x.push_back(1000.0 * curve.displacement[k]), s.y.push_back(1e-3 * curve.force[k]);
-    plot.series.push_back(s);
+    plot.series.push_back(bridge::scaledSeries("force", curve.displacement, curve.force, 1000.0, 1e-3));
     bridge::writePlotPng(ctx.outdir / "tensile_curve.png", plot);
   }
 
