@@ -111,7 +111,7 @@ int main(int argc, char** argv) {
   auto* run = app.add_subcommand("run", "Run a case and write results into OUTDIR");
   run->add_option("case", o.case_file, "case file (JSON)")->required();
   run->add_option("-o,--output", o.outdir, "output folder (default: results/<case name>)");
-  run->add_option("--law", o.law_file, "law file (gabion.law/1) overriding the case's laws");
+  run->add_option("--law", o.law_file, "law file (gabion.law/2, or /1) overriding the case's laws");
   run->add_option("--set", o.sets, "override a case value: path.to.key=value (repeatable)");
   run->add_option("--threads", o.threads, "worker threads")->check(CLI::Range(1, 256));
   run->add_flag("-q,--quiet", o.quiet, "no progress line and no timing report");

@@ -339,6 +339,9 @@ bridge::RunOutcome runStages(const JsonDocument& doc, const bridge::RunContext& 
                    {"seed", c.seed},
                    {"material", {{"name", c.structure_material}, {"edge_m", a}, {"mass_kg", cell_mass}}},
                    {"base_law", {{"file", fs::absolute(base_law).string()}, {"material", c.structure_material}}},
+                   // The lock-up from the settled fill (a fill already denser than 0.3 keeps the default).
+                   {"lockup", porosity > 0.3 ? json{{"porosity", porosity}, {"densest_porosity", 0.25}}
+                                             : json{{"strain", bridge::kDefaultLockupStrain}}},
                    {"axial",
                     {{"curves", {{{"file", fs::absolute(curve_dir / "axial.csv").string()}}}},
                      {"bounds",

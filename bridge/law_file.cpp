@@ -1,37 +1,90 @@
 #include "bridge/law_file.hpp"
 
+#include <cmath>
+
 #include "bridge/errors.hpp"
 
 namespace gabion::bridge {
 
 using nlohmann::json;
 
-AxialLawParams readAxialLaw(const JsonReader& r) {
+namespace {
+const char* modelName(AxialModel m) {
+  switch (m) {
+    case AxialModel::Bilinear:
+      return "bilinear";
+    case AxialModel::Densifying:
+      return "densifying";
+    case AxialModel::ElasticPerfectlyPlastic:
+      break;
+  }
+  return "elastic_perfectly_plastic";
+}
+}  // namespace
+
+void setDefaultLockup(AxialLawParams& p, double edge_m) {
+  p.lockup_shortening_m = kDefaultLockupStrain * edge_m;
+  p.lockup_stiffness_N_m = kDefaultLockupStiffnessRatio * looseStiffness(p);
+}
+
+AxialLawParams readAxialLaw(const JsonReader& r, double edge_m, int version) {
   AxialLawParams p;
-  const std::string model = r.choice("model", {"elastic_perfectly_plastic", "bilinear"});
-  p.model = model == "bilinear" ? AxialModel::Bilinear : AxialModel::ElasticPerfectlyPlastic;
+  const std::string model = version >= 2 ? r.choice("model", {"elastic_perfectly_plastic", "bilinear", "densifying"})
+                                         : r.choice("model", {"elastic_perfectly_plastic", "bilinear"});
+  p.model = model == "bilinear"     ? AxialModel::Bilinear
+            : model == "densifying" ? AxialModel::Densifying
+                                    : AxialModel::ElasticPerfectlyPlastic;
   p.stiffness_N_m = r.number("stiffness_N_m", Check::Positive);
   p.yield_force_N = r.number("yield_force_N", Check::Positive);
-  if (p.model == AxialModel::Bilinear) {
+  if (hardens(p.model)) {
     p.hardening_stiffness_N_m = r.number("hardening_stiffness_N_m", Check::NonNegative);
     if (p.hardening_stiffness_N_m >= p.stiffness_N_m)
       r.fail("hardening_stiffness_N_m", "must be smaller than stiffness_N_m");
   } else if (r.has("hardening_stiffness_N_m")) {
-    r.fail("hardening_stiffness_N_m", "only for model 'bilinear'");
+    r.fail("hardening_stiffness_N_m", "only for the models 'bilinear' and 'densifying'");
   }
+  if (version < 2) {
+    setDefaultLockup(p, edge_m);
+    for (const char* key : {"lockup_shortening_m", "lockup_stiffness_N_m"})
+      if (r.has(key)) r.fail(key, "a gabion.law/2 key: set \"format\": \"gabion.law/2\" to give a lock-up");
+    return p;
+  }
+  if (p.model == AxialModel::Densifying) {
+    p.densification_onset_m = r.number("densification_onset_m", Check::NonNegative);
+    p.densification_stiffness_N_m = r.number("densification_stiffness_N_m", Check::Positive);
+  } else {
+    for (const char* key : {"densification_onset_m", "densification_stiffness_N_m"})
+      if (r.has(key)) r.fail(key, "only for the model 'densifying'");
+  }
+  setDefaultLockup(p, edge_m);
+  p.lockup_shortening_m = r.optionalNumber("lockup_shortening_m", Check::Positive).value_or(p.lockup_shortening_m);
+  p.lockup_stiffness_N_m = r.optionalNumber("lockup_stiffness_N_m", Check::Positive).value_or(p.lockup_stiffness_N_m);
+  if (p.lockup_shortening_m >= edge_m)
+    r.fail("lockup_shortening_m", "must be smaller than the cell edge (" + std::to_string(edge_m) + " m)");
+  if (p.model == AxialModel::Densifying && p.densification_onset_m >= p.lockup_shortening_m)
+    r.fail("densification_onset_m",
+           "must be below lockup_shortening_m (" + std::to_string(p.lockup_shortening_m) + " m)");
   return p;
 }
 
 json toJson(const AxialLawParams& p) {
   json j;
-  j["model"] = p.model == AxialModel::Bilinear ? "bilinear" : "elastic_perfectly_plastic";
+  j["model"] = modelName(p.model);
   j["stiffness_N_m"] = p.stiffness_N_m;
   j["yield_force_N"] = p.yield_force_N;
-  if (p.model == AxialModel::Bilinear) j["hardening_stiffness_N_m"] = p.hardening_stiffness_N_m;
+  if (hardens(p.model)) j["hardening_stiffness_N_m"] = p.hardening_stiffness_N_m;
+  if (p.model == AxialModel::Densifying) {
+    j["densification_onset_m"] = p.densification_onset_m;
+    j["densification_stiffness_N_m"] = p.densification_stiffness_N_m;
+  }
+  if (std::isfinite(p.lockup_shortening_m)) {  // (a law built without one reads back with the default)
+    j["lockup_shortening_m"] = p.lockup_shortening_m;
+    j["lockup_stiffness_N_m"] = p.lockup_stiffness_N_m;
+  }
   return j;
 }
 
-LawFile readLawMaterials(const JsonReader& materials) {
+LawFile readLawMaterials(const JsonReader& materials, int version) {
   LawFile out;
   const auto members = materials.members();
   if (members.empty()) materials.failHere("at least one material is required");
@@ -39,17 +92,18 @@ LawFile readLawMaterials(const JsonReader& materials) {
     CellMaterial c;
     c.edge_m = m.number("edge_m", Check::Positive);
     c.mass_kg = m.number("mass_kg", Check::Positive);
-    c.axial = readAxialLaw(m.object("axial"));
+    c.axial = readAxialLaw(m.object("axial"), c.edge_m, version);
     c.lateral.reaction_coefficient = m.object("lateral").number("reaction_coefficient", Check::NonNegative);
     const JsonReader itf = m.object("interface");
     c.interface.friction = itf.number("friction", Check::NonNegative);
     c.interface.tangential_stiffness_N_m = itf.number("tangential_stiffness_N_m", Check::Positive);
-    c.impact = readAxialLaw(m.object("impact"));
+    c.impact = readAxialLaw(m.object("impact"), c.edge_m, version);
     const JsonReader prov = m.object("provenance");
     prov.choice("status", {"illustrative", "fitted", "measured"});
     c.provenance = m.raw("provenance");
     out.materials.emplace(name, std::move(c));
   }
+  out.version = version;
   return out;
 }
 
@@ -57,9 +111,10 @@ LawFile loadLawFile(const std::filesystem::path& path) {
   JsonDocument doc = JsonDocument::load(path);
   const JsonReader root = doc.root();
   const std::string format = root.string("format");
-  if (format != "gabion.law/1") root.fail("format", "expected 'gabion.law/1', got '" + format + "'");
+  if (format != "gabion.law/2" && format != "gabion.law/1")
+    root.fail("format", "expected 'gabion.law/2' (or the earlier 'gabion.law/1'), got '" + format + "'");
   root.choice("kind", {"cell_laws"});
-  LawFile laws = readLawMaterials(root.object("materials"));
+  LawFile laws = readLawMaterials(root.object("materials"), format == "gabion.law/1" ? 1 : 2);
   if (root.has("description")) root.string("description");
   doc.finish();
   return laws;
@@ -67,7 +122,7 @@ LawFile loadLawFile(const std::filesystem::path& path) {
 
 json toJson(const LawFile& laws) {
   json j;
-  j["format"] = "gabion.law/1";
+  j["format"] = "gabion.law/2";
   j["kind"] = "cell_laws";
   json mats = json::object();
   for (const auto& [name, c] : laws.materials) {

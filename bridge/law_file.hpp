@@ -1,7 +1,9 @@
 #pragma once
 /// \file
-/// The law file `gabion.law/1`: the macro cell laws of named materials, written
-/// by the fitting and read by the macro model. See docs/formats.md.
+/// The law file `gabion.law/2`: the macro cell laws of named materials, written
+/// by the fitting and read by the macro model. Files of version 1 (no lock-up,
+/// no densifying model) are still read: their laws get the default lock-up.
+/// See docs/formats.md.
 #include <filesystem>
 #include <map>
 #include <nlohmann/json.hpp>
@@ -38,16 +40,35 @@ struct CellMaterial {
 /// A law file: materials by name.
 struct LawFile {
   std::map<std::string, CellMaterial> materials;
+  int version = 2;  ///< format version it was read from (1 or 2)
 };
 
+/// The lock-up a law gets when its file does not give one: the fill's densest
+/// state is reached at kDefaultLockupStrain of the cell edge, and the dense
+/// fill is kDefaultLockupStiffnessRatio times stiffer than the loose one
+/// (its stiffest loading tangent, bridge::looseStiffness).
+/// 0.25 is the strain that takes the paper's fill porosity 0.436 to 0.25, a
+/// dense crushed-rock packing (lockupStrain); docs/formats.md.
+constexpr double kDefaultLockupStrain = 0.25;
+constexpr double kDefaultLockupStiffnessRatio = 10.0;
+/// Axial strain that takes a fill of porosity `porosity` to `densest_porosity`
+/// at constant solid volume and cross-section: (n - n_d) / (1 - n_d).
+inline double lockupStrain(double porosity, double densest_porosity) {
+  return (porosity - densest_porosity) / (1.0 - densest_porosity);
+}
+
 /// Reads an axial/impact law object ({"model", "stiffness_N_m", "yield_force_N",
-/// "hardening_stiffness_N_m" for bilinear}).
-AxialLawParams readAxialLaw(const JsonReader& r);
+/// "hardening_stiffness_N_m" for bilinear and densifying, "lockup_shortening_m"
+/// and "lockup_stiffness_N_m"}). `edge_m` sets the default lock-up; version 1
+/// accepts neither the lock-up keys nor the densifying model.
+AxialLawParams readAxialLaw(const JsonReader& r, double edge_m, int version = 2);
 nlohmann::json toJson(const AxialLawParams& p);
+/// The default lock-up of a law for cells of edge `edge_m` (see above).
+void setDefaultLockup(AxialLawParams& p, double edge_m);
 
 /// Reads the "materials" object of a law file (or of a case that embeds laws).
-LawFile readLawMaterials(const JsonReader& materials);
-/// Loads and validates a whole `gabion.law/1` file (throws InputError).
+LawFile readLawMaterials(const JsonReader& materials, int version = 2);
+/// Loads and validates a whole law file, version 1 or 2 (throws InputError).
 LawFile loadLawFile(const std::filesystem::path& path);
 nlohmann::json toJson(const LawFile& laws);
 

@@ -56,6 +56,9 @@ std::vector<std::string> parameterNames(LawModel m) {
       return {"stiffness_N_m", "yield_force_N"};
     case LawModel::Bilinear:
       return {"stiffness_N_m", "yield_force_N", "hardening_stiffness_N_m"};
+    case LawModel::Densifying:
+      return {"stiffness_N_m", "yield_force_N", "hardening_stiffness_N_m", "densification_onset_m",
+              "densification_stiffness_N_m"};
     case LawModel::LateralLinear:
       return {"reaction_coefficient"};
     case LawModel::InterfaceSlider:
@@ -70,6 +73,8 @@ std::string modelName(LawModel m) {
       return "elastic_perfectly_plastic";
     case LawModel::Bilinear:
       return "bilinear";
+    case LawModel::Densifying:
+      return "densifying";
     case LawModel::LateralLinear:
       return "lateral_linear";
     case LawModel::InterfaceSlider:
@@ -99,19 +104,35 @@ void evaluateSlider(double mu, double kt, const PathGrid& g, std::vector<double>
 
 }  // namespace
 
-void evaluateModel(LawModel m, const std::vector<double>& theta, const PathGrid& g, std::vector<double>& out) {
+bridge::AxialLawParams axialLaw(LawModel m, const std::vector<double>& theta, const Lockup& lockup) {
+  bridge::AxialLawParams p;
+  p.model = m == LawModel::Bilinear     ? bridge::AxialModel::Bilinear
+            : m == LawModel::Densifying ? bridge::AxialModel::Densifying
+                                        : bridge::AxialModel::ElasticPerfectlyPlastic;
+  p.stiffness_N_m = theta[0];
+  p.yield_force_N = theta[1];
+  if (m != LawModel::ElasticPerfectlyPlastic) {
+    p.hardening_stiffness_N_m = theta[2];
+    if (!(theta[2] < theta[0])) throw Infeasible("hardening_stiffness_N_m must be below stiffness_N_m");
+  }
+  if (m == LawModel::Densifying) {
+    p.densification_onset_m = theta[3];
+    p.densification_stiffness_N_m = theta[4];
+    if (!(theta[3] < lockup.shortening_m)) throw Infeasible("densification_onset_m must be below the lock-up");
+  }
+  p.lockup_shortening_m = lockup.shortening_m;
+  p.lockup_stiffness_N_m = lockup.stiffness_ratio * bridge::looseStiffness(p);
+  return p;
+}
+
+void evaluateModel(LawModel m, const std::vector<double>& theta, const PathGrid& g, std::vector<double>& out,
+                   const Lockup& lockup) {
   out.resize(g.x.size());
   switch (m) {
     case LawModel::ElasticPerfectlyPlastic:
-    case LawModel::Bilinear: {
-      bridge::AxialLawParams p;
-      p.model = m == LawModel::Bilinear ? bridge::AxialModel::Bilinear : bridge::AxialModel::ElasticPerfectlyPlastic;
-      p.stiffness_N_m = theta[0];
-      p.yield_force_N = theta[1];
-      if (m == LawModel::Bilinear) {
-        p.hardening_stiffness_N_m = theta[2];
-        if (!(theta[2] < theta[0])) throw Infeasible("hardening_stiffness_N_m must be below stiffness_N_m");
-      }
+    case LawModel::Bilinear:
+    case LawModel::Densifying: {
+      const bridge::AxialLawParams p = axialLaw(m, theta, lockup);
       double plastic = 0.0;
       for (std::size_t i = 0; i < g.x.size(); ++i) {
         const auto r = bridge::axialResponse(p, g.x[i], plastic);
@@ -158,7 +179,7 @@ double lossWeight(double r, const LossSettings& loss) {
 std::vector<double> residuals(const CurveSet& set, const std::vector<double>& theta) {
   std::vector<double> r, model;
   for (const auto& g : set.grids) {
-    evaluateModel(set.model, theta, g, model);
+    evaluateModel(set.model, theta, g, model, set.lockup);
     for (std::size_t i = 0; i < g.x.size(); ++i) r.push_back((model[i] - g.y[i]) / g.scale);
   }
   return r;
@@ -168,7 +189,7 @@ double misfit(const CurveSet& set, const std::vector<double>& theta) {
   double total = 0.0;
   std::vector<double> model;
   for (const auto& g : set.grids) {
-    evaluateModel(set.model, theta, g, model);
+    evaluateModel(set.model, theta, g, model, set.lockup);
     const double a = g.effectivePoints() / static_cast<double>(g.x.size());
     double sum = 0.0;
     for (std::size_t i = 0; i < g.x.size(); ++i) sum += lossValue((model[i] - g.y[i]) / g.scale, set.loss);
@@ -190,7 +211,7 @@ double residualVariance(const CurveSet& set, const std::vector<double>& theta) {
     PathGrid raw = g;
     raw.x = g.raw_x;
     raw.y = g.raw_y;
-    evaluateModel(set.model, theta, raw, model);
+    evaluateModel(set.model, theta, raw, model, set.lockup);
     for (std::size_t i = 0; i < model.size(); ++i) sum += lossValue((model[i] - raw.y[i]) / g.scale, set.loss);
     n += static_cast<double>(model.size());
   }

@@ -3,10 +3,12 @@
 /// Curves on a common grid, the macro-law models evaluated along a loading
 /// path, and the robust misfit between them (docs/fitting.md, "Objective").
 #include <cstddef>
+#include <limits>
 #include <string>
 #include <vector>
 
 #include "bridge/curve.hpp"
+#include "bridge/laws/cell_axial_law.hpp"
 
 namespace gabion::fitting {
 
@@ -34,6 +36,7 @@ PathGrid resampleOnPath(const bridge::Curve& c, std::size_t points);
 enum class LawModel {
   ElasticPerfectlyPlastic,  ///< axial/impact: stiffness_N_m, yield_force_N
   Bilinear,                 ///< axial/impact: + hardening_stiffness_N_m
+  Densifying,               ///< axial/impact: + densification_onset_m, densification_stiffness_N_m
   LateralLinear,            ///< lateral force = reaction_coefficient * axial force
   InterfaceSlider           ///< shear force: spring tangential_stiffness_N_m capped at friction * normal force
 };
@@ -43,10 +46,24 @@ std::vector<std::string> parameterNames(LawModel m);
 /// "elastic_perfectly_plastic", "bilinear", "lateral_linear", "interface_slider".
 std::string modelName(LawModel m);
 
+/// The lock-up every axial and impact law carries (bridge/laws/cell_axial_law.hpp):
+/// set from the fill's porosity, not fitted, and part of the model the curves
+/// are compared with.
+struct Lockup {
+  double shortening_m = std::numeric_limits<double>::infinity();  ///< u_L (m)
+  double stiffness_ratio = 10.0;                                  ///< k_L / bridge::looseStiffness
+};
+
+/// The axial/impact law of parameters `theta` of model `m` (one of the three
+/// axial models) with the lock-up `lockup`. Throws Infeasible for a hardening
+/// tangent not below the stiffness, or a densification onset not below the
+/// lock-up.
+bridge::AxialLawParams axialLaw(LawModel m, const std::vector<double>& theta, const Lockup& lockup);
+
 /// Model values along the path of `g` (same length as g.x). Axial and impact laws
-/// are evaluated by bridge::axialResponse with plastic memory. Throws Infeasible
-/// for a bilinear hardening tangent not below the stiffness.
-void evaluateModel(LawModel m, const std::vector<double>& theta, const PathGrid& g, std::vector<double>& out);
+/// are evaluated by bridge::axialResponse with plastic memory (axialLaw).
+void evaluateModel(LawModel m, const std::vector<double>& theta, const PathGrid& g, std::vector<double>& out,
+                   const Lockup& lockup = {});
 
 /// Loss applied to normalised residuals (docs/fitting.md).
 struct LossSettings {
@@ -66,6 +83,7 @@ struct CurveSet {
   LawModel model = LawModel::ElasticPerfectlyPlastic;
   std::vector<PathGrid> grids;
   LossSettings loss;
+  Lockup lockup;
 };
 
 /// Normalised residuals (model - data) / scale of every grid point, curve after curve.

@@ -25,6 +25,23 @@ namespace {
 
 /// The four laws a `fit` case may identify, in the order they are run.
 const std::vector<std::string> kTests = {"axial", "lateral", "interface", "impact"};
+/// Parameters of the densifying model beyond the bilinear ones.
+const char* const kDensificationParameters[] = {"densification_onset_m", "densification_stiffness_N_m"};
+
+// Bounds of the densification where the case gives none: the onset anywhere
+// from 0 to the largest shortening of the curves (an onset beyond them cannot
+// be seen) or the lock-up, whichever comes first; its stiffness from a
+// hundredth of the smallest to ten times the largest stiffness allowed.
+void defaultDensificationBounds(Bounds& b, const std::vector<PathGrid>& grids, double lockup_m) {
+  double reach = 0.0;
+  for (const auto& g : grids)
+    for (double x : g.x) reach = std::max(reach, x);
+  if (b.count("densification_onset_m") == 0) b["densification_onset_m"] = {0.0, std::min(reach, 0.999 * lockup_m)};
+  if (b.count("densification_stiffness_N_m") == 0) {
+    const auto& k = b.at("stiffness_N_m");
+    b["densification_stiffness_N_m"] = {0.01 * k.first, 10.0 * k.second};
+  }
+}
 
 CurveDefaults defaultsFor(const std::string& test) {
   if (test == "axial") return {"displacement_m", "force_N", "/curves/axial", "", true};
@@ -43,6 +60,9 @@ struct TestSpec {
 
 struct FitCase {
   std::string material;
+  double lockup_strain = bridge::kDefaultLockupStrain;  ///< of the cell edge
+  double lockup_ratio = bridge::kDefaultLockupStiffnessRatio;
+  json lockup_source;  ///< how the lock-up strain was set (for provenance)
   std::optional<double> edge_m, mass_kg;
   std::optional<fs::path> base_law;
   std::string base_material;
@@ -55,7 +75,7 @@ struct FitCase {
 std::vector<LawModel> readModels(const JsonReader& t, const std::string& test) {
   if (test == "lateral") return {LawModel::LateralLinear};
   if (test == "interface") return {LawModel::InterfaceSlider};
-  std::vector<LawModel> out{LawModel::ElasticPerfectlyPlastic, LawModel::Bilinear};
+  std::vector<LawModel> out{LawModel::ElasticPerfectlyPlastic, LawModel::Bilinear, LawModel::Densifying};
   if (!t.has("models")) return out;
   const json& v = t.raw("models");
   if (!v.is_array() || v.empty()) t.fail("models", "must be a non-empty array of model names");
@@ -67,8 +87,10 @@ std::vector<LawModel> readModels(const JsonReader& t, const std::string& test) {
       out.push_back(LawModel::ElasticPerfectlyPlastic);
     else if (s == "bilinear")
       out.push_back(LawModel::Bilinear);
+    else if (s == "densifying")
+      out.push_back(LawModel::Densifying);
     else
-      t.fail("models", "unknown model '" + s + "' (elastic_perfectly_plastic, bilinear)");
+      t.fail("models", "unknown model '" + s + "' (elastic_perfectly_plastic, bilinear, densifying)");
   }
   return out;
 }
@@ -93,6 +115,24 @@ FitCase readFitCase(const bridge::JsonDocument& doc) {
     c.base_law = dir / base->string("file");
     c.base_material = base->string("material");
   }
+  c.lockup_source = {{"strain", c.lockup_strain}, {"from", "default (docs/formats.md)"}};
+  if (auto lock = root.optionalObject("lockup")) {
+    if (lock->has("strain") && lock->has("porosity")) lock->fail("porosity", "give either 'strain' or 'porosity'");
+    if (lock->has("strain")) {
+      c.lockup_strain = lock->number("strain", Check::Positive);
+      if (c.lockup_strain >= 1.0) lock->fail("strain", "must be below 1");
+      c.lockup_source = {{"strain", c.lockup_strain}, {"from", "given"}};
+    } else if (lock->has("porosity")) {
+      const double n = lock->number("porosity", Check::Positive);
+      if (n >= 1.0) lock->fail("porosity", "must be below 1");
+      const double nd = lock->optionalNumber("densest_porosity", Check::NonNegative).value_or(0.25);
+      if (nd >= n) lock->fail("densest_porosity", "must be below porosity (" + std::to_string(n) + ")");
+      c.lockup_strain = bridge::lockupStrain(n, nd);
+      c.lockup_source = {{"strain", c.lockup_strain}, {"from", "porosity"}, {"porosity", n}, {"densest_porosity", nd}};
+    }
+    c.lockup_ratio = lock->optionalNumber("stiffness_ratio", Check::Positive).value_or(c.lockup_ratio);
+  }
+  c.lockup_source["stiffness_ratio"] = c.lockup_ratio;
 
   for (const auto& test : kTests) {
     auto t = root.optionalObject(test);
@@ -109,9 +149,13 @@ FitCase readFitCase(const bridge::JsonDocument& doc) {
     for (LawModel m : spec.candidates)
       for (const auto& n : parameterNames(m)) names.insert(n);
     const JsonReader b = t->object("bounds");
+    // The densification's bounds have defaults (set from the curves at run time).
+    for (const char* n : kDensificationParameters)
+      if (!b.has(n)) names.erase(n);
     spec.bounds = readBounds(b, std::vector<std::string>(names.begin(), names.end()));
     for (const auto& [name, lu] : spec.bounds) {
-      const bool may_be_zero = name == "hardening_stiffness_N_m" || name == "reaction_coefficient";
+      const bool may_be_zero =
+          name == "hardening_stiffness_N_m" || name == "reaction_coefficient" || name == "densification_onset_m";
       if (may_be_zero ? lu.first < 0.0 : !(lu.first > 0.0))
         b.fail(name, may_be_zero ? "lower bound must be >= 0" : "lower bound must be > 0");
     }
@@ -150,7 +194,8 @@ std::string axisLabel(const std::string& name) {
   return stem + " (" + name.substr(pos + 1) + ")";
 }
 
-void plotFit(const fs::path& file, const TestSpec& t, const std::vector<PathGrid>& grids, const ModelFit& fit) {
+void plotFit(const fs::path& file, const TestSpec& t, const std::vector<PathGrid>& grids, const ModelFit& fit,
+             const Lockup& lockup) {
   bridge::PlotSpec spec;
   spec.title = t.name + ": data and fitted " + modelName(fit.model) + " law (nRMS " +
                std::to_string(fit.nrms).substr(0, 6) + ")";
@@ -164,19 +209,10 @@ void plotFit(const fs::path& file, const TestSpec& t, const std::vector<PathGrid
     if (!d.condition_key.empty())
       tag += " (" + d.condition_key + " = " + std::to_string(g.condition).substr(0, 7) + ")";
     spec.series.push_back({"data " + tag, g.x, g.y, bridge::PlotSeries::Style::Markers});
-    evaluateModel(fit.model, fit.theta, g, model);
+    evaluateModel(fit.model, fit.theta, g, model, lockup);
     spec.series.push_back({"fit " + tag, g.x, model, bridge::PlotSeries::Style::Line});
   }
   bridge::writePlotPng(file, spec);
-}
-
-bridge::AxialLawParams axialParams(const ModelFit& f) {
-  bridge::AxialLawParams p;
-  p.model = f.model == LawModel::Bilinear ? bridge::AxialModel::Bilinear : bridge::AxialModel::ElasticPerfectlyPlastic;
-  p.stiffness_N_m = f.theta[0];
-  p.yield_force_N = f.theta[1];
-  if (f.model == LawModel::Bilinear) p.hardening_stiffness_N_m = f.theta[2];
-  return p;
 }
 
 void checkCase(const bridge::JsonDocument& doc) {
@@ -219,6 +255,8 @@ bridge::RunOutcome runCase(const bridge::JsonDocument& doc, const bridge::RunCon
   }
   if (c.edge_m) material.edge_m = *c.edge_m;
   if (c.mass_kg) material.mass_kg = *c.mass_kg;
+  LawFitSettings settings = c.settings;
+  settings.lockup = {c.lockup_strain * material.edge_m, c.lockup_ratio};
 
   json results = json::object();
   json fitted = json::object();
@@ -227,7 +265,10 @@ bridge::RunOutcome runCase(const bridge::JsonDocument& doc, const bridge::RunCon
   double fit_time = 0.0;
   for (const auto& t : c.tests) {
     const auto grids = loadGrids(t, c.grid_points);
-    const LawFitResult r = fitLaw(t.candidates, grids, t.bounds, c.settings);
+    Bounds bounds = t.bounds;
+    const bool axial_kind = t.name == "axial" || t.name == "impact";
+    if (axial_kind) defaultDensificationBounds(bounds, grids, settings.lockup.shortening_m);
+    const LawFitResult r = fitLaw(t.candidates, grids, bounds, settings);
     evaluations += r.evaluations;
     fit_time += r.wall_time_s;
     json entry = toJson(r, c.settings.criterion);
@@ -254,8 +295,8 @@ bridge::RunOutcome runCase(const bridge::JsonDocument& doc, const bridge::RunCon
     fitted[t.name] = entry;
 
     const ModelFit& best = r.best();
-    if (t.name == "axial") material.axial = axialParams(best);
-    if (t.name == "impact") material.impact = axialParams(best);
+    if (t.name == "axial") material.axial = axialLaw(best.model, best.theta, settings.lockup);
+    if (t.name == "impact") material.impact = axialLaw(best.model, best.theta, settings.lockup);
     if (t.name == "lateral") material.lateral.reaction_coefficient = best.theta[0];
     if (t.name == "interface") {
       material.interface.friction = best.theta[0];
@@ -263,7 +304,7 @@ bridge::RunOutcome runCase(const bridge::JsonDocument& doc, const bridge::RunCon
     }
     if (c.plots) {
       const std::string png = "fit_" + t.name + ".png";
-      plotFit(ctx.outdir / png, t, grids, best);
+      plotFit(ctx.outdir / png, t, grids, best, settings.lockup);
       plots.push_back(png);
     }
   }
@@ -276,6 +317,8 @@ bridge::RunOutcome runCase(const bridge::JsonDocument& doc, const bridge::RunCon
       "profile likelihood and the replicate spread (docs/fitting.md)";
   provenance["case_file"] = ctx.case_file.string();
   provenance["fitted"] = fitted;
+  provenance["lockup"] = c.lockup_source;
+  provenance["lockup"]["shortening_m"] = settings.lockup.shortening_m;
   material.provenance = provenance;
 
   bridge::LawFile law;

@@ -1,7 +1,7 @@
 #pragma once
 /// \file
 /// The `fit` case kind: identifies the macro cell laws (axial, lateral,
-/// interface, impact) from curves, writes law.json (gabion.law/1), plots and
+/// interface, impact) from curves, writes law.json (gabion.law/2), plots and
 /// the summary entries. No DEM inside the loop. Format: docs/fitting.md.
 #include "bridge/run.hpp"
 

@@ -19,7 +19,7 @@ ModelFit fitModel(LawModel model, const std::vector<PathGrid>& grids, const Boun
     const auto& b = bounds.at(name);
     fit.params.push_back(makeParameter(name, b.first, b.second));
   }
-  CurveSet set{model, grids, settings.loss};
+  CurveSet set{model, grids, settings.loss, settings.lockup};
   fit.optimization = minimise(
       fit.params, [&](const std::vector<double>& t) { return misfit(set, t); }, settings.optimizer);
   fit.theta = fit.optimization.parameters;
@@ -58,7 +58,7 @@ LawFitResult fitLaw(const std::vector<LawModel>& candidates, const std::vector<P
     if (value(r.candidates[i]) < value(r.candidates[r.chosen])) r.chosen = i;
   }
   const ModelFit& best = r.candidates[r.chosen];
-  const CurveSet set{best.model, grids, settings.loss};
+  const CurveSet set{best.model, grids, settings.loss, settings.lockup};
   r.effective_observations = effectiveObservations(set);
 
   std::vector<double> se;

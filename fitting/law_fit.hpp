@@ -25,6 +25,7 @@ struct LawFitSettings {
   LossSettings loss;
   Criterion criterion = Criterion::Bic;
   bool profile = true;  ///< profile-likelihood intervals (costs evaluations)
+  Lockup lockup;        ///< the axial/impact laws' fixed lock-up
 };
 
 /// One fitted candidate model.

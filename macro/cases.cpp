@@ -6,7 +6,7 @@ namespace gabion::macro {
 
 std::vector<bridge::CaseKind> caseKinds() {
   return {
-      {"macro.impact", "boulder impact(s) on a cellular structure, one node per cell (laws from a gabion.law/1 file)",
+      {"macro.impact", "boulder impact(s) on a cellular structure, one node per cell (laws from a gabion.law/2 file)",
        checkImpactCase, runImpactCase},
       {"macro.sweep", "a grid of macro impacts (velocity, mass, aim point, structure size) run in parallel",
        checkSweepCase, runSweepCase},

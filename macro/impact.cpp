@@ -118,6 +118,7 @@ ImpactResult runImpact(Model& model, const BoulderSpec& boulder, const RunSettin
     const double t = model.time_s() - dt - t0;
     if (st == StepStatus::Perforation) {  // an answer, not a failure
       res.outcome = Outcome::Perforated;
+      res.perforation = model.failure();
       res.end_time_s = t;
       ++k;
       break;
@@ -210,6 +211,7 @@ ImpactResult runImpact(Model& model, const BoulderSpec& boulder, const RunSettin
     const double back_speed = -model.boulderVelocity().dot(dir);
     if (model.boulderPositionAtForces().dot(dir) - boulder.diameter_m * 0.5 > back_plane) {
       res.outcome = Outcome::Perforated;
+      res.perforation = "the boulder passed the structure's back plane";
     } else if (!contact && back_speed > 0.0) {
       if (t_away < 0.0) t_away = t;
       const double in_contact_for = t_away - t_start;

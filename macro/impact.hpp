@@ -16,7 +16,7 @@ namespace gabion::macro {
 enum class Outcome {
   Stopped,    ///< the boulder came to rest on the structure, or left it at less than `rebound_restitution` of its speed
   Rebounded,  ///< it left the structure, moving back at `rebound_restitution` of its speed or more
-  Perforated,  ///< its centre entered a front cell, or it passed the structure's back plane
+  Perforated,  ///< it passed the back plane, its centre entered a front cell, or it crushed a cell beyond lock-up
   Unfinished   ///< none of these within max_duration_s
 };
 const char* outcomeName(Outcome o);
@@ -46,6 +46,7 @@ struct ImpactResult {
   bool ok = true;
   std::string message;  ///< why it failed
   Outcome outcome = Outcome::Unfinished;
+  std::string perforation;            ///< how it perforated (empty unless perforated)
   double end_time_s = 0.0;            ///< when the impact ended, from its start (its outcome, or max_duration_s)
   double input_energy_J = 0.0;        ///< boulder kinetic energy before contact (J)
   double peak_force_N = 0.0;          ///< largest contact force on the boulder (N)

@@ -108,6 +108,7 @@ json toJson(const ImpactResult& r) {
   j["status"] = r.ok ? "ok" : "failed";
   if (!r.message.empty()) j["message"] = r.message;
   if (r.ok) j["outcome"] = outcomeName(r.outcome);
+  if (r.ok && !r.perforation.empty()) j["perforation"] = r.perforation;
   j["end_time_s"] = r.end_time_s;
   j["input_energy_J"] = r.input_energy_J;
   j["peak_force_N"] = r.peak_force_N;

@@ -17,15 +17,15 @@ void BoulderSpec::setMass(double mass, bool keep_diameter) {
 
 namespace {
 
-// One link's cell law (bridge::elasticPlasticResponse, the return mapping
-// shared with the fine DEM's F_lim cap): the force (N) for compression `u`
-// (m), with the plastic memory `up` (m) updated and the plastic work and the
-// stored elastic energy added to the stage's sums (J).
-inline double linkLaw(const bridge::ElasticPlasticParams& law, double u, double& up, double& plastic, double& elastic) {
-  const auto r = bridge::elasticPlasticResponse(law, u, up);
+// One link's cell law (bridge::cellResponse: the return mapping shared with
+// the fine DEM's F_lim cap, plus the lock-up): the force (N) for compression
+// `u` (m), with the plastic memory `up` (m) updated and the plastic work and
+// the stored elastic energy added to the stage's sums (J).
+inline double linkLaw(const bridge::CellSpring& law, double u, double& up, double& plastic, double& elastic) {
+  const auto r = bridge::cellResponse(law, u, up);
   up = r.plastic_m;
   plastic += r.plastic_work_J;
-  elastic += bridge::elasticPlasticEnergy(law, r.force_N);
+  elastic += r.elastic_J;
   return r.force_N;
 }
 
@@ -52,8 +52,10 @@ double Model::criticalTimeStep() const {
   auto add = [](std::vector<double>& v, int node, double k) {
     if (node >= 0) v[static_cast<std::size_t>(node)] += k;
   };
+  // The stiffest tangent of a law: unloading past lock-up, k + k_L.
+  auto tangent = [&](int law) { return bridge::maxTangentStiffness(s_.axial_laws[static_cast<std::size_t>(law)]); };
   for (std::size_t l = 0; l < s_.axial.a.size(); ++l) {
-    const double k = s_.axial_laws[static_cast<std::size_t>(s_.axial.law[l])].stiffness_N_m;
+    const double k = tangent(s_.axial.law[l]);
     const double kt = s_.friction_laws[static_cast<std::size_t>(s_.axial.friction[l])].tangential_stiffness_N_m;
     for (int node : {s_.axial.a[l], s_.axial.b[l]}) {
       add(kx, node, k);
@@ -62,7 +64,7 @@ double Model::criticalTimeStep() const {
     }
   }
   for (std::size_t l = 0; l < s_.lateral.a.size(); ++l) {
-    const double k = s_.axial_laws[static_cast<std::size_t>(s_.lateral.law[l])].stiffness_N_m;
+    const double k = tangent(s_.lateral.law[l]);
     const double kt = s_.friction_laws[static_cast<std::size_t>(s_.lateral.friction[l])].tangential_stiffness_N_m;
     const bool y = s_.lateral.dir[l] == 1;
     for (int node : {s_.lateral.a[l], s_.lateral.b[l]}) {
@@ -73,14 +75,14 @@ double Model::criticalTimeStep() const {
   }
   for (std::size_t l = 0; l < s_.ground.node.size(); ++l) {
     const double kt = s_.friction_laws[static_cast<std::size_t>(s_.ground.friction[l])].tangential_stiffness_N_m;
-    const double k = s_.axial_laws[static_cast<std::size_t>(s_.ground.law[l])].stiffness_N_m;
+    const double k = tangent(s_.ground.law[l]);
     add(kx, s_.ground.node[l], kt);
     add(ky, s_.ground.node[l], kt);
     add(kz, s_.ground.node[l], k);
   }
   double kimp_max = 0.0;
   for (std::size_t e = 0; e < s_.front.node.size(); ++e) {
-    const double k = s_.axial_laws[static_cast<std::size_t>(s_.front.law[e])].stiffness_N_m;
+    const double k = tangent(s_.front.law[e]);
     kimp_max = std::max(kimp_max, k);
     if (boulder_.present) {
       add(kx, s_.front.node[e], k);
@@ -123,7 +125,8 @@ void Model::placeBoulder(const BoulderSpec& b) {
   bforce_.setZero();
   max_indent_ = 0.0;
   n_contacts_ = 0;
-  perforated_ = false;
+  centre_inside_ = false;
+  crushed_link_ = crushed_front_ = -1;
 }
 
 void Model::removeBoulder() {
@@ -167,8 +170,9 @@ void Model::computeAxialForces(double dt) {
     const int bi = L.b[l];
     const auto b = static_cast<std::size_t>(bi);
     const double shortening = ux_[a] - (bi >= 0 ? ux_[b] : 0.0);
-    const double F =
-        linkLaw(s_.axial_springs[static_cast<std::size_t>(L.law[l])], shortening, axial_plastic_[l], plastic, elastic);
+    const auto law = static_cast<std::size_t>(L.law[l]);
+    const double F = linkLaw(s_.axial_springs[law], shortening, axial_plastic_[l], plastic, elastic);
+    if (shortening > s_.axial_crush_m[law] && crushed_link_ < 0) crushed_link_ = static_cast<int>(l);
     axial_force_[l] = F;
     fx_[a] -= F;
     cell_axial_[a] += 0.5 * F;
@@ -222,13 +226,14 @@ void Model::computeBoulderContacts() {
     if (d2 >= R * R) continue;
     const double d = std::sqrt(d2);
     if (d <= 1e-9 * R) {  // the centre is inside a cell: the model no longer applies
-      perforated_ = true;
+      centre_inside_ = true;
       continue;
     }
     const double indent = R - d;
     if (indent <= front_plastic_[el]) continue;  // inside the dent left by an earlier impact: no force
-    const double f =
-        linkLaw(s_.axial_springs[static_cast<std::size_t>(F.law[el])], indent, front_plastic_[el], plastic, elastic);
+    const auto law = static_cast<std::size_t>(F.law[el]);
+    const double f = linkLaw(s_.axial_springs[law], indent, front_plastic_[el], plastic, elastic);
+    if (indent > s_.axial_crush_m[law] && crushed_front_ < 0) crushed_front_ = static_cast<int>(el);
     const double nx = dx / d, ny = dy / d, nz = dz / d;  // from the cube to the centre
     bforce_ += f * Vec3(nx, ny, nz);
     fx_[node] -= f * nx;
@@ -361,9 +366,20 @@ StepStatus Model::checkState() {
     failure_ = "non-finite state (energy or boulder position) at step " + std::to_string(steps_);
     return StepStatus::NonFinite;
   }
-  if (perforated_) {
-    failure_ = "the boulder's centre entered a front cell at step " + std::to_string(steps_) +
-               ": the one-node-per-cell model does not describe a perforation";
+  if (centre_inside_) {
+    failure_ = "the boulder's centre entered a front cell at step " + std::to_string(steps_);
+    return StepStatus::Perforation;
+  }
+  if (crushed_front_ >= 0) {
+    const auto node = static_cast<std::size_t>(s_.front.node[static_cast<std::size_t>(crushed_front_)]);
+    failure_ = "the boulder crushed front cell (" + std::to_string(s_.gi[node]) + ", " + std::to_string(s_.gj[node]) +
+               ", " + std::to_string(s_.gk[node]) + ") beyond its lock-up at step " + std::to_string(steps_);
+    return StepStatus::Perforation;
+  }
+  if (crushed_link_ >= 0) {
+    const auto a = static_cast<std::size_t>(s_.axial.a[static_cast<std::size_t>(crushed_link_)]);
+    failure_ = "cell (" + std::to_string(s_.gi[a]) + ", " + std::to_string(s_.gj[a]) + ", " + std::to_string(s_.gk[a]) +
+               ") was crushed beyond its lock-up at step " + std::to_string(steps_);
     return StepStatus::Perforation;
   }
   return StepStatus::Ok;

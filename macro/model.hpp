@@ -37,7 +37,8 @@ struct BoulderSpec {
   double initial_gap_m = 1e-3;    ///< gap between the sphere and the front plane at t = 0 (m)
 };
 
-/// What step() found.
+/// What step() found. Perforation: the boulder's centre entered a front
+/// cell, or a cell was crushed beyond its lock-up (failure() says which).
 enum class StepStatus { Ok, NonFinite, Perforation };
 
 /// Energy of the model (J). Plastic and friction are accumulated since the
@@ -146,7 +147,9 @@ class Model {
        bforce_ = Vec3::Zero();
   double max_indent_ = 0.0;
   int n_contacts_ = 0;
-  bool perforated_ = false;
+  bool centre_inside_ = false;  // the boulder's centre entered a front cell
+  int crushed_link_ = -1;       // first axial link shortened past its crushing shortening (-1: none)
+  int crushed_front_ = -1;      // first front element indented past it (-1: none)
 
   double time_ = 0.0;
   long long steps_ = 0;

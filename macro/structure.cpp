@@ -14,10 +14,17 @@ AxialLawParams seriesAxialLaw(const AxialLawParams& a, const AxialLawParams& b) 
   AxialLawParams p;
   p.stiffness_N_m = series(a.stiffness_N_m, b.stiffness_N_m);
   p.yield_force_N = std::min(a.yield_force_N, b.yield_force_N);
-  if (a.model == AxialModel::Bilinear && b.model == AxialModel::Bilinear) {
-    p.model = AxialModel::Bilinear;
+  if (bridge::hardens(a.model) && bridge::hardens(b.model)) {
+    p.model = a.model == b.model ? a.model : AxialModel::Bilinear;
     p.hardening_stiffness_N_m = series(a.hardening_stiffness_N_m, b.hardening_stiffness_N_m);
   }
+  // Each half cell densifies and locks up at half its cell's shortenings.
+  if (a.model == AxialModel::Densifying && b.model == AxialModel::Densifying) {
+    p.densification_onset_m = 0.5 * (a.densification_onset_m + b.densification_onset_m);
+    p.densification_stiffness_N_m = series(a.densification_stiffness_N_m, b.densification_stiffness_N_m);
+  }
+  p.lockup_shortening_m = 0.5 * (a.lockup_shortening_m + b.lockup_shortening_m);
+  p.lockup_stiffness_N_m = series(a.lockup_stiffness_N_m, b.lockup_stiffness_N_m);
   return p;
 }
 
@@ -25,7 +32,16 @@ AxialLawParams halfCellLaw(const AxialLawParams& a) {
   AxialLawParams p = a;
   p.stiffness_N_m *= 2.0;
   p.hardening_stiffness_N_m *= 2.0;
+  p.densification_onset_m *= 0.5;
+  p.densification_stiffness_N_m *= 2.0;
+  p.lockup_shortening_m *= 0.5;
+  p.lockup_stiffness_N_m *= 2.0;
   return p;
+}
+
+double crushShortening(const AxialLawParams& p, double length_m) {
+  if (!std::isfinite(p.lockup_shortening_m)) return INFINITY;
+  return p.lockup_shortening_m + kCrushFraction * (length_m - p.lockup_shortening_m);
 }
 
 int Structure::nodeAt(int i, int j, int k) const {
@@ -35,16 +51,22 @@ int Structure::nodeAt(int i, int j, int k) const {
 
 namespace {
 
-// Deduplicating tables of laws: equal parameters share one entry.
-int internAxial(Structure& s, const AxialLawParams& p) {
+// Deduplicating tables of laws: equal parameters (and lengths) share one entry.
+// `length_m`: what the law spans (a cell edge; half of one against a support).
+int internAxial(Structure& s, const AxialLawParams& p, double length_m) {
+  const double crush = crushShortening(p, length_m);
   for (std::size_t i = 0; i < s.axial_laws.size(); ++i) {
     const auto& q = s.axial_laws[i];
     if (q.model == p.model && q.stiffness_N_m == p.stiffness_N_m && q.yield_force_N == p.yield_force_N &&
-        q.hardening_stiffness_N_m == p.hardening_stiffness_N_m)
+        q.hardening_stiffness_N_m == p.hardening_stiffness_N_m && q.densification_onset_m == p.densification_onset_m &&
+        q.densification_stiffness_N_m == p.densification_stiffness_N_m &&
+        q.lockup_shortening_m == p.lockup_shortening_m && q.lockup_stiffness_N_m == p.lockup_stiffness_N_m &&
+        s.axial_crush_m[i] == crush)
       return static_cast<int>(i);
   }
   s.axial_laws.push_back(p);
-  s.axial_springs.push_back(bridge::axialSpring(p));
+  s.axial_springs.push_back(bridge::cellSpring(p));
+  s.axial_crush_m.push_back(crush);
   return static_cast<int>(s.axial_laws.size() - 1);
 }
 
@@ -153,14 +175,14 @@ Structure buildStructure(const StructureSpec& spec, const bridge::LawFile& laws)
       const auto& mb = s.materials[static_cast<std::size_t>(s.material[static_cast<std::size_t>(b)])];
       s.axial.a.push_back(a);
       s.axial.b.push_back(b);
-      s.axial.law.push_back(internAxial(s, seriesAxialLaw(ma.axial, mb.axial)));
+      s.axial.law.push_back(internAxial(s, seriesAxialLaw(ma.axial, mb.axial), e));
       s.axial.friction.push_back(internFriction(s, pairFriction(ma, mb)));
     } else {
       s.back_nodes.push_back(a);
       if (spec.support.fixed_back) {
         s.axial.a.push_back(a);
         s.axial.b.push_back(kWall);
-        s.axial.law.push_back(internAxial(s, halfCellLaw(ma.axial)));
+        s.axial.law.push_back(internAxial(s, halfCellLaw(ma.axial), 0.5 * e));
         s.axial.friction.push_back(internFriction(s, {ma.interface.friction, ma.interface.tangential_stiffness_N_m}));
       }
     }
@@ -171,7 +193,7 @@ Structure buildStructure(const StructureSpec& spec, const bridge::LawFile& laws)
       s.lateral.a.push_back(a);
       s.lateral.b.push_back(b);
       s.lateral.dir.push_back(dir);
-      s.lateral.law.push_back(internAxial(s, seriesAxialLaw(ma.axial, mb.axial)));
+      s.lateral.law.push_back(internAxial(s, seriesAxialLaw(ma.axial, mb.axial), e));
       s.lateral.friction.push_back(internFriction(s, pairFriction(ma, mb)));
     }
     if (k == 0 && spec.support.ground_friction) {
@@ -184,7 +206,7 @@ Structure buildStructure(const StructureSpec& spec, const bridge::LawFile& laws)
                             ? spec.support.ground_tangential_stiffness_N_m
                             : ma.interface.tangential_stiffness_N_m;
       s.ground.node.push_back(a);
-      s.ground.law.push_back(internAxial(s, halfCellLaw(ma.axial)));
+      s.ground.law.push_back(internAxial(s, halfCellLaw(ma.axial), 0.5 * e));
       s.ground.friction.push_back(internFriction(s, {mu, kt}));
       s.ground.weight_N.push_back(column * spec.support.gravity_m_s2);
     }
@@ -195,7 +217,7 @@ Structure buildStructure(const StructureSpec& spec, const bridge::LawFile& laws)
       const int node = s.nodeAt(i, j, k);
       s.front.node.push_back(node);
       s.front.law.push_back(
-          internAxial(s, s.materials[static_cast<std::size_t>(s.material[static_cast<std::size_t>(node)])].impact));
+          internAxial(s, s.materials[static_cast<std::size_t>(s.material[static_cast<std::size_t>(node)])].impact, e));
       s.front.x_min.push_back(i * e);
       s.front.y_min.push_back(j * e);
       s.front.z_min.push_back(k * e);

@@ -69,9 +69,12 @@ struct Structure {
 
   /// Law tables, indexed by the links below.
   std::vector<bridge::AxialLawParams> axial_laws;
-  /// Each axial law as the elastic-plastic spring its links evaluate
-  /// (bridge::axialSpring, hardening precomputed for the step loop).
-  std::vector<bridge::ElasticPlasticParams> axial_springs;
+  /// Each axial law as the spring its links evaluate (bridge::cellSpring,
+  /// hardening precomputed for the step loop).
+  std::vector<bridge::CellSpring> axial_springs;
+  /// Each axial law's crushing shortening (m): past it the cell is crushed
+  /// beyond its lock-up (crushShortening).
+  std::vector<double> axial_crush_m;
   std::vector<bridge::FrictionParams> friction_laws;
   std::vector<double> friction_half_inv_k;  ///< per friction law: 1 / (2 k_t) (m/N)
 
@@ -112,10 +115,21 @@ Structure buildStructure(const StructureSpec& spec, const bridge::LawFile& laws)
 
 /// The axial law of two half cells in series (an x-neighbour pair of two
 /// materials): stiffness 2 k_a k_b / (k_a + k_b), the smaller yield force, the
-/// same series rule for the hardening stiffness; bilinear only if both are.
+/// same series rule for the hardening and lock-up stiffnesses, the mean of the
+/// lock-up shortenings; hardening only if both harden.
 /// Equal materials give the material's law unchanged.
 bridge::AxialLawParams seriesAxialLaw(const bridge::AxialLawParams& a, const bridge::AxialLawParams& b);
-/// Half a cell against a rigid wall: stiffness and hardening doubled, the same yield force.
+/// Half a cell against a rigid wall: stiffnesses doubled, lock-up shortening
+/// halved, the same yield force.
 bridge::AxialLawParams halfCellLaw(const bridge::AxialLawParams& a);
+
+/// A cell is crushed once shortened past its lock-up by this fraction of what
+/// remains of it at lock-up: the dense fill itself then gives way, and the
+/// one-node-per-cell model no longer describes the structure (an impact's
+/// outcome is then `perforated`; docs/macro.md).
+constexpr double kCrushFraction = 0.1;
+/// Shortening at which a link of law `p` spanning `length_m` crushes:
+/// u_L + kCrushFraction (length - u_L); infinity without a lock-up.
+double crushShortening(const bridge::AxialLawParams& p, double length_m);
 
 }  // namespace gabion::macro

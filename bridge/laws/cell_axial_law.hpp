@@ -2,11 +2,12 @@
 /// \file
 /// The macro cell law in one direction: force against shortening of a cell
 /// (confined compression, Bertrand et al. 2006 Fig. 12 and Sec. 4), with
-/// plastic memory. The macro model uses it for its axial, lateral and ground
-/// links and for the boulder-face impact law; the fitting evaluates model
-/// curves with it. The return mapping itself is the elastic-plastic spring of
-/// elastic_plastic.hpp, shared with the fine DEM's F_lim cap; this header maps
-/// the law's parameters onto it.
+/// plastic memory and a lock-up. The macro model uses it for its axial,
+/// lateral and ground links and for the boulder-face impact law; the fitting
+/// evaluates model curves with it. The return mapping itself is the
+/// elastic-plastic spring of elastic_plastic.hpp, shared with the fine DEM's
+/// F_lim cap; this header maps the law's parameters onto it and adds the
+/// lock-up.
 ///
 /// Convention: u is the shortening (compression positive, m); F >= 0 is the
 /// compressive force (N). The cell carries no tension: a cell is a contact
@@ -19,42 +20,109 @@
 /// - bilinear: linear isotropic hardening; after yield the loading tangent is
 ///   k_h (< k): the yield force grows as F_y + H u_p with H = k k_h / (k - k_h).
 ///   Unloading and reloading are elastic with k.
+/// - densifying: the bilinear spring stiffened from a fitted onset u_d as the
+///   fill densifies (the CC curve's upturn at large strain): it adds
+///   k_d max(0, u - u_d).
+///
+/// Lock-up (every model): a fill cannot be compressed beyond its densest
+/// state, reached at the lock-up shortening u_L (from the fill's porosity).
+/// Beyond it the dense fill adds k_L max(0, u - u_L). With k_L many times k
+/// the cell stops shortening at u_L under any force the loose fill could
+/// carry; the macro model reports a cell pushed well beyond u_L as crushed
+/// (docs/macro.md). Both added terms are functions of u alone (no memory):
+/// they store k (u - u_0)^2 / 2 and give it back, so
+///   F = F_ep(u, u_p) + k_d max(0, u - u_d) + k_L max(0, u - u_L),
+/// and the stiffest tangent, unloading past both, is k + k_d + k_L: the one
+/// that sets the critical time step.
+#include <cmath>
+#include <limits>
+
 #include "bridge/laws/elastic_plastic.hpp"
 
 namespace gabion::bridge {
 
-enum class AxialModel { ElasticPerfectlyPlastic, Bilinear };
+enum class AxialModel { ElasticPerfectlyPlastic, Bilinear, Densifying };
 
 /// Parameters of the axial (or impact) law.
 struct AxialLawParams {
   AxialModel model = AxialModel::ElasticPerfectlyPlastic;
   double stiffness_N_m = 0.0;            ///< elastic stiffness k (N/m)
   double yield_force_N = 0.0;            ///< first yield force F_y (N)
-  double hardening_stiffness_N_m = 0.0;  ///< post-yield tangent k_h, bilinear only (N/m), 0 <= k_h < k
+  double hardening_stiffness_N_m = 0.0;  ///< post-yield tangent k_h, bilinear and densifying (N/m), 0 <= k_h < k
+  double densification_onset_m = std::numeric_limits<double>::infinity();  ///< u_d, densifying only (m)
+  double densification_stiffness_N_m = 0.0;                                ///< k_d, densifying only (N/m)
+  double lockup_shortening_m = std::numeric_limits<double>::infinity();    ///< u_L (m); infinity: no lock-up
+  double lockup_stiffness_N_m = 0.0;                                       ///< k_L (N/m), >= 0
 };
+
+/// True for the models with a hardening tangent (bilinear, densifying).
+inline bool hardens(AxialModel m) {
+  return m != AxialModel::ElasticPerfectlyPlastic;
+}
+
+/// The stiffest loading tangent of the law before lock-up (N/m): k, or
+/// k_h + k_d past a densifying model's onset if that is stiffer. The default
+/// lock-up stiffness is a multiple of it (bridge/law_file.hpp).
+inline double looseStiffness(const AxialLawParams& p) {
+  const double dense =
+      p.model == AxialModel::Densifying ? p.hardening_stiffness_N_m + p.densification_stiffness_N_m : 0.0;
+  return p.stiffness_N_m > dense ? p.stiffness_N_m : dense;
+}
 
 /// The law as the elastic-plastic spring of elastic_plastic.hpp (the same
 /// return mapping as the fine DEM's F_lim cap): no hardening for
-/// elastic_perfectly_plastic, H = k k_h / (k - k_h) for bilinear.
+/// elastic_perfectly_plastic, H = k k_h / (k - k_h) otherwise.
 inline ElasticPlasticParams axialSpring(const AxialLawParams& p) {
-  if (p.model == AxialModel::Bilinear)
-    return hardeningSpring(p.stiffness_N_m, p.yield_force_N, p.hardening_stiffness_N_m);
+  if (hardens(p.model)) return hardeningSpring(p.stiffness_N_m, p.yield_force_N, p.hardening_stiffness_N_m);
   return {p.stiffness_N_m, p.yield_force_N, 0.0, 0.0};
 }
 
+/// The law ready for a step loop: the spring, its densification and its lock-up.
+struct CellSpring {
+  ElasticPlasticParams spring;
+  double onset_m = std::numeric_limits<double>::infinity();   ///< u_d (m)
+  double densify_N_m = 0.0;                                   ///< k_d (N/m)
+  double lockup_m = std::numeric_limits<double>::infinity();  ///< u_L (m)
+  double lockup_N_m = 0.0;                                    ///< k_L (N/m)
+};
+
+inline CellSpring cellSpring(const AxialLawParams& p) {
+  const bool densifies = p.model == AxialModel::Densifying;
+  return {axialSpring(p), densifies ? p.densification_onset_m : std::numeric_limits<double>::infinity(),
+          densifies ? p.densification_stiffness_N_m : 0.0, p.lockup_shortening_m, p.lockup_stiffness_N_m};
+}
+
 /// Result of one evaluation: the force (N), the updated plastic shortening
-/// (m) and the plastic work of the update (J).
-using AxialResponse = ElasticPlasticResponse;
+/// (m), the plastic work of the update (J) and the elastic energy stored at
+/// the new state (J).
+struct AxialResponse {
+  double force_N = 0.0;
+  double plastic_m = 0.0;
+  double plastic_work_J = 0.0;
+  double elastic_J = 0.0;
+};
 
 /// Force for shortening `u_m` given the plastic shortening `plastic_m` carried
 /// from the previous evaluation (return mapping; exact for any step size).
-inline AxialResponse axialResponse(const AxialLawParams& p, double u_m, double plastic_m) {
-  return elasticPlasticResponse(axialSpring(p), u_m, plastic_m);
+inline AxialResponse cellResponse(const CellSpring& c, double u_m, double plastic_m) {
+  const auto r = elasticPlasticResponse(c.spring, u_m, plastic_m);
+  const double dense = u_m > c.onset_m ? u_m - c.onset_m : 0.0;
+  const double over = u_m > c.lockup_m ? u_m - c.lockup_m : 0.0;
+  const double fd = c.densify_N_m * dense, fl = c.lockup_N_m * over;
+  return {r.force_N + fd + fl, r.plastic_m, r.plastic_work_J,
+          elasticPlasticEnergy(c.spring, r.force_N) + 0.5 * (fd * dense + fl * over)};
 }
 
-/// Elastic energy stored at force F (J).
-inline double axialElasticEnergy(const AxialLawParams& p, double force_N) {
-  return elasticPlasticEnergy(axialSpring(p), force_N);
+inline AxialResponse axialResponse(const AxialLawParams& p, double u_m, double plastic_m) {
+  return cellResponse(cellSpring(p), u_m, plastic_m);
+}
+
+/// The stiffest tangent the law can show (unloading past lock-up),
+/// k + k_d + k_L (N/m): the one the critical time step must hold.
+inline double maxTangentStiffness(const AxialLawParams& p) {
+  const CellSpring c = cellSpring(p);
+  return c.spring.stiffness_N_m + (std::isfinite(c.onset_m) ? c.densify_N_m : 0.0) +
+         (std::isfinite(c.lockup_m) ? c.lockup_N_m : 0.0);
 }
 
 }  // namespace gabion::bridge

@@ -43,3 +43,53 @@ TEST(CellAxialLaw, BilinearTangentAfterYield) {
   EXPECT_NEAR(big.force_N, r.force_N, 1e-6);
   EXPECT_NEAR(big.plastic_m, r.plastic_m, 1e-12);
 }
+
+// Loading far beyond yield: past the lock-up shortening the force follows
+// F_y + k_L (u - u_L) (the dense fill's spring on top of the plateau), the
+// work done equals the plastic work plus the stored energy at every step
+// (trapezoidal work of a piecewise-linear path: exact up to the kinks), and
+// unloading gives the lock-up's energy back (no plastic work while unloading).
+TEST(CellAxialLaw, LockupStopsShorteningAndBalancesEnergy) {
+  AxialLawParams p{AxialModel::ElasticPerfectlyPlastic, 1e6, 1e4, 0.0};
+  p.lockup_shortening_m = 0.1;
+  p.lockup_stiffness_N_m = 1e7;
+  double up = 0.0, work = 0.0, plastic = 0.0, f_prev = 0.0;
+  const double du = 1e-5;
+  AxialResponse r;
+  for (int i = 1; i <= 12000; ++i) {  // to u = 0.12
+    r = axialResponse(p, du * i, up);
+    up = r.plastic_m;
+    plastic += r.plastic_work_J;
+    work += 0.5 * (f_prev + r.force_N) * du;
+    f_prev = r.force_N;
+  }
+  EXPECT_NEAR(r.force_N, 1e4 + 1e7 * 0.02, 1e-6 * r.force_N);
+  EXPECT_NEAR(r.elastic_J, 0.5 * 1e4 * 1e4 / 1e6 + 0.5 * 1e7 * 0.02 * 0.02, 1e-9);
+  // The trapezoid is exact on each linear piece; the only error is the yield
+  // kink inside one step: at most F_y du / 2.
+  EXPECT_NEAR(work, plastic + r.elastic_J, 0.5 * 1e4 * du);
+  // Back to u_L: the dense spring is unloaded, the plateau force too (k is
+  // the unloading stiffness of the loose part): F = F_y - k (0.02) < 0 -> 0.
+  const auto back = axialResponse(p, 0.1, up);
+  EXPECT_EQ(back.plastic_work_J, 0.0);
+  EXPECT_DOUBLE_EQ(back.force_N, 0.0);
+  EXPECT_DOUBLE_EQ(maxTangentStiffness(p), 1.1e7);
+}
+
+// The densifying model: the bilinear spring plus k_d (u - u_d) past its onset,
+// below the lock-up.
+TEST(CellAxialLaw, DensifyingAddsItsTermPastTheOnset) {
+  AxialLawParams p{AxialModel::Densifying, 1e6, 1e4, 2e5};
+  p.densification_onset_m = 0.05;
+  p.densification_stiffness_N_m = 3e6;
+  p.lockup_shortening_m = 0.2;
+  p.lockup_stiffness_N_m = 1e8;
+  const auto at = [&](double u) { return axialResponse(p, u, 0.0).force_N; };
+  EXPECT_NEAR(at(0.04), 1e4 + 2e5 * 0.03, 1e-6);  // bilinear only
+  EXPECT_NEAR(at(0.08), 1e4 + 2e5 * 0.07 + 3e6 * 0.03, 1e-6);
+  EXPECT_NEAR(at(0.21), 1e4 + 2e5 * 0.2 + 3e6 * 0.16 + 1e8 * 0.01, 1e-5);
+  // A bilinear law ignores the densification keys.
+  p.model = AxialModel::Bilinear;
+  EXPECT_NEAR(at(0.08), 1e4 + 2e5 * 0.07, 1e-6);
+  EXPECT_DOUBLE_EQ(maxTangentStiffness(p), 1e6 + 1e8);
+}

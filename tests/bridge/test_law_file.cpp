@@ -2,6 +2,9 @@
 #include <gtest/gtest.h>
 
 #include <fstream>
+#include <string>
+#include <utility>
+#include <vector>
 
 #include "bridge/errors.hpp"
 #include "bridge/law_file.hpp"
@@ -16,9 +19,11 @@ LawFile sampleLaws() {
   c.edge_m = 0.5;
   c.mass_kg = 183;
   c.axial = {AxialModel::ElasticPerfectlyPlastic, 2e6, 5e4, 0};
+  c.axial.lockup_shortening_m = 0.1;
+  c.axial.lockup_stiffness_N_m = 3e7;
   c.lateral.reaction_coefficient = 0.4;
   c.interface = {0.6, 1e6};
-  c.impact = {AxialModel::Bilinear, 3e6, 6e4, 1e5};
+  c.impact = {AxialModel::Densifying, 3e6, 6e4, 1e5, 0.04, 2e6, 0.12, 5e7};
   c.provenance = {{"status", "illustrative"}, {"note", "test"}};
   laws.materials["front"] = c;
   return laws;
@@ -32,8 +37,14 @@ TEST(LawFile, RoundTrip) {
   ASSERT_EQ(back.materials.count("front"), 1u);
   const auto& c = back.materials.at("front");
   EXPECT_DOUBLE_EQ(c.axial.stiffness_N_m, 2e6);
-  EXPECT_EQ(c.impact.model, AxialModel::Bilinear);
+  EXPECT_DOUBLE_EQ(c.axial.lockup_shortening_m, 0.1);
+  EXPECT_DOUBLE_EQ(c.axial.lockup_stiffness_N_m, 3e7);
+  EXPECT_EQ(c.impact.model, AxialModel::Densifying);
   EXPECT_DOUBLE_EQ(c.impact.hardening_stiffness_N_m, 1e5);
+  EXPECT_DOUBLE_EQ(c.impact.densification_onset_m, 0.04);
+  EXPECT_DOUBLE_EQ(c.impact.densification_stiffness_N_m, 2e6);
+  EXPECT_DOUBLE_EQ(c.impact.lockup_shortening_m, 0.12);
+  EXPECT_EQ(back.version, 2);
   EXPECT_DOUBLE_EQ(c.interface.friction, 0.6);
   EXPECT_EQ(c.provenance.at("note"), "test");
 }
@@ -58,5 +69,59 @@ TEST(LawFile, BadFieldsAreNamed) {
     FAIL() << "no error";
   } catch (const InputError& e) {
     EXPECT_EQ(e.pointer(), "/materials/front/lateral/reaction_coef");
+  }
+  for (const auto& [key, value] :
+       std::vector<std::pair<std::string, double>>{{"densification_onset_m", 0.13},  // at or past the lock-up
+                                                   {"lockup_shortening_m", 0.5}}) {  // the whole cell edge
+    j = toJson(sampleLaws());
+    j["materials"]["front"]["impact"][key] = value;
+    writeJsonAtomic(path, j);
+    try {
+      loadLawFile(path);
+      FAIL() << key;
+    } catch (const InputError& e) {
+      EXPECT_EQ(e.pointer(), "/materials/front/impact/" + key);
+    }
+  }
+}
+
+// A file of the earlier version gabion.law/1 (no lock-up, no densifying
+// model) is read: its laws get the documented default lock-up. Lock-up keys
+// or the densifying model in a version-1 file are refused by name.
+TEST(LawFile, Version1IsReadWithTheDefaultLockup) {
+  auto j = toJson(sampleLaws());
+  j["format"] = "gabion.law/1";
+  auto& m = j["materials"]["front"];
+  m["axial"].erase("lockup_shortening_m");
+  m["axial"].erase("lockup_stiffness_N_m");
+  m["impact"] = {
+      {"model", "bilinear"}, {"stiffness_N_m", 3e6}, {"yield_force_N", 6e4}, {"hardening_stiffness_N_m", 1e5}};
+  const std::string path = ::testing::TempDir() + "law_v1.json";
+  writeJsonAtomic(path, j);
+  const LawFile v1 = loadLawFile(path);
+  EXPECT_EQ(v1.version, 1);
+  const auto& c = v1.materials.at("front");
+  EXPECT_DOUBLE_EQ(c.axial.lockup_shortening_m, kDefaultLockupStrain * 0.5);
+  EXPECT_DOUBLE_EQ(c.axial.lockup_stiffness_N_m, kDefaultLockupStiffnessRatio * 2e6);
+  EXPECT_DOUBLE_EQ(c.impact.lockup_stiffness_N_m, kDefaultLockupStiffnessRatio * 3e6);
+  EXPECT_NEAR(lockupStrain(0.436, 0.25), 0.248, 1e-3);  // the default's origin
+
+  m["axial"]["lockup_shortening_m"] = 0.1;
+  writeJsonAtomic(path, j);
+  try {
+    loadLawFile(path);
+    FAIL() << "no error";
+  } catch (const InputError& e) {
+    EXPECT_EQ(e.pointer(), "/materials/front/axial/lockup_shortening_m");
+    EXPECT_NE(std::string(e.what()).find("gabion.law/2"), std::string::npos) << e.what();
+  }
+  m["axial"].erase("lockup_shortening_m");
+  m["impact"]["model"] = "densifying";
+  writeJsonAtomic(path, j);
+  try {
+    loadLawFile(path);
+    FAIL() << "no error";
+  } catch (const InputError& e) {
+    EXPECT_EQ(e.pointer(), "/materials/front/impact/model");
   }
 }

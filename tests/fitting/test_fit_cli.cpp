@@ -84,7 +84,7 @@ TEST(FitCli, ExampleCaseWritesLawSummaryAndPlots) {
   const auto out = testing::scratchDir("fit_cli_run");
   const auto r = runGabion("run " + (kCases / "fit_cell_laws.json").string() + " -q -o " + out.string());
   ASSERT_EQ(r.exit_code, 0) << r.output;
-  const auto law = bridge::loadLawFile(out / "law.json");  // validates gabion.law/1
+  const auto law = bridge::loadLawFile(out / "law.json");  // validates gabion.law/2
   const auto& m = law.materials.at("limestone_cell");
   EXPECT_EQ(m.provenance.at("status"), "fitted");
   // The synthetic truth of cases/data/fit/generate.py.

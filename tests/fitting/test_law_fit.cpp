@@ -101,6 +101,35 @@ TEST(LawFit, ModelChoicePicksBilinearOnlyWithHardening) {
   }
 }
 
+// The densifying model beside the other two: the criterion picks it only for
+// a curve that stiffens past an onset (the CC curve's upturn as the fill
+// densifies), recovers the onset within its intervals, and keeps bilinear for
+// bilinear data.
+TEST(LawFit, ModelChoicePicksDensifyingOnlyWhenTheCurveStiffens) {
+  const std::vector<LawModel> all = {LawModel::ElasticPerfectlyPlastic, LawModel::Bilinear, LawModel::Densifying};
+  Bounds b = kAxialBounds;
+  b["densification_onset_m"] = {0.0, 0.1};
+  b["densification_stiffness_N_m"] = {1e4, 1e8};
+  LawFitSettings settings;
+  settings.lockup = {0.125, 10.0};
+  const double kh = 0.1 * kK, onset = 0.06, kd = 0.5 * kK;
+  for (unsigned seed : {1u, 2u}) {
+    auto dense = testing::bilinear(kK, kFy, kh);
+    dense.model = bridge::AxialModel::Densifying;
+    dense.densification_onset_m = onset;
+    dense.densification_stiffness_N_m = kd;
+    dense.lockup_shortening_m = settings.lockup.shortening_m;
+    dense.lockup_stiffness_N_m = settings.lockup.stiffness_ratio * kK;
+    const auto r = fitLaw(all, axialGrids(dense, 0.02 * kFy, 2, seed), b, settings);
+    ASSERT_EQ(r.best().model, LawModel::Densifying) << "seed " << seed;
+    EXPECT_TRUE(inside(r.parameters[3].jacobian, onset))
+        << r.parameters[3].jacobian.lower << " " << r.parameters[3].jacobian.upper;
+    EXPECT_NEAR(r.parameters[4].value, kd, 0.1 * kd);
+    const auto hard = fitLaw(all, axialGrids(testing::bilinear(kK, kFy, kh), 0.02 * kFy, 2, seed), b, settings);
+    EXPECT_EQ(hard.best().model, LawModel::Bilinear) << "seed " << seed;
+  }
+}
+
 TEST(LawFit, SoftL1ToleratesOutliers) {
   auto curve = axialCurve(testing::epp(kK, kFy), cyclicPath(0.08, 0.05, 0.1, 50), 0.01 * kFy, 5);
   for (std::size_t i = 10; i < curve.y.size(); i += 15) curve.y[i] += 0.5 * kFy;  // gross outliers

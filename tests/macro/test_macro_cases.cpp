@@ -59,7 +59,7 @@ json readJson(const std::filesystem::path& p) {
 TEST(MacroDefaultWall, ConvergesAsTimeStepDecreases) {
   const DefaultWall wall;
   std::vector<ImpactResult> r;
-  for (double f : {0.2, 0.1, 0.05, 0.025}) {
+  for (double f : {0.8, 0.4, 0.2, 0.1}) {
     r.push_back(wall.run(20.0, f));
     ASSERT_TRUE(r.back().ok) << r.back().message;
   }
@@ -293,7 +293,7 @@ TEST(MacroCli, CapacityAgreesWithAFineSweep) {
   ASSERT_EQ(r.exit_code, 0) << r.output;
   const json none = readJson(dir / "none" / "summary.json");
   EXPECT_TRUE(none.at("capacity_energy_J").is_null());
-  EXPECT_EQ(none.at("governing_criterion"), "penetration");
+  EXPECT_EQ(none.at("governing_criterion"), "back_face");  // 50 m/s: back face 7.3x its limit, penetration 1.8x
 
   for (const auto& [name, edit, pointer] :
        std::vector<std::tuple<std::string, std::function<void(json&)>, std::string>>{

@@ -316,3 +316,62 @@ TEST(MacroOutcome, NoOutcomeWithinTheLongestRunIsUnfinished) {
   EXPECT_GE(r.end_time_s, 0.001);
   EXPECT_LT(r.end_time_s, 0.001 + r.time_step_s * 1.0001);
 }
+
+// A column of cells compressed far beyond yield by a heavy boulder stops
+// shortening at its lock-up: each link ends within the dense spring's share
+// of the force past u_L (F / k_L), far short of the crushing shortening, and
+// the energy stays balanced (kinetic + elastic + plastic = the boulder's).
+// Without a lock-up, twice that energy (which the column's plastic plateau
+// would take over 4 m of travel) drives the column through.
+TEST(MacroLockup, ColumnStopsShorteningAtItsLockup) {
+  const double k = 1e7, fy = 5e4, uL = 0.125, kL = 1e8, M = 2000.0, v0 = 10.0;  // 100 kJ, ~4x the plastic work
+  gabion::bridge::AxialLawParams axial = epp(k, fy);
+  axial.lockup_shortening_m = uL;
+  axial.lockup_stiffness_N_m = kL;
+  const auto impact = epp(2e8, 1e12);  // a stiff elastic face: the column takes the work
+  Structure s = buildStructure(grid(4, 1, 1), oneMaterial(axial, impact, 183.0));
+  Model model(s, Kinematics::XOnly);
+  model.placeBoulder(boulderAt(s, 0, 0, M, v0));
+  const double dt = 0.05 * model.criticalTimeStep(), e0 = 0.5 * M * v0 * v0;
+  const auto& links = s.axial;
+  double max_short = 0.0, max_force = 0.0, max_err = 0.0;
+  for (int i = 0; i < 40000 && model.boulderVelocity().x() >= 0.0; ++i) {
+    ASSERT_EQ(model.step(dt), StepStatus::Ok) << model.failure();
+    for (std::size_t l = 0; l < links.a.size(); ++l) {
+      const auto a = static_cast<std::size_t>(links.a[l]);
+      const double u = model.ux()[a] - (links.b[l] >= 0 ? model.ux()[static_cast<std::size_t>(links.b[l])] : 0.0);
+      const double u_lock = links.b[l] >= 0 ? uL : 0.5 * uL;  // the back link is half a cell
+      max_short = std::max(max_short, u / u_lock);
+      max_force = std::max(max_force, model.axialForce()[l]);
+    }
+    max_err = std::max(max_err, std::abs(model.energy().total() - e0) / e0);
+  }
+  ASSERT_LT(model.boulderVelocity().x(), 0.0) << "the boulder must have been stopped";
+  EXPECT_GT(max_short, 1.0);  // it did reach its lock-up ...
+  // ... and stopped within the dense spring's share of the force beyond it
+  // (in units of u_L; the back link's k_L is doubled, its u_L halved).
+  EXPECT_LT(max_short, 1.0 + (max_force - fy) / kL / uL * 1.0001);
+  EXPECT_LT(max_short, 1.0 + kCrushFraction * (s.edge_m - uL) / uL);
+  EXPECT_LT(max_err, 0.01);
+
+  Structure loose = buildStructure(grid(4, 1, 1), oneMaterial(epp(k, fy), impact, 183.0));
+  Model free(loose, Kinematics::XOnly);
+  const ImpactResult r =
+      runImpact(free, boulderAt(loose, 0, 0, M, v0 * std::sqrt(2.0)), quickRun(0.2, 0.05), 0, nullptr);
+  ASSERT_TRUE(r.ok) << r.message;
+  EXPECT_EQ(r.outcome, Outcome::Perforated) << "without a lock-up the column is driven through";
+}
+
+// A cell pushed past its lock-up by more than kCrushFraction of what remains
+// of it is crushed: the impact's outcome is perforated, and says which cell.
+TEST(MacroLockup, CellCrushedBeyondItsLockupIsAPerforation) {
+  gabion::bridge::AxialLawParams axial = epp(1e7, 5e4);
+  axial.lockup_shortening_m = 0.125;
+  axial.lockup_stiffness_N_m = 2e7;  // a soft dense fill: a heavy fast boulder crushes it
+  Structure s = buildStructure(grid(2, 1, 1), oneMaterial(axial, epp(2e8, 1e12), 183.0));
+  Model model(s, Kinematics::XOnly);
+  const ImpactResult r = runImpact(model, boulderAt(s, 0, 0, 5000.0, 20.0), quickRun(0.2, 0.05), 0, nullptr);
+  ASSERT_TRUE(r.ok) << r.message;
+  EXPECT_EQ(r.outcome, Outcome::Perforated);
+  EXPECT_NE(r.perforation.find("crushed beyond its lock-up"), std::string::npos) << r.perforation;
+}
