@@ -131,6 +131,9 @@ BoulderSpec readBoulder(const JsonReader& r, bool& aim_given) {
   readVelocity(r, b, true);
   readAim(r, b, aim_given);
   b.initial_gap_m = r.number("initial_gap_m", 1e-3, Check::NonNegative);
+  b.face_friction = r.number("face_friction", b.face_friction, Check::NonNegative);
+  if (r.has("face_tangential_stiffness_N_m"))
+    b.face_tangential_stiffness_N_m = r.number("face_tangential_stiffness_N_m", Check::Positive);
   return b;
 }
 
@@ -149,6 +152,9 @@ RunSettings readRun(const JsonReader& root, bool sweep) {
   s.series_every_steps = static_cast<int>(r->integer("series_every_steps", s.series_every_steps, 1));
   s.snapshots = static_cast<int>(r->integer("snapshots", s.snapshots, 2));
   s.max_balance_error = r->number("max_balance_error", s.max_balance_error, Check::Positive);
+  s.gravity_m_s2 = r->number("gravity_m_s2", s.gravity_m_s2, Check::NonNegative);
+  if (s.gravity_m_s2 > 0.0 && s.kinematics == Kinematics::XOnly)
+    r->fail("gravity_m_s2", "gravity on the boulder needs \"kinematics\": \"3d\" (x-only guides it along x)");
   if (sweep) {
     s.relax = false;
   } else {
@@ -206,6 +212,7 @@ ImpactCase readImpactCase(const JsonDocument& doc, const std::optional<std::file
     c.aim_given.push_back(aim);
   }
   c.run = readRun(root, sweep);
+  for (auto& b : c.impacts) b.gravity_m_s2 = c.run.gravity_m_s2;
   if (c.run.kinematics == Kinematics::XOnly)
     for (std::size_t i = 0; i < c.impacts.size(); ++i) {
       const Vec3& v = c.impacts[i].velocity_m_s;

@@ -129,8 +129,8 @@ ImpactResult runImpact(Model& model, const BoulderSpec& boulder, const RunSettin
       break;
     }
     const Energy& e = model.energy();
-    const double e_now =
-        e.kinetic_J + e.elastic_J + (e.plastic_J - e_before.plastic_J) + (e.friction_J - e_before.friction_J);
+    const double e_now = e.kinetic_J + e.elastic_J + e.potential_J + (e.plastic_J - e_before.plastic_J) +
+                         (e.friction_J - e_before.friction_J);
     if (k == 0) e_ref = e_now;
     const double bal = std::abs(e_now - e_ref) / e_ref;
     res.balance_rel_error = std::max(res.balance_rel_error, bal);
@@ -212,7 +212,7 @@ ImpactResult runImpact(Model& model, const BoulderSpec& boulder, const RunSettin
     if (model.boulderPositionAtForces().dot(dir) - boulder.diameter_m * 0.5 > back_plane) {
       res.outcome = Outcome::Perforated;
       res.perforation = "the boulder passed the structure's back plane";
-    } else if (!contact && back_speed > 0.0) {
+    } else if (!contact && back_speed >= 0.0) {
       if (t_away < 0.0) t_away = t;
       const double in_contact_for = t_away - t_start;
       if (t - t_away >= std::max(kAwayOverContact * in_contact_for, 20.0 * dt))
@@ -257,7 +257,10 @@ ImpactResult runImpact(Model& model, const BoulderSpec& boulder, const RunSettin
   res.elastic_J = e.elastic_J;
   res.plastic_J = e.plastic_J - e_before.plastic_J;
   res.friction_J = e.friction_J - e_before.friction_J;
+  res.potential_J = e.potential_J;
   res.rebound_velocity_m_s = -model.boulderVelocity().dot(dir);
+  res.final_spin_rad_s = model.boulderSpin().norm();
+  res.final_velocity_m_s = model.boulderVelocity();
   for (std::size_t i = 0; i < n; ++i)
     if (peak_axial[i] > 0.1 * res.peak_force_N) ++res.loaded_cells;
   model.removeBoulder();

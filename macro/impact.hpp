@@ -39,6 +39,7 @@ struct RunSettings {
   long long relax_max_steps = 200000;
   double relax_tolerance = 1e-10;   ///< rest: structure kinetic energy < this x impact energy
   double max_balance_error = 0.05;  ///< an energy balance error above this stops the run (numerical failure)
+  double gravity_m_s2 = 0.0;        ///< gravity on the boulder (3-D only; copied into each BoulderSpec)
 };
 
 /// The results of one impact.
@@ -46,19 +47,21 @@ struct ImpactResult {
   bool ok = true;
   std::string message;  ///< why it failed
   Outcome outcome = Outcome::Unfinished;
-  std::string perforation;            ///< how it perforated (empty unless perforated)
-  double end_time_s = 0.0;            ///< when the impact ended, from its start (its outcome, or max_duration_s)
-  double input_energy_J = 0.0;        ///< boulder kinetic energy before contact (J)
-  double peak_force_N = 0.0;          ///< largest contact force on the boulder (N)
-  double time_of_peak_s = 0.0;        ///< from the first contact (s)
-  double max_penetration_m = 0.0;     ///< boulder travel into the structure after first contact (m)
-  double final_penetration_m = 0.0;   ///< where the boulder was at the outcome, from where it touched (>= 0, m)
-  double max_indentation_m = 0.0;     ///< largest indentation of the impact law (m)
-  double contact_duration_s = 0.0;    ///< the first contact: first touch to first separation (s)
-  int contact_episodes = 0;           ///< contacts: 1 + later re-contacts (the boulder catching up with the face)
-  double last_separation_s = 0.0;     ///< from the first touch to the end of the last contact (s)
-  double rebound_velocity_m_s = 0.0;  ///< boulder speed back along its incoming direction at the end (m/s)
-  bool contact_at_end = false;        ///< still in contact when the run ended
+  std::string perforation;                 ///< how it perforated (empty unless perforated)
+  double end_time_s = 0.0;                 ///< when the impact ended, from its start (its outcome, or max_duration_s)
+  double input_energy_J = 0.0;             ///< boulder kinetic energy before contact (J)
+  double peak_force_N = 0.0;               ///< largest contact force on the boulder (N)
+  double time_of_peak_s = 0.0;             ///< from the first contact (s)
+  double max_penetration_m = 0.0;          ///< boulder travel into the structure after first contact (m)
+  double final_penetration_m = 0.0;        ///< where the boulder was at the outcome, from where it touched (>= 0, m)
+  double max_indentation_m = 0.0;          ///< largest indentation of the impact law (m)
+  double contact_duration_s = 0.0;         ///< the first contact: first touch to first separation (s)
+  int contact_episodes = 0;                ///< contacts: 1 + later re-contacts (the boulder catching up with the face)
+  double last_separation_s = 0.0;          ///< from the first touch to the end of the last contact (s)
+  double rebound_velocity_m_s = 0.0;       ///< boulder speed back along its incoming direction at the end (m/s)
+  double final_spin_rad_s = 0.0;           ///< boulder angular speed at the end (rad/s; 3-D face friction)
+  Vec3 final_velocity_m_s = Vec3::Zero();  ///< boulder velocity at the end (m/s)
+  bool contact_at_end = false;             ///< still in contact when the run ended
   double max_back_face_displacement_m = 0.0;        ///< largest x displacement of a back cell (m)
   double max_front_face_displacement_m = 0.0;       ///< largest x displacement of a front cell (m)
   double residual_back_face_displacement_m = 0.0;   ///< after relaxation (largest back cell, m)
@@ -67,8 +70,8 @@ struct ImpactResult {
   bool relaxed = false, relax_converged = false;
   long long relax_steps = 0;
   int loaded_cells = 0;  ///< cells whose axial force exceeded 10 % of the peak boulder force
-  double kinetic_J = 0.0, elastic_J = 0.0, plastic_J = 0.0,
-         friction_J = 0.0;         ///< at the end of the impact (J); plastic and friction: this impact
+  double kinetic_J = 0.0, elastic_J = 0.0, plastic_J = 0.0, friction_J = 0.0,
+         potential_J = 0.0;        ///< at the end of the impact (J); plastic and friction: this impact
   double balance_rel_error = 0.0;  ///< max over the impact of |E(t) - E(0)| / E(0)
   double time_step_s = 0.0, critical_time_step_s = 0.0;
   long long steps = 0;

@@ -135,6 +135,8 @@ json toJson(const ImpactResult& r) {
   j["elastic_energy_J"] = r.elastic_J;
   j["plastic_energy_J"] = r.plastic_J;
   j["friction_energy_J"] = r.friction_J;
+  j["potential_energy_J"] = r.potential_J;
+  j["final_spin_rad_s"] = r.final_spin_rad_s;
   j["balance_rel_error"] = r.balance_rel_error;
   j["time_step_s"] = r.time_step_s;
   j["critical_time_step_s"] = r.critical_time_step_s;

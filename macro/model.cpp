@@ -43,6 +43,8 @@ Model::Model(Structure structure, Kinematics kinematics)
   for (auto* v : {&lat_ftx_, &lat_fto_, &lat_plastic_, &lat_force_}) v->assign(nl, 0.0);
   for (auto* v : {&gnd_ftx_, &gnd_fty_, &gnd_plastic_, &gnd_force_}) v->assign(ng, 0.0);
   front_plastic_.assign(s_.front.node.size(), 0.0);
+  front_ft_.assign(s_.front.node.size(), Vec3::Zero());
+  front_kt_.assign(s_.front.node.size(), 0.0);
 }
 
 double Model::criticalTimeStep() const {
@@ -82,7 +84,8 @@ double Model::criticalTimeStep() const {
   }
   double kimp_max = 0.0;
   for (std::size_t e = 0; e < s_.front.node.size(); ++e) {
-    const double k = tangent(s_.front.law[e]);
+    // The impact law, and in 3-D the face friction's tangential spring.
+    const double k = tangent(s_.front.law[e]) + (three_d_ && boulder_.present ? front_kt_[e] : 0.0);
     kimp_max = std::max(kimp_max, k);
     if (boulder_.present) {
       add(kx, s_.front.node[e], k);
@@ -101,6 +104,11 @@ double Model::criticalTimeStep() const {
     const double per_axis = std::ceil(2.0 * boulder_.radius_m / s_.edge_m) + 1.0;
     const double touching = std::min(static_cast<double>(s_.front.node.size()), per_axis * per_axis);
     w2 = std::max(w2, 2.0 * touching * kimp_max / boulder_.mass_kg);
+    if (three_d_) {  // rotation: a tangential spring k_t at arm R against I = 2/5 M R^2 gives 2.5 k_t / M
+      double kt_max = 0.0;
+      for (const double kt : front_kt_) kt_max = std::max(kt_max, kt);
+      w2 = std::max(w2, 2.0 * touching * 2.5 * kt_max / boulder_.mass_kg);
+    }
   }
   return w2 > 0.0 ? 2.0 / std::sqrt(w2) : INFINITY;
 }
@@ -117,8 +125,20 @@ void Model::placeBoulder(const BoulderSpec& b) {
   for (int off : s_.front_offset_cells) min_offset = std::min(min_offset, off);
   const double r = 0.5 * b.diameter_m;
   const Vec3 aim(min_offset * s_.edge_m, b.aim_y_m, b.aim_z_m);
-  boulder_ = {true, r, b.mass_kg};
+  if (!(b.face_friction >= 0.0) || !(b.face_tangential_stiffness_N_m >= 0.0) || !(b.gravity_m_s2 >= 0.0))
+    throw std::invalid_argument("boulder face friction, tangential stiffness and gravity must be >= 0");
+  if (!three_d_ && b.gravity_m_s2 > 0.0)
+    throw std::invalid_argument("gravity on the boulder needs kinematics '3d' (x-only guides it along x)");
+  boulder_ = {true, r, b.mass_kg, 0.4 * b.mass_kg * r * r, b.face_friction, b.gravity_m_s2, 0.0};
   bpos_ = aim - dir * ((r + b.initial_gap_m) / dir.x());
+  boulder_.z0_m = bpos_.z();
+  for (std::size_t e = 0; e < front_kt_.size(); ++e)
+    front_kt_[e] = b.face_tangential_stiffness_N_m > 0.0
+                       ? b.face_tangential_stiffness_N_m
+                       : s_.axial_laws[static_cast<std::size_t>(s_.front.law[e])].stiffness_N_m;
+  std::fill(front_ft_.begin(), front_ft_.end(), Vec3::Zero());
+  bspin_.setZero();
+  bspin_full_.setZero();
   bpos_force_ = bpos_;
   bvel_ = b.velocity_m_s;
   bvel_full_ = bvel_;
@@ -131,6 +151,10 @@ void Model::placeBoulder(const BoulderSpec& b) {
 
 void Model::removeBoulder() {
   boulder_.present = false;
+  std::fill(front_ft_.begin(), front_ft_.end(), Vec3::Zero());
+  bspin_.setZero();
+  bspin_full_.setZero();
+  energy_.potential_J = 0.0;
   bvel_.setZero();
   bvel_full_.setZero();
   bforce_.setZero();
@@ -141,7 +165,7 @@ void Model::removeBoulder() {
 StepStatus Model::step(double dt, double damping_rate_1_s) {
   clearForces();
   computeAxialForces(dt);
-  computeBoulderContacts();
+  computeBoulderContacts(dt);
   computeLateralForces(dt);
   computeGroundForces(dt);
   integrate(dt, damping_rate_1_s);
@@ -156,6 +180,7 @@ void Model::clearForces() {
     std::fill(fz_.begin(), fz_.end(), 0.0);
   }
   bforce_.setZero();
+  btorque_.setZero();
   elastic_acc_ = 0.0;
 }
 
@@ -203,7 +228,7 @@ void Model::computeAxialForces(double dt) {
 // The boulder against the front cubes through the impact law: the indentation
 // is the sphere's overlap with the cube (radius minus the distance from the
 // centre to the nearest point of the cube), the force acts along that line.
-void Model::computeBoulderContacts() {
+void Model::computeBoulderContacts(double dt) {
   // Local sums: the loop's stores to the force arrays cannot alias them.
   double elastic = 0.0, friction = 0.0, plastic = 0.0;
   max_indent_ = 0.0;
@@ -214,23 +239,35 @@ void Model::computeBoulderContacts() {
   for (std::size_t el = 0; el < F.node.size(); ++el) {
     const auto node = static_cast<std::size_t>(F.node[el]);
     const double x0 = F.x_min[el] + ux_[node];
-    if (bpos_.x() + R <= x0) continue;  // in front of the face: no contact possible
+    if (bpos_.x() + R <= x0) {  // in front of the face: no contact possible
+      front_ft_[el].setZero();
+      continue;
+    }
     const double y0 = F.y_min[el] + (three_d_ ? uy_[node] : 0.0);
     const double z0 = F.z_min[el] + (three_d_ ? uz_[node] : 0.0);
     const double dy = bpos_.y() - std::clamp(bpos_.y(), y0, y0 + e);
     const double dz = bpos_.z() - std::clamp(bpos_.z(), z0, z0 + e);
     const double dyz2 = dy * dy + dz * dz;
-    if (dyz2 >= R * R) continue;  // beside the cube
+    if (dyz2 >= R * R) {  // beside the cube
+      front_ft_[el].setZero();
+      continue;
+    }
     const double dx = bpos_.x() - std::clamp(bpos_.x(), x0, x0 + e);
     const double d2 = dx * dx + dyz2;
-    if (d2 >= R * R) continue;
+    if (d2 >= R * R) {
+      front_ft_[el].setZero();
+      continue;
+    }
     const double d = std::sqrt(d2);
     if (d <= 1e-9 * R) {  // the centre is inside a cell: the model no longer applies
       centre_inside_ = true;
       continue;
     }
     const double indent = R - d;
-    if (indent <= front_plastic_[el]) continue;  // inside the dent left by an earlier impact: no force
+    if (indent <= front_plastic_[el]) {  // inside the dent left by an earlier impact: no force
+      front_ft_[el].setZero();
+      continue;
+    }
     const auto law = static_cast<std::size_t>(F.law[el]);
     const double f = linkLaw(s_.axial_springs[law], indent, front_plastic_[el], plastic, elastic);
     if (indent > s_.axial_crush_m[law] && crushed_front_ < 0) crushed_front_ = static_cast<int>(el);
@@ -241,6 +278,7 @@ void Model::computeBoulderContacts() {
     if (three_d_) {
       fy_[node] -= f * ny;
       fz_[node] -= f * nz;
+      friction += faceFriction(el, node, Vec3(nx, ny, nz), f, dt, elastic);
     }
     max_indent_ = std::max(max_indent_, indent);
     ++n_contacts_;
@@ -249,6 +287,33 @@ void Model::computeBoulderContacts() {
   elastic_acc_ += elastic;
   energy_.friction_J += friction;
   energy_.plastic_J += plastic;
+}
+
+// Boulder-face friction on front element `el` (3-D): the tangential spring
+// force on the boulder, carried in the contact's tangent plane (turned with the
+// normal, its magnitude kept), updated with the sliding of the contact point
+// over the step and limited to mu times the normal force `fn`
+// (bridge::frictionUpdate<3>). It acts on the boulder at its contact point
+// (a torque) and on the cell opposite. Returns the dissipated energy; adds
+// the tangential spring's energy to `elastic`.
+double Model::faceFriction(std::size_t el, std::size_t node, const Vec3& n, double fn, double dt, double& elastic) {
+  Vec3& ft = front_ft_[el];
+  const double old = ft.norm();
+  ft -= ft.dot(n) * n;
+  const double now = ft.norm();
+  if (now > 0.0) ft *= old / now;
+  const Vec3 arm = -boulder_.radius_m * n;  // centre to contact point
+  const Vec3 v_rel = bvel_ + bspin_.cross(arm) - Vec3(vx_[node], vy_[node], vz_[node]);
+  const Vec3 du = -dt * (v_rel - v_rel.dot(n) * n);  // the cell's slide relative to the boulder
+  const bridge::FrictionParams fp{boulder_.friction, front_kt_[el]};
+  const double dissipated = bridge::frictionUpdate<3>(fp, fn, du.data(), ft.data());
+  bforce_ += ft;
+  btorque_ += arm.cross(ft);
+  fx_[node] -= ft.x();
+  fy_[node] -= ft.y();
+  fz_[node] -= ft.z();
+  elastic += 0.5 * ft.squaredNorm() / fp.tangential_stiffness_N_m;
+  return dissipated;
 }
 
 // Lateral neighbours: normal reaction = reaction coefficient x axial force of
@@ -348,12 +413,20 @@ void Model::integrate(double dt, double damping_rate_1_s) {
     advance(vz_, uz_, fz_);
   }
   if (boulder_.present) {
-    const Vec3 vnew = bvel_ + dt * bforce_ / boulder_.mass_kg;
+    const Vec3 weight(0.0, 0.0, -boulder_.mass_kg * boulder_.gravity_m_s2);
+    energy_.potential_J = boulder_.mass_kg * boulder_.gravity_m_s2 * (bpos_.z() - boulder_.z0_m);  // at x(n)
+    const Vec3 vnew = bvel_ + dt * (bforce_ + weight) / boulder_.mass_kg;
     kinetic += 0.5 * boulder_.mass_kg * bvel_.dot(vnew);
     bvel_full_ = 0.5 * (bvel_ + vnew);
     bpos_force_ = bpos_;
     bvel_ = vnew;
     bpos_ += dt * bvel_;
+    if (three_d_) {
+      const Vec3 wnew = bspin_ + dt * btorque_ / boulder_.inertia_kg_m2;
+      kinetic += 0.5 * boulder_.inertia_kg_m2 * bspin_.dot(wnew);
+      bspin_full_ = 0.5 * (bspin_ + wnew);
+      bspin_ = wnew;
+    }
   }
   energy_.kinetic_J = kinetic;
   energy_.elastic_J = elastic_acc_;

@@ -3,7 +3,7 @@
 /// The macro model in motion: the state of the nodes and interactions of a
 /// Structure, an optional boulder, and one readable step():
 ///
-///   clearForces -> computeAxialForces -> computeBoulderContacts
+///   clearForces -> computeAxialForces -> computeBoulderContacts (with face friction)
 ///     -> computeLateralForces -> computeGroundForces -> integrate -> checkState
 ///
 /// Integration is the leapfrog (velocity at half steps, positions at full
@@ -14,6 +14,7 @@
 /// up to the integrator's error at contact kinks, which is what
 /// balance_rel_error measures.
 #include <Eigen/Core>
+#include <Eigen/Geometry>
 #include <string>
 #include <vector>
 
@@ -35,6 +36,12 @@ struct BoulderSpec {
   double aim_y_m = 0.0;           ///< where the centre's path meets the front plane (m)
   double aim_z_m = 0.0;           ///< (m)
   double initial_gap_m = 1e-3;    ///< gap between the sphere and the front plane at t = 0 (m)
+  /// Boulder-face friction (3-D kinematics; x-only guides the boulder along
+  /// x): Coulomb coefficient, and the tangential spring (N/m; 0: each face's
+  /// impact-law stiffness).
+  double face_friction = 0.5;
+  double face_tangential_stiffness_N_m = 0.0;
+  double gravity_m_s2 = 0.0;  ///< gravity on the boulder, along -z (3-D kinematics only)
 };
 
 /// What step() found. Perforation: the boulder's centre entered a front
@@ -44,11 +51,12 @@ enum class StepStatus { Ok, NonFinite, Perforation };
 /// Energy of the model (J). Plastic and friction are accumulated since the
 /// model was built; kinetic includes the boulder.
 struct Energy {
-  double kinetic_J = 0.0;
+  double kinetic_J = 0.0;  ///< translation of the nodes and the boulder, and the boulder's rotation
   double elastic_J = 0.0;
   double plastic_J = 0.0;
   double friction_J = 0.0;
-  double total() const { return kinetic_J + elastic_J + plastic_J + friction_J; }
+  double potential_J = 0.0;  ///< the boulder's weight: M g (z - z at placement) (J)
+  double total() const { return kinetic_J + elastic_J + plastic_J + friction_J + potential_J; }
 };
 
 class Model {
@@ -108,6 +116,8 @@ class Model {
   const Vec3& boulderVelocity() const { return bvel_full_; }
   /// Total contact force on the boulder at the last step (N).
   const Vec3& boulderForce() const { return bforce_; }
+  /// Boulder angular velocity at the last full step (rad/s; 3-D only).
+  const Vec3& boulderSpin() const { return bspin_full_; }
   /// Deepest indentation of the boulder into a front element at the last step (m).
   double indentation() const { return max_indent_; }
   /// Number of front elements in contact at the last step.
@@ -117,7 +127,8 @@ class Model {
  private:
   void clearForces();
   void computeAxialForces(double dt);
-  void computeBoulderContacts();
+  void computeBoulderContacts(double dt);
+  double faceFriction(std::size_t el, std::size_t node, const Vec3& n, double fn, double dt, double& elastic);
   void computeLateralForces(double dt);
   void computeGroundForces(double dt);
   void integrate(double dt, double damping_rate_1_s);
@@ -136,15 +147,23 @@ class Model {
   std::vector<double> lat_ftx_, lat_fto_, lat_plastic_, lat_force_;
   // Ground links.
   std::vector<double> gnd_ftx_, gnd_fty_, gnd_plastic_, gnd_force_;
-  // Front elements.
+  // Front elements: plastic indentation; boulder-face tangential force on the
+  // boulder and tangential stiffness (3-D).
   std::vector<double> front_plastic_;
+  std::vector<Vec3> front_ft_;
+  std::vector<double> front_kt_;
 
   struct Boulder {
     bool present = false;
     double radius_m = 0.0, mass_kg = 0.0;
+    double inertia_kg_m2 = 0.0;  // 2/5 M R^2
+    double friction = 0.0;       // boulder-face Coulomb coefficient
+    double gravity_m_s2 = 0.0;
+    double z0_m = 0.0;  // height at placement (potential energy's zero)
   } boulder_;
   Vec3 bpos_ = Vec3::Zero(), bpos_force_ = Vec3::Zero(), bvel_ = Vec3::Zero(), bvel_full_ = Vec3::Zero(),
        bforce_ = Vec3::Zero();
+  Vec3 bspin_ = Vec3::Zero(), bspin_full_ = Vec3::Zero(), btorque_ = Vec3::Zero();  // rotation (3-D)
   double max_indent_ = 0.0;
   int n_contacts_ = 0;
   bool centre_inside_ = false;  // the boulder's centre entered a front cell

@@ -20,44 +20,53 @@ struct FrictionParams {
   double tangential_stiffness_N_m = 0.0;  ///< k_t (N/m), > 0
 };
 
-/// One incremental update of a 1-D tangential force (in place): trial force
-/// F + k_t du, limited to mu N (N >= 0 the current normal force). When the
-/// limit acts, the slip of the step is du - (F_new - F_old) / k_t and the
-/// energy it dissipates is taken at the mean force of the step,
-/// (F_old + F_new) / 2 * slip: the trapezoidal rule, second-order accurate
-/// and consistent with a leapfrog integrator's work while sliding under a
-/// changing normal force. Returns the energy dissipated (J, >= 0 up to round-off).
-inline double frictionUpdate1d(const FrictionParams& p, double normal_N, double du_m, double& force_N) {
+/// One incremental update of a tangential force of N components (in place):
+/// trial force F + k_t du, its magnitude limited to mu N (N >= 0 the current
+/// normal force), scaled back along the trial force. When the limit acts, the
+/// slip of the step is du - (F_new - F_old) / k_t and the energy it dissipates
+/// is taken at the mean force of the step, (F_old + F_new) / 2 . slip: the
+/// trapezoidal rule, second-order accurate and consistent with a leapfrog
+/// integrator's work while sliding under a changing normal force. Returns the
+/// energy dissipated (J, >= 0 up to round-off). N = 1: the force along x of
+/// x-only kinematics; 2: a face's two tangent axes; 3: the boulder on a face,
+/// its tangent plane any plane (the caller keeps the force in it).
+template <int N>
+inline double frictionUpdate(const FrictionParams& p, double normal_N, const double* du_m, double* force_N) {
   const double k = p.tangential_stiffness_N_m;
   const double limit = p.friction * std::max(normal_N, 0.0);
-  const double old = force_N;
-  const double trial = old + k * du_m;
-  if (std::abs(trial) <= limit) {
-    force_N = trial;
+  double old[N], trial[N], mag2 = 0.0;
+  for (int i = 0; i < N; ++i) {
+    old[i] = force_N[i];
+    trial[i] = old[i] + k * du_m[i];
+    mag2 += trial[i] * trial[i];
+  }
+  if (mag2 <= limit * limit) {
+    for (int i = 0; i < N; ++i) force_N[i] = trial[i];
     return 0.0;
   }
-  force_N = std::copysign(limit, trial);
-  return 0.5 * (old + force_N) * (du_m - (force_N - old) / k);
+  const double s = limit / std::sqrt(mag2);
+  double dissipated = 0.0;
+  for (int i = 0; i < N; ++i) {
+    force_N[i] = trial[i] * s;
+    dissipated += 0.5 * (old[i] + force_N[i]) * (du_m[i] - (force_N[i] - old[i]) / k);
+  }
+  return dissipated;
 }
 
-/// The same for a tangential force with two components (3-D kinematics): the
-/// limit applies to the magnitude, the force is scaled back along the trial force.
+/// The 1-D update (frictionUpdate<1>) on scalars.
+inline double frictionUpdate1d(const FrictionParams& p, double normal_N, double du_m, double& force_N) {
+  return frictionUpdate<1>(p, normal_N, &du_m, &force_N);
+}
+
+/// The 2-D update (frictionUpdate<2>) on two scalars.
 inline double frictionUpdate2d(const FrictionParams& p, double normal_N, double du1_m, double du2_m, double& f1_N,
                                double& f2_N) {
-  const double k = p.tangential_stiffness_N_m;
-  const double limit = p.friction * std::max(normal_N, 0.0);
-  const double o1 = f1_N, o2 = f2_N;
-  const double t1 = o1 + k * du1_m, t2 = o2 + k * du2_m;
-  const double mag = std::hypot(t1, t2);
-  if (mag <= limit) {
-    f1_N = t1;
-    f2_N = t2;
-    return 0.0;
-  }
-  const double s = limit / mag;
-  f1_N = t1 * s;
-  f2_N = t2 * s;
-  return 0.5 * ((o1 + f1_N) * (du1_m - (f1_N - o1) / k) + (o2 + f2_N) * (du2_m - (f2_N - o2) / k));
+  const double du[2] = {du1_m, du2_m};
+  double f[2] = {f1_N, f2_N};
+  const double d = frictionUpdate<2>(p, normal_N, du, f);
+  f1_N = f[0];
+  f2_N = f[1];
+  return d;
 }
 
 /// Elastic energy stored in the tangential spring at force magnitude F (J).
