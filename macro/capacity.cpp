@@ -11,6 +11,7 @@
 #include "bridge/output.hpp"
 #include "bridge/plot.hpp"
 #include "macro/case_reader.hpp"
+#include "macro/criteria.hpp"
 #include "macro/runs.hpp"
 
 namespace gabion::macro {
@@ -21,11 +22,6 @@ using bridge::JsonReader;
 using nlohmann::json;
 
 namespace {
-
-struct Criteria {
-  double max_back_face_m = std::numeric_limits<double>::infinity();
-  double max_penetration_m = std::numeric_limits<double>::infinity();
-};
 
 struct CapacitySpec {
   bool over_mass = false;  // else over velocity
@@ -71,15 +67,8 @@ Plan plan(const JsonDocument& doc, const std::optional<std::filesystem::path>& l
 }
 
 // One impact at x (a velocity or a mass) and what it says of the criteria.
-struct Evaluation {
-  double x = 0.0, energy_J = 0.0;
-  ImpactResult result;
-  bool met = false;
-  std::string failed;  // the criterion it failed by the most ("held", "back_face", "penetration")
-};
-
-Evaluation evaluate(const Plan& p, double x) {
-  Evaluation ev;
+CapacityEvaluation evaluate(const Plan& p, double x) {
+  CapacityEvaluation ev;
   ev.x = x;
   BoulderSpec b = p.c.impacts.front();
   if (p.spec.over_mass)
@@ -89,21 +78,14 @@ Evaluation evaluate(const Plan& p, double x) {
   ev.energy_J = 0.5 * b.mass_kg * b.velocity_m_s.squaredNorm();
   Model model(p.structure, p.c.run.kinematics);
   ev.result = runImpact(model, b, p.c.run, 0, nullptr);
-  if (!ev.result.ok) return ev;
-  const ImpactResult& r = ev.result;
-  const bool held = r.outcome == Outcome::Stopped || r.outcome == Outcome::Rebounded;
-  const double back = r.max_back_face_displacement_m / p.spec.criteria.max_back_face_m;
-  const double pen = r.max_penetration_m / p.spec.criteria.max_penetration_m;
-  ev.met = held && back <= 1.0 && pen <= 1.0;
-  if (!held)
-    ev.failed = "held";
-  else if (back > 1.0 || pen > 1.0)
-    ev.failed = back >= pen ? "back_face" : "penetration";
+  if (!ev.result.ok)
+    throw bridge::NumericalError(0, 0.0, "the impact at " + std::to_string(x) + " failed: " + ev.result.message);
+  ev.verdict = judge(ev.result, p.spec.criteria);
   return ev;
 }
 
-json toJson(const Evaluation& e, const CapacitySpec& s) {
-  json j = {{s.over_mass ? "mass_kg" : "velocity_m_s", e.x}, {"energy_J", e.energy_J}, {"met", e.met}};
+json toJson(const CapacityEvaluation& e, const CapacitySpec& s) {
+  json j = {{s.over_mass ? "mass_kg" : "velocity_m_s", e.x}, {"energy_J", e.energy_J}, {"met", e.verdict.met}};
   if (!e.result.ok) {
     j["status"] = "failed", j["message"] = e.result.message;
     return j;
@@ -112,14 +94,8 @@ json toJson(const Evaluation& e, const CapacitySpec& s) {
   j["max_penetration_m"] = e.result.max_penetration_m;
   j["max_back_face_displacement_m"] = e.result.max_back_face_displacement_m;
   j["peak_force_N"] = e.result.peak_force_N;
-  if (!e.failed.empty()) j["failed"] = e.failed;
+  if (!e.verdict.failed.empty()) j["failed"] = e.verdict.failed;
   return j;
-}
-
-const char* criterionText(const std::string& c) {
-  if (c == "held") return "the boulder is held (not perforated, and finished)";
-  if (c == "back_face") return "the back face's displacement";
-  return "the penetration";
 }
 
 }  // namespace
@@ -131,30 +107,22 @@ void checkCapacityCase(const JsonDocument& doc) {
 bridge::RunOutcome runCapacityCase(const JsonDocument& doc, const bridge::RunContext& ctx) {
   const Plan p = plan(doc, ctx.law_file);
   const CapacitySpec& s = p.spec;
-  std::vector<Evaluation> evals;
   bridge::RunOutcome out;
-  const auto run = [&](double x) -> const Evaluation& {
-    evals.push_back(evaluate(p, x));
-    if (!evals.back().result.ok)
-      throw bridge::NumericalError(0, 0.0,
-                                   "the impact at " + std::to_string(x) + " failed: " + evals.back().result.message);
-    return evals.back();
-  };
-  // The energy grows with x (as x^2 over velocity, as x over mass): bisect
-  // between a point that meets every criterion and one that does not, until
-  // the bracket's energies are within `tolerance` of each other.
-  const Evaluation lo = run(s.lo);
-  const Evaluation hi = run(s.hi);
+  const CapacitySearch search =
+      searchCapacity([&](double x) { return evaluate(p, x); }, s.lo, s.hi, s.over_mass, s.tolerance, s.max_evaluations);
+  const std::vector<CapacityEvaluation>& evals = search.evaluations;
   json& r = out.results;
   const char* key = s.over_mass ? "mass_kg" : "velocity_m_s";
   std::ostringstream answer;
   answer.precision(4);
-  if (!lo.met) {
+  if (search.kind == CapacitySearch::Kind::NoneMet) {
+    const CapacityEvaluation& lo = evals[search.bad];
     r["capacity_energy_J"] = nullptr;
-    r["governing_criterion"] = lo.failed;
+    r["governing_criterion"] = lo.verdict.failed;
     answer << "no impact in the range meets the criteria: at the lowest, " << s.lo << " (" << lo.energy_J / 1e3
-           << " kJ), " << criterionText(lo.failed) << " already fails";
-  } else if (hi.met) {
+           << " kJ), " << criterionText(lo.verdict.failed) << " already fails";
+  } else if (search.kind == CapacitySearch::Kind::AllMet) {
+    const CapacityEvaluation& hi = evals[search.good];
     r["capacity_energy_J"] = hi.energy_J;
     r[key] = s.hi;
     r["governing_criterion"] = nullptr;
@@ -162,22 +130,12 @@ bridge::RunOutcome runCapacityCase(const JsonDocument& doc, const bridge::RunCon
     answer << "every criterion is met up to the highest of the range, " << s.hi << " (" << hi.energy_J / 1e3
            << " kJ): the capacity is at least that";
   } else {
-    double a = s.lo, b = s.hi;
-    Evaluation good = lo, bad = hi;
-    while ((bad.energy_J - good.energy_J) > s.tolerance * good.energy_J &&
-           static_cast<int>(evals.size()) < s.max_evaluations) {
-      const double mid = s.over_mass ? 0.5 * (a + b) : std::sqrt(0.5 * (a * a + b * b));  // (mid-energy)
-      const Evaluation e = run(mid);
-      if (e.met)
-        a = mid, good = e;
-      else
-        b = mid, bad = e;
-    }
+    const CapacityEvaluation &good = evals[search.good], &bad = evals[search.bad];
     r["capacity_energy_J"] = good.energy_J;
     r[key] = good.x;
     r["bracket_energy_J"] = {good.energy_J, bad.energy_J};
-    r["governing_criterion"] = bad.failed;
-    r["converged"] = (bad.energy_J - good.energy_J) <= s.tolerance * good.energy_J;
+    r["governing_criterion"] = bad.verdict.failed;
+    r["converged"] = search.converged;
     const ImpactResult& g = good.result;
     json margin = json::object();
     if (std::isfinite(s.criteria.max_back_face_m))
@@ -187,7 +145,7 @@ bridge::RunOutcome runCapacityCase(const JsonDocument& doc, const bridge::RunCon
     r["margins_at_capacity"] = margin;
     answer << "capacity " << good.energy_J / 1e3 << " kJ (" << key << " " << good.x << "; " << outcomeName(g.outcome)
            << ", penetration " << 1e3 * g.max_penetration_m << " mm, back face " << 1e3 * g.max_back_face_displacement_m
-           << " mm); above it " << criterionText(bad.failed) << " governs (at " << bad.energy_J / 1e3 << " kJ)";
+           << " mm); above it " << criterionText(bad.verdict.failed) << " governs (at " << bad.energy_J / 1e3 << " kJ)";
   }
   r["answer"] = answer.str();
   r["criteria"] = {{"held", true},
@@ -196,24 +154,24 @@ bridge::RunOutcome runCapacityCase(const JsonDocument& doc, const bridge::RunCon
                    {"max_penetration_m",
                     std::isfinite(s.criteria.max_penetration_m) ? json(s.criteria.max_penetration_m) : json(nullptr)}};
   json list = json::array();
-  for (const Evaluation& e : evals) list.push_back(toJson(e, s));
+  for (const CapacityEvaluation& e : evals) list.push_back(toJson(e, s));
   r["evaluations"] = list;
   r["tolerance"] = s.tolerance;
   double worst = 0.0;  // (the energy balance of every impact run)
-  for (const Evaluation& e : evals) worst = std::max(worst, e.result.balance_rel_error);
+  for (const CapacityEvaluation& e : evals) worst = std::max(worst, e.result.balance_rel_error);
   r["balance_rel_error"] = worst;
 
   // The evaluations against energy, with the limits.
-  std::vector<Evaluation> sorted = evals;
+  std::vector<CapacityEvaluation> sorted = evals;
   std::sort(sorted.begin(), sorted.end(),
-            [](const Evaluation& x, const Evaluation& y) { return x.energy_J < y.energy_J; });
+            [](const CapacityEvaluation& x, const CapacityEvaluation& y) { return x.energy_J < y.energy_J; });
   bridge::PlotSpec plot;
   plot.title = "Capacity: the impacts the search ran";
   plot.x_label = "impact energy (kJ)";
   plot.y_label = "displacement (mm)";
   bridge::PlotSeries pen{"max penetration", {}, {}, bridge::PlotSeries::Style::LineMarkers};
   bridge::PlotSeries back{"max back-face displacement", {}, {}, bridge::PlotSeries::Style::LineMarkers};
-  for (const Evaluation& e : sorted) {
+  for (const CapacityEvaluation& e : sorted) {
     pen.x.push_back(e.energy_J / 1e3), pen.y.push_back(1e3 * e.result.max_penetration_m);
     back.x.push_back(e.energy_J / 1e3), back.y.push_back(1e3 * e.result.max_back_face_displacement_m);
   }
@@ -230,8 +188,9 @@ bridge::RunOutcome runCapacityCase(const JsonDocument& doc, const bridge::RunCon
                            {1e3 * s.criteria.max_back_face_m, 1e3 * s.criteria.max_back_face_m},
                            bridge::PlotSeries::Style::Line});
   bridge::PlotSeries held{"not held (perforated or unfinished)", {}, {}, bridge::PlotSeries::Style::Markers};
-  for (const Evaluation& e : sorted)
-    if (e.failed == "held") held.x.push_back(e.energy_J / 1e3), held.y.push_back(1e3 * e.result.max_penetration_m);
+  for (const CapacityEvaluation& e : sorted)
+    if (e.verdict.failed == "held")
+      held.x.push_back(e.energy_J / 1e3), held.y.push_back(1e3 * e.result.max_penetration_m);
   if (!held.x.empty()) plot.series.push_back(held);
   bridge::writePlotPng(ctx.outdir / "capacity.png", plot);
   out.report = "macro.capacity: " + answer.str() + " (" + std::to_string(evals.size()) + " impacts)\n";
