@@ -33,7 +33,7 @@ json wallCase(const std::string& law, int nx, int ny, int nz, double duration_s,
           {"structure",
            {{"cells", {nx, ny, nz}}, {"material", {{"front", "front"}, {"core", "core"}, {"front_depth_cells", 1}}}}},
           {"boulder", {{"diameter_m", 0.5}, {"density_kg_m3", 2600}, {"velocity_m_s", 20}}},
-          {"run", {{"duration_s", duration_s}, {"time_step_fraction", 0.1}, {"kinematics", kinematics}}}};
+          {"run", {{"duration_s", duration_s}, {"time_step_fraction", 0.25}, {"kinematics", kinematics}}}};
 }
 
 // CPU time of this thread (s): on a shared, loaded machine it is what the run

@@ -112,70 +112,89 @@ void validateCurve(const Curve& c, const CurveRequest& request, const std::vecto
     throw InputError(c.source, location(lineOf(0), x_column, c.x_name), "column has no spread (all values equal)");
 }
 
-Curve readCurveCsv(const fs::path& file, const CurveRequest& request) {
+CsvTable readCsvTable(const fs::path& file, const std::vector<std::string>& required,
+                      const std::vector<std::string>& optional) {
   const std::string name = file.string();
   std::error_code ec;
   if (!fs::exists(file, ec)) throw InputError(name, "", "file does not exist");
+  if (!fs::is_regular_file(file, ec)) throw InputError(name, "", "not a regular file");
   std::ifstream in(file);
   if (!in) throw InputError(name, "", "cannot open file");
 
   std::string line;
-  std::size_t line_no = 0, header_line = 0;
-  std::vector<std::string> header;
+  std::size_t line_no = 0;
+  CsvTable t;
+  t.source = name;
   while (std::getline(in, line)) {
     ++line_no;
-    const std::string t = trim(line);
-    if (t.empty() || t[0] == '#') continue;
-    header = splitCells(t);
-    header_line = line_no;
+    const std::string s = trim(line);
+    if (s.empty() || s[0] == '#') continue;
+    t.header = splitCells(s);
+    t.header_line = line_no;
     break;
   }
-  if (header.empty())
+  if (t.header.empty())
     throw InputError(name, location(std::max<std::size_t>(line_no, 1), 0, ""), "empty file: no header line");
+  std::vector<std::size_t> read;  // the columns read, by index
+  for (const auto& want : required) {
+    read.push_back(findColumn(name, t.header, want, t.header_line));
+    t.columns[want];
+  }
+  for (const auto& want : optional)
+    for (std::size_t i = 0; i < t.header.size(); ++i)
+      if (t.header[i] == want) {
+        read.push_back(i);
+        t.columns[want];
+      }
 
-  const std::size_t ix = findColumn(name, header, request.x_name, header_line);
-  const std::size_t iy = findColumn(name, header, request.y_name, header_line);
-  std::size_t it = header.size();
-  for (std::size_t i = 0; i < header.size(); ++i)
-    if (header[i] == "time_s") it = i;
-
-  Curve c;
-  c.source = name;
-  c.x_name = request.x_name;
-  c.y_name = request.y_name;
-  std::vector<std::size_t> lines;
-  double last_time = -std::numeric_limits<double>::infinity();
   while (std::getline(in, line)) {
     ++line_no;
-    const std::string t = trim(line);
-    if (t.empty() || t[0] == '#') continue;
-    const auto cells = splitCells(t);
-    if (cells.size() != header.size())
+    const std::string s = trim(line);
+    if (s.empty() || s[0] == '#') continue;
+    const auto cells = splitCells(s);
+    if (cells.size() != t.header.size())
       throw InputError(
-          name, location(line_no, std::min(cells.size(), header.size()) + 1, ""),
-          "row has " + std::to_string(cells.size()) + " cells, the header has " + std::to_string(header.size()));
-    double v = 0.0;
-    for (std::size_t col = 0; col < cells.size(); ++col) {
-      if (col != ix && col != iy && col != it) continue;
+          name, location(line_no, std::min(cells.size(), t.header.size()) + 1, ""),
+          "row has " + std::to_string(cells.size()) + " cells, the header has " + std::to_string(t.header.size()));
+    for (const std::size_t col : read) {
+      double v = 0.0;
       if (!parseNumber(cells[col], v))
-        throw InputError(name, location(line_no, col + 1, header[col]), "not a number: '" + cells[col] + "'");
+        throw InputError(name, location(line_no, col + 1, t.header[col]), "not a number: '" + cells[col] + "'");
       if (!std::isfinite(v))
-        throw InputError(name, location(line_no, col + 1, header[col]), "value is not finite (" + cells[col] + ")");
+        throw InputError(name, location(line_no, col + 1, t.header[col]), "value is not finite (" + cells[col] + ")");
+      t.columns[t.header[col]].push_back(v);
     }
-    parseNumber(cells[ix], v);
-    c.x.push_back(v);
-    parseNumber(cells[iy], v);
-    c.y.push_back(v);
-    if (it < cells.size()) {
-      parseNumber(cells[it], v);
-      if (!(v > last_time))
-        throw InputError(name, location(line_no, it + 1, "time_s"), "unsorted: time_s must increase strictly");
-      last_time = v;
-    }
-    lines.push_back(line_no);
+    t.lines.push_back(line_no);
   }
-  if (c.x.empty()) throw InputError(name, location(line_no, 0, ""), "empty file: a header but no data rows");
-  validateCurve(c, request, lines, ix + 1, iy + 1);
+  if (t.lines.empty()) throw InputError(name, location(line_no, 0, ""), "empty file: a header but no data rows");
+  return t;
+}
+
+std::size_t CsvTable::column(const std::string& name) const {
+  for (std::size_t i = 0; i < header.size(); ++i)
+    if (header[i] == name) return i + 1;
+  return 0;
+}
+
+std::string CsvTable::where(std::size_t row, const std::string& name) const {
+  return location(lines.at(row), column(name), name);
+}
+
+Curve readCurveCsv(const fs::path& file, const CurveRequest& request) {
+  const CsvTable t = readCsvTable(file, {request.x_name, request.y_name}, {"time_s"});
+  if (t.columns.count("time_s") != 0) {
+    const auto& time = t.columns.at("time_s");
+    for (std::size_t i = 1; i < time.size(); ++i)
+      if (!(time[i] > time[i - 1]))
+        throw InputError(t.source, t.where(i, "time_s"), "unsorted: time_s must increase strictly");
+  }
+  Curve c;
+  c.source = t.source;
+  c.x_name = request.x_name;
+  c.y_name = request.y_name;
+  c.x = t.columns.at(request.x_name);
+  c.y = t.columns.at(request.y_name);
+  validateCurve(c, request, t.lines, t.column(request.x_name), t.column(request.y_name));
   return c;
 }
 

@@ -5,6 +5,7 @@
 /// line and the column of the first bad value. Formats: docs/fitting.md.
 #include <cstddef>
 #include <filesystem>
+#include <map>
 #include <string>
 #include <vector>
 
@@ -36,7 +37,33 @@ struct CurveRequest {
   std::size_t min_points = 5;  ///< fewer rows than this is an error
 };
 
-/// Reads a CSV curve: a header line with the column names (each ending in its SI
+/// A CSV table of numbers: the columns asked for, by name, one value per data
+/// row, and the file line of every row (for messages).
+struct CsvTable {
+  std::string source;                                  ///< the file
+  std::vector<std::string> header;                     ///< every column's name, in order
+  std::size_t header_line = 0;                         ///< line of the header
+  std::map<std::string, std::vector<double>> columns;  ///< the columns read (required, and optional ones present)
+  std::vector<std::size_t> lines;                      ///< file line of each row
+  std::size_t rows() const { return lines.size(); }
+  /// 1-based column of `name` (0: absent).
+  std::size_t column(const std::string& name) const;
+  /// "line L, column C (name)" of a cell, for an InputError.
+  std::string where(std::size_t row, const std::string& name) const;
+};
+
+/// Reads a CSV table: a header line with the column names (each ending in its
+/// SI unit), then one row of numbers per line; blank lines and lines starting
+/// with '#' are skipped. Reads the `required` columns and those of
+/// `optional` that the header has; other columns are ignored. Throws
+/// InputError (file, "line L, column C (name)", message) for a missing or
+/// empty file, a missing column (or one of the right name and another unit,
+/// `velocity_km_h` for `velocity_m_s`), a row with the wrong number of cells,
+/// and a non-numeric or non-finite cell in a column read.
+CsvTable readCsvTable(const std::filesystem::path& file, const std::vector<std::string>& required,
+                      const std::vector<std::string>& optional = {});
+
+/// Reads a CSV curve (readCsvTable): a header line with the column names (each ending in its SI
 /// unit, e.g. `displacement_m,force_N`; other columns are allowed and ignored,
 /// except `time_s`, which must then increase strictly), then one row of numbers
 /// per line. Blank lines and lines starting with '#' are skipped.

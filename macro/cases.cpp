@@ -13,6 +13,9 @@ std::vector<bridge::CaseKind> caseKinds() {
       {"macro.capacity",
        "the largest impact energy a structure holds with the acceptance criteria met (bisection over velocity or mass)",
        checkCapacityCase, runCapacityCase},
+      {"macro.design",
+       "the smallest structure (thickness, height, front material) that holds the design impacts with the criteria met",
+       checkDesignCase, runDesignCase},
   };
 }
 

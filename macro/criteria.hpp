@@ -47,7 +47,8 @@ struct CapacityEvaluation {
 struct CapacitySearch {
   enum class Kind { NoneMet, AllMet, Bracketed } kind = Kind::NoneMet;
   std::vector<CapacityEvaluation> evaluations;
-  std::size_t good = 0, bad = 0;  ///< Bracketed: the highest that met, the lowest that did not; NoneMet: bad = lowest; AllMet: good = highest
+  std::size_t good = 0, bad = 0;  ///< Bracketed: the highest that met, the lowest that did not; NoneMet: bad = lowest;
+                                  ///< AllMet: good = highest
   bool converged = false;         ///< Bracketed: the bracket's energies within the tolerance
 };
 

@@ -31,7 +31,7 @@ struct RunSettings {
   double max_duration_s = 0.0;        ///< the longest an impact runs (s); 0: 20 x duration_s
   double rebound_restitution = 0.05;  ///< speed back over speed in above which the boulder rebounded
   double separated_for_ratio = 0.5;   ///< the boulder has left for good once away this long over the contact's duration
-  double time_step_fraction = 0.1;    ///< dt = fraction x critical time step
+  double time_step_fraction = 0.25;   ///< dt = fraction x critical time step (docs/macro.md, Time step)
   double time_step_s = 0.0;           ///< explicit dt (s); 0: from the fraction
   int series_every_steps = 1;         ///< series sampling (steps)
   int snapshots = 41;                 ///< node snapshots per impact (evenly spaced, >= 2)

@@ -162,6 +162,11 @@ void Model::removeBoulder() {
   max_indent_ = 0.0;
 }
 
+void Model::stopNodes() {
+  for (auto* v : {&vx_, &vy_, &vz_}) std::fill(v->begin(), v->end(), 0.0);
+  energy_.kinetic_J = 0.0;
+}
+
 StepStatus Model::step(double dt, double damping_rate_1_s) {
   clearForces();
   computeAxialForces(dt);

@@ -77,6 +77,8 @@ class Model {
   /// from that plane. Throws std::invalid_argument for an impossible boulder.
   void placeBoulder(const BoulderSpec& b);
   void removeBoulder();
+  /// Sets every node's velocity to zero (kinetic damping while relaxing).
+  void stopNodes();
   bool hasBoulder() const { return boulder_.present; }
 
   /// Advances by dt (s). `damping_rate_1_s` > 0 adds mass-proportional viscous

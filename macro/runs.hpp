@@ -3,7 +3,8 @@
 /// The case kinds of the macro module: `macro.impact` (one structure, one
 /// impact or a list of impacts, full result files), `macro.sweep` (a grid of
 /// impacts run in parallel, a table and design charts) and `macro.capacity`
-/// (the largest impact energy that meets the acceptance criteria).
+/// (the largest impact energy that meets the acceptance criteria) and
+/// `macro.design` (the smallest section that meets them).
 #include "bridge/run.hpp"
 #include "macro/impact.hpp"
 
@@ -23,6 +24,11 @@ bridge::RunOutcome runSweepCase(const bridge::JsonDocument& doc, const bridge::R
 void checkCapacityCase(const bridge::JsonDocument& doc);
 /// Runs a macro.capacity case: bisection over the boulder's velocity or mass.
 bridge::RunOutcome runCapacityCase(const bridge::JsonDocument& doc, const bridge::RunContext& ctx);
+
+/// Validates a macro.design case.
+void checkDesignCase(const bridge::JsonDocument& doc);
+/// Runs a macro.design case: the smallest section that meets the criteria.
+bridge::RunOutcome runDesignCase(const bridge::JsonDocument& doc, const bridge::RunContext& ctx);
 
 /// The summary entries of one impact.
 nlohmann::json toJson(const ImpactResult& r);

@@ -3,7 +3,6 @@
 // (each point on its own fresh model; results stored by point index, so the
 // output order does not depend on the threads). Failed points are recorded.
 #include <algorithm>
-#include <atomic>
 #include <chrono>
 #include <cmath>
 #include <fstream>
@@ -11,12 +10,12 @@
 #include <map>
 #include <sstream>
 #include <stdexcept>
-#include <thread>
 
 #include "bridge/errors.hpp"
 #include "bridge/output.hpp"
 #include "bridge/plot.hpp"
 #include "macro/case_reader.hpp"
+#include "macro/parallel.hpp"
 #include "macro/runs.hpp"
 
 namespace gabion::macro {
@@ -132,28 +131,10 @@ bridge::RunOutcome runSweepCase(const JsonDocument& doc, const bridge::RunContex
   const Plan p = plan(doc, ctx.law_file);
   const std::size_t np = p.points.size();
   std::vector<ImpactResult> results(np);
-  std::atomic<std::size_t> next{0}, done{0};
   const auto t0 = std::chrono::steady_clock::now();
-  auto worker = [&] {
-    for (std::size_t i = next++; i < np; i = next++) {
-      results[i] = runPoint(p, p.points[i]);
-      ++done;
-    }
-  };
   const int nthreads = std::max(1, std::min<int>(ctx.threads, static_cast<int>(np)));
-  std::vector<std::thread> pool;
-  for (int t = 1; t < nthreads; ++t) pool.emplace_back(worker);
-  {
-    // The main thread works too and reports progress between its points.
-    bridge::Progress progress(ctx.progress, "macro.sweep");
-    for (std::size_t i = next++; i < np; i = next++) {
-      results[i] = runPoint(p, p.points[i]);
-      ++done;
-      progress.update(static_cast<double>(done.load()), static_cast<double>(np), static_cast<long long>(done.load()));
-    }
-    for (auto& th : pool) th.join();
-    progress.finish();
-  }
+  bridge::Progress progress(ctx.progress, "macro.sweep");
+  runParallel(np, nthreads, progress, [&](std::size_t i) { results[i] = runPoint(p, p.points[i]); });
   const double wall = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
 
   // Table: CSV and HDF5, one row per point in grid order.

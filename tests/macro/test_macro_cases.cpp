@@ -380,3 +380,133 @@ TEST(MacroCli, TimeStepAboveCriticalExitsThree) {
   EXPECT_EQ(r.exit_code, 3) << r.output;
   EXPECT_NE(r.output.find("critical time step"), std::string::npos) << r.output;
 }
+
+// macro.design (cases/macro_design.json on smaller bounds): the bisection
+// over the thickness returns the section exhaustive enumeration finds; the
+// chosen section holds its design impacts (residual capacity at least the
+// number asked) and the next thinner one of its height and material does not.
+TEST(MacroCli, DesignBisectionAgreesWithExhaustiveEnumeration) {
+  const auto dir = scratchDir("macro_design");
+  json c = readJson(kSource + "/cases/macro_design.json");
+  c["law_file"] = kSource + "/cases/laws/illustrative.json";
+  c["design"]["thickness_cells"] = {2, 7};
+  c["design"]["height_cells"] = {2, 4};
+  c["design"]["capacity_chart"] = false;
+  json answers[2];
+  int k = 0;
+  for (const char* search : {"bisection", "exhaustive"}) {
+    c["design"]["search"] = search;
+    writeFile(dir / (std::string(search) + ".json"), c.dump());
+    const auto r = runGabion("run " + (dir / (std::string(search) + ".json")).string() + " -q --threads 2 -o " +
+                             (dir / search).string());
+    ASSERT_EQ(r.exit_code, 0) << r.output;
+    answers[k++] = readJson(dir / search / "summary.json");
+  }
+  const json& b = answers[0].at("design");
+  const json& e = answers[1].at("design");
+  ASSERT_FALSE(b.is_null());
+  EXPECT_EQ(b.at("thickness_cells"), e.at("thickness_cells"));
+  EXPECT_EQ(b.at("height_cells"), e.at("height_cells"));
+  EXPECT_EQ(b.at("front_material"), e.at("front_material"));
+  EXPECT_EQ(b.at("margins"), e.at("margins"));
+  EXPECT_LT(answers[0].at("sections_evaluated").get<int>(), answers[1].at("sections_evaluated").get<int>());
+  EXPECT_GE(answers[0].at("residual_capacity_impacts").get<int>(), c["design"]["criteria"]["impacts"].get<int>());
+  for (const auto& s : answers[1].at("sections"))  // nothing cheaper holds
+    if (s.at("met").get<bool>()) EXPECT_GE(s.at("cells").get<int>(), b.at("cells").get<int>());
+  bool thinner_checked = false;
+  for (const auto& s : answers[1].at("sections"))
+    if (s.at("height_cells") == b.at("height_cells") && s.at("front_material") == b.at("front_material") &&
+        s.at("thickness_cells").get<int>() == b.at("thickness_cells").get<int>() - 1) {
+      EXPECT_FALSE(s.at("met").get<bool>());
+      thinner_checked = true;
+    }
+  EXPECT_TRUE(thinner_checked);
+}
+
+// Criteria that no section in the bounds meets give an answer naming the
+// criterion (exit 0, no design); a table of impacts with probabilities and
+// an acceptance probability below 1 accept a section that fails the rarest
+// impact; bad bounds, materials and tables are input errors naming the field.
+TEST(MacroCli, DesignAnswersImpossibleCriteriaAndRefusesBadBounds) {
+  const auto dir = scratchDir("macro_design_bad");
+  json c = readJson(kSource + "/cases/macro_design.json");
+  c["law_file"] = kSource + "/cases/laws/illustrative.json";
+  c["design"]["thickness_cells"] = {2, 3};
+  c["design"]["height_cells"] = {3, 3};
+  c["design"]["capacity_chart"] = false;
+  c["design"]["criteria"]["max_back_face_displacement_m"] = 1e-6;
+  writeFile(dir / "none.json", c.dump());
+  auto r = runGabion("run " + (dir / "none.json").string() + " -q -o " + (dir / "none").string());
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  json none = readJson(dir / "none" / "summary.json");
+  EXPECT_TRUE(none.at("design").is_null());
+  EXPECT_EQ(none.at("governing_criterion"), "back_face");
+  EXPECT_NE(none.at("answer").get<std::string>().find("no section"), std::string::npos);
+
+  // Two impacts: the design one (90 %) and a rare fast one (10 %) that the
+  // 2-cell section cannot hold.
+  json t = c;
+  t["design"]["criteria"] = {{"max_back_face_displacement_m", 0.02}, {"max_penetration_m", 0.25}};
+  t["design"]["front_materials"] = {"front"};
+  t["design"]["thickness_cells"] = {2, 6};
+  t["boulder"]["velocity_m_s"] = 15;
+  t["impacts"] = {{{"probability", 0.9}}, {{"velocity_m_s", 28}, {"probability", 0.1}}};
+  int thickness[2];
+  for (int i = 0; i < 2; ++i) {
+    t["design"]["acceptance_probability"] = i == 0 ? 1.0 : 0.85;
+    writeFile(dir / "table.json", t.dump());
+    r = runGabion("run " + (dir / "table.json").string() + " -q -o " + (dir / ("table" + std::to_string(i))).string());
+    ASSERT_EQ(r.exit_code, 0) << r.output;
+    const json s = readJson(dir / ("table" + std::to_string(i)) / "summary.json");
+    ASSERT_FALSE(s.at("design").is_null()) << s.at("answer");
+    thickness[i] = s.at("design").at("thickness_cells").get<int>();
+    if (i == 1) {
+      EXPECT_NEAR(s.at("design").at("probability_met").get<double>(), 0.9, 1e-12);
+      for (const auto& [name, margin] : s.at("design").at("margins").items())  // (over the impacts it holds)
+        EXPECT_GE(margin.get<double>(), 0.0) << name;
+    }
+  }
+  EXPECT_LT(thickness[1], thickness[0]);
+
+  writeFile(dir / "impacts.csv", "velocity_m_s,probability\n15,0.5\n20,abc\n");
+  struct Bad {
+    const char* name;
+    std::function<void(json&)> edit;
+    const char* where;
+  };
+  const std::vector<Bad> bad = {
+      {"inverted",
+       [](json& x) {
+         x["design"]["thickness_cells"] = {6, 2};
+       },
+       "/design/thickness_cells"},
+      {"zero",
+       [](json& x) {
+         x["design"]["height_cells"] = {0, 3};
+       },
+       "/design/height_cells"},
+      {"material",
+       [](json& x) {
+         x["design"]["front_materials"] = {"front", "granite"};
+       },
+       "/design/front_materials/1"},
+      {"probabilities",
+       [](json& x) {
+         x["impacts"] = {{{"probability", 0.5}}, {{"probability", 0.2}}};
+       },
+       "/impacts"},
+      {"csv", [&](json& x) { x["impacts_csv"] = (dir / "impacts.csv").string(); }, "line 3, column 2 (probability)"},
+      {"aim",
+       [](json& x) {
+         x["boulder"]["aim_point_m"] = {2.75, 9.0};
+       },
+       "/boulder/aim_point_m"}};
+  for (const auto& b : bad) {
+    json x = c;
+    b.edit(x);
+    writeFile(dir / (std::string(b.name) + ".json"), x.dump());
+    const auto out = runGabion("check " + (dir / (std::string(b.name) + ".json")).string());
+    EXPECT_EQ(out.exit_code, 2) << b.name << ": " << out.output;
+    EXPECT_NE(out.output.find(b.where), std::string::npos) << b.name << ": " << out.output;
+  }
+}
