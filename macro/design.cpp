@@ -66,9 +66,9 @@ struct Section {
 struct SectionResult {
   Section section;
   bool met = false;
-  double probability_met = 0.0;   // sum of the probabilities of the impacts it holds within the criteria
-  std::string failed;             // the criterion the most probable failing impact failed ("height", ...)
-  double back_face_ratio = 0.0;   // worst over the impacts it holds (met), over all of them (not met)
+  double probability_met = 0.0;  // sum of the probabilities of the impacts it holds within the criteria
+  std::string failed;            // the criterion the most probable failing impact failed ("height", ...)
+  double back_face_ratio = 0.0;  // worst over the impacts it holds (met), over all of them (not met)
   double penetration_ratio = 0.0;
   int impacts_run = 0;
   double balance_rel_error = 0.0;
@@ -92,8 +92,9 @@ std::pair<int, int> readRange(const JsonReader& r, const std::string& key, int f
   if (v.size() != 2) r.fail(key, "expected [smallest, largest] in cells");
   for (double x : v)
     if (x != std::floor(x) || x < 1.0 || x > 200.0) r.fail(key, "cell counts must be whole numbers in [1, 200]");
-  if (v[0] > v[1]) r.fail(key, "inverted: the smallest (" + std::to_string(static_cast<int>(v[0])) +
-                                   ") is above the largest (" + std::to_string(static_cast<int>(v[1])) + ")");
+  if (v[0] > v[1])
+    r.fail(key, "inverted: the smallest (" + std::to_string(static_cast<int>(v[0])) + ") is above the largest (" +
+                    std::to_string(static_cast<int>(v[1])) + ")");
   return {static_cast<int>(v[0]), static_cast<int>(v[1])};
 }
 
@@ -134,7 +135,8 @@ std::vector<DesignImpact> readImpactTable(const JsonDocument& doc, const Boulder
 Plan plan(const JsonDocument& doc, const std::optional<std::filesystem::path>& law) {
   Plan p;
   const JsonReader root = doc.root();
-  if (root.has("impacts") && root.has("impacts_csv")) root.fail("impacts_csv", "give either 'impacts' or 'impacts_csv'");
+  if (root.has("impacts") && root.has("impacts_csv"))
+    root.fail("impacts_csv", "give either 'impacts' or 'impacts_csv'");
   p.c = readImpactCase(doc, law, false);
   const StructureSpec& base = p.c.structure;
   if (!base.front_offset_cells.empty())
@@ -169,8 +171,7 @@ Plan plan(const JsonDocument& doc, const std::optional<std::filesystem::path>& l
     s.materials.push_back(base.material.front);
   }
   const JsonReader crit = d.object("criteria");
-  s.criteria.max_back_face_m =
-      crit.number("max_back_face_displacement_m", s.criteria.max_back_face_m, Check::Positive);
+  s.criteria.max_back_face_m = crit.number("max_back_face_displacement_m", s.criteria.max_back_face_m, Check::Positive);
   s.criteria.max_penetration_m = crit.number("max_penetration_m", s.criteria.max_penetration_m, Check::Positive);
   s.repeats = static_cast<int>(crit.integer("impacts", s.repeats, 1));
   if (s.repeats > 100) crit.fail("impacts", "at most 100 impacts in a row");
@@ -209,8 +210,8 @@ Plan plan(const JsonDocument& doc, const std::optional<std::filesystem::path>& l
     const double width = base.ny * p.edge_m, height = s.h_hi * p.edge_m;
     if (b.aim_y_m < 0.0 || b.aim_y_m > width || b.aim_z_m < 0.0 || b.aim_z_m > height) {
       const std::string where = root.has("impacts_csv") ? "/impacts_csv"
-                                : root.has("impacts")     ? "/impacts/" + std::to_string(i) + "/aim_point_m"
-                                                          : "/boulder/aim_point_m";
+                                : root.has("impacts")   ? "/impacts/" + std::to_string(i) + "/aim_point_m"
+                                                        : "/boulder/aim_point_m";
       throw InputError(doc.file(), where,
                        "impact " + std::to_string(i) + " aims outside the largest front face [0, " +
                            std::to_string(width) + "] x [0, " + std::to_string(height) + "] m");
@@ -219,8 +220,8 @@ Plan plan(const JsonDocument& doc, const std::optional<std::filesystem::path>& l
   if (std::abs(total - 1.0) > 1e-6)
     throw InputError(doc.file(), root.has("impacts_csv") ? "/impacts_csv" : "/impacts",
                      "the impacts' probabilities sum to " + std::to_string(total) + ", expected 1");
-  const long long sections = static_cast<long long>(s.t_hi - s.t_lo + 1) * (s.h_hi - s.h_lo + 1) *
-                             static_cast<long long>(s.materials.size());
+  const long long sections =
+      static_cast<long long>(s.t_hi - s.t_lo + 1) * (s.h_hi - s.h_lo + 1) * static_cast<long long>(s.materials.size());
   if (sections > 20000)
     d.fail("thickness_cells", "the bounds hold " + std::to_string(sections) + " sections: at most 20,000");
   return p;
@@ -293,7 +294,8 @@ std::pair<int, std::string> residualCapacity(const Plan& p, const Section& sec, 
   if (b.aim_z_m >= sec.h * p.edge_m) return {0, "height"};
   for (int k = 0; k < max; ++k) {
     const ImpactResult r = runImpact(model, b, p.c.run, k, nullptr);
-    if (!r.ok) throw bridge::NumericalError(0, 0.0, "residual capacity, impact " + std::to_string(k + 1) + ": " + r.message);
+    if (!r.ok)
+      throw bridge::NumericalError(0, 0.0, "residual capacity, impact " + std::to_string(k + 1) + ": " + r.message);
     const Verdict v = judge(r, p.spec.criteria);
     if (!v.met) return {k, v.failed};
   }
@@ -374,7 +376,8 @@ bridge::RunOutcome runDesignCase(const JsonDocument& doc, const bridge::RunConte
     if (r.met && (best == nullptr || cheaper(p, r.section, best->section))) best = &r;
   int impacts_run = 0;
   double worst_balance = 0.0;
-  for (const auto& r : evaluated) impacts_run += r.impacts_run, worst_balance = std::max(worst_balance, r.balance_rel_error);
+  for (const auto& r : evaluated)
+    impacts_run += r.impacts_run, worst_balance = std::max(worst_balance, r.balance_rel_error);
 
   bridge::RunOutcome out;
   json& res = out.results;
@@ -402,7 +405,8 @@ bridge::RunOutcome runDesignCase(const JsonDocument& doc, const bridge::RunConte
     if (!after.empty()) res["residual_capacity_governing_criterion"] = after;
     answer << "smallest section: " << b.t << " cells thick x " << b.h << " high (" << cellsOf(p, b) << " cells, front '"
            << s.materials[static_cast<std::size_t>(b.m)] << "')";
-    if (!governing.empty()) answer << "; governing: " << criterionText(governing) << ", margin " << 100.0 * smallest << " %";
+    if (!governing.empty())
+      answer << "; governing: " << criterionText(governing) << ", margin " << 100.0 * smallest << " %";
     answer << "; it takes " << (residual >= s.residual_max ? "at least " : "") << residual << " design impact"
            << (residual == 1 ? "" : "s") << " in a row";
   } else {
@@ -474,8 +478,8 @@ bridge::RunOutcome runDesignCase(const JsonDocument& doc, const bridge::RunConte
     json table = json::array();
     double t_first = s.t_lo, t_last = s.t_hi;
     for (int m = 0; m < nm; ++m) {
-      bridge::PlotSeries series{"front '" + s.materials[static_cast<std::size_t>(m)] + "'", {}, {},
-                                bridge::PlotSeries::Style::LineMarkers};
+      bridge::PlotSeries series{
+          "front '" + s.materials[static_cast<std::size_t>(m)] + "'", {}, {}, bridge::PlotSeries::Style::LineMarkers};
       for (std::size_t i = 0; i < secs.size(); ++i) {
         if (secs[i].m != m) continue;
         const CapacitySearch& c = caps[i];
