@@ -411,8 +411,11 @@ TEST(MacroCli, DesignBisectionAgreesWithExhaustiveEnumeration) {
   EXPECT_EQ(b.at("margins"), e.at("margins"));
   EXPECT_LT(answers[0].at("sections_evaluated").get<int>(), answers[1].at("sections_evaluated").get<int>());
   EXPECT_GE(answers[0].at("residual_capacity_impacts").get<int>(), c["design"]["criteria"]["impacts"].get<int>());
-  for (const auto& s : answers[1].at("sections"))  // nothing cheaper holds
-    if (s.at("met").get<bool>()) EXPECT_GE(s.at("cells").get<int>(), b.at("cells").get<int>());
+  for (const auto& s : answers[1].at("sections")) {  // nothing cheaper holds
+    if (s.at("met").get<bool>()) {
+      EXPECT_GE(s.at("cells").get<int>(), b.at("cells").get<int>());
+    }
+  }
   bool thinner_checked = false;
   for (const auto& s : answers[1].at("sections"))
     if (s.at("height_cells") == b.at("height_cells") && s.at("front_material") == b.at("front_material") &&
