@@ -268,7 +268,12 @@ bridge::RunOutcome runCase(const bridge::JsonDocument& doc, const bridge::RunCon
     Bounds bounds = t.bounds;
     const bool axial_kind = t.name == "axial" || t.name == "impact";
     if (axial_kind) defaultDensificationBounds(bounds, grids, settings.lockup.shortening_m);
-    const LawFitResult r = fitLaw(t.candidates, grids, bounds, settings);
+    LawFitResult r;
+    try {
+      r = fitLaw(t.candidates, grids, bounds, settings);
+    } catch (const Infeasible& e) {
+      throw bridge::InputError(doc.file(), t.pointer + "/bounds", e.what());
+    }
     evaluations += r.evaluations;
     fit_time += r.wall_time_s;
     json entry = toJson(r, c.settings.criterion);

@@ -24,7 +24,14 @@ ModelFit fitModel(LawModel model, const std::vector<PathGrid>& grids, const Boun
       fit.params, [&](const std::vector<double>& t) { return misfit(set, t); }, settings.optimizer);
   fit.theta = fit.optimization.parameters;
   fit.misfit = fit.optimization.value;
-  fit.nrms = normalisedRms(set, fit.theta);
+  try {
+    fit.nrms = normalisedRms(set, fit.theta);
+  } catch (const Infeasible&) {  // no feasible point found within the bounds: never chosen
+    fit.feasible = false;
+    fit.nrms = kNaN;
+    fit.bic = fit.aicc = std::numeric_limits<double>::infinity();
+    return fit;
+  }
   // Gaussian likelihood with unknown variance: -2 ln L = n ln(S/n) + const.
   const double n = effectiveObservations(set);
   const double k = static_cast<double>(fit.params.size());
@@ -57,6 +64,10 @@ LawFitResult fitLaw(const std::vector<LawModel>& candidates, const std::vector<P
     const auto value = [&](const ModelFit& f) { return settings.criterion == Criterion::Bic ? f.bic : f.aicc; };
     if (value(r.candidates[i]) < value(r.candidates[r.chosen])) r.chosen = i;
   }
+  if (!r.candidates[r.chosen].feasible)
+    throw Infeasible(
+        "no candidate model found a feasible parameter set within the bounds (e.g. a hardening "
+        "stiffness below the stiffness): widen or correct the bounds");
   const ModelFit& best = r.candidates[r.chosen];
   const CurveSet set{best.model, grids, settings.loss, settings.lockup};
   r.effective_observations = effectiveObservations(set);
@@ -124,11 +135,13 @@ nlohmann::json toJson(const LawFitResult& r, Criterion criterion) {
   for (const auto& c : r.candidates) {
     json p = json::object();
     for (std::size_t j = 0; j < c.theta.size(); ++j) p[c.params[j].name] = c.theta[j];
+    const auto finite = [](double v) { return std::isfinite(v) ? json(v) : json(nullptr); };
     cands[modelName(c.model)] = {{"parameters", p},
-                                 {"misfit", c.misfit},
-                                 {"nrms", c.nrms},
-                                 {"bic", c.bic},
-                                 {"aicc", std::isnan(c.aicc) ? json(nullptr) : json(c.aicc)},
+                                 {"feasible", c.feasible},
+                                 {"misfit", finite(c.misfit)},
+                                 {"nrms", finite(c.nrms)},
+                                 {"bic", finite(c.bic)},
+                                 {"aicc", finite(c.aicc)},
                                  {"evaluations", c.optimization.evaluations},
                                  {"infeasible_evaluations", c.optimization.infeasible_evaluations},
                                  {"global_status", c.optimization.global_status},

@@ -36,6 +36,7 @@ struct ModelFit {
   double misfit = 0.0;        ///< robust misfit S at theta
   double nrms = 0.0;          ///< normalised RMS error
   double aicc = 0.0, bic = 0.0;
+  bool feasible = true;  ///< false: no feasible point within the bounds (criteria infinite, never chosen)
   OptimizationResult optimization;
 };
 
@@ -68,7 +69,8 @@ struct LawFitResult {
 using Bounds = std::map<std::string, std::pair<double, double>>;
 
 /// Fits every model in `candidates` to `grids`, chooses one, computes intervals.
-/// `bounds` must hold every parameter of every candidate.
+/// `bounds` must hold every parameter of every candidate. Throws Infeasible
+/// when no candidate finds a feasible point within its bounds.
 LawFitResult fitLaw(const std::vector<LawModel>& candidates, const std::vector<PathGrid>& grids, const Bounds& bounds,
                     const LawFitSettings& settings);
 

@@ -46,13 +46,32 @@ std::vector<Interval> jacobianIntervals(const CurveSet& set, const std::vector<P
     auto plus = theta, minus = theta;
     plus[j] += h;
     minus[j] -= h;
-    const auto rp = residuals(set, plus), rm = residuals(set, minus);
+    // A side outside the model's domain (the best point on its edge, e.g. a
+    // hardening tangent just below the stiffness): a one-sided difference;
+    // both sides outside: no linearised interval.
+    const auto at = [&](const std::vector<double>& t, std::vector<double>& r) {
+      try {
+        r = residuals(set, t);
+        return true;
+      } catch (const Infeasible&) {
+        return false;
+      }
+    };
+    std::vector<double> rp, rm;
+    const bool ok_p = at(plus, rp), ok_m = at(minus, rm);
+    if (!ok_p && !ok_m) {
+      stderr_out.assign(p, kNaN);
+      return std::vector<Interval>(p, Interval{kNaN, kNaN});
+    }
+    if (!ok_p) rp = r0;
+    if (!ok_m) rm = r0;
+    const double span = (ok_p ? h : 0.0) + (ok_m ? h : 0.0);
     // Columns in relative units (d r / d ln theta) so that parameters of very
     // different magnitudes (friction ~1, stiffness ~1e6) do not look singular.
     const double d = theta[j] != 0.0 ? std::abs(theta[j]) : range;
     scale[j] = d;
     for (std::size_t i = 0; i < m; ++i)
-      J(static_cast<Eigen::Index>(i), static_cast<Eigen::Index>(j)) = d * (rp[i] - rm[i]) / (2.0 * h);
+      J(static_cast<Eigen::Index>(i), static_cast<Eigen::Index>(j)) = d * (rp[i] - rm[i]) / span;
   }
   const double n_eff = effectiveObservations(set);
   const double dof = n_eff - static_cast<double>(p);
@@ -104,7 +123,7 @@ double profileMisfit(const CurveSet& set, const std::vector<Parameter>& params, 
   s.local_max_evaluations = 400;
   s.xtol_rel = 1e-7;
   const auto r = minimise(
-      sub, [&](const std::vector<double>& o) { return misfit(set, full(o)); }, s, others);
+      sub, [&](const std::vector<double>& o) { return misfit(set, full(o)); }, s, others);  // (Infeasible: a penalty)
   evaluations += r.evaluations;
   others = r.parameters;
   return r.value >= settings.penalty ? std::numeric_limits<double>::infinity() : r.value;

@@ -18,7 +18,7 @@ Verdict judge(const ImpactResult& r, const Criteria& c) {
 }
 
 const char* criterionText(const std::string& criterion) {
-  if (criterion == "held") return "the boulder is held (not perforated, and finished)";
+  if (criterion == "held") return "holding the boulder (not perforated, finished)";
   if (criterion == "back_face") return "the back face's displacement";
   if (criterion == "height") return "the wall's height (the boulder passes over it)";
   return "the penetration";

@@ -269,12 +269,12 @@ void Model::computeBoulderContacts(double dt) {
       continue;
     }
     const double indent = R - d;
-    if (indent <= front_plastic_[el]) {  // inside the dent left by an earlier impact: no force
+    const auto law = static_cast<std::size_t>(F.law[el]);
+    const double f = linkLaw(s_.axial_springs[law], indent, front_plastic_[el], plastic, elastic);
+    if (!(f > 0.0)) {  // inside the dent left by an earlier impact (and short of lock-up): no force
       front_ft_[el].setZero();
       continue;
     }
-    const auto law = static_cast<std::size_t>(F.law[el]);
-    const double f = linkLaw(s_.axial_springs[law], indent, front_plastic_[el], plastic, elastic);
     if (indent > s_.axial_crush_m[law] && crushed_front_ < 0) crushed_front_ = static_cast<int>(el);
     const double nx = dx / d, ny = dy / d, nz = dz / d;  // from the cube to the centre
     bforce_ += f * Vec3(nx, ny, nz);

@@ -431,3 +431,26 @@ TEST(MacroBoulder, GravityActsOnTheBoulderAndKeepsTheBalance) {
   Model guided(s, Kinematics::XOnly);
   EXPECT_THROW(guided.placeBoulder(b), std::invalid_argument);
 }
+
+// A face that yields at once and locks up: its plastic indentation runs past
+// the lock-up, and on the way back the dense fill alone pushes the boulder
+// out (between u_L and u_p the elastic-plastic part is slack). The energy
+// stays balanced through it and the boulder leaves with the dense spring's
+// energy: 1/2 M v_r^2 = 1/2 k_L (u_max - u_L)^2 (the plastic part gives
+// nothing back).
+TEST(MacroLockup, DenseFillPushesTheBoulderBackPastTheDent) {
+  const double M = 170.0, v0 = 10.0, uL = 0.05, kL = 4e8;
+  gabion::bridge::AxialLawParams face = epp(4e7, 175.0);
+  face.lockup_shortening_m = uL;
+  face.lockup_stiffness_N_m = kL;
+  Structure s = buildStructure(grid(1, 1, 1), oneMaterial(epp(1e13, 1e15), face, 1e9));
+  Model model(s, Kinematics::XOnly);
+  const ImpactResult r = runImpact(model, boulderAt(s, 0, 0, M, v0), quickRun(0.05, 0.05), 0, nullptr);
+  ASSERT_TRUE(r.ok) << r.message;
+  EXPECT_EQ(r.outcome, Outcome::Rebounded);
+  EXPECT_GT(model.frontPlastic()[0], uL);  // (the dent is deeper than the lock-up)
+  EXPECT_LT(r.balance_rel_error, 2e-3);
+  const double over = r.max_indentation_m - uL;
+  EXPECT_NEAR(0.5 * M * r.rebound_velocity_m_s * r.rebound_velocity_m_s, 0.5 * kL * over * over,
+              0.02 * 0.5 * kL * over * over);
+}
