@@ -1,18 +1,21 @@
 #include "app/pipeline.hpp"
 
 #include <algorithm>
+#include <chrono>
 #include <cmath>
 #include <filesystem>
+#include <fstream>
 #include <iomanip>
+#include <map>
 #include <sstream>
 
 #include "app/registry.hpp"
-#include "bridge/curve.hpp"
 #include "bridge/errors.hpp"
 #include "bridge/law_file.hpp"
 #include "bridge/output.hpp"
 #include "bridge/plot.hpp"
-#include "micro/packing.hpp"
+#include "fitting/sha256.hpp"
+#include "gabion_version.hpp"
 
 namespace gabion::app {
 
@@ -24,78 +27,70 @@ using bridge::JsonDocument;
 using bridge::JsonReader;
 using nlohmann::json;
 
-constexpr double kPi = 3.14159265358979323846;
-constexpr double kGravity = 9.81;  // m/s2, along -z
+/// The four virtual lab tests, in the order they run.
+const std::vector<std::string> kTests = {"cc", "uc", "uci", "shear"};
+const std::map<std::string, std::string> kTestKind = {
+    {"cc", "micro.cc"}, {"uc", "micro.uc"}, {"uci", "micro.uci"}, {"shear", "micro.shear"}};
 
-/// Everything a pipeline case says (defaults in docs/pipeline.md).
+/// Everything a pipeline case says (docs/pipeline.md).
 struct PipelineCase {
+  fs::path cell;  ///< a micro.cell case, or a cell file (.h5) used as it is
+  bool cell_is_file = false;
+  double cell_edge_m = 0.5;  ///< the edge of a given cell file's cell
   unsigned long seed = 1;
-  // The cell and its grains (the CC sample is one cell).
-  double edge_m = 0.5;
-  double mean_radius_m = 0.03;
-  double radius_std_rel = 0.15;
-  double density_kg_m3 = 2600.0;
-  double loose_solid_fraction = 0.25;
-  double target_porosity = 0.436;
-  double normal_stiffness_N_m = 0.0;
-  double shear_stiffness_N_m = 0.0;
-  double friction = 0.5;
-  double wall_friction = 0.0;
-  double settle_friction = 0.0;
-  std::optional<double> normal_force_limit_N;
-  double local_damping = 0.3;
-  double settle_duration_s = 1.0;
-  // The CC test.
-  double strain = 0.04;
-  double lid_velocity_m_s = 0.05;
-  int samples = 200;
-  double seating_force_fraction = 0.02;
-  // The structure.
+  int replicates = 1;
+  std::map<std::string, fs::path> tests;  ///< lab case per test name
+  std::vector<double> uci_velocities_m_s;
   fs::path structure_case;
-  std::string structure_material = "front";
+  std::string material = "front";
   std::vector<double> velocities_m_s;
+  std::optional<fs::path> capacity_case, design_case;
+  std::map<std::string, std::vector<std::string>> settings;  ///< per stage: --set lines
 };
+
+fs::path relative(const JsonDocument& doc, const std::string& p) {
+  return fs::path(doc.file()).parent_path() / p;
+}
 
 PipelineCase readPipeline(const JsonDocument& doc) {
   const JsonReader root = doc.root();
   PipelineCase c;
   c.seed = static_cast<unsigned long>(root.integer("seed", 1, 0));
-
-  const JsonReader cell = root.object("cell");
-  c.edge_m = cell.number("edge_m", Check::Positive);
-  const JsonReader grains = cell.object("grains");
-  c.mean_radius_m = grains.number("mean_radius_m", Check::Positive);
-  c.radius_std_rel = grains.number("radius_std_rel", c.radius_std_rel, Check::NonNegative);
-  if (c.radius_std_rel >= 0.5) grains.fail("radius_std_rel", "must be < 0.5");
-  c.density_kg_m3 = grains.number("density_kg_m3", Check::Positive);
-  c.loose_solid_fraction = grains.number("loose_solid_fraction", c.loose_solid_fraction, Check::Positive);
-  if (c.loose_solid_fraction > 0.35)
-    grains.fail("loose_solid_fraction", "must be <= 0.35 (random sequential addition)");
-  c.target_porosity = cell.number("target_porosity", c.target_porosity, Check::Fraction);
-  if (c.mean_radius_m * 6.0 > c.edge_m) grains.fail("mean_radius_m", "grains must be at most edge_m / 6");
-
-  const JsonReader contact = cell.object("contact");
-  c.normal_stiffness_N_m = contact.number("normal_stiffness_N_m", Check::Positive);
-  c.shear_stiffness_N_m = contact.number("shear_stiffness_N_m", Check::Positive);
-  c.friction = contact.number("friction", Check::NonNegative);
-  c.wall_friction = contact.number("wall_friction", c.wall_friction, Check::NonNegative);
-  if (contact.has("normal_force_limit_N"))
-    c.normal_force_limit_N = contact.number("normal_force_limit_N", Check::Positive);
-  c.local_damping = contact.number("local_damping", c.local_damping, Check::UnitOpen);
-  c.settle_duration_s = cell.number("settle_duration_s", c.settle_duration_s, Check::Positive);
-  c.settle_friction = cell.number("settle_friction", c.settle_friction, Check::NonNegative);
-
-  const JsonReader cc = root.object("compression");
-  c.strain = cc.number("strain", Check::Positive);
-  if (c.strain > 0.2) cc.fail("strain", "must be <= 0.2 (the CC test of a cell)");
-  c.lid_velocity_m_s = cc.number("velocity_m_s", Check::Positive);
-  c.samples = static_cast<int>(cc.integer("samples", c.samples, 20));
-  c.seating_force_fraction = cc.number("seating_force_fraction", c.seating_force_fraction, Check::UnitOpen);
-
+  c.cell = relative(doc, root.string("cell"));
+  c.cell_is_file = c.cell.extension() == ".h5";
+  if (root.has("cell_edge_m")) {
+    if (!c.cell_is_file) root.fail("cell_edge_m", "only with a cell file as 'cell' (a micro.cell case gives its edge)");
+    c.cell_edge_m = root.number("cell_edge_m", Check::Positive);
+  }
+  c.replicates = static_cast<int>(root.integer("replicates", 1, 1));
+  if (c.replicates > 16) root.fail("replicates", "at most 16 cells");
+  if (c.cell_is_file && c.replicates > 1)
+    root.fail("replicates", "replicates need a micro.cell case as 'cell' (cells of consecutive seeds)");
+  const JsonReader lab = root.object("lab");
+  for (const auto& t : kTests) c.tests[t] = relative(doc, lab.string(t));
+  c.uci_velocities_m_s = root.numbers("uci_velocities_m_s", Check::Positive, 1);
   const JsonReader st = root.object("structure");
-  c.structure_case = fs::path(doc.file()).parent_path() / st.string("case");
-  c.structure_material = st.string("material", c.structure_material);
+  c.structure_case = relative(doc, st.string("case"));
+  c.material = st.string("material", c.material);
   c.velocities_m_s = st.numbers("velocities_m_s", Check::Positive, 1);
+  if (root.has("capacity")) c.capacity_case = relative(doc, root.string("capacity"));
+  if (root.has("design")) c.design_case = relative(doc, root.string("design"));
+  if (root.has("stage_settings")) {
+    const json& all = root.raw("stage_settings");
+    const std::vector<std::string> stages = {"cell", "cc", "uc", "uci", "shear", "fit", "impact", "capacity", "design"};
+    if (!all.is_object()) root.fail("stage_settings", "expected an object: stage name -> list of settings");
+    for (const auto& [name, v] : all.items()) {
+      if (std::find(stages.begin(), stages.end(), name) == stages.end())
+        throw bridge::InputError(doc.file(), "/stage_settings/" + name,
+                                 "unknown stage (cell, cc, uc, uci, shear, fit, impact, capacity, design)");
+      bool ok = v.is_array();
+      for (const auto& line : v) ok = ok && line.is_string() && line.get<std::string>().find('=') != std::string::npos;
+      if (!ok)
+        throw bridge::InputError(doc.file(), "/stage_settings/" + name,
+                                 "expected a list of \"path.to.key=value\" settings");
+      for (const auto& line : v) c.settings[name].push_back(line.get<std::string>());
+    }
+  }
   return c;
 }
 
@@ -104,354 +99,570 @@ struct StageFailure : std::runtime_error {
   using std::runtime_error::runtime_error;
 };
 
-// Runs one case of another kind through its public CaseKind, in its own
-// folder, with its own summary; a numerical failure stops the pipeline.
-bridge::RunOutcome runStage(const std::string& stage, const std::string& kind, JsonDocument& doc,
-                            const bridge::RunContext& parent, const fs::path& dir,
-                            const std::optional<fs::path>& law = std::nullopt) {
-  const bridge::CaseKind* k = &checkCase(doc, kind);
+/// What a stage left: its summary, whether it was reused, its wall time.
+struct StageResult {
+  std::string name;
+  fs::path dir;
+  json summary;
+  bool reused = false;
+  double wall_time_s = 0.0;
+};
+
+std::string fmt(double x, int digits = 4) {
+  std::ostringstream s;
+  s << std::setprecision(digits) << x;
+  return s.str();
+}
+
+// The stage's content key: the program's version, its case and the bytes of
+// the files it reads.
+std::string stageKey(const json& case_value, const std::vector<fs::path>& inputs) {
+  std::string text = std::string("gabion ") + gabion::kVersion + "\n" + case_value.dump();
+  for (const auto& f : inputs) text += "\n" + f.string() + " " + fitting::sha256File(f);
+  return fitting::sha256Hex(text);
+}
+
+/// Runs one stage through its kind's public CaseKind, in its own folder:
+/// the case written to `dir/case.json` (with the pipeline's --set lines for
+/// this stage applied), the summary beside it, and `stage.json` written last
+/// with the stage's content key. A stage whose key is unchanged and whose
+/// summary says ok is not run again.
+StageResult runStage(const std::string& name, const std::string& kind, json case_value,
+                     const std::vector<fs::path>& inputs, const std::vector<std::string>& settings,
+                     const bridge::RunContext& parent, const fs::path& dir,
+                     const std::optional<fs::path>& law = std::nullopt) {
+  StageResult out;
+  out.name = name;
+  out.dir = dir;
   fs::create_directories(dir);
+  // The settings go through the case document (as --set does), so the key
+  // is that of the case the stage runs.
+  {
+    JsonDocument staged(case_value, (dir / "case.json").string());
+    for (const auto& s : settings) staged.applySet(s);
+    case_value = staged.json();
+  }
+  std::vector<fs::path> all = inputs;
+  if (law) all.push_back(*law);
+  const std::string key = stageKey(case_value, all);
+  const auto t0 = std::chrono::steady_clock::now();
+  if (fs::exists(dir / "stage.json") && fs::exists(dir / "summary.json")) {
+    try {
+      std::ifstream in(dir / "stage.json");
+      const json st = json::parse(in);
+      std::ifstream sin(dir / "summary.json");
+      json summary = json::parse(sin);
+      if (st.value("key", "") == key && summary.value("status", "") == "ok") {
+        out.summary = std::move(summary);
+        out.reused = true;
+        out.wall_time_s = st.value("wall_time_s", 0.0);
+        if (parent.progress) std::printf("pipeline: %s: unchanged, reused (%s)\n", name.c_str(), dir.c_str());
+        return out;
+      }
+    } catch (const std::exception&) {
+      // A damaged record: run the stage again.
+    }
+  }
+  fs::remove(dir / "stage.json");
+  bridge::writeJsonAtomic(dir / "case.json", case_value);
+  JsonDocument doc = JsonDocument::load(dir / "case.json");
+  const bridge::CaseKind& k = checkCase(doc, kind);
   bridge::RunContext ctx = parent;
   ctx.outdir = dir;
   ctx.case_file = doc.file();
   ctx.law_file = law;
-  if (parent.progress) std::printf("pipeline: %s\n", stage.c_str());
+  if (parent.progress) std::printf("pipeline: %s (%s) ...\n", name.c_str(), kind.c_str());
   std::fflush(stdout);
-  bridge::RunOutcome out = k->run(doc, ctx);
-  json summary = out.results;
+  bridge::RunOutcome ran = k.run(doc, ctx);
+  out.wall_time_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  json summary = ran.results;
   summary["format"] = "gabion.summary/1";
   summary["kind"] = kind;
-  summary["status"] = out.status == bridge::RunOutcome::Status::Ok ? "ok" : "numerical_failure";
+  summary["status"] = ran.status == bridge::RunOutcome::Status::Ok ? "ok" : "numerical_failure";
+  if (!ran.message.empty()) summary["message"] = ran.message;
+  summary["wall_time_s"] = out.wall_time_s;
   summary["case"] = doc.json();
   bridge::writeJsonAtomic(dir / "summary.json", summary);
-  if (out.status != bridge::RunOutcome::Status::Ok)
-    throw StageFailure("pipeline stage '" + stage + "' (" + dir.string() + "): " + out.message);
+  if (ran.status != bridge::RunOutcome::Status::Ok)
+    throw StageFailure("pipeline stage '" + name + "' (" + dir.string() + "): " + ran.message);
+  bridge::writeJsonAtomic(dir / "stage.json", {{"key", key}, {"wall_time_s", out.wall_time_s}});
+  out.summary = std::move(summary);
+  if (parent.progress) std::printf("pipeline: %s done in %.1f s\n", name.c_str(), out.wall_time_s);
   return out;
 }
 
-// Writes a generated case to `dir/case.json` and loads it back, so that every
-// stage's input is on disk beside its output (and relative paths resolve).
-JsonDocument stageCase(const fs::path& dir, const json& value) {
-  fs::create_directories(dir);
-  bridge::writeJsonAtomic(dir / "case.json", value);
-  return JsonDocument::load(dir / "case.json");
+json loadJson(const fs::path& p) {
+  return JsonDocument::load(p).json();
 }
 
-json material(const PipelineCase& c, double friction) {
-  json m = {{"density_kg_m3", c.density_kg_m3},
-            {"normal_stiffness_N_m", c.normal_stiffness_N_m},
-            {"shear_stiffness_N_m", c.shear_stiffness_N_m},
-            {"friction", friction},
-            {"local_damping", c.local_damping}};
-  if (c.normal_force_limit_N) m["normal_force_limit_N"] = *c.normal_force_limit_N;
+// The result files of a lab stage, one per run (replicate and variant), with
+// the run's replicate label.
+std::vector<std::pair<fs::path, std::string>> labResults(const StageResult& s) {
+  std::vector<std::pair<fs::path, std::string>> out;
+  if (!s.summary.contains("runs")) {
+    out.emplace_back(s.dir / "result.h5", "0");
+    return out;
+  }
+  for (const auto& r : s.summary.at("runs"))
+    out.emplace_back(s.dir / r.at("folder").get<std::string>() / "result.h5",
+                     std::to_string(r.at("replicate").get<int>()));
+  return out;
+}
+
+// Largest value of a key over a lab stage's runs (or its own summary).
+double labMax(const StageResult& s, const std::string& key) {
+  double m = 0.0;
+  if (s.summary.contains(key) && s.summary.at(key).is_number()) m = s.summary.at(key).get<double>();
+  if (s.summary.contains("runs"))
+    for (const auto& r : labResults(s)) {
+      const fs::path sum = r.first.parent_path() / "summary.json";
+      if (!fs::exists(sum)) continue;
+      const json j = loadJson(sum);
+      if (j.contains(key) && j.at(key).is_number()) m = std::max(m, j.at(key).get<double>());
+    }
   return m;
 }
 
-json wall(const std::string& name, const Eigen::Vector3d& p, const Eigen::Vector3d& n,
-          const Eigen::Vector3d& v = Eigen::Vector3d::Zero()) {
-  json w = {
-      {"name", name}, {"point_m", {p.x(), p.y(), p.z()}}, {"normal", {n.x(), n.y(), n.z()}}, {"material", "wall"}};
-  if (v.squaredNorm() > 0) w["velocity_m_s"] = {v.x(), v.y(), v.z()};
-  return w;
+// A bound pair [f_lo x, f_hi x] around a scale x read from the data.
+json around(double x, double lo, double hi) {
+  return json::array({lo * x, hi * x});
 }
 
-/// The lateral walls of the cell, each with its inward normal; the CC test
-/// reads their series by these names.
-struct LateralWall {
-  const char* name;
-  Eigen::Vector3d normal;
-};
-const LateralWall kLateralWalls[4] = {
-    {"x_minus", {1, 0, 0}}, {"x_plus", {-1, 0, 0}}, {"y_minus", {0, 1, 0}}, {"y_plus", {0, -1, 0}}};
-constexpr const char* kLid = "lid";
-
-/// The floor and the four lateral walls of the cell (named, so the results
-/// are read by name: docs/pipeline.md).
-json cellWalls(double a) {
-  json walls = json::array({wall("z_minus", {0, 0, 0}, {0, 0, 1})});
-  for (const auto& w : kLateralWalls) {
-    // A wall facing -x or -y sits at the far side of the cell.
-    const Eigen::Vector3d p(w.normal.x() < 0 ? a : 0.0, w.normal.y() < 0 ? a : 0.0, 0.0);
-    walls.push_back(wall(w.name, p, w.normal));
-  }
-  return walls;
-}
-
-json microScene(const PipelineCase& c, const std::vector<Eigen::Vector3d>& centers, const std::vector<double>& radii,
-                json walls, double duration_s, double series_interval_s, double friction) {
-  json spheres = json::array();
-  for (std::size_t i = 0; i < radii.size(); ++i)
-    spheres.push_back(
-        {{"center_m", {centers[i].x(), centers[i].y(), centers[i].z()}}, {"radius_m", radii[i]}, {"material", "rock"}});
+// The fit case from the four tests' result files: every law fitted, bounds
+// spanning decades around the scales the tests measured, the lock-up from the
+// cell's porosity.
+json fitCase(const PipelineCase& c, const std::map<std::string, StageResult>& lab, double edge_m, double mass_kg,
+             double porosity) {
+  auto curves = [&](const std::string& test, bool cyclic) {
+    json list = json::array();
+    for (const auto& [file, label] : labResults(lab.at(test))) {
+      json e = {{"file", fs::absolute(file).string()}, {"replicate", label}};
+      if (cyclic) e["path"] = "cyclic";
+      list.push_back(e);
+    }
+    return list;
+  };
+  const StageResult& cc = lab.at("cc");
+  const double f_cc = std::max(labMax(cc, "peak_force_N"), 1.0);
+  const double k_cc = std::max(f_cc / (0.15 * edge_m), 1.0);  // a secant over the test's strain
+  const StageResult& uci = lab.at("uci");
+  const double f_imp = std::max(labMax(uci, "peak_force_N"), 1.0);
+  const double pen = std::max(labMax(uci, "max_penetration_m"), 1e-3);
+  const double k_imp = f_imp / pen;
+  const StageResult& sh = lab.at("shear");
+  const double kt = std::max(labMax(sh, "tangential_stiffness_N_m"), 1.0);
+  json lockup = porosity > 0.3 ? json{{"porosity", porosity}, {"densest_porosity", 0.25}}
+                               : json{{"strain", bridge::kDefaultLockupStrain}};
   return {{"format", "gabion.case/1"},
-          {"kind", "micro.scene"},
-          {"gravity_m_s2", {0.0, 0.0, -kGravity}},
-          {"materials", {{"rock", material(c, friction)}, {"wall", material(c, c.wall_friction)}}},
-          {"spheres", spheres},
-          {"walls", walls},
-          {"run",
-           {{"duration_s", duration_s},
-            {"output_interval_s", duration_s / 10.0},
-            {"series_interval_s", series_interval_s}}}};
+          {"kind", "fit"},
+          {"description", "generated by the pipeline from its virtual lab tests"},
+          {"seed", c.seed},
+          {"material", {{"name", c.material}, {"edge_m", edge_m}, {"mass_kg", mass_kg}}},
+          {"lockup", lockup},
+          {"axial",
+           {{"curves", curves("cc", true)},
+            {"bounds",
+             {{"stiffness_N_m", around(k_cc, 0.01, 100.0)},
+              {"yield_force_N", around(f_cc, 0.001, 2.0)},
+              {"hardening_stiffness_N_m", around(k_cc, 0.0, 20.0)}}}}},
+          {"lateral", {{"curves", curves("cc", true)}, {"bounds", {{"reaction_coefficient", {0.0, 3.0}}}}}},
+          {"interface",
+           {{"curves", curves("shear", false)},
+            {"bounds", {{"friction", {0.01, 2.0}}, {"tangential_stiffness_N_m", around(kt, 0.01, 100.0)}}}}},
+          {"impact",
+           {{"curves", curves("uci", true)},
+            {"bounds",
+             {{"stiffness_N_m", around(k_imp, 0.1, 100.0)},
+              {"yield_force_N", around(f_imp, 0.001, 2.0)},
+              {"hardening_stiffness_N_m", around(k_imp, 0.0, 50.0)}}}}}};
 }
 
-/// Row `t` of a (times, rows, 3) dataset as vectors.
-std::vector<Eigen::Vector3d> frame(const bridge::H5Reader& h5, const std::string& ds, std::size_t t) {
-  const auto d = h5.dims(ds);
-  const auto v = h5.read(ds);
-  std::vector<Eigen::Vector3d> out(d.at(1));
-  for (std::size_t i = 0; i < out.size(); ++i)
-    out[i] = Eigen::Vector3d(v[(t * d[1] + i) * 3], v[(t * d[1] + i) * 3 + 1], v[(t * d[1] + i) * 3 + 2]);
+std::string base64(const std::string& bytes) {
+  static const char* t = "ABCDEFGHIJKLMNOPQRSTUVWXYZabcdefghijklmnopqrstuvwxyz0123456789+/";
+  std::string out;
+  std::size_t i = 0;
+  for (; i + 2 < bytes.size(); i += 3) {
+    const unsigned v = (static_cast<unsigned char>(bytes[i]) << 16) | (static_cast<unsigned char>(bytes[i + 1]) << 8) |
+                       static_cast<unsigned char>(bytes[i + 2]);
+    out += {t[(v >> 18) & 63], t[(v >> 12) & 63], t[(v >> 6) & 63], t[v & 63]};
+  }
+  if (i + 1 == bytes.size()) {
+    const unsigned v = static_cast<unsigned char>(bytes[i]) << 16;
+    out += {t[(v >> 18) & 63], t[(v >> 12) & 63], '=', '='};
+  } else if (i + 2 == bytes.size()) {
+    const unsigned v = (static_cast<unsigned char>(bytes[i]) << 16) | (static_cast<unsigned char>(bytes[i + 1]) << 8);
+    out += {t[(v >> 18) & 63], t[(v >> 12) & 63], t[(v >> 6) & 63], '='};
+  }
   return out;
 }
 
-std::string fmt(double x, int digits = 4) {
-  std::ostringstream os;
-  os << std::setprecision(digits) << x;
-  return os.str();
+std::string html(const std::string& s) {
+  std::string o;
+  for (char ch : s) o += ch == '<' ? "&lt;" : ch == '>' ? "&gt;" : ch == '&' ? "&amp;" : std::string(1, ch);
+  return o;
 }
 
-/// What the CC test gave: the two curves for the fitting and the cell state.
-struct CcCurves {
-  bridge::Curve axial;    ///< displacement_m (scaled to the cell edge, seating removed) -> force_N
-  bridge::Curve lateral;  ///< axial_force_N -> mean lateral wall force lateral_force_N
-  double seating_m = 0.0;
+/// The report: one self-contained HTML file (figures embedded), the figures
+/// also copied into OUT/figures/.
+class Report {
+ public:
+  explicit Report(fs::path out) : out_(std::move(out)) { fs::create_directories(out_ / "figures"); }
+  void heading(const std::string& h) { body_ << "<h2>" << html(h) << "</h2>\n"; }
+  void text(const std::string& t) { body_ << "<p>" << t << "</p>\n"; }
+  void warning(const std::string& w) {
+    warnings_.push_back(w);
+    body_ << "<p class=\"warn\">&#9888; " << html(w) << "</p>\n";
+  }
+  void table(const std::vector<std::string>& head, const std::vector<std::vector<std::string>>& rows) {
+    body_ << "<table><tr>";
+    for (const auto& h : head) body_ << "<th>" << html(h) << "</th>";
+    body_ << "</tr>\n";
+    for (const auto& r : rows) {
+      body_ << "<tr>";
+      for (const auto& c : r) body_ << "<td>" << html(c) << "</td>";
+      body_ << "</tr>\n";
+    }
+    body_ << "</table>\n";
+  }
+  /// Embeds a PNG (and copies it to figures/ under `name`); a missing file is a warning.
+  void figure(const fs::path& png, const std::string& name, const std::string& caption) {
+    if (!fs::exists(png)) {
+      warning("figure missing: " + png.string());
+      return;
+    }
+    fs::copy_file(png, out_ / "figures" / name, fs::copy_options::overwrite_existing);
+    std::ifstream in(png, std::ios::binary);
+    std::ostringstream bytes;
+    bytes << in.rdbuf();
+    body_ << "<figure><img alt=\"" << html(caption) << "\" src=\"data:image/png;base64," << base64(bytes.str())
+          << "\"><figcaption>" << html(caption) << " (<code>figures/" << html(name)
+          << "</code>)</figcaption></figure>\n";
+    figures_.push_back("figures/" + name);
+  }
+  const std::vector<std::string>& figures() const { return figures_; }
+  const std::vector<std::string>& warnings() const { return warnings_; }
+  void write(const std::string& title) const {
+    std::ostringstream doc;
+    doc << "<!DOCTYPE html>\n<html lang=\"en\"><head><meta charset=\"utf-8\"><title>" << html(title)
+        << "</title>\n<style>body{font-family:sans-serif;max-width:60em;margin:2em auto;line-height:1.4}"
+           "table{border-collapse:collapse;margin:1em 0}td,th{border:1px solid #bbb;padding:0.2em 0.6em;"
+           "text-align:right}th{background:#eee}img{max-width:100%}figure{margin:1.5em 0}"
+           ".warn{color:#a40;font-weight:bold}code{background:#f4f4f4}</style></head>\n<body>\n<h1>"
+        << html(title) << "</h1>\n"
+        << body_.str() << "</body></html>\n";
+    bridge::writeTextAtomic(out_ / "report.html", doc.str());
+  }
+
+ private:
+  fs::path out_;
+  std::ostringstream body_;
+  std::vector<std::string> figures_, warnings_;
 };
 
-CcCurves ccCurves(const PipelineCase& c, const fs::path& h5file, double height_m) {
-  const bridge::WallSeries lid = bridge::readWallSeriesH5(h5file, kLid);
-  const std::vector<Eigen::Vector3d>& lid_p = lid.position_m;
-  const std::vector<Eigen::Vector3d>& lid_f = lid.force_N;
-  std::vector<std::vector<Eigen::Vector3d>> side;
-  for (const auto& w : kLateralWalls) side.push_back(bridge::readWallSeriesH5(h5file, w.name).force_N);
-  for (const auto& f : side)
-    if (f.size() != lid_f.size()) throw std::logic_error("pipeline: the CC walls' series differ in length");
-
-  // The bodies push the lid up (+z) while it moves down: the force on the
-  // lid along +z is the axial force.
-  double fmax = 0.0;
-  for (const auto& f : lid_f) fmax = std::max(fmax, f.z());
-  if (!(fmax > 0.0)) throw std::runtime_error("CC test: the lid never touched the grains");
-  // Seating: like a lab CC test, displacement counts from the point where the
-  // force first exceeds a small fraction of its maximum (the lid first meets
-  // the few highest grains).
-  const double seat_force = c.seating_force_fraction * fmax;
-  std::size_t first = 0;
-  while (first < lid_f.size() && lid_f[first].z() < seat_force) ++first;
-  CcCurves out;
-  out.seating_m = lid_p.front().z() - lid_p[first].z();
-  const double scale = c.edge_m / height_m;  // shortening of a cube cell of edge a at the same strain
-  out.axial.source = lid.source;
-  out.axial.x_name = "displacement_m";
-  out.axial.y_name = "force_N";
-  out.lateral.source = h5file.string() + " (walls x_minus, x_plus, y_minus, y_plus against the lid)";
-  out.lateral.x_name = "axial_force_N";
-  out.lateral.y_name = "lateral_force_N";
-  std::vector<std::pair<double, double>> lateral;
-  for (std::size_t i = first; i < lid_f.size(); ++i) {
-    out.axial.x.push_back((lid_p[first].z() - lid_p[i].z()) * scale);
-    out.axial.y.push_back(lid_f[i].z());
-    double s = 0.0;
-    // The bodies push each lateral wall outwards, against its inward normal.
-    for (std::size_t w = 0; w < 4; ++w) s += -side[w][i].dot(kLateralWalls[w].normal);
-    lateral.emplace_back(lid_f[i].z(), 0.25 * s);
-  }
-  // The lateral law is a proportionality: order the points by axial force so
-  // that noise in the force does not read as unloading.
-  std::sort(lateral.begin(), lateral.end());
-  for (const auto& [fa, fl] : lateral) {
-    if (!out.lateral.x.empty() && fa <= out.lateral.x.back()) continue;
-    out.lateral.x.push_back(fa);
-    out.lateral.y.push_back(fl);
-  }
-  return out;
+// Units for the parameter table.
+std::string unitOf(const std::string& name) {
+  const auto pos = name.rfind('_');
+  const std::string u = pos == std::string::npos ? "" : name.substr(pos + 1);
+  if (u == "m" && name.find("_N_m") != std::string::npos) return "kN/m";
+  if (name.size() > 4 && name.substr(name.size() - 4) == "_N_m") return "kN/m";
+  if (u == "N") return "kN";
+  if (u == "m") return "mm";
+  return "-";
+}
+double inUnit(const std::string& name, double v) {
+  const std::string u = unitOf(name);
+  if (u == "kN/m" || u == "kN") return v / 1e3;
+  if (u == "mm") return v * 1e3;
+  return v;
 }
 
-// -------------------------------------------------------------- the run
+// A sub-case's file references made absolute (its copy runs in another folder).
+json absolutePaths(json v, const fs::path& from) {
+  for (const char* key : {"law_file", "impacts_csv"})
+    if (v.contains(key) && v[key].is_string())
+      v[key] = fs::absolute(from.parent_path() / v[key].get<std::string>()).string();
+  return v;
+}
+
+// A number of a summary, or NaN.
+double num(const json& j, const std::string& key) {
+  return j.contains(key) && j.at(key).is_number() ? j.at(key).get<double>() : std::nan("");
+}
 
 bridge::RunOutcome runStages(const JsonDocument& doc, const bridge::RunContext& ctx) {
   const PipelineCase c = readPipeline(doc);
-  const double a = c.edge_m;
-  json results;
+  const auto t_start = std::chrono::steady_clock::now();
+  std::vector<StageResult> stages;
+  const auto settingsOf = [&](const std::string& stage) {
+    const auto it = c.settings.find(stage);
+    return it == c.settings.end() ? std::vector<std::string>{} : it->second;
+  };
+  const fs::path out = ctx.outdir;
 
-  // 1. Generate a loose packing tall enough to settle to about the cell height.
-  micro::PackingSpec spec;
-  const double solid_target = (1.0 - c.target_porosity) * a * a * a;
-  spec.box_max_m = Eigen::Vector3d(a, a, solid_target / (c.loose_solid_fraction * a * a));
-  spec.mean_radius_m = c.mean_radius_m;
-  spec.radius_std_rel = c.radius_std_rel;
-  spec.solid_fraction = c.loose_solid_fraction;
-  spec.min_gap_m = 0.02 * c.mean_radius_m;
-  spec.seed = c.seed;
-  micro::Packing packing;
-  try {
-    packing = micro::randomPacking(spec);
-  } catch (const std::runtime_error& e) {
-    throw bridge::InputError(doc.file(), "/cell/grains/loose_solid_fraction", std::string(e.what()) + "; lower it");
+  // 1. The cell(s): generated from the micro.cell case (consecutive seeds for
+  //    replicates), or the cell file given.
+  std::vector<fs::path> cells;
+  double edge_m = 0.0, porosity = 0.0;
+  json cell_summary;
+  if (c.cell_is_file) {
+    cells.push_back(fs::absolute(c.cell));
+    edge_m = c.cell_edge_m;
+    const bridge::H5Reader h5(c.cell);  // the micro.cell run's summary, kept in the cell file
+    cell_summary = json::parse(h5.attribute("/", "summary"));
+    porosity = num(cell_summary, "porosity");
+  } else {
+    const json cell_case = absolutePaths(loadJson(c.cell), c.cell);
+    edge_m = cell_case.value("edge_m", 0.5);
+    for (int k = 0; k < c.replicates; ++k) {
+      json one = cell_case;
+      one["seed"] = c.seed + static_cast<unsigned long>(k);
+      const std::string name = c.replicates > 1 ? "1_cell_seed" + std::to_string(c.seed + k) : "1_cell";
+      stages.push_back(runStage("cell" + (c.replicates > 1 ? " (seed " + std::to_string(c.seed + k) + ")" : ""),
+                                "micro.cell", one, {}, settingsOf("cell"), ctx, out / name));
+      cells.push_back(fs::absolute(out / name / "cell.h5"));
+      if (k == 0) cell_summary = stages.back().summary;
+    }
+    porosity = num(cell_summary, "porosity");
   }
-  const std::size_t n = packing.radii_m.size();
-  double solid = 0.0;
-  for (double r : packing.radii_m) solid += 4.0 / 3.0 * kPi * r * r * r;
 
-  // 2. Settle under gravity inside the floor and the four lateral walls.
-  const fs::path settle_dir = ctx.outdir / "1_settle";
-  JsonDocument settle_doc =
-      stageCase(settle_dir, microScene(c, packing.centers_m, packing.radii_m, cellWalls(a), c.settle_duration_s,
-                                       c.settle_duration_s / 100.0, c.settle_friction));
-  const auto settle =
-      runStage("settle the grains under gravity (micro.scene)", "micro.scene", settle_doc, ctx, settle_dir);
-  std::vector<Eigen::Vector3d> settled;
-  {
-    const bridge::H5Reader h5(settle_dir / "result.h5");
-    const auto t = h5.dims("/bodies/position_m").at(0);
-    settled = frame(h5, "/bodies/position_m", t - 1);
+  // 2. The virtual lab tests on the cell(s).
+  std::map<std::string, StageResult> lab;
+  int n = 2;
+  for (const auto& t : kTests) {
+    json tc = absolutePaths(loadJson(c.tests.at(t)), c.tests.at(t));
+    if (cells.size() == 1) {
+      tc["cell"] = cells.front().string();
+    } else {
+      tc["cell"] = json::array();
+      for (const auto& f : cells) tc["cell"].push_back(f.string());
+    }
+    tc.erase("replicates");
+    if (t == "uci") {
+      tc.erase("velocity_m_s");
+      tc["velocities_m_s"] = c.uci_velocities_m_s;
+    }
+    const fs::path dir = out / (std::to_string(n) + "_" + t);
+    stages.push_back(runStage(t, kTestKind.at(t), tc, cells, settingsOf(t), ctx, dir));
+    lab[t] = stages.back();
   }
-  if (settled.size() != n) throw std::logic_error("pipeline: settle stage returned another number of bodies");
-  double top = 0.0;
-  for (std::size_t i = 0; i < n; ++i) top = std::max(top, settled[i].z() + packing.radii_m[i]);
-  const double porosity = 1.0 - solid / (a * a * top);
+  double mass_kg = num(cell_summary, "mass_kg");
+  if (!(mass_kg > 0.0)) mass_kg = num(lab.at("cc").summary, "mass_kg");
 
-  // 3. CC test: the lid comes down on the settled grains.
-  const double duration = c.strain * top / c.lid_velocity_m_s;
-  json walls = cellWalls(a);
-  walls.push_back(wall(kLid, {0, 0, top}, {0, 0, -1}, {0, 0, -c.lid_velocity_m_s}));
-  const fs::path cc_dir = ctx.outdir / "2_compression";
-  JsonDocument cc_doc =
-      stageCase(cc_dir, microScene(c, settled, packing.radii_m, walls, duration, duration / c.samples, c.friction));
-  runStage("confined compression (micro.scene)", "micro.scene", cc_doc, ctx, cc_dir);
-  const CcCurves curves = ccCurves(c, cc_dir / "result.h5", top);
-  const fs::path curve_dir = ctx.outdir / "3_curves";
-  fs::create_directories(curve_dir);
-  bridge::writeCurveCsv(curve_dir / "axial.csv", curves.axial);
-  bridge::writeCurveCsv(curve_dir / "lateral.csv", curves.lateral);
-
-  // 4. Fit the axial law and the lateral reaction coefficient; the other laws
-  //    come from the structure's base law file, and the provenance says so.
-  JsonDocument structure = JsonDocument::load(c.structure_case);
-  const fs::path base_law = c.structure_case.parent_path() / structure.root().string("law_file");
-  const double fmax = *std::max_element(curves.axial.y.begin(), curves.axial.y.end());
-  const double umax = curves.axial.x.back();
-  const double secant = fmax / umax;
-  const double cell_mass = (solid / (a * a * top)) * a * a * a * c.density_kg_m3;
-  json fit_case = {{"format", "gabion.case/1"},
-                   {"kind", "fit"},
-                   {"description", "generated by the pipeline from its CC test"},
-                   {"seed", c.seed},
-                   {"material", {{"name", c.structure_material}, {"edge_m", a}, {"mass_kg", cell_mass}}},
-                   {"base_law", {{"file", fs::absolute(base_law).string()}, {"material", c.structure_material}}},
-                   // The lock-up from the settled fill (a fill already denser than 0.3 keeps the default).
-                   {"lockup", porosity > 0.3 ? json{{"porosity", porosity}, {"densest_porosity", 0.25}}
-                                             : json{{"strain", bridge::kDefaultLockupStrain}}},
-                   {"axial",
-                    {{"curves", {{{"file", fs::absolute(curve_dir / "axial.csv").string()}}}},
-                     {"bounds",
-                      {{"stiffness_N_m", {0.2 * secant, 50.0 * secant}},
-                       {"yield_force_N", {0.05 * fmax, 1.5 * fmax}},
-                       {"hardening_stiffness_N_m", {0.0, 2.0 * secant}}}}}},
-                   {"lateral",
-                    {{"curves", {{{"file", fs::absolute(curve_dir / "lateral.csv").string()}}}},
-                     {"bounds", {{"reaction_coefficient", {0.0, 3.0}}}}}}};
-  const fs::path fit_dir = ctx.outdir / "4_fit";
-  JsonDocument fit_doc = stageCase(fit_dir, fit_case);
-  const auto fit = runStage("fit the cell laws (fit)", "fit", fit_doc, ctx, fit_dir);
+  // 3. Every law fitted from the tests' curves.
+  std::vector<fs::path> curve_files;
+  for (const auto& [t, st] : lab)
+    for (const auto& r : labResults(st)) curve_files.push_back(r.first);
+  stages.push_back(runStage("fit", "fit", fitCase(c, lab, edge_m, mass_kg, porosity), curve_files, settingsOf("fit"),
+                            ctx, out / "3_fit"));
+  const StageResult fit = stages.back();
 
   // The structure's law file with the calibrated material replaced.
-  bridge::LawFile laws = bridge::loadLawFile(base_law);
-  const bridge::LawFile fitted = bridge::loadLawFile(fit_dir / "law.json");
-  if (laws.materials.count(c.structure_material) == 0)
+  const fs::path structure_law =
+      relative(JsonDocument::load(c.structure_case), loadJson(c.structure_case).at("law_file"));
+  bridge::LawFile laws = bridge::loadLawFile(structure_law);
+  const bridge::LawFile fitted = bridge::loadLawFile(out / "3_fit" / "law.json");
+  if (laws.materials.count(c.material) == 0)
     throw bridge::InputError(doc.file(), "/structure/material",
-                             "no material '" + c.structure_material + "' in " + base_law.string());
-  laws.materials[c.structure_material] = fitted.materials.at(c.structure_material);
+                             "no material '" + c.material + "' in " + structure_law.string());
+  laws.materials[c.material] = fitted.materials.at(c.material);
   json law_json = bridge::toJson(laws);
-  law_json["description"] = "Structure laws: material '" + c.structure_material +
-                            "' calibrated by the pipeline (see its provenance); the others as in " + base_law.string();
-  bridge::writeJsonAtomic(ctx.outdir / "law.json", law_json);
+  law_json["description"] = "Structure laws: material '" + c.material +
+                            "' calibrated by the pipeline (see its provenance); the others as in " +
+                            structure_law.string();
+  bridge::writeJsonAtomic(out / "law.json", law_json);
+  const fs::path law = fs::absolute(out / "law.json");
 
-  // 5. Structure impacts with the calibrated law, one per velocity.
-  json impacts = json::array();
-  bridge::PlotSpec force_plot;
-  force_plot.title = "Boulder force against time (cf. paper Fig. 13)";
-  force_plot.x_label = "time (s)";
-  force_plot.y_label = "force on the boulder (N)";
-  double plot_until = 0.0;
+  // 4. The structure at several energies, its capacity and its design.
+  std::vector<StageResult> impacts;
+  const json structure_case = absolutePaths(loadJson(c.structure_case), c.structure_case);
   for (double v : c.velocities_m_s) {
-    JsonDocument impact = JsonDocument::load(c.structure_case);
-    impact.applySet("boulder.velocity_m_s=" + fmt(v, 17));
-    const fs::path dir = ctx.outdir / ("5_impact_" + fmt(v) + "_m_s");
-    const auto out = runStage("structure impact at " + fmt(v) + " m/s (macro.impact)", "macro.impact", impact, ctx, dir,
-                              ctx.outdir / "law.json");
-    json row = {{"velocity_m_s", v}, {"folder", dir.filename().string()}};
-    // macro.impact always reports these: a missing key is a broken contract, not a blank cell.
-    for (const char* key : {"outcome", "input_energy_J", "peak_force_N", "max_penetration_m", "contact_duration_s",
-                            "rebound_velocity_m_s", "balance_rel_error"})
-      row[key] = out.results.at(key);
-    impacts.push_back(row);
-    const bridge::H5Reader h5(dir / "result.h5");
-    force_plot.series.push_back({fmt(v) + " m/s", h5.read("/series/time_s"), h5.read("/series/boulder_force_N"),
-                                 bridge::PlotSeries::Style::Line});
-    plot_until = std::max(plot_until, 2.0 * out.results.at("contact_duration_s").get<double>());
+    json sc = structure_case;
+    sc["boulder"]["velocity_m_s"] = v;
+    sc.erase("impacts");
+    const std::string name = "4_impact_" + fmt(v) + "_m_s";
+    stages.push_back(
+        runStage("impact at " + fmt(v) + " m/s", "macro.impact", sc, {}, settingsOf("impact"), ctx, out / name, law));
+    impacts.push_back(stages.back());
   }
-  // Show the contacts, not the long quiet tail after the boulder has left.
-  if (plot_until > 0.0)
-    for (auto& series : force_plot.series) {
-      std::size_t keep = 0;
-      while (keep < series.x.size() && series.x[keep] <= plot_until) ++keep;
-      series.x.resize(keep);
-      series.y.resize(keep);
+  std::optional<StageResult> capacity, design;
+  if (c.capacity_case) {
+    stages.push_back(runStage("capacity", "macro.capacity", absolutePaths(loadJson(*c.capacity_case), *c.capacity_case),
+                              {}, settingsOf("capacity"), ctx, out / "5_capacity", law));
+    capacity = stages.back();
+  }
+  if (c.design_case) {
+    stages.push_back(runStage("design", "macro.design", absolutePaths(loadJson(*c.design_case), *c.design_case), {},
+                              settingsOf("design"), ctx, out / "6_design", law));
+    design = stages.back();
+  }
+
+  // 5. The report.
+  Report rep(out);
+  const json& fj = fit.summary.at("fit");
+  rep.heading("Answer");
+  std::ostringstream headline;
+  if (capacity) headline << "Capacity of the wall: " << html(capacity->summary.at("answer").get<std::string>()) << ". ";
+  if (design) headline << "Design: " << html(design->summary.at("answer").get<std::string>()) << ".";
+  if (!headline.str().empty()) rep.text(headline.str());
+  rep.text("Law file: <code>law.json</code> (material <code>" + html(c.material) + "</code> calibrated; status <b>" +
+           html(fit.summary.at("law_status").get<std::string>()) + "</b>).");
+
+  rep.heading("1. The virtual cell");
+  {
+    rep.text(fmt(num(cell_summary, "blocks")) + " blocks, mass " + fmt(num(cell_summary, "mass_kg")) +
+             " kg, porosity " + fmt(porosity, 3) + " (target " + fmt(num(cell_summary, "target_porosity"), 3) + "), " +
+             fmt(edge_m) + " m cell.");
+    if (c.cell_is_file) {
+      rep.text("Cell file: <code>" + html(c.cell.string()) + "</code>.");
+    } else {
+      rep.figure(out / "1_cell" / "grading_0.png", "grading.png", "Grading of the blocks against its target");
+      rep.figure(out / "1_cell" / "vibration.png", "vibration.png", "Porosity during filling and vibration");
     }
-  bridge::writePlotPng(ctx.outdir / "impact_force_time.png", force_plot);
-
-  results["cell"] = {{"edge_m", a},
-                     {"grains", n},
-                     {"settled_height_m", top},
-                     {"settled_porosity", porosity},
-                     {"mass_kg", cell_mass},
-                     {"settle_energy_J", settle.results.at("energy")},
-                     {"seating_m", curves.seating_m}};
-  results["fit"] = fit.results;
-  results["law_file"] = "law.json";
-  results["impacts"] = impacts;
-  results["plots"] = json::array({"4_fit/fit_axial.png", "4_fit/fit_lateral.png", "impact_force_time.png"});
-
-  // 6. The report a person reads first.
-  std::ostringstream r;
-  r << "# Gabion calibration pipeline\n\nCase: `" << ctx.case_file.string() << "`\n\n"
-    << "## 1. Virtual cell (micro)\n\n"
-    << "- " << n << " grains (mean radius " << fmt(c.mean_radius_m) << " m, density " << fmt(c.density_kg_m3)
-    << " kg/m3) settled under gravity in a " << fmt(a) << " m cell: height " << fmt(top) << " m, porosity "
-    << fmt(porosity, 3) << " (paper: 0.436)\n"
-    << "- Confined compression: lid at " << fmt(c.lid_velocity_m_s) << " m/s to " << fmt(100 * c.strain)
-    << " % strain; seating " << fmt(1000 * curves.seating_m, 3) << " mm removed; curves in `3_curves/`\n\n"
-    << "## 2. Fitted cell laws\n\n";
-  const json& fj = fit.results.at("fit");
-  for (const char* test : {"axial", "lateral"}) {
-    // The chosen model, its error and its parameters with their intervals;
-    // every candidate and evaluation count is in 4_fit/summary.json.
-    const json& t = fj.at(test);
-    const json brief = {{"model", t.at("model")}, {"nrms", t.at("nrms")}, {"parameters", t.at("parameters")}};
-    r << "### " << test << "\n\n```json\n" << brief.dump(2) << "\n```\n\n";
   }
-  r << "Law status: **" << fit.results.at("law_status").get<std::string>()
-    << "**. `law.json` is the structure's law file with "
-    << "material `" << c.structure_material << "` replaced by the calibrated one; laws the CC test cannot identify "
-    << "(interface, impact) are carried from `" << base_law.string() << "`, as its provenance records.\n\n"
-    << "![axial](4_fit/fit_axial.png)\n![lateral](4_fit/fit_lateral.png)\n\n"
-    << "## 3. Structure impacts (macro)\n\n| velocity (m/s) | energy (kJ) | outcome | peak force (kN) | penetration "
-       "(mm) | "
-       "duration (ms) | energy balance error |\n|---|---|---|---|---|---|---|\n";
-  for (const auto& row : impacts)
-    r << "| " << fmt(row.at("velocity_m_s").get<double>()) << " | " << fmt(row.at("input_energy_J").get<double>() / 1e3)
-      << " | " << row.at("outcome").get<std::string>() << " | " << fmt(row.at("peak_force_N").get<double>() / 1e3)
-      << " | " << fmt(row.at("max_penetration_m").get<double>() * 1e3) << " | "
-      << fmt(row.at("contact_duration_s").get<double>() * 1e3) << " | "
-      << fmt(row.at("balance_rel_error").get<double>(), 2) << " |\n";
-  r << "\n![force](impact_force_time.png)\n";
-  bridge::writeTextAtomic(ctx.outdir / "report.md", r.str());
-  results["report"] = "report.md";
 
-  bridge::RunOutcome outcome;
-  outcome.results = results;
-  return outcome;
+  rep.heading("2. Virtual lab tests");
+  std::vector<std::vector<std::string>> rows;
+  for (const auto& t : kTests) {
+    const StageResult& st = lab.at(t);
+    rows.push_back({t, kTestKind.at(t), fmt(labMax(st, "peak_force_N") / 1e3), st.reused ? "reused" : "run",
+                    fmt(st.wall_time_s, 3)});
+    const json& s = st.summary;
+    if (s.contains("quasi_static") && s.at("quasi_static").is_boolean() && !s.at("quasi_static").get<bool>())
+      rep.warning(t + ": the test left its quasi-static range (kinetic energy over work above the limit)");
+  }
+  rep.table({"test", "kind", "peak force (kN)", "stage", "wall time (s)"}, rows);
+  rep.figure(out / "2_cc" / "cc_curve.png", "cc_curve.png", "CC: axial force against shortening");
+  rep.figure(out / "2_uc" / "uc_curve.png", "uc_curve.png", "UC: axial force against shortening");
+  rep.figure(out / "2_shear" / "shear_curve.png", "shear_curve.png", "Interface shear");
+
+  rep.heading("3. Fitted cell laws");
+  rows.clear();
+  for (const char* law_name : {"axial", "lateral", "interface", "impact"}) {
+    const json& l = fj.at(law_name);
+    for (const auto& [pname, p] : l.at("parameters").items()) {
+      const double v = p.at("value").get<double>();
+      const json& iv =
+          p.contains("profile_95") && !p.at("profile_95").is_null() ? p.at("profile_95") : p.at("jacobian_95");
+      const std::string interval =
+          iv.is_null() ? "-"
+                       : fmt(inUnit(pname, iv[0].get<double>())) + " to " + fmt(inUnit(pname, iv[1].get<double>()));
+      rows.push_back(
+          {law_name, l.at("model").get<std::string>(), pname, unitOf(pname), fmt(inUnit(pname, v)), interval});
+    }
+    const double nrms = l.at("nrms").get<double>();
+    if (nrms > 0.1)
+      rep.warning(std::string(law_name) + " law: a poor fit (normalised RMS error " + fmt(nrms, 3) + " > 0.1)");
+  }
+  rep.table({"law", "model", "parameter", "unit", "value", "95 % interval"}, rows);
+  for (const char* law_name : {"axial", "lateral", "interface", "impact"})
+    rep.figure(out / "3_fit" / ("fit_" + std::string(law_name) + ".png"), "fit_" + std::string(law_name) + ".png",
+               std::string("Data and fitted ") + law_name + " law");
+
+  rep.heading("4. The structure");
+  rows.clear();
+  bridge::PlotSpec force_plot;
+  force_plot.title = "Boulder force against time (cf. the paper's Fig. 13)";
+  force_plot.x_label = "time (ms)";
+  force_plot.y_label = "force on the boulder (kN)";
+  json impact_rows = json::array();
+  for (std::size_t i = 0; i < impacts.size(); ++i) {
+    const json& s = impacts[i].summary;
+    rows.push_back({fmt(c.velocities_m_s[i]), fmt(num(s, "input_energy_J") / 1e3), s.at("outcome").get<std::string>(),
+                    fmt(num(s, "peak_force_N") / 1e3), fmt(num(s, "max_penetration_m") * 1e3),
+                    fmt(num(s, "max_back_face_displacement_m") * 1e3), fmt(num(s, "contact_duration_s") * 1e3),
+                    fmt(num(s, "balance_rel_error"), 2)});
+    json row = {{"velocity_m_s", c.velocities_m_s[i]}, {"folder", impacts[i].dir.filename().string()}};
+    for (const char* key : {"outcome", "input_energy_J", "peak_force_N", "max_penetration_m",
+                            "max_back_face_displacement_m", "contact_duration_s", "balance_rel_error"})
+      row[key] = s.at(key);
+    impact_rows.push_back(row);
+    const bridge::H5Reader h5(impacts[i].dir / "result.h5");
+    const double until = 2.0 * num(s, "contact_duration_s");
+    std::vector<double> t = h5.read("/series/time_s"), f = h5.read("/series/boulder_force_N");
+    std::size_t keep = 0;
+    while (keep < t.size() && t[keep] <= until) ++keep;
+    t.resize(keep), f.resize(keep);
+    for (auto& x : t) x *= 1e3;
+    for (auto& x : f) x /= 1e3;
+    force_plot.series.push_back({fmt(c.velocities_m_s[i]) + " m/s", t, f, bridge::PlotSeries::Style::Line});
+  }
+  rep.table({"velocity (m/s)", "energy (kJ)", "outcome", "peak force (kN)", "penetration (mm)", "back face (mm)",
+             "contact (ms)", "balance error"},
+            rows);
+  bridge::writePlotPng(out / "impact_force_time.png", force_plot);
+  rep.figure(out / "impact_force_time.png", "impact_force_time.png", "Boulder force against time");
+  if (capacity) {
+    rep.text("<b>Capacity.</b> " + html(capacity->summary.at("answer").get<std::string>()) + ".");
+    rep.figure(out / "5_capacity" / "capacity.png", "capacity.png", "Capacity search: the impacts run");
+  }
+  if (design) {
+    rep.text("<b>Design.</b> " + html(design->summary.at("answer").get<std::string>()) + ".");
+    rep.figure(out / "6_design" / "capacity_vs_thickness.png", "capacity_vs_thickness.png",
+               "Capacity against thickness");
+  }
+
+  rep.heading("5. Stages");
+  rows.clear();
+  for (const auto& st : stages)
+    rows.push_back({st.name, st.dir.filename().string(), st.reused ? "reused" : "run", fmt(st.wall_time_s, 3)});
+  rep.table({"stage", "folder", "", "wall time (s)"}, rows);
+  rep.write("Gabion calibration pipeline: " + doc.file());
+
+  // Summary and console.
+  bridge::RunOutcome result;
+  json& res = result.results;
+  json stage_list = json::array();
+  int reused = 0;
+  for (const auto& st : stages) {
+    stage_list.push_back({{"name", st.name},
+                          {"folder", st.dir.filename().string()},
+                          {"reused", st.reused},
+                          {"wall_time_s", st.wall_time_s}});
+    reused += st.reused ? 1 : 0;
+  }
+  res["stages"] = stage_list;
+  res["stages_reused"] = reused;
+  res["cell"] = {{"edge_m", edge_m},
+                 {"mass_kg", mass_kg},
+                 {"porosity", porosity > 0.0 ? json(porosity) : json(nullptr)},
+                 {"files", json::array()}};
+  for (const auto& f : cells) res["cell"]["files"].push_back(f.string());
+  res["fit"] = fj;
+  res["law_status"] = fit.summary.at("law_status");
+  res["law_file"] = "law.json";
+  res["impacts"] = impact_rows;
+  if (capacity)
+    res["capacity"] = {{"answer", capacity->summary.at("answer")},
+                       {"capacity_energy_J", capacity->summary.at("capacity_energy_J")}};
+  if (design) res["design"] = {{"answer", design->summary.at("answer")}, {"design", design->summary.at("design")}};
+  res["report"] = "report.html";
+  res["figures"] = rep.figures();
+  res["warnings"] = rep.warnings();
+  res["pipeline_wall_time_s"] = std::chrono::duration<double>(std::chrono::steady_clock::now() - t_start).count();
+
+  std::ostringstream console;
+  console << "pipeline: fitted laws of '" << c.material << "' (95 % intervals):\n";
+  for (const char* law_name : {"axial", "lateral", "interface", "impact"}) {
+    const json& l = fj.at(law_name);
+    console << "  " << law_name << " (" << l.at("model").get<std::string>() << "):";
+    for (const auto& [pname, p] : l.at("parameters").items()) {
+      console << " " << pname << " " << fmt(inUnit(pname, p.at("value").get<double>())) << " " << unitOf(pname);
+      const json& iv =
+          p.contains("profile_95") && !p.at("profile_95").is_null() ? p.at("profile_95") : p.at("jacobian_95");
+      if (!iv.is_null())
+        console << " [" << fmt(inUnit(pname, iv[0].get<double>())) << ", " << fmt(inUnit(pname, iv[1].get<double>()))
+                << "]";
+      console << ";";
+    }
+    console << "\n";
+  }
+  if (capacity) console << "pipeline: capacity: " << capacity->summary.at("answer").get<std::string>() << "\n";
+  if (design) console << "pipeline: design: " << design->summary.at("answer").get<std::string>() << "\n";
+  for (const auto& w : rep.warnings()) console << "pipeline: warning: " << w << "\n";
+  console << "pipeline: report: " << (out / "report.html").string() << " (" << stages.size() << " stages, " << reused
+          << " reused)\n";
+  result.report = console.str();
+  return result;
 }
 
 bridge::RunOutcome runPipeline(const JsonDocument& doc, const bridge::RunContext& ctx) {
@@ -465,20 +676,50 @@ bridge::RunOutcome runPipeline(const JsonDocument& doc, const bridge::RunContext
   }
 }
 
+// Every referenced case must be valid on its own (as its stage will read it,
+// the cell given), before anything runs.
 void checkPipeline(const JsonDocument& doc) {
   const PipelineCase c = readPipeline(doc);
-  // The structure case must be valid on its own and name a law file.
-  JsonDocument structure = JsonDocument::load(c.structure_case);
-  checkCase(structure, "macro.impact");
-  if (!structure.root().has("law_file"))
+  const auto check = [&](const fs::path& file, const std::string& kind, const std::string& pointer) {
+    if (!fs::exists(file)) throw bridge::InputError(doc.file(), pointer, file.string() + ": file does not exist");
+    JsonDocument sub = JsonDocument::load(file);
+    checkCase(sub, kind);
+  };
+  if (c.cell_is_file) {
+    if (!fs::exists(c.cell)) throw bridge::InputError(doc.file(), "/cell", c.cell.string() + ": file does not exist");
+  } else {
+    check(c.cell, "micro.cell", "/cell");
+  }
+  for (const auto& t : kTests) {
+    // (the test's own cell is replaced by the pipeline's: check it with that cell when it is a file)
+    const fs::path file = c.tests.at(t);
+    if (!fs::exists(file)) throw bridge::InputError(doc.file(), "/lab/" + t, file.string() + ": file does not exist");
+    JsonDocument sub = JsonDocument::load(file);
+    const json cell = c.cell_is_file ? json(fs::absolute(c.cell).string())
+                                     : json{{"case", fs::absolute(c.cell).string()}, {"seed", c.seed}};
+    sub.applySet("cell=" + cell.dump());
+    sub.applySet("replicates=1");
+    checkCase(sub, kTestKind.at(t));
+  }
+  check(c.structure_case, "macro.impact", "/structure/case");
+  const json sc = loadJson(c.structure_case);
+  if (!sc.contains("law_file"))
     throw bridge::InputError(c.structure_case.string(), "/law_file",
                              "the pipeline needs a structure case with a law_file");
+  const auto laws = bridge::loadLawFile(relative(JsonDocument::load(c.structure_case), sc.at("law_file")));
+  if (laws.materials.count(c.material) == 0)
+    throw bridge::InputError(doc.file(), "/structure/material",
+                             "no material '" + c.material + "' in the structure's law file");
+  if (c.capacity_case) check(*c.capacity_case, "macro.capacity", "/capacity");
+  if (c.design_case) check(*c.design_case, "macro.design", "/design");
 }
 
 }  // namespace
 
 bridge::CaseKind pipelineKind() {
-  return {"pipeline", "calibrate a cell by virtual CC test, fit its laws, run structure impacts with them",
+  return {"pipeline",
+          "the calibration chain: generate the cell, run CC, UC, UCI and shear on it, fit every law, run the wall "
+          "with them (impacts, capacity, design), write report.html",
           checkPipeline, runPipeline};
 }
 

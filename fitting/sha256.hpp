@@ -1,7 +1,8 @@
 #pragma once
 /// \file
-/// SHA-256 of a file (FIPS 180-4), for the provenance of fitted laws: which
-/// exact input files a law was identified from.
+/// SHA-256 of a file (FIPS 180-4, computed by Nettle), for the provenance of
+/// fitted laws (which exact input files a law was identified from) and the
+/// pipeline's stage keys.
 #include <filesystem>
 #include <string>
 

@@ -1,10 +1,13 @@
-// The calibration pipeline end to end on the default case (one boulder
-// velocity to keep it short): every stage leaves its files, the law file it
-// writes is valid and says what was fitted and what was carried over, the
-// structure run with it balances energy, and bad input names the field.
+// The calibration pipeline end to end on a reduced chain (a 0.3 m cell of
+// about 45 blocks, short lab tests, a small wall): every stage leaves valid
+// outputs, the law file it writes is fitted from the four tests, the report
+// embeds every figure it names, a second run reuses every stage, and a
+// changed setting reruns only the stages that depend on it. Bad input names
+// the field before anything runs.
 #include <gtest/gtest.h>
 
 #include <fstream>
+#include <regex>
 #include <string>
 #include <vector>
 
@@ -17,72 +20,157 @@ using gabion::testing::writeFile;
 namespace fs = std::filesystem;
 
 namespace {
+
 nlohmann::json readJson(const fs::path& p) {
   std::ifstream in(p);
   return nlohmann::json::parse(in);
 }
-const std::string kCase = std::string(GABION_SOURCE_DIR) + "/cases/pipeline.json";
+
+std::string readText(const fs::path& p) {
+  std::ifstream in(p);
+  return std::string(std::istreambuf_iterator<char>(in), {});
+}
+
+// The small chain's files: cell, lab tests, wall, capacity and design cases,
+// and a law file whose material 'small' the pipeline replaces.
+void writeSmallChain(const fs::path& dir) {
+  writeFile(dir / "cell.json", R"({"format": "gabion.case/1", "kind": "micro.cell", "edge_m": 0.3, "seed": 3,
+ "rock": {"density_kg_m3": 2600, "normal_stiffness_N_m": 1e6, "shear_stiffness_N_m": 2.5e5, "friction": 0.5,
+          "local_damping": 0.1, "viscous_damping_ratio": 0.1},
+ "blocks": {"grading": {"sieve_m": [0.06, 0.075, 0.09], "passing_percent": [0, 50, 100]}},
+ "netting": {"contact": {"normal_stiffness_N_m": 1e6, "shear_stiffness_N_m": 2.5e5, "friction": 0.5, "local_damping": 0.1}},
+ "fill": {"max_duration_s": 0.35, "friction": 0.1},
+ "vibration": {"max_duration_s": 0.1, "check_interval_s": 0.05},
+ "closing": {"max_duration_s": 0.1},
+ "standing": {"max_duration_s": 0.1},
+ "run": {"output_interval_s": 0.05, "series_interval_s": 0.005}})");
+  const std::string head = R"({"format": "gabion.case/1", "cell": "replaced.h5", )";
+  writeFile(
+      dir / "cc.json",
+      head + R"("kind": "micro.cc", "loading": {"velocity_m_s": 0.2, "strain": 0.05, "unload_at_strain": [0.03]}})");
+  writeFile(dir / "uc.json", head + R"("kind": "micro.uc", "loading": {"velocity_m_s": 0.2, "strain": 0.03}})");
+  writeFile(dir / "uci.json", head + R"("kind": "micro.uci", "velocity_m_s": 6, "boulder": {"diameter_m": 0.3},
+ "run": {"duration_s": 0.03}})");
+  writeFile(dir / "shear.json", head + R"("kind": "micro.shear",
+ "shear": {"normal_stress_Pa": 10000, "displacement_m": 0.01, "velocity_m_s": 0.05}})");
+  nlohmann::json law = readJson(std::string(GABION_SOURCE_DIR) + "/cases/laws/illustrative.json");
+  nlohmann::json small = law["materials"]["front"];
+  small["edge_m"] = 0.3;
+  small["mass_kg"] = 40.0;
+  for (const char* l : {"axial", "impact"}) small[l]["lockup_shortening_m"] = 0.075;
+  law["materials"] = {{"small", small}};
+  writeFile(dir / "law.json", law.dump());
+  const std::string wall = R"("law_file": "law.json",
+ "structure": {"cells": [3, 5, 3], "material": {"front": "small", "core": "small"}, "support": {"back": "fixed"}},
+ "boulder": {"diameter_m": 0.3, "density_kg_m3": 2600, "velocity_m_s": 10, "aim_point_m": [0.75, 0.45]},
+ "run": {"duration_s": 0.05})";
+  writeFile(dir / "wall.json", R"({"format": "gabion.case/1", "kind": "macro.impact", )" + wall + "}");
+  writeFile(dir / "capacity.json", R"({"format": "gabion.case/1", "kind": "macro.capacity", )" + wall +
+                                       R"(, "capacity": {"range": [2, 40], "criteria": {"max_penetration_m": 0.1}}})");
+  writeFile(dir / "design.json", R"({"format": "gabion.case/1", "kind": "macro.design", )" + wall +
+                                     R"(, "design": {"thickness_cells": [1, 4], "height_cells": [2, 3],
+ "criteria": {"max_penetration_m": 0.15}, "residual_capacity_max_impacts": 3}})");
+  writeFile(dir / "pipeline.json", R"({"format": "gabion.case/1", "kind": "pipeline", "seed": 3,
+ "cell": "cell.json",
+ "lab": {"cc": "cc.json", "uc": "uc.json", "uci": "uci.json", "shear": "shear.json"},
+ "uci_velocities_m_s": [5, 8],
+ "structure": {"case": "wall.json", "material": "small", "velocities_m_s": [8, 12]},
+ "capacity": "capacity.json", "design": "design.json"})");
+}
+
 }  // namespace
 
-TEST(Pipeline, DefaultCaseRunsEndToEnd) {
-  const auto out = scratchDir("pipeline");
-  const auto r = runGabion("run " + kCase + " -q -o " + out.string() + " --set structure.velocities_m_s=[15]");
+TEST(Pipeline, ReducedChainRunsEveryStageThenReusesThem) {
+  const auto dir = scratchDir("pipeline_small");
+  writeSmallChain(dir);
+  const fs::path out = dir / "out";
+  auto r = runGabion("run " + (dir / "pipeline.json").string() + " --threads 2 -o " + out.string());
   ASSERT_EQ(r.exit_code, 0) << r.output;
-  for (const char* f : {"summary.json", "law.json", "report.md", "impact_force_time.png", "1_settle/result.h5",
-                        "2_compression/result.h5", "3_curves/axial.csv", "3_curves/lateral.csv", "4_fit/law.json",
-                        "4_fit/fit_axial.png", "5_impact_15_m_s/result.h5"})
-    EXPECT_TRUE(fs::exists(out / f)) << f;
+  // The console's headline: fitted parameters with intervals, the answers, the report.
+  for (const char* line : {"fitted laws of 'small'", "pipeline: capacity:", "pipeline: design:", "report.html"})
+    EXPECT_NE(r.output.find(line), std::string::npos) << line << "\n" << r.output;
 
   const auto s = readJson(out / "summary.json");
   EXPECT_EQ(s.at("status"), "ok");
-  // The CC scene names its walls; the curves are read by those names.
-  const auto cc = readJson(out / "2_compression/case.json");
-  std::vector<std::string> walls;
-  for (const auto& w : cc.at("walls")) walls.push_back(w.at("name"));
-  EXPECT_EQ(walls, (std::vector<std::string>{"z_minus", "x_minus", "x_plus", "y_minus", "y_plus", "lid"}));
-  // A settled random packing of spheres in a box: looser than the densest
-  // random packing (porosity 0.36) and denser than the loose cloud (0.75).
-  const double porosity = s.at("cell").at("settled_porosity").get<double>();
-  EXPECT_GT(porosity, 0.36);
-  EXPECT_LT(porosity, 0.6);
-  // The CC test loads the lateral walls: a positive reaction coefficient.
-  const double K = s.at("fit").at("fit").at("lateral").at("parameters").at("reaction_coefficient").at("value");
-  EXPECT_GT(K, 0.0);
-  ASSERT_EQ(s.at("impacts").size(), 1u);
-  EXPECT_LT(std::abs(s.at("impacts")[0].at("balance_rel_error").get<double>()), 5e-3);
-  EXPECT_GT(s.at("impacts")[0].at("peak_force_N").get<double>(), 0.0);
-  // 0.5 m limestone boulder (170 kg) at 15 m/s: E = m v^2 / 2 = 19.1 kJ (shared/reference).
-  EXPECT_NEAR(s.at("impacts")[0].at("input_energy_J").get<double>(), 19.1e3, 0.2e3);
+  EXPECT_EQ(s.at("stages_reused"), 0);
+  // Every stage left an ok summary and the files the next one reads.
+  for (const auto& st : s.at("stages")) {
+    const fs::path d = out / st.at("folder").get<std::string>();
+    EXPECT_EQ(readJson(d / "summary.json").at("status"), "ok") << d;
+    EXPECT_TRUE(fs::exists(d / "stage.json")) << d;
+  }
+  for (const char* f : {"1_cell/cell.h5", "2_cc/result.h5", "2_uc/result.h5", "2_uci/v5/result.h5",
+                        "2_uci/v8/result.h5", "2_shear/result.h5", "3_fit/law.json", "4_impact_8_m_s/result.h5",
+                        "5_capacity/capacity.png", "6_design/capacity_vs_thickness.png", "law.json", "report.html"})
+    EXPECT_TRUE(fs::exists(out / f)) << f;
 
-  // The law file: the calibrated material is replaced, the others carried;
-  // it stays "illustrative" because interface and impact come from an
-  // illustrative base law, and its provenance says which laws were fitted.
+  // The law file: 'small' replaced by the law fitted from the four tests,
+  // with its lock-up from the generated cell's porosity.
   const auto laws = gabion::bridge::loadLawFile(out / "law.json");
-  ASSERT_EQ(laws.materials.count("front"), 1u);
-  ASSERT_EQ(laws.materials.count("core"), 1u);
-  const auto& front = laws.materials.at("front");
-  EXPECT_EQ(front.provenance.at("status"), "illustrative");
-  EXPECT_TRUE(front.provenance.at("fitted").contains("axial"));
-  EXPECT_TRUE(front.provenance.at("fitted").contains("lateral"));
-  EXPECT_DOUBLE_EQ(front.lateral.reaction_coefficient, K);
-  EXPECT_EQ(laws.materials.at("core").provenance.at("status"), "illustrative");
+  const auto& m = laws.materials.at("small");
+  for (const char* law : {"axial", "lateral", "interface", "impact"})
+    EXPECT_TRUE(m.provenance.at("fitted").contains(law)) << law;
+  EXPECT_EQ(m.provenance.at("lockup").at("from"), "porosity");
+  EXPECT_DOUBLE_EQ(m.edge_m, 0.3);
+
+  // The report embeds every figure it lists, each also a file in figures/.
+  const std::string html = readText(out / "report.html");
+  const auto figures = s.at("figures");
+  EXPECT_GE(figures.size(), 10u);
+  std::size_t embedded = 0;
+  for (std::size_t at = html.find("data:image/png;base64,"); at != std::string::npos;
+       at = html.find("data:image/png;base64,", at + 1))
+    ++embedded;
+  EXPECT_EQ(embedded, figures.size());
+  for (const auto& f : figures) EXPECT_GT(fs::file_size(out / f.get<std::string>()), 1000u) << f;
+
+  // A second run reuses every stage; the answers are the same.
+  r = runGabion("run " + (dir / "pipeline.json").string() + " -q --threads 2 -o " + out.string());
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  const auto again = readJson(out / "summary.json");
+  EXPECT_EQ(again.at("stages_reused"), again.at("stages").size());
+  EXPECT_EQ(again.at("design"), s.at("design"));
+  EXPECT_EQ(again.at("fit"), s.at("fit"));
+
+  // A changed structure velocity reruns that impact only.
+  r = runGabion("run " + (dir / "pipeline.json").string() + " -q --threads 2 -o " + out.string() +
+                " --set structure.velocities_m_s=[8,14]");
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  const auto third = readJson(out / "summary.json");
+  for (const auto& st : third.at("stages"))
+    EXPECT_EQ(st.at("reused").get<bool>(), st.at("folder") != "4_impact_14_m_s") << st.at("folder");
 }
 
 TEST(Pipeline, BadInputNamesTheField) {
   const auto dir = scratchDir("pipeline_bad");
-  auto j = readJson(kCase);
+  writeSmallChain(dir);
+  auto j = readJson(dir / "pipeline.json");
   j["structure"]["case"] = "no_such_case.json";
   writeFile(dir / "missing_structure.json", j.dump());
   auto r = runGabion("check " + (dir / "missing_structure.json").string());
   EXPECT_EQ(r.exit_code, 2) << r.output;
+  EXPECT_NE(r.output.find("/structure/case"), std::string::npos) << r.output;
   EXPECT_NE(r.output.find("no_such_case.json: file does not exist"), std::string::npos) << r.output;
 
-  j = readJson(kCase);
-  j["structure"]["case"] = std::string(GABION_SOURCE_DIR) + "/cases/wall_impact.json";
-  j["compression"]["strain"] = -0.1;
-  writeFile(dir / "bad_strain.json", j.dump());
-  r = runGabion("run " + (dir / "bad_strain.json").string() + " -q -o " + (dir / "out").string());
+  j = readJson(dir / "pipeline.json");
+  j["structure"]["material"] = "granite";
+  writeFile(dir / "bad_material.json", j.dump());
+  r = runGabion("run " + (dir / "bad_material.json").string() + " -q -o " + (dir / "out").string());
   EXPECT_EQ(r.exit_code, 2) << r.output;
-  EXPECT_NE(r.output.find("/compression/strain: must be > 0"), std::string::npos) << r.output;
+  EXPECT_NE(r.output.find("/structure/material"), std::string::npos) << r.output;
   EXPECT_FALSE(fs::exists(dir / "out"));
+
+  // A lab case with an error is named by its own file and pointer.
+  writeFile(dir / "uc.json", R"({"format": "gabion.case/1", "cell": "replaced.h5", "kind": "micro.uc",
+ "loading": {"velocity_m_s": -1}})");
+  r = runGabion("check " + (dir / "pipeline.json").string());
+  EXPECT_EQ(r.exit_code, 2) << r.output;
+  EXPECT_NE(r.output.find("uc.json: /loading/velocity_m_s"), std::string::npos) << r.output;
+
+  j = readJson(dir / "pipeline.json");
+  j["stage_settings"] = {{"ccc", {"loading.strain=0.1"}}};
+  writeFile(dir / "bad_stage.json", j.dump());
+  r = runGabion("check " + (dir / "bad_stage.json").string());
+  EXPECT_EQ(r.exit_code, 2) << r.output;
+  EXPECT_NE(r.output.find("/stage_settings/ccc"), std::string::npos) << r.output;
 }
