@@ -1,8 +1,8 @@
 #pragma once
 /// \file
-/// Charts as PNG files (line and marker plots with axes, ticks, labels and a
-/// legend), rendered by our own small rasteriser and written with zlib, so
-/// that every run can leave a plot a person can look at without extra tools.
+/// Charts as PNG or SVG files (line and marker plots with axes, ticks, labels
+/// and a legend), drawn with cairo, so that every run can leave a plot a
+/// person can look at without extra tools.
 #include <filesystem>
 #include <string>
 #include <vector>
@@ -33,8 +33,11 @@ struct PlotSpec {
   int height_px = 600;
 };
 
-/// Renders `spec` to a PNG file at `path` (written atomically).
-/// Throws std::runtime_error when the file cannot be written.
+/// Renders `spec` to a PNG file at `path` (8-bit RGB, written atomically).
+/// Throws std::invalid_argument for an invalid spec, std::runtime_error when
+/// the file cannot be drawn or written.
 void writePlotPng(const std::filesystem::path& path, const PlotSpec& spec);
+/// The same chart as an SVG file (vector paths and text).
+void writePlotSvg(const std::filesystem::path& path, const PlotSpec& spec);
 
 }  // namespace gabion::bridge

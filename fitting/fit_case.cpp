@@ -5,6 +5,7 @@
 #include <cmath>
 #include <optional>
 #include <set>
+#include <sstream>
 
 #include "bridge/errors.hpp"
 #include "bridge/law_file.hpp"
@@ -185,32 +186,59 @@ std::vector<PathGrid> loadGrids(const TestSpec& t, std::size_t grid_points) {
   return grids;
 }
 
-// "displacement_m" -> "displacement (m)".
-std::string axisLabel(const std::string& name) {
+// A dataset name and its engineers' unit on a chart: "displacement_m" ->
+// {"displacement (mm)", 1e3}, "force_N" -> {"force (kN)", 1e-3}; other units as they are.
+std::pair<std::string, double> axisOf(const std::string& name) {
+  const auto ends = [&](const std::string& tail) {
+    return name.size() > tail.size() && name.compare(name.size() - tail.size(), tail.size(), tail) == 0;
+  };
+  const auto stemOf = [&](std::size_t tail) {
+    std::string stem = name.substr(0, name.size() - tail);
+    std::replace(stem.begin(), stem.end(), '_', ' ');
+    return stem;
+  };
+  if (ends("_m_s")) return {stemOf(4) + " (m/s)", 1.0};
+  if (ends("_N_m")) return {stemOf(4) + " (kN/m)", 1e-3};
   const auto pos = name.rfind('_');
-  if (pos == std::string::npos) return name;
+  if (pos == std::string::npos) return {name, 1.0};
   std::string stem = name.substr(0, pos);
   std::replace(stem.begin(), stem.end(), '_', ' ');
-  return stem + " (" + name.substr(pos + 1) + ")";
+  const std::string unit = name.substr(pos + 1);
+  if (unit == "m") return {stem + " (mm)", 1e3};
+  if (unit == "N") return {stem + " (kN)", 1e-3};
+  return {stem + " (" + unit + ")", 1.0};
 }
 
 void plotFit(const fs::path& file, const TestSpec& t, const std::vector<PathGrid>& grids, const ModelFit& fit,
              const Lockup& lockup) {
   bridge::PlotSpec spec;
-  spec.title = t.name + ": data and fitted " + modelName(fit.model) + " law (nRMS " +
-               std::to_string(fit.nrms).substr(0, 6) + ")";
+  std::ostringstream nrms;
+  nrms.precision(3);
+  nrms << fit.nrms;
+  spec.title =
+      t.name + ": data and the fitted " + modelName(fit.model) + " law (normalised RMS error " + nrms.str() + ")";
   const auto d = defaultsFor(t.name);
-  spec.x_label = axisLabel(t.curves.front().request.x_name);
-  spec.y_label = axisLabel(t.curves.front().request.y_name);
+  const auto [x_label, x_scale] = axisOf(t.curves.front().request.x_name);
+  const auto [y_label, y_scale] = axisOf(t.curves.front().request.y_name);
+  spec.x_label = x_label;
+  spec.y_label = y_label;
   std::vector<double> model;
   for (std::size_t i = 0; i < grids.size(); ++i) {
     const auto& g = grids[i];
-    std::string tag = "curve " + std::to_string(i + 1);
-    if (!d.condition_key.empty())
-      tag += " (" + d.condition_key + " = " + std::to_string(g.condition).substr(0, 7) + ")";
-    spec.series.push_back({"data " + tag, g.x, g.y, bridge::PlotSeries::Style::Markers});
+    std::string tag = grids.size() > 1 ? "curve " + std::to_string(i + 1) : "";
+    if (!d.condition_key.empty()) {
+      const auto [cond, cond_scale] = axisOf(d.condition_key);
+      std::ostringstream c;
+      c.precision(4);
+      const auto open = cond.find(" (");
+      c << cond.substr(0, open) << " " << g.condition * cond_scale << " "
+        << cond.substr(open + 2, cond.size() - open - 3);
+      tag = c.str();
+    }
+    spec.series.push_back(
+        bridge::scaledSeries("data " + tag, g.x, g.y, x_scale, y_scale, bridge::PlotSeries::Style::Markers));
     evaluateModel(fit.model, fit.theta, g, model, lockup);
-    spec.series.push_back({"fit " + tag, g.x, model, bridge::PlotSeries::Style::Line});
+    spec.series.push_back(bridge::scaledSeries("fit " + tag, g.x, model, x_scale, y_scale));
   }
   bridge::writePlotPng(file, spec);
 }

@@ -21,5 +21,5 @@ foreach(lab micro_cc micro_uc micro_uci micro_shear)
 endforeach()
 # The pipeline on the smoke cell, its lab tests as short as their own smoke runs.
 set(GABION_SMOKE_SET_pipeline --set cell=${GABION_SMOKE_CELL} --set uci_velocities_m_s=[8]
-    --set "stage_settings={\"cc\":[\"loading.strain=0.004\",\"loading.unload_at_strain=[0.002]\"],\"uc\":[\"loading.strain=0.004\"],\"uci\":[\"boulder.diameter_m=0.3\",\"run.duration_s=0.005\"],\"shear\":[\"shear.displacement_m=0.001\",\"shear.max_settle_s=0.01\"]}")
+    --set "stage_settings={\"cc\":[\"loading.strain=0.004\",\"loading.unload_at_strain=[0.002]\"],\"uc\":[\"loading.strain=0.004\"],\"uci\":[\"boulder.diameter_m=0.3\",\"run.duration_s=0.02\"],\"shear\":[\"shear.displacement_m=0.001\",\"shear.max_settle_s=0.01\"]}")
 set(GABION_SMOKE_NEEDS_pipeline cell_file)
