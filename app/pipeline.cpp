@@ -515,6 +515,7 @@ bridge::RunOutcome runStages(const JsonDocument& doc, const bridge::RunContext& 
     if (c.cell_is_file) {
       rep.text("Cell file: <code>" + html(c.cell.string()) + "</code>.");
     } else {
+      rep.figure(out / "1_cell" / "cell_view.png", "cell_view.png", "The generated cell: its blocks and netting");
       rep.figure(out / "1_cell" / "grading_0.png", "grading.png", "Grading of the blocks against its target");
       rep.figure(out / "1_cell" / "vibration.png", "vibration.png", "Porosity during filling and vibration");
     }

@@ -14,6 +14,7 @@
 #include "bridge/plot.hpp"
 #include "micro/blocks/block_fill.hpp"
 #include "micro/cell/cell_file.hpp"
+#include "micro/cell/cell_view.hpp"
 #include "micro/cell/porosity.hpp"
 #include "micro/netting/mesh.hpp"
 #include "micro/netting/netting_input.hpp"
@@ -583,6 +584,8 @@ bridge::RunOutcome run(const bridge::JsonDocument& doc, const bridge::RunContext
     bridge::writePlotPng(ctx.outdir / "vibration.png", plot);
   }
   writeCellFile(ctx.outdir / "cell.h5", fin, final_state, res);
+  writeCellView(ctx.outdir / "cell_view.png", fin,
+                "The cell: " + std::to_string(fin.blocks.size()) + " blocks in their netting");
   std::ostringstream rep;
   rep.setf(std::ios::fixed);
   rep.precision(3);

@@ -17,6 +17,7 @@
 #include <vector>
 
 #include "bridge/plot.hpp"
+#include "bridge/scene_view.hpp"
 
 using namespace gabion::bridge;
 namespace fs = std::filesystem;
@@ -357,4 +358,30 @@ TEST(Plot, InvalidSpecThrows) {
   s.y = {1.0};
   mismatch.series.push_back(s);
   EXPECT_THROW(writePlotPng(tempPng("bad.png"), mismatch), std::invalid_argument);
+}
+
+// The scene view (bridge/scene_view.hpp): a red sphere and a blue one side
+// by side along the screen's right axis are drawn where the projection puts
+// them, on a white ground; an empty view is refused.
+TEST(SceneView, SpheresLandWhereTheProjectionPutsThem) {
+  gabion::bridge::SceneView v;
+  v.azimuth_deg = 0.0;  // looking from +x: screen right is +y, up is +z
+  v.elevation_deg = 0.0;
+  v.spheres.push_back({Eigen::Vector3d(0.0, -1.0, 0.0), 0.5, 0xdd2020});
+  v.spheres.push_back({Eigen::Vector3d(0.0, 1.0, 0.0), 0.5, 0x2020dd});
+  v.width_px = 400;
+  v.height_px = 200;
+  const auto path = tempPng("view.png");
+  gabion::bridge::writeSceneViewPng(path, v);
+  const Image img = readPng(path);
+  ASSERT_EQ(img.width, 400);
+  ASSERT_EQ(img.height, 200);
+  // Fitted with a 16 px margin: the spheres' centres at a quarter and three
+  // quarters of the width, half the height (the shading is lit from the
+  // upper left: sample a little up and left of each centre).
+  EXPECT_TRUE(isReddish(img.at(96, 92))) << img.at(96, 92)[0] << " " << img.at(96, 92)[1];
+  EXPECT_TRUE(isBluish(img.at(296, 92))) << img.at(296, 92)[2];
+  const auto corner = img.at(2, 2);
+  EXPECT_EQ(corner[0] + corner[1] + corner[2], 3 * 255);
+  EXPECT_THROW(gabion::bridge::writeSceneViewPng(path, gabion::bridge::SceneView{}), std::invalid_argument);
 }
