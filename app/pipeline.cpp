@@ -302,6 +302,31 @@ std::string html(const std::string& s) {
   return o;
 }
 
+// Once the page has loaded, the body records how many figures it has, how
+// many did not load and how many are blank (under 0.5 % of their pixels
+// other than white): what a person would see, for the headless-browser test
+// and for anyone who opens the page's source.
+constexpr const char* kImageCheck = R"(<script>
+window.addEventListener('load', () => {
+  let broken = 0, blank = 0;
+  for (const img of document.images) {
+    if (!img.complete || img.naturalWidth === 0) { ++broken; continue; }
+    const c = document.createElement('canvas');
+    c.width = 200; c.height = Math.max(1, Math.round(200 * img.naturalHeight / img.naturalWidth));
+    const g = c.getContext('2d');
+    g.drawImage(img, 0, 0, c.width, c.height);
+    const d = g.getImageData(0, 0, c.width, c.height).data;
+    let ink = 0;
+    for (let i = 0; i < d.length; i += 4) if (d[i] < 240 || d[i + 1] < 240 || d[i + 2] < 240) ++ink;
+    if (ink < 0.005 * c.width * c.height) ++blank;
+  }
+  document.body.dataset.images = document.images.length;
+  document.body.dataset.brokenImages = broken;
+  document.body.dataset.blankImages = blank;
+});
+</script>
+)";
+
 /// The report: one self-contained HTML file (figures embedded), the figures
 /// also copied into OUT/figures/.
 class Report {
@@ -349,7 +374,7 @@ class Report {
            "text-align:right}th{background:#eee}img{max-width:100%}figure{margin:1.5em 0}"
            ".warn{color:#a40;font-weight:bold}code{background:#f4f4f4}</style></head>\n<body>\n<h1>"
         << html(title) << "</h1>\n"
-        << body_.str() << "</body></html>\n";
+        << body_.str() << kImageCheck << "</body></html>\n";
     bridge::writeTextAtomic(out_ / "report.html", doc.str());
   }
 

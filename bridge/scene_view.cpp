@@ -3,7 +3,6 @@
 #include <cairo.h>
 
 #include <Eigen/Geometry>
-
 #include <algorithm>
 #include <array>
 #include <cmath>

@@ -14,8 +14,8 @@ void writeCellView(const std::filesystem::path& file, const Scene& scene, const 
   for (std::size_t k = 0; k < scene.blocks.size(); ++k) {
     const BlockSpec& b = scene.blocks[k];
     for (std::size_t m = 0; m < b.member_centers_m.size(); ++m)
-      v.spheres.push_back({b.position_m + b.orientation * b.member_centers_m[m], b.member_radii_m[m],
-                           kStone[k % kStone.size()]});
+      v.spheres.push_back(
+          {b.position_m + b.orientation * b.member_centers_m[m], b.member_radii_m[m], kStone[k % kStone.size()]});
   }
   // The netting: its wires, and its nodes drawn at a third of their contact
   // radius so that the mesh does not hide the stones.

@@ -17,8 +17,9 @@ struct CliResult {
   std::string output;  // stdout and stderr together
 };
 
-inline CliResult runGabion(const std::string& args) {
-  const std::string cmd = std::string(GABION_BINARY) + " " + args + " 2>&1";
+/// Runs a shell command line and captures its exit code and output.
+inline CliResult runCommand(const std::string& command_line) {
+  const std::string cmd = command_line + " 2>&1";
   CliResult r;
   FILE* p = popen(cmd.c_str(), "r");
   if (p == nullptr) return r;
@@ -27,6 +28,10 @@ inline CliResult runGabion(const std::string& args) {
   const int status = pclose(p);
   r.exit_code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
   return r;
+}
+
+inline CliResult runGabion(const std::string& args) {
+  return runCommand(std::string(GABION_BINARY) + " " + args);
 }
 
 /// A fresh scratch folder under the test temp dir, named by the test and
