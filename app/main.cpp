@@ -1,4 +1,5 @@
-// The `gabion` command line: run or check a case, print the version.
+// The `gabion` command line: run or check a case, draw a result's figure,
+// print the version.
 // Exit codes: 0 ok, 1 internal error, 2 bad input, 3 numerical failure.
 #include <unistd.h>
 
@@ -9,6 +10,7 @@
 #include <iostream>
 
 #include "app/registry.hpp"
+#include "app/standard_figure.hpp"
 #include "bridge/errors.hpp"
 #include "bridge/output.hpp"
 #include "gabion_version.hpp"
@@ -31,6 +33,8 @@ struct Options {
   std::vector<std::string> sets;
   int threads = 1;
   bool quiet = false;
+  std::string result_file;  // plot
+  std::string figure;       // plot: -o
 };
 
 // Loads the case, applies --set, finds its kind and validates every key.
@@ -122,6 +126,10 @@ int main(int argc, char** argv) {
 
   auto* kinds = app.add_subcommand("kinds", "List the case kinds this build runs");
 
+  auto* plot = app.add_subcommand("plot", "Draw the standard figure of a result file (result.h5)");
+  plot->add_option("result", o.result_file, "a run's result.h5")->required();
+  plot->add_option("-o,--output", o.figure, "figure file, .png or .svg (default: beside the result, .png)");
+
   CLI11_PARSE(app, argc, argv);
   try {
     if (kinds->parsed()) {
@@ -129,6 +137,12 @@ int main(int argc, char** argv) {
       return kExitOk;
     }
     if (check->parsed()) return commandCheck(o);
+    if (plot->parsed()) {
+      const fs::path figure = o.figure.empty() ? fs::path(o.result_file).replace_extension(".png") : fs::path(o.figure);
+      gabion::app::writeStandardFigure(o.result_file, figure);
+      std::cout << figure.string() << "\n";
+      return kExitOk;
+    }
     return commandRun(o);
   } catch (const InputError& e) {
     std::cerr << e.what() << "\n";

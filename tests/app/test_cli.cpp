@@ -2,6 +2,10 @@
 // file and the field for bad input, and nothing written for a rejected case.
 #include <gtest/gtest.h>
 
+#include <fstream>
+#include <iterator>
+#include <string>
+
 #include "tests/support/run_gabion.hpp"
 
 using gabion::testing::runGabion;
@@ -40,5 +44,33 @@ TEST(Cli, BadInputsExitTwoAndNameTheField) {
     const auto rr = runGabion("run " + path.string() + " -q -o " + out.string());
     EXPECT_EQ(rr.exit_code, 2) << c.name;
     EXPECT_FALSE(std::filesystem::exists(out)) << c.name << ": a rejected case must write nothing";
+  }
+}
+
+// `gabion plot`: the standard figure of a structure impact's result file, as
+// PNG beside it or as the SVG asked for; a file with nothing to draw (or none
+// at all) exits 2 naming it.
+TEST(Cli, PlotDrawsTheStandardFigureOfAResult) {
+  const auto dir = scratchDir("cli_plot");
+  auto r = runGabion("run " + std::string(GABION_SOURCE_DIR) + "/cases/wall_impact.json -q -o " +
+                     (dir / "wall").string() + " --set boulder.velocity_m_s=10");
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  r = runGabion("plot " + (dir / "wall" / "result.h5").string());
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  std::ifstream png(dir / "wall" / "result.png", std::ios::binary);
+  std::string head(8, '\0');
+  png.read(head.data(), 8);
+  EXPECT_EQ(head, std::string("\x89PNG\r\n\x1a\n", 8));
+  r = runGabion("plot " + (dir / "wall" / "result.h5").string() + " -o " + (dir / "force.svg").string());
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  std::ifstream svg(dir / "force.svg");
+  const std::string text((std::istreambuf_iterator<char>(svg)), std::istreambuf_iterator<char>());
+  EXPECT_NE(text.find("<svg"), std::string::npos);
+  EXPECT_GT(text.size(), 2000u);
+
+  for (const std::string& bad : {(dir / "none.h5").string(), (dir / "wall" / "summary.json").string()}) {
+    r = runGabion("plot " + bad);
+    EXPECT_EQ(r.exit_code, 2) << bad << ": " << r.output;
+    EXPECT_NE(r.output.find(bad), std::string::npos) << r.output;
   }
 }
