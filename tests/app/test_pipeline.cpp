@@ -132,13 +132,14 @@ TEST(Pipeline, ReducedChainRunsEveryStageThenReusesThem) {
     const auto dom = gabion::testing::runCommand(
         "timeout 120 /usr/bin/chromium --headless --no-sandbox --disable-gpu --user-data-dir=" +
         (dir / "chromium").string() + " --dump-dom file://" + (out / "report.html").string());
-    std::smatch m;
+    std::smatch found;
     ASSERT_TRUE(std::regex_search(
-        dom.output, m, std::regex(R"re(data-images="(\d+)" data-broken-images="(\d+)" data-blank-images="(\d+)")re")))
+        dom.output, found,
+        std::regex(R"re(data-images="(\d+)" data-broken-images="(\d+)" data-blank-images="(\d+)")re")))
         << dom.output.substr(0, 2000);
-    EXPECT_EQ(std::stoul(m[1]), figures.size());
-    EXPECT_EQ(m[2], "0") << "figures that did not load";
-    EXPECT_EQ(m[3], "0") << "blank figures";
+    EXPECT_EQ(std::stoul(found[1]), figures.size());
+    EXPECT_EQ(found[2], "0") << "figures that did not load";
+    EXPECT_EQ(found[3], "0") << "blank figures";
   }
 
   // A second run reuses every stage; the answers are the same.
