@@ -5,9 +5,6 @@
 // legend in the plot corner that covers the fewest data points.
 #include "bridge/plot.hpp"
 
-#include <cairo-svg.h>
-#include <cairo.h>
-
 #include <algorithm>
 #include <array>
 #include <cmath>
@@ -18,7 +15,7 @@
 #include <string>
 #include <vector>
 
-#include "bridge/output.hpp"
+#include "bridge/cairo_output.hpp"
 
 namespace gabion::bridge {
 
@@ -404,46 +401,16 @@ void render(cairo_t* cr, const PlotSpec& spec) {
   drawLegend(p, spec, f, points);
 }
 
-cairo_status_t appendBytes(void* closure, const unsigned char* data, unsigned int length) {
-  static_cast<std::string*>(closure)->append(reinterpret_cast<const char*>(data), length);
-  return CAIRO_STATUS_SUCCESS;
-}
-
-void check(cairo_status_t st, const std::filesystem::path& path) {
-  if (st != CAIRO_STATUS_SUCCESS)
-    throw std::runtime_error("plot " + path.string() + ": cairo: " + cairo_status_to_string(st));
-}
-
 }  // namespace
 
 void writePlotPng(const std::filesystem::path& path, const PlotSpec& spec) {
   validate(path, spec);
-  cairo_surface_t* surface = cairo_image_surface_create(CAIRO_FORMAT_RGB24, spec.width_px, spec.height_px);
-  cairo_t* cr = cairo_create(surface);
-  render(cr, spec);
-  const cairo_status_t drawn = cairo_status(cr);
-  cairo_destroy(cr);
-  std::string png;
-  const cairo_status_t written =
-      drawn == CAIRO_STATUS_SUCCESS ? cairo_surface_write_to_png_stream(surface, appendBytes, &png) : drawn;
-  cairo_surface_destroy(surface);
-  check(written, path);
-  writeTextAtomic(path, png);
+  writeCairoPng(path, spec.width_px, spec.height_px, [&](cairo_t* cr) { render(cr, spec); });
 }
 
 void writePlotSvg(const std::filesystem::path& path, const PlotSpec& spec) {
   validate(path, spec);
-  std::string svg;
-  cairo_surface_t* surface = cairo_svg_surface_create_for_stream(appendBytes, &svg, spec.width_px, spec.height_px);
-  cairo_t* cr = cairo_create(surface);
-  render(cr, spec);
-  const cairo_status_t drawn = cairo_status(cr);
-  cairo_destroy(cr);
-  cairo_surface_finish(surface);
-  const cairo_status_t finished = cairo_surface_status(surface);
-  cairo_surface_destroy(surface);
-  check(drawn != CAIRO_STATUS_SUCCESS ? drawn : finished, path);
-  writeTextAtomic(path, svg);
+  writeCairoSvg(path, spec.width_px, spec.height_px, [&](cairo_t* cr) { render(cr, spec); });
 }
 
 }  // namespace gabion::bridge

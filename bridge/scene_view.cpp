@@ -1,7 +1,5 @@
 #include "bridge/scene_view.hpp"
 
-#include <cairo.h>
-
 #include <Eigen/Geometry>
 #include <algorithm>
 #include <array>
@@ -9,16 +7,11 @@
 #include <limits>
 #include <stdexcept>
 
-#include "bridge/output.hpp"
+#include "bridge/cairo_output.hpp"
 
 namespace gabion::bridge {
 
 namespace {
-
-cairo_status_t appendBytes(void* closure, const unsigned char* data, unsigned int length) {
-  static_cast<std::string*>(closure)->append(reinterpret_cast<const char*>(data), length);
-  return CAIRO_STATUS_SUCCESS;
-}
 
 // One thing to paint: its depth (larger: nearer the viewer) and which.
 struct Item {
@@ -66,61 +59,52 @@ void writeSceneViewPng(const std::filesystem::path& path, const SceneView& v) {
   double d0 = std::numeric_limits<double>::infinity(), d1 = -d0;
   for (const auto& it : items) d0 = std::min(d0, it.depth), d1 = std::max(d1, it.depth);
 
-  cairo_surface_t* surface = cairo_image_surface_create(CAIRO_FORMAT_RGB24, v.width_px, v.height_px);
-  cairo_t* cr = cairo_create(surface);
-  cairo_set_source_rgb(cr, 1.0, 1.0, 1.0);
-  cairo_paint(cr);
-  cairo_set_line_cap(cr, CAIRO_LINE_CAP_ROUND);
-  for (const Item& it : items) {
-    // Farther things a little paler: a cue of depth in an orthographic view.
-    const double fade = d1 > d0 ? 0.25 * (d1 - it.depth) / (d1 - d0) : 0.0;
-    const auto rgb = [&](int c) {
-      const double r = ((c >> 16) & 255) / 255.0, g = ((c >> 8) & 255) / 255.0, b = (c & 255) / 255.0;
-      return std::array<double, 3>{r + (1.0 - r) * fade, g + (1.0 - g) * fade, b + (1.0 - b) * fade};
-    };
-    if (it.sphere) {
-      const auto& s = v.spheres[it.index];
-      const auto c = px(screen(s.center_m));
-      const double r = std::max(s.radius_m * scale, 0.5);
-      const auto col = rgb(s.color);
-      // Lit from the upper left: a radial gradient from a highlight to the rim.
-      cairo_pattern_t* shade = cairo_pattern_create_radial(c[0] - 0.35 * r, c[1] - 0.35 * r, 0.1 * r, c[0], c[1], r);
-      cairo_pattern_add_color_stop_rgb(shade, 0.0, std::min(1.0, col[0] + 0.15), std::min(1.0, col[1] + 0.15),
-                                       std::min(1.0, col[2] + 0.15));
-      cairo_pattern_add_color_stop_rgb(shade, 1.0, 0.5 * col[0], 0.5 * col[1], 0.5 * col[2]);
-      cairo_set_source(cr, shade);
-      cairo_arc(cr, c[0], c[1], r, 0.0, 2.0 * M_PI);
-      cairo_fill(cr);
-      cairo_pattern_destroy(shade);
-    } else {
-      const auto& g = v.segments[it.index];
-      const auto a = px(screen(g.a_m)), b = px(screen(g.b_m));
-      const auto col = rgb(g.color);
-      cairo_set_source_rgb(cr, col[0], col[1], col[2]);
-      cairo_set_line_width(cr, g.width_px);
-      cairo_move_to(cr, a[0], a[1]);
-      cairo_line_to(cr, b[0], b[1]);
-      cairo_stroke(cr);
+  writeCairoPng(path, v.width_px, v.height_px, [&](cairo_t* cr) {
+    cairo_set_source_rgb(cr, 1.0, 1.0, 1.0);
+    cairo_paint(cr);
+    cairo_set_line_cap(cr, CAIRO_LINE_CAP_ROUND);
+    for (const Item& it : items) {
+      // Farther things a little paler: a cue of depth in an orthographic view.
+      const double fade = d1 > d0 ? 0.25 * (d1 - it.depth) / (d1 - d0) : 0.0;
+      const auto rgb = [&](int c) {
+        const double r = ((c >> 16) & 255) / 255.0, g = ((c >> 8) & 255) / 255.0, b = (c & 255) / 255.0;
+        return std::array<double, 3>{r + (1.0 - r) * fade, g + (1.0 - g) * fade, b + (1.0 - b) * fade};
+      };
+      if (it.sphere) {
+        const auto& s = v.spheres[it.index];
+        const auto c = px(screen(s.center_m));
+        const double r = std::max(s.radius_m * scale, 0.5);
+        const auto col = rgb(s.color);
+        // Lit from the upper left: a radial gradient from a highlight to the rim.
+        cairo_pattern_t* shade = cairo_pattern_create_radial(c[0] - 0.35 * r, c[1] - 0.35 * r, 0.1 * r, c[0], c[1], r);
+        cairo_pattern_add_color_stop_rgb(shade, 0.0, std::min(1.0, col[0] + 0.15), std::min(1.0, col[1] + 0.15),
+                                         std::min(1.0, col[2] + 0.15));
+        cairo_pattern_add_color_stop_rgb(shade, 1.0, 0.5 * col[0], 0.5 * col[1], 0.5 * col[2]);
+        cairo_set_source(cr, shade);
+        cairo_arc(cr, c[0], c[1], r, 0.0, 2.0 * M_PI);
+        cairo_fill(cr);
+        cairo_pattern_destroy(shade);
+      } else {
+        const auto& g = v.segments[it.index];
+        const auto a = px(screen(g.a_m)), b = px(screen(g.b_m));
+        const auto col = rgb(g.color);
+        cairo_set_source_rgb(cr, col[0], col[1], col[2]);
+        cairo_set_line_width(cr, g.width_px);
+        cairo_move_to(cr, a[0], a[1]);
+        cairo_line_to(cr, b[0], b[1]);
+        cairo_stroke(cr);
+      }
     }
-  }
-  if (!v.title.empty()) {
-    cairo_select_font_face(cr, "DejaVu Sans", CAIRO_FONT_SLANT_NORMAL, CAIRO_FONT_WEIGHT_NORMAL);
-    cairo_set_font_size(cr, 17.0);
-    cairo_text_extents_t e;
-    cairo_text_extents(cr, v.title.c_str(), &e);
-    cairo_set_source_rgb(cr, 0.08, 0.08, 0.08);
-    cairo_move_to(cr, 0.5 * (v.width_px - e.x_advance), 26.0);
-    cairo_show_text(cr, v.title.c_str());
-  }
-  const cairo_status_t drawn = cairo_status(cr);
-  cairo_destroy(cr);
-  std::string png;
-  const cairo_status_t written =
-      drawn == CAIRO_STATUS_SUCCESS ? cairo_surface_write_to_png_stream(surface, appendBytes, &png) : drawn;
-  cairo_surface_destroy(surface);
-  if (written != CAIRO_STATUS_SUCCESS)
-    throw std::runtime_error("view " + path.string() + ": cairo: " + cairo_status_to_string(written));
-  writeTextAtomic(path, png);
+    if (!v.title.empty()) {
+      cairo_select_font_face(cr, "DejaVu Sans", CAIRO_FONT_SLANT_NORMAL, CAIRO_FONT_WEIGHT_NORMAL);
+      cairo_set_font_size(cr, 17.0);
+      cairo_text_extents_t e;
+      cairo_text_extents(cr, v.title.c_str(), &e);
+      cairo_set_source_rgb(cr, 0.08, 0.08, 0.08);
+      cairo_move_to(cr, 0.5 * (v.width_px - e.x_advance), 26.0);
+      cairo_show_text(cr, v.title.c_str());
+    }
+  });
 }
 
 }  // namespace gabion::bridge

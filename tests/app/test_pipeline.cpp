@@ -13,6 +13,7 @@
 
 #include "bridge/law_file.hpp"
 #include "tests/support/run_gabion.hpp"
+#include "tests/support/small_cell.hpp"
 
 using gabion::testing::runGabion;
 using gabion::testing::scratchDir;
@@ -34,16 +35,7 @@ std::string readText(const fs::path& p) {
 // The small chain's files: cell, lab tests, wall, capacity and design cases,
 // and a law file whose material 'small' the pipeline replaces.
 void writeSmallChain(const fs::path& dir) {
-  writeFile(dir / "cell.json", R"({"format": "gabion.case/1", "kind": "micro.cell", "edge_m": 0.3, "seed": 3,
- "rock": {"density_kg_m3": 2600, "normal_stiffness_N_m": 1e6, "shear_stiffness_N_m": 2.5e5, "friction": 0.5,
-          "local_damping": 0.1, "viscous_damping_ratio": 0.1},
- "blocks": {"grading": {"sieve_m": [0.06, 0.075, 0.09], "passing_percent": [0, 50, 100]}},
- "netting": {"contact": {"normal_stiffness_N_m": 1e6, "shear_stiffness_N_m": 2.5e5, "friction": 0.5, "local_damping": 0.1}},
- "fill": {"max_duration_s": 0.35, "friction": 0.1},
- "vibration": {"max_duration_s": 0.1, "check_interval_s": 0.05},
- "closing": {"max_duration_s": 0.1},
- "standing": {"max_duration_s": 0.1},
- "run": {"output_interval_s": 0.05, "series_interval_s": 0.005}})");
+  writeFile(dir / "cell.json", gabion::testing::smallCellCase());
   const std::string head = R"({"format": "gabion.case/1", "cell": "replaced.h5", )";
   writeFile(
       dir / "cc.json",
