@@ -122,6 +122,19 @@ std::string stageKey(const json& case_value, const std::vector<fs::path>& inputs
   return fitting::sha256Hex(text);
 }
 
+/// Where the pipeline is: stages done of all, and since when (for the
+/// progress lines on a terminal).
+struct StageClock {
+  int done = 0, total = 0;
+  std::chrono::steady_clock::time_point start = std::chrono::steady_clock::now();
+  std::string prefix() const {
+    const double s = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+    std::ostringstream o;
+    o << "pipeline [" << done + 1 << "/" << total << ", " << std::fixed << std::setprecision(0) << s << " s]";
+    return o.str();
+  }
+};
+
 /// Runs one stage through its kind's public CaseKind, in its own folder:
 /// the case written to `dir/case.json` (with the pipeline's --set lines for
 /// this stage applied), the summary beside it, and `stage.json` written last
@@ -129,7 +142,7 @@ std::string stageKey(const json& case_value, const std::vector<fs::path>& inputs
 /// summary says ok is not run again.
 StageResult runStage(const std::string& name, const std::string& kind, json case_value,
                      const std::vector<fs::path>& inputs, const std::vector<std::string>& settings,
-                     const bridge::RunContext& parent, const fs::path& dir,
+                     const bridge::RunContext& parent, const fs::path& dir, StageClock& clock,
                      const std::optional<fs::path>& law = std::nullopt) {
   StageResult out;
   out.name = name;
@@ -156,7 +169,9 @@ StageResult runStage(const std::string& name, const std::string& kind, json case
         out.summary = std::move(summary);
         out.reused = true;
         out.wall_time_s = st.value("wall_time_s", 0.0);
-        if (parent.progress) std::printf("pipeline: %s: unchanged, reused (%s)\n", name.c_str(), dir.c_str());
+        if (parent.progress)
+          std::printf("%s %s: unchanged, reused (%s)\n", clock.prefix().c_str(), name.c_str(), dir.c_str());
+        ++clock.done;
         return out;
       }
     } catch (const std::exception&) {
@@ -171,7 +186,7 @@ StageResult runStage(const std::string& name, const std::string& kind, json case
   ctx.outdir = dir;
   ctx.case_file = doc.file();
   ctx.law_file = law;
-  if (parent.progress) std::printf("pipeline: %s (%s) ...\n", name.c_str(), kind.c_str());
+  if (parent.progress) std::printf("%s %s (%s) ...\n", clock.prefix().c_str(), name.c_str(), kind.c_str());
   std::fflush(stdout);
   bridge::RunOutcome ran = k.run(doc, ctx);
   out.wall_time_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
@@ -187,7 +202,8 @@ StageResult runStage(const std::string& name, const std::string& kind, json case
     throw StageFailure("pipeline stage '" + name + "' (" + dir.string() + "): " + ran.message);
   bridge::writeJsonAtomic(dir / "stage.json", {{"key", key}, {"wall_time_s", out.wall_time_s}});
   out.summary = std::move(summary);
-  if (parent.progress) std::printf("pipeline: %s done in %.1f s\n", name.c_str(), out.wall_time_s);
+  if (parent.progress) std::printf("%s %s done in %.1f s\n", clock.prefix().c_str(), name.c_str(), out.wall_time_s);
+  ++clock.done;
   return out;
 }
 
@@ -423,6 +439,9 @@ bridge::RunOutcome runStages(const JsonDocument& doc, const bridge::RunContext& 
     return it == c.settings.end() ? std::vector<std::string>{} : it->second;
   };
   const fs::path out = ctx.outdir;
+  StageClock clock;
+  clock.total = (c.cell_is_file ? 0 : c.replicates) + static_cast<int>(kTests.size()) + 1 +
+                static_cast<int>(c.velocities_m_s.size()) + (c.capacity_case ? 1 : 0) + (c.design_case ? 1 : 0);
 
   // 1. The cell(s): generated from the micro.cell case (consecutive seeds for
   //    replicates), or the cell file given.
@@ -443,7 +462,7 @@ bridge::RunOutcome runStages(const JsonDocument& doc, const bridge::RunContext& 
       one["seed"] = c.seed + static_cast<unsigned long>(k);
       const std::string name = c.replicates > 1 ? "1_cell_seed" + std::to_string(c.seed + k) : "1_cell";
       stages.push_back(runStage("cell" + (c.replicates > 1 ? " (seed " + std::to_string(c.seed + k) + ")" : ""),
-                                "micro.cell", one, {}, settingsOf("cell"), ctx, out / name));
+                                "micro.cell", one, {}, settingsOf("cell"), ctx, out / name, clock));
       cells.push_back(fs::absolute(out / name / "cell.h5"));
       if (k == 0) cell_summary = stages.back().summary;
     }
@@ -467,7 +486,7 @@ bridge::RunOutcome runStages(const JsonDocument& doc, const bridge::RunContext& 
       tc["velocities_m_s"] = c.uci_velocities_m_s;
     }
     const fs::path dir = out / (std::to_string(n) + "_" + t);
-    stages.push_back(runStage(t, kTestKind.at(t), tc, cells, settingsOf(t), ctx, dir));
+    stages.push_back(runStage(t, kTestKind.at(t), tc, cells, settingsOf(t), ctx, dir, clock));
     lab[t] = stages.back();
   }
   double mass_kg = num(cell_summary, "mass_kg");
@@ -478,7 +497,7 @@ bridge::RunOutcome runStages(const JsonDocument& doc, const bridge::RunContext& 
   for (const auto& [t, st] : lab)
     for (const auto& r : labResults(st)) curve_files.push_back(r.first);
   stages.push_back(runStage("fit", "fit", fitCase(c, lab, edge_m, mass_kg, porosity), curve_files, settingsOf("fit"),
-                            ctx, out / "3_fit"));
+                            ctx, out / "3_fit", clock));
   const StageResult fit = stages.back();
 
   // The structure's law file with the calibrated material replaced.
@@ -505,19 +524,19 @@ bridge::RunOutcome runStages(const JsonDocument& doc, const bridge::RunContext& 
     sc["boulder"]["velocity_m_s"] = v;
     sc.erase("impacts");
     const std::string name = "4_impact_" + fmt(v) + "_m_s";
-    stages.push_back(
-        runStage("impact at " + fmt(v) + " m/s", "macro.impact", sc, {}, settingsOf("impact"), ctx, out / name, law));
+    stages.push_back(runStage("impact at " + fmt(v) + " m/s", "macro.impact", sc, {}, settingsOf("impact"), ctx,
+                              out / name, clock, law));
     impacts.push_back(stages.back());
   }
   std::optional<StageResult> capacity, design;
   if (c.capacity_case) {
     stages.push_back(runStage("capacity", "macro.capacity", absolutePaths(loadJson(*c.capacity_case), *c.capacity_case),
-                              {}, settingsOf("capacity"), ctx, out / "5_capacity", law));
+                              {}, settingsOf("capacity"), ctx, out / "5_capacity", clock, law));
     capacity = stages.back();
   }
   if (c.design_case) {
     stages.push_back(runStage("design", "macro.design", absolutePaths(loadJson(*c.design_case), *c.design_case), {},
-                              settingsOf("design"), ctx, out / "6_design", law));
+                              settingsOf("design"), ctx, out / "6_design", clock, law));
     design = stages.back();
   }
 
