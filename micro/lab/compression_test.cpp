@@ -63,11 +63,6 @@ CompressionCase parseCase(const bridge::JsonDocument& doc, bool confined) {
   double back = 0.0;
   for (const double s : c.unload_at) back += 2.0 * 0.55 * s;
   c.setup = parseLabSetup(root, 8.0, 1.2 * (travel + back) / c.velocity_m_s, 1e-3);
-  // A netting node pinched between a stone and a plate (or the other cell)
-  // is squeezed past half its radius under the test's load at the cell's
-  // contact stiffness; the check stays one against tunnelling (a centre
-  // passing the other sphere's surface).
-  if (!root.has("run") || !root.object("run").has("max_overlap_ratio")) c.setup.run.max_overlap_ratio = 1.0;
   return c;
 }
 

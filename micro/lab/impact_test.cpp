@@ -53,10 +53,6 @@ ImpactCase parseCase(const bridge::JsonDocument& doc) {
   // An impact lasts some tens of milliseconds; the series every 0.1 ms. No
   // mass scaling by default: the test is dynamic.
   c.setup = parseLabSetup(root, 1.0, 0.15, 1e-4);
-  // A netting node pinched between the boulder and a stone is squeezed past
-  // half its radius at the cell's contact stiffness; the check stays one
-  // against tunnelling (a centre passing the other sphere's surface).
-  if (!root.has("run") || !root.object("run").has("max_overlap_ratio")) c.setup.run.max_overlap_ratio = 1.0;
   return c;
 }
 

@@ -140,6 +140,12 @@ LabSetup parseLabSetup(const JsonReader& root, double default_mass_scale, double
     s.run.series_interval_s = std::min(default_series_s, default_duration_s);
     s.run.output_interval_s = default_duration_s / 50.0;
   }
+  // The overlap check at 1 (the centre of one sphere at the other's surface)
+  // unless given: a netting node pinched between a stone and a plate, the
+  // boulder or the other cell is squeezed past half its radius under a
+  // test's load at the cell's contact stiffness; the check stays one against
+  // tunnelling (docs/lab.md).
+  if (!root.has("run") || !root.object("run").has("max_overlap_ratio")) s.run.max_overlap_ratio = 1.0;
   return s;
 }
 

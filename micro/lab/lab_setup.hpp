@@ -56,7 +56,7 @@ struct LabSetup {
 
 /// Reads "cell", "replicates", "materials", "contact_pairs", "plates", "netting_mass_scale",
 /// "gravity_m_s2" and "run" (duration default_duration_s, series every
-/// default_series_s unless given).
+/// default_series_s, overlap check at 1 unless given).
 LabSetup parseLabSetup(const bridge::JsonReader& root, double default_mass_scale, double default_duration_s,
                        double default_series_s);
 

@@ -39,11 +39,6 @@ ShearCase parseCase(const bridge::JsonDocument& doc) {
   if (const auto q = root.optionalObject("quasi_static"))
     c.max_kinetic_ratio = q->number("max_kinetic_ratio", c.max_kinetic_ratio, Check::Positive);
   c.setup = parseLabSetup(root, 8.0, c.settle_s + 1.2 * c.displacement_m / c.speed_m_s, 1e-3);
-  // A netting node pinched between a stone and a plate (or the other cell)
-  // is squeezed past half its radius under the test's load at the cell's
-  // contact stiffness; the check stays one against tunnelling (a centre
-  // passing the other sphere's surface).
-  if (!root.has("run") || !root.object("run").has("max_overlap_ratio")) c.setup.run.max_overlap_ratio = 1.0;
   return c;
 }
 
