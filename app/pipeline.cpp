@@ -14,6 +14,7 @@
 #include "bridge/law_file.hpp"
 #include "bridge/output.hpp"
 #include "bridge/plot.hpp"
+#include "bridge/units.hpp"
 #include "fitting/sha256.hpp"
 #include "gabion_version.hpp"
 
@@ -400,21 +401,12 @@ class Report {
   std::vector<std::string> figures_, warnings_;
 };
 
-// Units for the parameter table.
+// A parameter's unit and value as the report and the console show them.
 std::string unitOf(const std::string& name) {
-  const auto pos = name.rfind('_');
-  const std::string u = pos == std::string::npos ? "" : name.substr(pos + 1);
-  if (u == "m" && name.find("_N_m") != std::string::npos) return "kN/m";
-  if (name.size() > 4 && name.substr(name.size() - 4) == "_N_m") return "kN/m";
-  if (u == "N") return "kN";
-  if (u == "m") return "mm";
-  return "-";
+  return bridge::displayUnit(name).unit;
 }
 double inUnit(const std::string& name, double v) {
-  const std::string u = unitOf(name);
-  if (u == "kN/m" || u == "kN") return v / 1e3;
-  if (u == "mm") return v * 1e3;
-  return v;
+  return bridge::displayUnit(name).scale * v;
 }
 
 // A sub-case's file references made absolute (its copy runs in another folder).

@@ -11,6 +11,7 @@
 #include "bridge/law_file.hpp"
 #include "bridge/output.hpp"
 #include "bridge/plot.hpp"
+#include "bridge/units.hpp"
 #include "fitting/case_input.hpp"
 #include "fitting/sha256.hpp"
 #include "gabion_version.hpp"
@@ -186,27 +187,11 @@ std::vector<PathGrid> loadGrids(const TestSpec& t, std::size_t grid_points) {
   return grids;
 }
 
-// A dataset name and its engineers' unit on a chart: "displacement_m" ->
-// {"displacement (mm)", 1e3}, "force_N" -> {"force (kN)", 1e-3}; other units as they are.
+// A dataset name and its engineers' unit on a chart (bridge::displayUnit):
+// "displacement_m" -> {"displacement (mm)", 1e3}, "force_N" -> {"force (kN)", 1e-3}.
 std::pair<std::string, double> axisOf(const std::string& name) {
-  const auto ends = [&](const std::string& tail) {
-    return name.size() > tail.size() && name.compare(name.size() - tail.size(), tail.size(), tail) == 0;
-  };
-  const auto stemOf = [&](std::size_t tail) {
-    std::string stem = name.substr(0, name.size() - tail);
-    std::replace(stem.begin(), stem.end(), '_', ' ');
-    return stem;
-  };
-  if (ends("_m_s")) return {stemOf(4) + " (m/s)", 1.0};
-  if (ends("_N_m")) return {stemOf(4) + " (kN/m)", 1e-3};
-  const auto pos = name.rfind('_');
-  if (pos == std::string::npos) return {name, 1.0};
-  std::string stem = name.substr(0, pos);
-  std::replace(stem.begin(), stem.end(), '_', ' ');
-  const std::string unit = name.substr(pos + 1);
-  if (unit == "m") return {stem + " (mm)", 1e3};
-  if (unit == "N") return {stem + " (kN)", 1e-3};
-  return {stem + " (" + unit + ")", 1.0};
+  const bridge::DisplayUnit u = bridge::displayUnit(name);
+  return {u.stem + " (" + u.unit + ")", u.scale};
 }
 
 void plotFit(const fs::path& file, const TestSpec& t, const std::vector<PathGrid>& grids, const ModelFit& fit,
