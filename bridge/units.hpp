@@ -12,9 +12,9 @@ namespace gabion::bridge {
 /// How a quantity is shown: its name without the unit, the unit, and the
 /// factor from SI to it.
 struct DisplayUnit {
-  std::string stem;   ///< "displacement", "tangential stiffness"
-  std::string unit;   ///< "mm", "kN", "kN/m", "m/s", "s", "J", "Pa", "kg"; "-" when dimensionless
-  double scale = 1.0; ///< shown value = scale x SI value
+  std::string stem;    ///< "displacement", "tangential stiffness"
+  std::string unit;    ///< "mm", "kN", "kN/m", "m/s", "s", "J", "Pa", "kg"; "-" when dimensionless
+  double scale = 1.0;  ///< shown value = scale x SI value
 };
 
 inline DisplayUnit displayUnit(const std::string& name) {
@@ -25,7 +25,7 @@ inline DisplayUnit displayUnit(const std::string& name) {
   };
   // Longest suffixes first: "_N_m" before "_m", "_m_s" before "_s".
   static const Rule rules[] = {{"_m_s", "m/s", 1.0}, {"_N_m", "kN/m", 1e-3}, {"_N", "kN", 1e-3}, {"_m", "mm", 1e3},
-                               {"_s", "s", 1.0},     {"_J", "J", 1.0},        {"_Pa", "Pa", 1.0}, {"_kg", "kg", 1.0}};
+                               {"_s", "s", 1.0},     {"_J", "J", 1.0},       {"_Pa", "Pa", 1.0}, {"_kg", "kg", 1.0}};
   const auto spaced = [](std::string s) {
     std::replace(s.begin(), s.end(), '_', ' ');
     return s;
