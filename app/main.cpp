@@ -39,9 +39,22 @@ struct Options {
 
 // Loads the case, applies --set, finds its kind and validates every key.
 // Throws InputError; writes nothing.
+// --law sets the case's "law_file" (in place of embedded "laws"): the case
+// is checked with the laws it will run with.
 std::pair<JsonDocument, const gabion::bridge::CaseKind*> loadAndCheck(const Options& o) {
   JsonDocument doc = JsonDocument::load(o.case_file);
   for (const auto& s : o.sets) doc.applySet(s);
+  if (!o.law_file.empty()) {
+    nlohmann::json value = doc.json();
+    if (!value.contains("law_file") && !value.contains("laws"))
+      throw InputError(o.case_file, "",
+                       "--law " + o.law_file + ": this " + value.value("kind", std::string("")) +
+                           " case reads no laws (only the macro cases do)");
+    if (!fs::is_regular_file(o.law_file)) throw InputError(o.law_file, "", "--law: no such file");
+    value.erase("laws");
+    value["law_file"] = fs::absolute(o.law_file).string();
+    doc = JsonDocument(value, o.case_file);
+  }
   const auto* kind = &gabion::app::checkCase(doc);
   return {std::move(doc), kind};
 }
@@ -62,7 +75,6 @@ int commandRun(const Options& o) {
   ctx.threads = o.threads;
   ctx.case_file = o.case_file;
   ctx.progress = !o.quiet && isatty(STDOUT_FILENO) != 0;
-  if (!o.law_file.empty()) ctx.law_file = o.law_file;
   // The effective case for summary.json, kept as text so that the kind may
   // free the document while it runs.
   const std::string case_text = doc.json().dump();
@@ -100,7 +112,8 @@ int commandRun(const Options& o) {
   std::cout << "results: " << fs::absolute(outdir).string() << "\n";
   for (const auto& entry : fs::directory_iterator(outdir))
     if (entry.is_regular_file()) std::cout << "  " << entry.path().filename().string() << "\n";
-  if (!o.quiet && !outcome.report.empty()) std::cout << outcome.report;
+  std::cout << outcome.answer;
+  if (!o.quiet) std::cout << outcome.report;
   return kExitOk;
 }
 
@@ -115,13 +128,14 @@ int main(int argc, char** argv) {
   auto* run = app.add_subcommand("run", "Run a case and write results into OUTDIR");
   run->add_option("case", o.case_file, "case file (JSON)")->required();
   run->add_option("-o,--output", o.outdir, "output folder (default: results/<case name>)");
-  run->add_option("--law", o.law_file, "law file (gabion.law/2, or /1) overriding the case's laws");
+  run->add_option("--law", o.law_file, "law file (gabion.law/2, or /1) replacing the case's laws (macro cases)");
   run->add_option("--set", o.sets, "override a case value: path.to.key=value (repeatable)");
   run->add_option("--threads", o.threads, "worker threads")->check(CLI::Range(1, 256));
   run->add_flag("-q,--quiet", o.quiet, "no progress line and no timing report");
 
   auto* check = app.add_subcommand("check", "Validate a case without running it");
   check->add_option("case", o.case_file, "case file (JSON)")->required();
+  check->add_option("--law", o.law_file, "law file (gabion.law/2, or /1) replacing the case's laws");
   check->add_option("--set", o.sets, "override a case value: path.to.key=value (repeatable)");
 
   auto* kinds = app.add_subcommand("kinds", "List the case kinds this build runs");

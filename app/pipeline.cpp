@@ -15,6 +15,7 @@
 #include "bridge/output.hpp"
 #include "bridge/plot.hpp"
 #include "bridge/units.hpp"
+#include "fitting/law_fit.hpp"
 #include "fitting/sha256.hpp"
 #include "gabion_version.hpp"
 
@@ -45,7 +46,7 @@ struct PipelineCase {
   fs::path structure_case;
   std::string material = "front";
   std::vector<double> velocities_m_s;
-  std::optional<fs::path> capacity_case, design_case;
+  std::optional<fs::path> sweep_case, capacity_case, design_case;
   std::map<std::string, std::vector<std::string>> settings;  ///< per stage: --set lines
 };
 
@@ -74,16 +75,18 @@ PipelineCase readPipeline(const JsonDocument& doc) {
   c.structure_case = relative(doc, st.string("case"));
   c.material = st.string("material", c.material);
   c.velocities_m_s = st.numbers("velocities_m_s", Check::Positive, 1);
+  if (root.has("sweep")) c.sweep_case = relative(doc, root.string("sweep"));
   if (root.has("capacity")) c.capacity_case = relative(doc, root.string("capacity"));
   if (root.has("design")) c.design_case = relative(doc, root.string("design"));
   if (root.has("stage_settings")) {
     const json& all = root.raw("stage_settings");
-    const std::vector<std::string> stages = {"cell", "cc", "uc", "uci", "shear", "fit", "impact", "capacity", "design"};
+    const std::vector<std::string> stages = {"cell", "cc",     "uc",    "uci",      "shear",
+                                             "fit",  "impact", "sweep", "capacity", "design"};
     if (!all.is_object()) root.fail("stage_settings", "expected an object: stage name -> list of settings");
     for (const auto& [name, v] : all.items()) {
       if (std::find(stages.begin(), stages.end(), name) == stages.end())
         throw bridge::InputError(doc.file(), "/stage_settings/" + name,
-                                 "unknown stage (cell, cc, uc, uci, shear, fit, impact, capacity, design)");
+                                 "unknown stage (cell, cc, uc, uci, shear, fit, impact, sweep, capacity, design)");
       bool ok = v.is_array();
       for (const auto& line : v) ok = ok && line.is_string() && line.get<std::string>().find('=') != std::string::npos;
       if (!ok)
@@ -123,16 +126,64 @@ std::string stageKey(const json& case_value, const std::vector<fs::path>& inputs
   return fitting::sha256Hex(text);
 }
 
-/// Where the pipeline is: stages done of all, and since when (for the
-/// progress lines on a terminal).
+/// Where the pipeline is: stages done of all, since when, and how long the
+/// rest should take (for the progress lines on a terminal). The ETA counts
+/// the stages whose kind estimates its cost (the micro lab tests, known once
+/// the cell exists) in body-steps, at the seconds per body-step measured on
+/// those already run (at first a rate typical of the cell's tests on two
+/// cores); the fit and macro stages take about a second together.
 struct StageClock {
   int done = 0, total = 0;
   std::chrono::steady_clock::time_point start = std::chrono::steady_clock::now();
-  std::string prefix() const {
+  std::map<std::string, double> estimated;  ///< body-steps, by stage name, where its kind estimates them
+  std::map<std::string, double> pending;    ///< those of the stages still to run
+  std::string current;                      ///< the stage running
+  std::chrono::steady_clock::time_point current_start = start;
+  double measured_s = 0.0, measured_body_steps = 0.0;
+  // (the default pipeline's four tests on two cores: 272 s for 7.75e9
+  // estimated body-steps, 2.4e-8 to 4.9e-8 s each; summary.json, stages)
+  static constexpr double kInitialSecondsPerBodyStep = 3.5e-8;
+
+  double secondsPerBodyStep() const {
+    return measured_body_steps > 0.0 ? measured_s / measured_body_steps : kInitialSecondsPerBodyStep;
+  }
+  /// Seconds left, given the running stage's own estimate of its remaining
+  /// time (`run_eta_s`, < 0 when it has none); NaN while nothing is estimated.
+  double eta(double run_eta_s) const {
+    if (pending.empty()) return NAN;
+    double left = 0.0;
+    for (const auto& [name, body_steps] : pending) {
+      double t = body_steps * secondsPerBodyStep();
+      if (name == current) {
+        t -= std::chrono::duration<double>(std::chrono::steady_clock::now() - current_start).count();
+        t = std::max(t, run_eta_s);
+      }
+      left += std::max(t, 0.0);
+    }
+    return left;
+  }
+  std::string prefix(double run_eta_s = -1.0) const {
     const double s = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
     std::ostringstream o;
-    o << "pipeline [" << done + 1 << "/" << total << ", " << std::fixed << std::setprecision(0) << s << " s]";
+    o << "pipeline [" << done + 1 << "/" << total << ", " << std::fixed << std::setprecision(0) << s << " s";
+    const double left = eta(run_eta_s);
+    if (std::isfinite(left)) o << ", ETA " << left << " s";
+    o << "]";
     return o.str();
+  }
+  void begin(const std::string& name) {
+    current = name;
+    current_start = std::chrono::steady_clock::now();
+  }
+  /// The stage is over: its time calibrates the rate when it ran (not reused).
+  void end(const std::string& name, bool ran, double wall_s) {
+    const auto it = pending.find(name);
+    if (it != pending.end()) {
+      if (ran) measured_s += wall_s, measured_body_steps += it->second;
+      pending.erase(it);
+    }
+    current.clear();
+    ++done;
   }
 };
 
@@ -157,9 +208,14 @@ StageResult runStage(const std::string& name, const std::string& kind, json case
     case_value = staged.json();
   }
   std::vector<fs::path> all = inputs;
-  if (law) all.push_back(*law);
+  if (law) {  // (the macro stages: the calibrated laws in place of the case's)
+    case_value.erase("laws");
+    case_value["law_file"] = law->string();
+    all.push_back(*law);
+  }
   const std::string key = stageKey(case_value, all);
   const auto t0 = std::chrono::steady_clock::now();
+  clock.begin(name);
   if (fs::exists(dir / "stage.json") && fs::exists(dir / "summary.json")) {
     try {
       std::ifstream in(dir / "stage.json");
@@ -172,7 +228,7 @@ StageResult runStage(const std::string& name, const std::string& kind, json case
         out.wall_time_s = st.value("wall_time_s", 0.0);
         if (parent.progress)
           std::printf("%s %s: unchanged, reused (%s)\n", clock.prefix().c_str(), name.c_str(), dir.c_str());
-        ++clock.done;
+        clock.end(name, false, out.wall_time_s);
         return out;
       }
     } catch (const std::exception&) {
@@ -186,7 +242,7 @@ StageResult runStage(const std::string& name, const std::string& kind, json case
   bridge::RunContext ctx = parent;
   ctx.outdir = dir;
   ctx.case_file = doc.file();
-  ctx.law_file = law;
+  ctx.progress_context = [&clock](double run_eta_s) { return clock.prefix(run_eta_s); };
   if (parent.progress) std::printf("%s %s (%s) ...\n", clock.prefix().c_str(), name.c_str(), kind.c_str());
   std::fflush(stdout);
   bridge::RunOutcome ran = k.run(doc, ctx);
@@ -204,7 +260,7 @@ StageResult runStage(const std::string& name, const std::string& kind, json case
   bridge::writeJsonAtomic(dir / "stage.json", {{"key", key}, {"wall_time_s", out.wall_time_s}});
   out.summary = std::move(summary);
   if (parent.progress) std::printf("%s %s done in %.1f s\n", clock.prefix().c_str(), name.c_str(), out.wall_time_s);
-  ++clock.done;
+  clock.end(name, true, out.wall_time_s);
   return out;
 }
 
@@ -433,7 +489,8 @@ bridge::RunOutcome runStages(const JsonDocument& doc, const bridge::RunContext& 
   const fs::path out = ctx.outdir;
   StageClock clock;
   clock.total = (c.cell_is_file ? 0 : c.replicates) + static_cast<int>(kTests.size()) + 1 +
-                static_cast<int>(c.velocities_m_s.size()) + (c.capacity_case ? 1 : 0) + (c.design_case ? 1 : 0);
+                static_cast<int>(c.velocities_m_s.size()) + (c.sweep_case ? 1 : 0) + (c.capacity_case ? 1 : 0) +
+                (c.design_case ? 1 : 0);
 
   // 1. The cell(s): generated from the micro.cell case (consecutive seeds for
   //    replicates), or the cell file given.
@@ -463,7 +520,7 @@ bridge::RunOutcome runStages(const JsonDocument& doc, const bridge::RunContext& 
 
   // 2. The virtual lab tests on the cell(s).
   std::map<std::string, StageResult> lab;
-  int n = 2;
+  std::map<std::string, json> test_cases;
   for (const auto& t : kTests) {
     json tc = absolutePaths(loadJson(c.tests.at(t)), c.tests.at(t));
     if (cells.size() == 1) {
@@ -477,8 +534,16 @@ bridge::RunOutcome runStages(const JsonDocument& doc, const bridge::RunContext& 
       tc.erase("velocity_m_s");
       tc["velocities_m_s"] = c.uci_velocities_m_s;
     }
-    const fs::path dir = out / (std::to_string(n) + "_" + t);
-    stages.push_back(runStage(t, kTestKind.at(t), tc, cells, settingsOf(t), ctx, dir, clock));
+    test_cases[t] = tc;
+    // What it will cost, for the ETA (the stage's settings applied as it will run).
+    JsonDocument staged(tc, (out / ("2_" + t) / "case.json").string());
+    for (const auto& setting : settingsOf(t)) staged.applySet(setting);
+    if (const auto e = findKind(kTestKind.at(t))->estimate(staged))
+      clock.estimated[t] = clock.pending[t] = e->body_steps;
+  }
+  for (const auto& t : kTests) {
+    stages.push_back(
+        runStage(t, kTestKind.at(t), test_cases.at(t), cells, settingsOf(t), ctx, out / ("2_" + t), clock));
     lab[t] = stages.back();
   }
   double mass_kg = num(cell_summary, "mass_kg");
@@ -520,7 +585,12 @@ bridge::RunOutcome runStages(const JsonDocument& doc, const bridge::RunContext& 
                               out / name, clock, law));
     impacts.push_back(stages.back());
   }
-  std::optional<StageResult> capacity, design;
+  std::optional<StageResult> sweep, capacity, design;
+  if (c.sweep_case) {
+    stages.push_back(runStage("sweep", "macro.sweep", absolutePaths(loadJson(*c.sweep_case), *c.sweep_case), {},
+                              settingsOf("sweep"), ctx, out / "4_sweep", clock, law));
+    sweep = stages.back();
+  }
   if (c.capacity_case) {
     stages.push_back(runStage("capacity", "macro.capacity", absolutePaths(loadJson(*c.capacity_case), *c.capacity_case),
                               {}, settingsOf("capacity"), ctx, out / "5_capacity", clock, law));
@@ -587,8 +657,9 @@ bridge::RunOutcome runStages(const JsonDocument& doc, const bridge::RunContext& 
           {law_name, l.at("model").get<std::string>(), pname, unitOf(pname), fmt(inUnit(pname, v)), interval});
     }
     const double nrms = l.at("nrms").get<double>();
-    if (nrms > 0.1)
-      rep.warning(std::string(law_name) + " law: a poor fit (normalised RMS error " + fmt(nrms, 3) + " > 0.1)");
+    if (nrms > fitting::kPoorFitNrms)
+      rep.warning(std::string(law_name) + " law: a poor fit (normalised RMS error " + fmt(nrms, 3) + " > " +
+                  fmt(fitting::kPoorFitNrms) + ")");
   }
   rep.table({"law", "model", "parameter", "unit", "value", "95 % interval"}, rows);
   for (const char* law_name : {"axial", "lateral", "interface", "impact"})
@@ -628,6 +699,24 @@ bridge::RunOutcome runStages(const JsonDocument& doc, const bridge::RunContext& 
             rows);
   bridge::writePlotPng(out / "impact_force_time.png", force_plot);
   rep.figure(out / "impact_force_time.png", "impact_force_time.png", "Boulder force against time");
+  if (sweep) {
+    const json& o = sweep->summary.at("outcomes");
+    std::ostringstream t;
+    t << "<b>Design charts.</b> A sweep of " << sweep->summary.at("points").get<long long>() << " impacts (";
+    bool first = true;
+    for (const auto& [outcome, count] : o.items()) {
+      t << (first ? "" : ", ") << count.get<long long>() << " " << html(outcome);
+      first = false;
+    }
+    t << "), <code>4_sweep/sweep.csv</code>; perforated impacts are marked, and the sweep's limits drawn.";
+    rep.text(t.str());
+    for (const char* chart : {"chart_peak_force.png", "chart_penetration.png", "chart_back_face.png"})
+      if (fs::exists(out / "4_sweep" / chart))
+        rep.figure(out / "4_sweep" / chart, std::string("sweep_") + chart,
+                   std::string(chart) == "chart_peak_force.png"    ? "Peak force against impact energy"
+                   : std::string(chart) == "chart_penetration.png" ? "Penetration against impact energy"
+                                                                   : "Back-face displacement against impact energy");
+  }
   if (capacity) {
     rep.text("<b>Capacity.</b> " + html(capacity->summary.at("answer").get<std::string>()) + ".");
     rep.figure(out / "5_capacity" / "capacity.png", "capacity.png", "Capacity search: the impacts run");
@@ -655,6 +744,7 @@ bridge::RunOutcome runStages(const JsonDocument& doc, const bridge::RunContext& 
                           {"folder", st.dir.filename().string()},
                           {"reused", st.reused},
                           {"wall_time_s", st.wall_time_s}});
+    if (clock.estimated.count(st.name)) stage_list.back()["estimated_body_steps"] = clock.estimated.at(st.name);
     reused += st.reused ? 1 : 0;
   }
   res["stages"] = stage_list;
@@ -679,26 +769,14 @@ bridge::RunOutcome runStages(const JsonDocument& doc, const bridge::RunContext& 
 
   std::ostringstream console;
   console << "pipeline: fitted laws of '" << c.material << "' (95 % intervals):\n";
-  for (const char* law_name : {"axial", "lateral", "interface", "impact"}) {
-    const json& l = fj.at(law_name);
-    console << "  " << law_name << " (" << l.at("model").get<std::string>() << "):";
-    for (const auto& [pname, p] : l.at("parameters").items()) {
-      console << " " << pname << " " << fmt(inUnit(pname, p.at("value").get<double>())) << " " << unitOf(pname);
-      const json& iv =
-          p.contains("profile_95") && !p.at("profile_95").is_null() ? p.at("profile_95") : p.at("jacobian_95");
-      if (!iv.is_null())
-        console << " [" << fmt(inUnit(pname, iv[0].get<double>())) << ", " << fmt(inUnit(pname, iv[1].get<double>()))
-                << "]";
-      console << ";";
-    }
-    console << "\n";
-  }
+  for (const char* law_name : {"axial", "lateral", "interface", "impact"})
+    console << "  " << fitting::describeFit(law_name, fj.at(law_name)) << "\n";
   if (capacity) console << "pipeline: capacity: " << capacity->summary.at("answer").get<std::string>() << "\n";
   if (design) console << "pipeline: design: " << design->summary.at("answer").get<std::string>() << "\n";
   for (const auto& w : rep.warnings()) console << "pipeline: warning: " << w << "\n";
   console << "pipeline: report: " << (out / "report.html").string() << " (" << stages.size() << " stages, " << reused
           << " reused)\n";
-  result.report = console.str();
+  result.answer = console.str();
   return result;
 }
 
@@ -747,6 +825,7 @@ void checkPipeline(const JsonDocument& doc) {
   if (laws.materials.count(c.material) == 0)
     throw bridge::InputError(doc.file(), "/structure/material",
                              "no material '" + c.material + "' in the structure's law file");
+  if (c.sweep_case) check(*c.sweep_case, "macro.sweep", "/sweep");
   if (c.capacity_case) check(*c.capacity_case, "macro.capacity", "/capacity");
   if (c.design_case) check(*c.design_case, "macro.design", "/design");
 }
@@ -757,7 +836,7 @@ bridge::CaseKind pipelineKind() {
   return {"pipeline",
           "the calibration chain: generate the cell, run CC, UC, UCI and shear on it, fit every law, run the wall "
           "with them (impacts, capacity, design), write report.html",
-          checkPipeline, runPipeline};
+          checkPipeline, runPipeline, nullptr};
 }
 
 }  // namespace gabion::app

@@ -54,7 +54,7 @@ void impactTable(const std::string& law) {
   for (const char* kin : {"x-only", "3d"})
     for (int n : {5, 10, 15}) {
       const bridge::JsonDocument doc(wallCase(law, n, n, n, 0.2, kin), "bench");
-      macro::ImpactCase c = macro::readImpactCase(doc, std::nullopt, false);
+      macro::ImpactCase c = macro::readImpactCase(doc, false);
       const macro::Structure s = macro::buildCaseStructure(doc, c);
       macro::resolveAims(doc, c, s);
       c.run.relax = false;

@@ -16,6 +16,23 @@
 
 namespace gabion::bridge {
 
+/// What a run gets from the command line.
+struct RunContext {
+  std::filesystem::path outdir;     ///< existing output folder
+  int threads = 1;                  ///< --threads
+  bool progress = false;            ///< show a progress line
+  std::filesystem::path case_file;  ///< for provenance and messages
+  /// The kind may free the case document's parsed value once it has read it
+  /// (JsonDocument::releaseValue; a large particle case would otherwise keep
+  /// its DOM beside the engine). The caller then keeps its own copy.
+  bool may_release_case = false;
+  /// Set by a caller that runs this case as one part of a longer job (the
+  /// pipeline): given the remaining time of this run as its progress line
+  /// estimates it, returns the job's own words (its stage, rank, ETA) that
+  /// the line starts with. Called from the thread that shows the progress.
+  std::function<std::string(double run_eta_s)> progress_context;
+};
+
 /// Reports the progress of a long run as one line on a terminal
 /// (simulated time, steps/s, ETA). Silent when disabled; it also waits
 /// `delay_s` before the first line so that short runs print nothing.
@@ -23,6 +40,8 @@ class Progress {
  public:
   Progress() = default;
   Progress(bool enabled, std::string label, double delay_s = 2.0);
+  /// Enabled as ctx.progress, the line led by ctx.progress_context's words.
+  Progress(const RunContext& ctx, std::string label, double delay_s = 2.0);
   /// `done` and `total` in any unit (simulated seconds, evaluations); `steps`
   /// is the count the rate is given in. Cheap: checks the clock every 64 calls.
   void update(double done, double total, long long steps);
@@ -34,23 +53,11 @@ class Progress {
   bool enabled_ = false;
   bool printed_ = false;
   std::string label_;
+  std::function<std::string(double)> context_;
   double delay_s_ = 2.0;
   unsigned calls_ = 0;
   std::chrono::steady_clock::time_point start_ = std::chrono::steady_clock::now();
   std::chrono::steady_clock::time_point last_ = start_;
-};
-
-/// What a run gets from the command line.
-struct RunContext {
-  std::filesystem::path outdir;                   ///< existing output folder
-  std::optional<std::filesystem::path> law_file;  ///< --law override (macro cases)
-  int threads = 1;                                ///< --threads
-  bool progress = false;                          ///< show a progress line
-  std::filesystem::path case_file;                ///< for provenance and messages
-  /// The kind may free the case document's parsed value once it has read it
-  /// (JsonDocument::releaseValue; a large particle case would otherwise keep
-  /// its DOM beside the engine). The caller then keeps its own copy.
-  bool may_release_case = false;
 };
 
 /// What a run gives back. `results` is merged into summary.json.
@@ -58,11 +65,25 @@ struct RunOutcome {
   enum class Status { Ok, NumericalFailure };
   Status status = Status::Ok;
   std::string message;  ///< why it failed (step, time, bodies)
-  /// A short account for the person at the terminal (e.g. where the time
-  /// went), printed by the app after the list of result files unless
+  /// A short account for the person at the terminal of how the run went
+  /// (e.g. where the time went), printed by the app after the answer unless
   /// --quiet; everything in it is also in `results`. Empty: nothing.
   std::string report;
+  /// The run's answer in a few lines (the verdict, the fitted parameters,
+  /// the capacity), printed after the list of result files even with
+  /// --quiet; everything in it is also in `results`. Empty: nothing.
+  std::string answer;
   nlohmann::json results = nlohmann::json::object();
+};
+
+/// What a case will cost, estimated before it runs from its settings and
+/// input files: steps are an upper bound where a run may end early (a test
+/// that stops at its target). Summed over every run of the case.
+struct Estimate {
+  double bodies = 0.0;      ///< bodies of its largest run (spheres, block members counted one by one)
+  double steps = 0.0;       ///< time steps, over its runs
+  double body_steps = 0.0;  ///< bodies x steps, over its runs: what its wall time scales with
+  std::size_t runs = 0;     ///< engine runs (variants x replicates)
 };
 
 /// One case kind: `check` parses and validates everything without running
@@ -74,6 +95,9 @@ struct CaseKind {
   std::string description;
   std::function<void(const JsonDocument&)> check;
   std::function<RunOutcome(const JsonDocument&, const RunContext&)> run;
+  /// Its cost before it runs (absent, or nullopt: not known, e.g. a cell
+  /// that is not generated yet). Throws InputError as check does.
+  std::function<std::optional<Estimate>(const JsonDocument&)> estimate;
 };
 
 }  // namespace gabion::bridge

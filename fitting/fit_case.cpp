@@ -354,6 +354,7 @@ bridge::RunOutcome runCase(const bridge::JsonDocument& doc, const bridge::RunCon
   bridge::loadLawFile(ctx.outdir / "law.json");
 
   outcome.results["fit"] = results;
+  for (const auto& [name, entry] : results.items()) outcome.answer += "fit: " + describeFit(name, entry) + "\n";
   outcome.results["law_file"] = "law.json";
   outcome.results["law_status"] = provenance["status"];
   outcome.results["plots"] = plots;
@@ -366,7 +367,7 @@ bridge::RunOutcome runCase(const bridge::JsonDocument& doc, const bridge::RunCon
 
 bridge::CaseKind fitCaseKind() {
   return {"fit", "identify the macro cell laws (axial, lateral, interface, impact) from curves with NLopt", checkCase,
-          runCase};
+          runCase, nullptr};
 }
 
 }  // namespace gabion::fitting

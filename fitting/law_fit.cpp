@@ -2,8 +2,12 @@
 
 #include <chrono>
 #include <cmath>
+#include <iomanip>
 #include <limits>
 #include <set>
+#include <sstream>
+
+#include "bridge/units.hpp"
 
 namespace gabion::fitting {
 
@@ -124,6 +128,28 @@ nlohmann::json intervalJson(const Interval& iv) {
   return j;
 }
 }  // namespace
+
+std::string describeFit(const std::string& law, const nlohmann::json& entry) {
+  const auto show = [](double v) {
+    std::ostringstream o;
+    o << std::setprecision(4) << v;
+    return o.str();
+  };
+  const double nrms = entry.at("nrms").get<double>();
+  std::ostringstream line;
+  line << law << " (" << entry.at("model").get<std::string>() << ", nRMS " << std::setprecision(3) << nrms
+       << (nrms > kPoorFitNrms ? ", POOR FIT" : "") << "):";
+  for (const auto& [name, p] : entry.at("parameters").items()) {
+    const bridge::DisplayUnit u = bridge::displayUnit(name);
+    line << " " << u.stem << " " << show(u.scale * p.at("value").get<double>());
+    const nlohmann::json& iv =
+        p.contains("profile_95") && !p.at("profile_95").is_null() ? p.at("profile_95") : p.at("jacobian_95");
+    if (!iv.is_null())
+      line << " [" << show(u.scale * iv[0].get<double>()) << ", " << show(u.scale * iv[1].get<double>()) << "]";
+    line << (u.unit == "-" ? "" : " " + u.unit) << ";";
+  }
+  return line.str();
+}
 
 nlohmann::json toJson(const LawFitResult& r, Criterion criterion) {
   using nlohmann::json;

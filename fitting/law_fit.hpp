@@ -74,6 +74,14 @@ using Bounds = std::map<std::string, std::pair<double, double>>;
 LawFitResult fitLaw(const std::vector<LawModel>& candidates, const std::vector<PathGrid>& grids, const Bounds& bounds,
                     const LawFitSettings& settings);
 
+/// A fit whose normalised RMS error is above this is called poor (warned of).
+constexpr double kPoorFitNrms = 0.1;
+
+/// One line for people from a summary entry (toJson): the law, its model,
+/// its nRMS error, each parameter in engineers' units with its 95 %
+/// interval (profile, else linearised); "poor fit" past kPoorFitNrms.
+std::string describeFit(const std::string& law, const nlohmann::json& entry);
+
 /// The summary.json entry of a result (parameters, intervals, residual,
 /// evaluations, wall time, chosen model and criterion values).
 nlohmann::json toJson(const LawFitResult& r, Criterion criterion);

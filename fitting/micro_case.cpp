@@ -261,7 +261,7 @@ bridge::RunOutcome runCase(const bridge::JsonDocument& doc, const bridge::RunCon
   EvaluationLog log(ctx.outdir / "evaluations.jsonl", caseHash(doc, c.micro_case), names, c.resume);
   CalibrationSettings search = c.search;
   search.threads = ctx.threads;
-  bridge::Progress progress(ctx.progress, "fit.micro");
+  bridge::Progress progress(ctx, "fit.micro");
   const auto result = calibrate(
       params, [&](const std::vector<double>& v, const fs::path& scratch) { return objective(v, scratch); }, search, log,
       ctx.outdir / "evaluations", &progress);
@@ -327,7 +327,7 @@ bridge::RunOutcome runCase(const bridge::JsonDocument& doc, const bridge::RunCon
 bridge::CaseKind fitMicroCaseKind() {
   return {"fit.micro",
           "identify micro contact parameters so that a micro case matches lab curves (DEM in the loop, resumable)",
-          checkCase, runCase};
+          checkCase, runCase, nullptr};
 }
 
 }  // namespace gabion::fitting

@@ -38,9 +38,9 @@ struct Plan {
   Structure structure;
 };
 
-Plan plan(const JsonDocument& doc, const std::optional<std::filesystem::path>& law) {
+Plan plan(const JsonDocument& doc) {
   Plan p;
-  p.c = readImpactCase(doc, law, true);
+  p.c = readImpactCase(doc, true);
   const JsonReader r = doc.root().object("capacity");
   CapacitySpec& s = p.spec;
   const std::string over = r.choice("over", {"velocity_m_s", "mass_kg"}, "velocity_m_s");
@@ -101,11 +101,11 @@ json toJson(const CapacityEvaluation& e, const CapacitySpec& s) {
 }  // namespace
 
 void checkCapacityCase(const JsonDocument& doc) {
-  plan(doc, std::nullopt);
+  plan(doc);
 }
 
 bridge::RunOutcome runCapacityCase(const JsonDocument& doc, const bridge::RunContext& ctx) {
-  const Plan p = plan(doc, ctx.law_file);
+  const Plan p = plan(doc);
   const CapacitySpec& s = p.spec;
   bridge::RunOutcome out;
   const CapacitySearch search =
@@ -193,7 +193,7 @@ bridge::RunOutcome runCapacityCase(const JsonDocument& doc, const bridge::RunCon
       held.x.push_back(e.energy_J / 1e3), held.y.push_back(1e3 * e.result.max_penetration_m);
   if (!held.x.empty()) plot.series.push_back(held);
   bridge::writePlotPng(ctx.outdir / "capacity.png", plot);
-  out.report = "macro.capacity: " + answer.str() + " (" + std::to_string(evals.size()) + " impacts)\n";
+  out.answer = "macro.capacity: " + answer.str() + " (" + std::to_string(evals.size()) + " impacts)\n";
   return out;
 }
 

@@ -171,28 +171,40 @@ std::pair<double, double> defaultAim(const StructureSpec& s, double edge_m) {
   return {(s.ny / 2 + 0.5) * edge_m, (s.nz / 2 + 0.5) * edge_m};
 }
 
-ImpactCase readImpactCase(const JsonDocument& doc, const std::optional<std::filesystem::path>& law_override,
-                          bool sweep) {
+// Every material the structure names is in the case's laws: an error names
+// the key, the law file and the materials it has.
+void checkMaterialNames(const JsonDocument& doc, const ImpactCase& c) {
+  std::string have;
+  for (const auto& [name, m] : c.laws.materials) have += (have.empty() ? "'" : ", '") + name + "'";
+  const auto check = [&](const std::string& name, const std::string& pointer) {
+    if (!name.empty() && c.laws.materials.count(name) == 0)
+      throw InputError(doc.file(), pointer,
+                       "material '" + name + "' is not in the laws (" + c.law_source + "), which have " + have);
+  };
+  const MaterialRule& m = c.structure.material;
+  check(m.front, "/structure/material/front");
+  check(m.core, "/structure/material/core");
+  for (std::size_t i = 0; i < m.cells.size(); ++i) check(m.cells[i], "/structure/material/cells/" + std::to_string(i));
+}
+
+ImpactCase readImpactCase(const JsonDocument& doc, bool sweep) {
   const JsonReader root = doc.root();
   ImpactCase c;
-  // Laws: embedded, or a law file relative to the case file; --law replaces them.
+  // Laws: embedded, or a law file relative to the case file.
   if (root.has("laws") && root.has("law_file")) root.fail("law_file", "give either 'laws' or 'law_file'");
   if (root.has("laws")) {
     c.laws = bridge::readLawMaterials(root.object("laws").object("materials"));
     c.law_source = "embedded";
   } else if (root.has("law_file")) {
     const std::filesystem::path p = std::filesystem::path(doc.file()).parent_path() / root.string("law_file");
-    if (!law_override) c.laws = bridge::loadLawFile(p);
+    c.laws = bridge::loadLawFile(p);
     c.law_source = p.string();
   } else {
     root.fail("law_file", "missing: a case needs 'laws' (embedded materials) or 'law_file'");
   }
-  if (law_override) {
-    c.laws = bridge::loadLawFile(*law_override);
-    c.law_source = law_override->string();
-  }
 
   c.structure = readStructure(root.object("structure"));
+  checkMaterialNames(doc, c);
   bool aim = false;
   const BoulderSpec base = readBoulder(root.object("boulder"), aim);
   if (!sweep && root.has("impacts")) {

@@ -41,11 +41,11 @@ struct SweepSpec {
   double limit_back_face_m = std::numeric_limits<double>::infinity();
 };
 
-/// Reads the laws, structure, boulder and run of a macro case. `law_override`
-/// (from --law) replaces the case's laws. With `sweep` the case may not list
-/// impacts and does not relax after the impact. Throws InputError.
-ImpactCase readImpactCase(const bridge::JsonDocument& doc, const std::optional<std::filesystem::path>& law_override,
-                          bool sweep);
+/// Reads the laws (embedded, or the case's `law_file`: `gabion run --law`
+/// sets that key), structure, boulder and run of a macro case; every
+/// material the structure names must be in its laws. With `sweep` the case
+/// may not list impacts and does not relax after the impact. Throws InputError.
+ImpactCase readImpactCase(const bridge::JsonDocument& doc, bool sweep);
 /// Reads the "sweep" object of a macro.sweep case.
 SweepSpec readSweep(const bridge::JsonReader& sweep);
 /// Builds the structure of a case; an inconsistency (unknown material, mixed

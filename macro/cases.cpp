@@ -7,15 +7,15 @@ namespace gabion::macro {
 std::vector<bridge::CaseKind> caseKinds() {
   return {
       {"macro.impact", "boulder impact(s) on a cellular structure, one node per cell (laws from a gabion.law/2 file)",
-       checkImpactCase, runImpactCase},
+       checkImpactCase, runImpactCase, nullptr},
       {"macro.sweep", "a grid of macro impacts (velocity, mass, aim point, structure size) run in parallel",
-       checkSweepCase, runSweepCase},
+       checkSweepCase, runSweepCase, nullptr},
       {"macro.capacity",
        "the largest impact energy a structure holds with the acceptance criteria met (bisection over velocity or mass)",
-       checkCapacityCase, runCapacityCase},
+       checkCapacityCase, runCapacityCase, nullptr},
       {"macro.design",
        "the smallest structure (thickness, height, front material) that holds the design impacts with the criteria met",
-       checkDesignCase, runDesignCase},
+       checkDesignCase, runDesignCase, nullptr},
   };
 }
 

@@ -132,12 +132,12 @@ std::vector<DesignImpact> readImpactTable(const JsonDocument& doc, const Boulder
   return out;
 }
 
-Plan plan(const JsonDocument& doc, const std::optional<std::filesystem::path>& law) {
+Plan plan(const JsonDocument& doc) {
   Plan p;
   const JsonReader root = doc.root();
   if (root.has("impacts") && root.has("impacts_csv"))
     root.fail("impacts_csv", "give either 'impacts' or 'impacts_csv'");
-  p.c = readImpactCase(doc, law, false);
+  p.c = readImpactCase(doc, false);
   const StructureSpec& base = p.c.structure;
   if (!base.front_offset_cells.empty())
     root.object("structure").fail("front_offset_cells", "not with macro.design: the design varies the height");
@@ -325,11 +325,11 @@ json toJson(const Plan& p, const SectionResult& r) {
 }  // namespace
 
 void checkDesignCase(const JsonDocument& doc) {
-  plan(doc, std::nullopt);
+  plan(doc);
 }
 
 bridge::RunOutcome runDesignCase(const JsonDocument& doc, const bridge::RunContext& ctx) {
-  const Plan p = plan(doc, ctx.law_file);
+  const Plan p = plan(doc);
   const DesignSpec& s = p.spec;
   const auto t0 = std::chrono::steady_clock::now();
   const int nm = static_cast<int>(s.materials.size());
@@ -345,14 +345,14 @@ bridge::RunOutcome runDesignCase(const JsonDocument& doc, const bridge::RunConte
       for (int h = s.h_lo; h <= s.h_hi; ++h)
         for (int t = s.t_lo; t <= s.t_hi; ++t) all.push_back({t, h, m});
     evaluated.resize(all.size());
-    bridge::Progress progress(ctx.progress, "macro.design (exhaustive)");
+    bridge::Progress progress(ctx, "macro.design (exhaustive)");
     runParallel(all.size(), ctx.threads, progress, [&](std::size_t i) { evaluated[i] = evaluate(p, all[i]); });
   } else {
     std::vector<std::pair<int, int>> combos;  // (material, height)
     for (int m = 0; m < nm; ++m)
       for (int h = s.h_lo; h <= s.h_hi; ++h) combos.emplace_back(m, h);
     std::vector<std::vector<SectionResult>> per(combos.size());
-    bridge::Progress progress(ctx.progress, "macro.design (bisection)");
+    bridge::Progress progress(ctx, "macro.design (bisection)");
     runParallel(combos.size(), ctx.threads, progress, [&](std::size_t i) {
       const auto [m, h] = combos[i];
       auto& out = per[i];
@@ -451,7 +451,7 @@ bridge::RunOutcome runDesignCase(const JsonDocument& doc, const bridge::RunConte
     for (int m = 0; m < nm; ++m)
       for (int t = s.t_lo; t <= s.t_hi; ++t) secs.push_back({t, chart_section.h, m});
     std::vector<CapacitySearch> caps(secs.size());
-    bridge::Progress progress(ctx.progress, "macro.design: capacity against thickness");
+    bridge::Progress progress(ctx, "macro.design: capacity against thickness");
     runParallel(secs.size(), ctx.threads, progress, [&](std::size_t i) {
       const Structure structure = buildStructure(sectionSpec(p, secs[i]), p.c.laws);
       const auto run = [&](double x) {
@@ -517,7 +517,7 @@ bridge::RunOutcome runDesignCase(const JsonDocument& doc, const bridge::RunConte
        << r.probability_met << " | " << r.back_face_ratio << " | " << r.penetration_ratio << " |\n";
   if (s.capacity_chart) md << "\n![capacity against thickness](capacity_vs_thickness.png)\n";
   bridge::writeTextAtomic(ctx.outdir / "report.md", md.str());
-  out.report = "macro.design: " + answer.str() + "\n";
+  out.answer = "macro.design: " + answer.str() + "\n";
   return out;
 }
 

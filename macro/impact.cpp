@@ -18,6 +18,9 @@ double maxOver(const std::vector<int>& nodes, const std::vector<double>& u) {
 // The boulder has left for good once it has been away, moving back, for
 // this fraction of the time it was in contact (and 20 steps at least).
 constexpr double kAwayOverContact = 0.5;
+// The back face's largest displacement "grows" when it passes its last
+// value by this fraction (a creep below it does not hold the impact open).
+constexpr double kBackFaceGrowth = 1e-3;
 
 std::string fmt(double v) {
   std::ostringstream s;
@@ -105,6 +108,7 @@ ImpactResult runImpact(Model& model, const BoulderSpec& boulder, const RunSettin
   bool touched = false, in_contact = false;
   double f_prev = 0.0, f_prev2 = 0.0, t_first = 0.0, f_first = 0.0, t_start = 0.0, t_end = 0.0, touch_proj = 0.0;
   long long first_contact_step = -1;
+  double t_back_rise = 0.0;  // when the back face's largest displacement last grew
   double e_ref = 0.0;
   const long long snap_count = std::max(2, run.snapshots);
   long long next_snap = 0;
@@ -183,7 +187,9 @@ ImpactResult runImpact(Model& model, const BoulderSpec& boulder, const RunSettin
     f_prev2 = f_prev;
     f_prev = force;
     const auto& ux = model.ux();
-    res.max_back_face_displacement_m = std::max(res.max_back_face_displacement_m, maxOver(s.back_nodes, ux));
+    const double back = maxOver(s.back_nodes, ux);
+    if (back > res.max_back_face_displacement_m * (1.0 + kBackFaceGrowth)) t_back_rise = t;
+    res.max_back_face_displacement_m = std::max(res.max_back_face_displacement_m, back);
     res.max_front_face_displacement_m = std::max(res.max_front_face_displacement_m, maxOver(s.front.node, ux));
     const auto& ax = model.cellAxialForce();
     for (std::size_t i = 0; i < n; ++i) peak_axial[i] = std::max(peak_axial[i], ax[i]);
@@ -213,9 +219,11 @@ ImpactResult runImpact(Model& model, const BoulderSpec& boulder, const RunSettin
     }
     // The outcome, once the boulder has touched: it passed the back plane;
     // it has been away, moving back, for half as long as it was in contact
-    // (the face does not catch it up again) and its speed back tells
-    // rebounded from stopped; or it rests on the structure, everything at
-    // rest and the face no longer pushing it.
+    // (the face does not catch it up again), and the back face has not moved
+    // further for as long (the wave the impact sent through the wall may
+    // reach it after the boulder left), and its speed back tells rebounded
+    // from stopped; or it rests on the structure, everything at rest and
+    // the face no longer pushing it.
     if (!touched) continue;
     const double back_speed = -model.boulderVelocity().dot(dir);
     if (model.boulderPositionAtForces().dot(dir) - boulder.diameter_m * 0.5 > back_plane) {
@@ -224,7 +232,8 @@ ImpactResult runImpact(Model& model, const BoulderSpec& boulder, const RunSettin
     } else if (!contact && back_speed >= 0.0) {
       if (t_away < 0.0) t_away = t;
       const double in_contact_for = t_away - t_start;
-      if (t - t_away >= std::max(kAwayOverContact * in_contact_for, 20.0 * dt))
+      const double window = std::max(kAwayOverContact * in_contact_for, 20.0 * dt);
+      if (t - t_away >= window && t - t_back_rise >= window)
         res.outcome = back_speed >= run.rebound_restitution * v0 ? Outcome::Rebounded : Outcome::Stopped;
     } else {
       t_away = -1.0;

@@ -1,6 +1,8 @@
 // The macro.impact case kind: read, build, run the impacts one after the
 // other, write summary results, result.h5 and result.xdmf.
 #include <cmath>
+#include <iomanip>
+#include <sstream>
 #include <stdexcept>
 
 #include "bridge/errors.hpp"
@@ -22,8 +24,8 @@ struct Prepared {
   Structure structure;
 };
 
-Prepared prepare(const JsonDocument& doc, const std::optional<std::filesystem::path>& law) {
-  Prepared p{readImpactCase(doc, law, false), {}};
+Prepared prepare(const JsonDocument& doc) {
+  Prepared p{readImpactCase(doc, false), {}};
   p.structure = buildCaseStructure(doc, p.c);
   resolveAims(doc, p.c, p.structure);
   for (std::size_t i = 0; i < p.c.impacts.size(); ++i) {
@@ -145,17 +147,17 @@ json toJson(const ImpactResult& r) {
 }
 
 void checkImpactCase(const JsonDocument& doc) {
-  prepare(doc, std::nullopt);
+  prepare(doc);
 }
 
 bridge::RunOutcome runImpactCase(const JsonDocument& doc, const bridge::RunContext& ctx) {
-  Prepared p = prepare(doc, ctx.law_file);
+  Prepared p = prepare(doc);
   const Structure& s = p.structure;
   Model model(s, p.c.run.kinematics);
   Recording rec;
   std::vector<ImpactResult> results;
   bridge::RunOutcome out;
-  bridge::Progress progress(ctx.progress, "macro.impact");
+  bridge::Progress progress(ctx, "macro.impact");
   for (std::size_t i = 0; i < p.c.impacts.size(); ++i) {
     if (i > 0) rec.time_offset_s += results.back().end_time_s;  // (each impact's series after the last one's)
     results.push_back(runImpact(model, p.c.impacts[i], p.c.run, static_cast<int>(i), &rec));
@@ -192,6 +194,18 @@ bridge::RunOutcome runImpactCase(const JsonDocument& doc, const bridge::RunConte
       {"materials", s.material_names},        {"axial_links", s.axial.a.size()}, {"lateral_links", s.lateral.a.size()},
       {"front_elements", s.front.node.size()}};
   r["laws"] = {{"source", p.c.law_source}, {"file", bridge::toJson(p.c.laws)}};
+  std::ostringstream answer;
+  answer << std::setprecision(3);
+  for (std::size_t i = 0; i < results.size(); ++i) {
+    const ImpactResult& x = results[i];
+    if (!x.ok) continue;
+    answer << "macro.impact" << (results.size() > 1 ? " " + std::to_string(i) : "") << ": " << outcomeName(x.outcome)
+           << " (" << x.input_energy_J / 1e3 << " kJ): peak force " << x.peak_force_N / 1e3 << " kN, penetration "
+           << 1e3 * x.max_penetration_m << " mm, back face " << 1e3 * x.max_back_face_displacement_m << " mm, contact "
+           << 1e3 * x.contact_duration_s << " ms; energy balance error " << x.balance_rel_error << "\n";
+    if (!x.perforation.empty()) answer << "  " << x.perforation << "\n";
+  }
+  out.answer = answer.str();
   return out;
 }
 

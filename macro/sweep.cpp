@@ -40,9 +40,9 @@ struct Plan {
   std::vector<Point> points;
 };
 
-Plan plan(const JsonDocument& doc, const std::optional<std::filesystem::path>& law) {
+Plan plan(const JsonDocument& doc) {
   Plan p;
-  p.c = readImpactCase(doc, law, true);
+  p.c = readImpactCase(doc, true);
   p.sweep = readSweep(doc.root().object("sweep"));
   p.sizes = p.sweep.cells;
   if (p.sizes.empty()) p.sizes.push_back({p.c.structure.nx, p.c.structure.ny, p.c.structure.nz});
@@ -124,16 +124,16 @@ std::string csvQuote(const std::string& s) {
 }  // namespace
 
 void checkSweepCase(const JsonDocument& doc) {
-  plan(doc, std::nullopt);
+  plan(doc);
 }
 
 bridge::RunOutcome runSweepCase(const JsonDocument& doc, const bridge::RunContext& ctx) {
-  const Plan p = plan(doc, ctx.law_file);
+  const Plan p = plan(doc);
   const std::size_t np = p.points.size();
   std::vector<ImpactResult> results(np);
   const auto t0 = std::chrono::steady_clock::now();
   const int nthreads = std::max(1, std::min<int>(ctx.threads, static_cast<int>(np)));
-  bridge::Progress progress(ctx.progress, "macro.sweep");
+  bridge::Progress progress(ctx, "macro.sweep");
   runParallel(np, nthreads, progress, [&](std::size_t i) { results[i] = runPoint(p, p.points[i]); });
   const double wall = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
 
@@ -288,6 +288,13 @@ bridge::RunOutcome runSweepCase(const JsonDocument& doc, const bridge::RunContex
   out.results["points_per_second"] = wall > 0.0 ? static_cast<double>(np) / wall : 0.0;
   out.results["threads_used"] = nthreads;
   out.results["files"] = files;
+  {
+    std::ostringstream answer;
+    answer << "macro.sweep: " << np << " impacts in " << std::setprecision(3) << wall << " s:";
+    for (const auto& [name, count] : outcomes) answer << " " << count << " " << name << ";";
+    answer << " " << failed << " failed; worst energy balance error " << worst_balance << "\n";
+    out.answer = answer.str();
+  }
   out.results["laws_source"] = p.c.law_source;
   // A sweep in which every point failed has produced nothing usable.
   if (np > 0 && failed == np) {

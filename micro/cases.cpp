@@ -31,7 +31,7 @@ bridge::RunOutcome runSceneCase(const bridge::JsonDocument& doc, const bridge::R
 
 std::vector<bridge::CaseKind> caseKinds() {
   return {{"micro.scene", "fine DEM of explicit spheres, rigid multi-sphere blocks and planar walls (docs/micro.md)",
-           checkScene, runSceneCase},
+           checkScene, runSceneCase, nullptr},
           nettingTensileKind(),
           cellKind(),
           lab::confinedCompressionKind(),

@@ -192,7 +192,7 @@ bridge::RunOutcome runScene(Scene scene, const std::string& file, const bridge::
     }
   };
 
-  bridge::Progress progress(ctx.progress, hooks.label);
+  bridge::Progress progress(ctx, hooks.label);
   snapshot(0.0);
   StepStatus status = StepStatus::Ok;
   bool ended = false;  // the kind's test is over before the duration

@@ -598,7 +598,7 @@ bridge::RunOutcome run(const bridge::JsonDocument& doc, const bridge::RunContext
       << " blocks (" << levelled_mass << " kg) above it taken off\n";
   rep << "stages (wall s): fill " << fill.wall_s << ", vibration " << vibration.wall_s << ", closing " << closing.wall_s
       << ", standing " << standing.wall_s << "\n";
-  out.report = rep.str();
+  out.answer = rep.str();
   return out;
 }
 
@@ -608,7 +608,7 @@ bridge::CaseKind cellKind() {
   return {"micro.cell",
           "a gabion cell: netting basket filled with angular blocks by gravity, vibrated to a target porosity, "
           "closed and left to stand (docs/cell.md)",
-          check, run};
+          check, run, nullptr};
 }
 
 }  // namespace gabion::micro

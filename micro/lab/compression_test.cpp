@@ -86,6 +86,17 @@ Scene buildScene(const CompressionCase& c, const Sample& sample) {
   return s;
 }
 
+// The scene as the test runs it: the rig, and a duration long enough for the
+// loading and each unloading-reloading cycle at the sample's height.
+Scene planScene(const CompressionCase& c, const Sample& sample) {
+  Scene scene = buildScene(c, sample);
+  const double height = sample.hi.z() - sample.lo.z();
+  double travel = c.strain * height;
+  for (const double s : c.unload_at) travel += 2.0 * s * height;
+  if (!c.setup.duration_given) scene.run.duration_s = 1.2 * travel / c.velocity_m_s;
+  return scene;
+}
+
 void check(const bridge::JsonDocument& doc, bool confined) {
   const CompressionCase c = parseCase(doc, confined);
   checkCells(c.setup);
@@ -144,14 +155,10 @@ CurveShape curveShape(const std::vector<double>& u, const std::vector<double>& f
 
 bridge::RunOutcome runOne(const CompressionCase& c, const Sample& sample, const bridge::RunContext& ctx,
                           const std::string& file) {
-  Scene scene = buildScene(c, sample);
+  Scene scene = planScene(c, sample);
   const double height = sample.hi.z() - sample.lo.z();
   const double target = c.strain * height;
   const std::size_t nwalls = scene.walls.size(), lid = nwalls - 1;
-  // The run lasts as long as the loading and cycles need at this height.
-  double travel = target;
-  for (const double s : c.unload_at) travel += 2.0 * s * height;
-  if (!c.setup.duration_given) scene.run.duration_s = 1.2 * travel / c.velocity_m_s;
 
   Curves cv;
   cv.side.resize(4);
@@ -318,7 +325,7 @@ bridge::RunOutcome runOne(const CompressionCase& c, const Sample& sample, const 
     rep << "; " << r["drop_count"].get<std::size_t>() << " force drops";
   rep << "; kinetic/work " << ratio << (r["quasi_static"].get<bool>() ? " (quasi-static)" : " (NOT quasi-static)")
       << "\n";
-  out.report = rep.str() + out.report;
+  out.answer = rep.str() + out.answer;
   if (c.strict && !r["quasi_static"].get<bool>() && out.status == bridge::RunOutcome::Status::Ok) {
     out.status = bridge::RunOutcome::Status::NumericalFailure;
     out.message = warnings.front().get<std::string>() + " (quasi_static.strict)";
@@ -339,18 +346,25 @@ bridge::RunOutcome run(const bridge::JsonDocument& doc, const bridge::RunContext
       [&](const Sample& s, std::size_t, const bridge::RunContext& rc) { return runOne(c, s, rc, file); }, keys);
 }
 
+std::optional<bridge::Estimate> estimate(const bridge::JsonDocument& doc, bool confined) {
+  const CompressionCase c = parseCase(doc, confined);
+  return estimateReplicates(c.setup, 1, [&](const Sample& s, std::size_t) { return planScene(c, s); });
+}
+
 }  // namespace
 
 bridge::CaseKind confinedCompressionKind() {
   return {"micro.cc", "confined compression of a cell between six rigid walls, the lid driven down (docs/lab.md)",
           [](const bridge::JsonDocument& d) { check(d, true); },
-          [](const bridge::JsonDocument& d, const bridge::RunContext& ctx) { return run(d, ctx, true); }};
+          [](const bridge::JsonDocument& d, const bridge::RunContext& ctx) { return run(d, ctx, true); },
+          [](const bridge::JsonDocument& d) { return estimate(d, true); }};
 }
 
 bridge::CaseKind unconfinedCompressionKind() {
   return {"micro.uc", "unconfined compression of a cell between two plates, the netting alone confining (docs/lab.md)",
           [](const bridge::JsonDocument& d) { check(d, false); },
-          [](const bridge::JsonDocument& d, const bridge::RunContext& ctx) { return run(d, ctx, false); }};
+          [](const bridge::JsonDocument& d, const bridge::RunContext& ctx) { return run(d, ctx, false); },
+          [](const bridge::JsonDocument& d) { return estimate(d, false); }};
 }
 
 }  // namespace gabion::micro::lab

@@ -60,6 +60,7 @@ struct Placement {
   Scene scene;
   std::size_t boulder = 0;
   double mass_kg = 0.0;
+  bool dt_limited = false;  ///< the step held down by the boulder's travel
 };
 
 Placement buildScene(const ImpactCase& c, const Sample& sample, double velocity) {
@@ -88,6 +89,21 @@ Placement buildScene(const ImpactCase& c, const Sample& sample, double velocity)
   s.spheres.push_back(b);
   s.walls.push_back(fixedWall("base", sample.lo, Vec3::UnitZ(), sample.plate_material));
   return p;
+}
+
+// The scene as the test runs it: the boulder must not pass a netting node
+// within a step, so its travel in a step is held below a tenth of the
+// smallest radius (run.dt_s set where that is below the chosen step).
+Placement planScene(const ImpactCase& c, const Sample& sample, double v0, const std::string& file) {
+  Placement pl = buildScene(c, sample, v0);
+  double rmin = 1e300;
+  for (const SphereSpec& sp : pl.scene.spheres) rmin = std::min(rmin, sp.radius_m);
+  for (const BlockSpec& b : pl.scene.blocks)
+    for (const double r : b.member_radii_m) rmin = std::min(rmin, r);
+  const double dt = chooseDt(pl.scene, criticalTimeStep(pl.scene), file);
+  pl.dt_limited = v0 * dt > 0.1 * rmin;
+  if (pl.dt_limited) pl.scene.run.dt_s = 0.1 * rmin / v0;
+  return pl;
 }
 
 void checkBoulder(const ImpactCase& c, double face_m, const std::string& file) {
@@ -124,17 +140,9 @@ bridge::RunOutcome runOne(const ImpactCase& c, const Sample& sample, double v0, 
     const Vec3 size = sample.hi - sample.lo;
     checkBoulder(c, std::min(size.x(), size.y()), file);
   }
-  Placement pl = buildScene(c, sample, v0);
+  Placement pl = planScene(c, sample, v0, file);
   const std::size_t boulder = pl.boulder;
-  // The boulder must not pass a netting node within a step: its travel in a
-  // step is held below a tenth of the smallest radius.
-  double rmin = 1e300;
-  for (const SphereSpec& sp : pl.scene.spheres) rmin = std::min(rmin, sp.radius_m);
-  for (const BlockSpec& b : pl.scene.blocks)
-    for (const double r : b.member_radii_m) rmin = std::min(rmin, r);
-  const double dt = chooseDt(pl.scene, criticalTimeStep(pl.scene), file);
-  const bool limited = v0 * dt > 0.1 * rmin;
-  if (limited) pl.scene.run.dt_s = 0.1 * rmin / v0;
+  const bool limited = pl.dt_limited;
 
   struct Series {
     std::vector<double> time, force, base_force, penetration, velocity;
@@ -246,8 +254,15 @@ bridge::RunOutcome runOne(const ImpactCase& c, const Sample& sample, double v0, 
   rep << hooks.label << ": peak force " << peak << " N (base " << peak_base << " N), penetration " << 1000.0 * max_pen
       << " mm, contact " << 1000.0 * duration << " ms, rebound " << rebound << " m/s, "
       << out.results["broken_links"].get<std::size_t>() << " broken links\n";
-  out.report = rep.str() + out.report;
+  out.answer = rep.str() + out.answer;
   return out;
+}
+
+std::optional<bridge::Estimate> estimate(const bridge::JsonDocument& doc) {
+  const ImpactCase c = parseCase(doc);
+  return estimateReplicates(c.setup, c.velocities_m_s.size(), [&](const Sample& s, std::size_t v) {
+    return planScene(c, s, c.velocities_m_s[v], doc.file()).scene;
+  });
 }
 
 }  // namespace
@@ -255,7 +270,8 @@ bridge::RunOutcome runOne(const ImpactCase& c, const Sample& sample, double v0, 
 bridge::CaseKind unconfinedImpactKind() {
   return {"micro.uci",
           "unconfined impact: a boulder dropped at a set velocity on a cell standing on a rigid base (docs/lab.md)",
-          check, [](const bridge::JsonDocument& doc, const bridge::RunContext& ctx) {
+          check,
+          [](const bridge::JsonDocument& doc, const bridge::RunContext& ctx) {
             const ImpactCase c = parseCase(doc);
             const std::string file = doc.file();
             std::vector<std::string> names;
@@ -266,7 +282,8 @@ bridge::CaseKind unconfinedImpactKind() {
                                  },
                                  {"peak_force_N", "peak_base_force_N", "max_penetration_m", "contact_duration_s",
                                   "rebound_velocity_m_s", "broken_links"});
-          }};
+          },
+          estimate};
 }
 
 }  // namespace gabion::micro::lab

@@ -13,6 +13,7 @@
 #include "micro/cell/cell_assembly.hpp"
 #include "micro/cell/cell_file.hpp"
 #include "micro/rigid_body.hpp"
+#include "micro/scene_run.hpp"
 
 namespace gabion::micro::lab {
 namespace {
@@ -308,6 +309,28 @@ nlohmann::json scatterOf(const std::vector<double>& v) {
 
 }  // namespace
 
+std::optional<bridge::Estimate> estimateReplicates(const LabSetup& setup, std::size_t variants, const ScenePlan& plan) {
+  const CellSource& first = setup.cells.front();
+  if (!first.generate.empty()) return std::nullopt;
+  const Sample sample = loadSample(first.file, setup);
+  bridge::Estimate e;
+  for (std::size_t v = 0; v < variants; ++v) {
+    const Scene scene = plan(sample, v);
+    const double dt = scene.run.dt_s > 0.0 ? scene.run.dt_s : chooseDt(scene, criticalTimeStep(scene), setup.file);
+    double bodies = static_cast<double>(scene.spheres.size());
+    for (const BlockSpec& b : scene.blocks) bodies += static_cast<double>(b.member_radii_m.size());
+    const double steps = std::ceil(scene.run.duration_s / dt);
+    e.bodies = std::max(e.bodies, bodies);
+    e.steps += steps;
+    e.body_steps += bodies * steps;
+  }
+  const auto replicates = static_cast<double>(setup.cells.size());
+  e.steps *= replicates;
+  e.body_steps *= replicates;
+  e.runs = variants * setup.cells.size();
+  return e;
+}
+
 bridge::RunOutcome runReplicates(const LabSetup& setup, const bridge::RunContext& ctx, const std::string& label,
                                  const std::vector<std::string>& variants, const TestRun& test,
                                  const std::vector<std::string>& scatter_keys) {
@@ -423,7 +446,7 @@ bridge::RunOutcome runReplicates(const LabSetup& setup, const bridge::RunContext
     scatter[variants[v]] = per;
   }
   out.results["scatter"] = scatter;
-  out.report = report.str();
+  out.answer = report.str();
   if (!failures.empty()) {
     out.status = bridge::RunOutcome::Status::NumericalFailure;
     out.message = failures;

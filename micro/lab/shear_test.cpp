@@ -114,6 +114,14 @@ Rig buildRig(const ShearCase& c, const Sample& sample) {
   return rig;
 }
 
+// The rig as the test runs it: long enough for the normal load to come and
+// the push to its displacement.
+Rig planRig(const ShearCase& c, const Sample& sample) {
+  Rig rig = buildRig(c, sample);
+  if (!c.setup.duration_given) rig.scene.run.duration_s = c.settle_s + 1.2 * c.displacement_m / c.speed_m_s;
+  return rig;
+}
+
 void check(const bridge::JsonDocument& doc) {
   const ShearCase c = parseCase(doc);
   checkCells(c.setup);
@@ -137,10 +145,9 @@ double slopeFromStart(const std::vector<double>& x, const std::vector<double>& y
 
 bridge::RunOutcome runOne(const ShearCase& c, const Sample& sample, const bridge::RunContext& ctx,
                           const std::string& file) {
-  Rig rig = buildRig(c, sample);
+  Rig rig = planRig(c, sample);
   const double weight = -rig.scene.gravity_m_s2.z() * rig.top_mass_kg;  // the upper cell's, on the interface
   const double target = rig.scene.walls[rig.lid].program.target_force_N;
-  if (!c.setup.duration_given) rig.scene.run.duration_s = c.settle_s + 1.2 * c.displacement_m / c.speed_m_s;
   struct Series {
     std::vector<double> time, displacement, force, normal, kinetic, work;
     std::vector<double> settle_time, settle_force;  // the lid's force while the normal load comes
@@ -270,8 +277,13 @@ bridge::RunOutcome runOne(const ShearCase& c, const Sample& sample, const bridge
   rep << "micro.shear: friction coefficient " << r["friction_coefficient"].get<double>() << " (peak " << peak_ratio
       << "), tangential stiffness " << r["tangential_stiffness_N_m"].get<double>() << " N/m under "
       << r["mean_normal_force_N"].get<double>() << " N; kinetic/work " << ratio << "\n";
-  out.report = rep.str() + out.report;
+  out.answer = rep.str() + out.answer;
   return out;
+}
+
+std::optional<bridge::Estimate> estimate(const bridge::JsonDocument& doc) {
+  const ShearCase c = parseCase(doc);
+  return estimateReplicates(c.setup, 1, [&](const Sample& s, std::size_t) { return planRig(c, s).scene; });
 }
 
 }  // namespace
@@ -281,14 +293,16 @@ bridge::CaseKind interfaceShearKind() {
       "micro.shear",
       "interface shear: a cell on another under a normal load held by a servo, the upper one pushed sideways "
       "(docs/lab.md)",
-      check, [](const bridge::JsonDocument& doc, const bridge::RunContext& ctx) {
+      check,
+      [](const bridge::JsonDocument& doc, const bridge::RunContext& ctx) {
         const ShearCase c = parseCase(doc);
         const std::string file = doc.file();
         return runReplicates(
             c.setup, ctx, "micro.shear", {"test"},
             [&](const Sample& s, std::size_t, const bridge::RunContext& rc) { return runOne(c, s, rc, file); },
             {"friction_coefficient", "peak_friction_coefficient", "tangential_stiffness_N_m", "kinetic_to_work_ratio"});
-      }};
+      },
+      estimate};
 }
 
 }  // namespace gabion::micro::lab

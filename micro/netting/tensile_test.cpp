@@ -238,7 +238,8 @@ bridge::RunOutcome run(const bridge::JsonDocument& doc, const bridge::RunContext
 
 bridge::CaseKind nettingTensileKind() {
   return {"micro.netting_tensile",
-          "tensile test of a sheet of double-twisted hexagonal wire netting to rupture (docs/netting.md)", check, run};
+          "tensile test of a sheet of double-twisted hexagonal wire netting to rupture (docs/netting.md)", check, run,
+          nullptr};
 }
 
 }  // namespace gabion::micro

@@ -32,7 +32,7 @@ std::string readText(const fs::path& p) {
   return std::string(std::istreambuf_iterator<char>(in), {});
 }
 
-// The small chain's files: cell, lab tests, wall, capacity and design cases,
+// The small chain's files: cell, lab tests, wall, sweep, capacity and design cases,
 // and a law file whose material 'small' the pipeline replaces.
 void writeSmallChain(const fs::path& dir) {
   writeFile(dir / "cell.json", gabion::testing::smallCellCase());
@@ -57,6 +57,9 @@ void writeSmallChain(const fs::path& dir) {
  "boulder": {"diameter_m": 0.3, "density_kg_m3": 2600, "velocity_m_s": 10, "aim_point_m": [0.75, 0.45]},
  "run": {"duration_s": 0.05})";
   writeFile(dir / "wall.json", R"({"format": "gabion.case/1", "kind": "macro.impact", )" + wall + "}");
+  writeFile(dir / "sweep.json", R"({"format": "gabion.case/1", "kind": "macro.sweep", )" + wall +
+                                    R"(, "sweep": {"velocity_m_s": {"from": 4, "to": 16, "count": 4}, "chart": true,
+ "limits": {"max_penetration_m": 0.1}}})");
   writeFile(dir / "capacity.json", R"({"format": "gabion.case/1", "kind": "macro.capacity", )" + wall +
                                        R"(, "capacity": {"range": [2, 40], "criteria": {"max_penetration_m": 0.1}}})");
   writeFile(dir / "design.json", R"({"format": "gabion.case/1", "kind": "macro.design", )" + wall +
@@ -67,7 +70,7 @@ void writeSmallChain(const fs::path& dir) {
  "lab": {"cc": "cc.json", "uc": "uc.json", "uci": "uci.json", "shear": "shear.json"},
  "uci_velocities_m_s": [5, 8],
  "structure": {"case": "wall.json", "material": "small", "velocities_m_s": [8, 12]},
- "capacity": "capacity.json", "design": "design.json"})");
+ "sweep": "sweep.json", "capacity": "capacity.json", "design": "design.json"})");
 }
 
 }  // namespace
@@ -93,8 +96,22 @@ TEST(Pipeline, ReducedChainRunsEveryStageThenReusesThem) {
   }
   for (const char* f : {"1_cell/cell.h5", "2_cc/result.h5", "2_uc/result.h5", "2_uci/v5/result.h5",
                         "2_uci/v8/result.h5", "2_shear/result.h5", "3_fit/law.json", "4_impact_8_m_s/result.h5",
-                        "5_capacity/capacity.png", "6_design/capacity_vs_thickness.png", "law.json", "report.html"})
+                        "4_sweep/sweep.csv", "figures/sweep_chart_penetration.png", "5_capacity/capacity.png",
+                        "6_design/capacity_vs_thickness.png", "law.json", "report.html"})
     EXPECT_TRUE(fs::exists(out / f)) << f;
+  // Each lab test estimated its cost before it ran (the ETA's ground), and
+  // none took more steps than estimated.
+  for (const auto& st : s.at("stages")) {
+    const std::string folder = st.at("folder").get<std::string>();
+    if (folder.rfind("2_", 0) != 0) continue;
+    ASSERT_TRUE(st.contains("estimated_body_steps")) << folder;
+    EXPECT_GT(st.at("estimated_body_steps").get<double>(), 0.0) << folder;
+  }
+  {
+    const auto cc = readJson(out / "2_cc" / "summary.json");
+    EXPECT_GE(s.at("stages")[1].at("estimated_body_steps").get<double>(),
+              cc.at("steps").get<double>() * cc.at("spheres").get<double>());
+  }
 
   // The law file: 'small' replaced by the law fitted from the four tests,
   // with its lock-up from the generated cell's porosity.

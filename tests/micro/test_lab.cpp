@@ -6,6 +6,7 @@
 // bad input names its field before anything runs.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <fstream>
 #include <nlohmann/json.hpp>
@@ -14,6 +15,7 @@
 #include "../support/run_gabion.hpp"
 #include "../support/small_cell.hpp"
 #include "bridge/output.hpp"
+#include "micro/cases.hpp"
 #include "micro/lab/force_drops.hpp"
 
 namespace {
@@ -99,6 +101,25 @@ TEST(MicroLab, TheFourTestsRunOnASmallCellAndKeepTheirBalances) {
         << "lid " << lid.back() << ", base " << base.back();
     EXPECT_EQ(h.read("/curves/lateral/axial_force_N"), lid);
     EXPECT_TRUE(std::filesystem::exists(dir / "cc" / "cc_curve.png"));
+  }
+  // Its cost, estimated before it runs (the pipeline's ETA): the steps of its
+  // whole planned duration (1.2 times the lid's travel down to 10 % and
+  // back and down again over the 5 % cycle, at 0.1 m/s) at the step the run
+  // chose; the run took fewer (the lid turns back down as soon as the force
+  // has fallen, and the test ends at its strain).
+  {
+    const auto kinds = gabion::micro::caseKinds();
+    const auto k = std::find_if(kinds.begin(), kinds.end(), [](const auto& x) { return x.kind == "micro.cc"; });
+    ASSERT_NE(k, kinds.end());
+    const auto e = k->estimate(gabion::bridge::JsonDocument::load(dir / "cc.json"));
+    ASSERT_TRUE(e.has_value());
+    const nlohmann::json r = summaryOf(dir / "cc");
+    const double height = r["height_m"].get<double>(), dt = r["dt_s"].get<double>();
+    EXPECT_NEAR(e->steps, std::ceil(1.2 * (0.1 + 2 * 0.05) * height / 0.1 / dt), 1.0);
+    EXPECT_GE(e->steps, r["steps"].get<double>());
+    EXPECT_EQ(e->runs, 1u);
+    EXPECT_GE(e->bodies, r["spheres"].get<double>());
+    EXPECT_DOUBLE_EQ(e->body_steps, e->bodies * e->steps);
   }
 
   // A lid fast enough to leave the quasi-static range is a warning with the
