@@ -68,7 +68,12 @@ int commandCheck(const Options& o) {
 int commandRun(const Options& o) {
   auto [doc, kind] = loadAndCheck(o);
   const fs::path outdir = o.outdir.empty() ? fs::path("results") / fs::path(o.case_file).stem() : fs::path(o.outdir);
-  fs::create_directories(outdir);
+  std::error_code ec;
+  fs::create_directories(outdir, ec);
+  if (ec || !fs::is_directory(outdir))
+    throw InputError(outdir.string(), "", "cannot make the output folder (-o): " + ec.message());
+  if (access(outdir.c_str(), W_OK) != 0)
+    throw InputError(outdir.string(), "", "the output folder (-o) is not writable");
 
   gabion::bridge::RunContext ctx;
   ctx.outdir = outdir;
@@ -144,7 +149,12 @@ int main(int argc, char** argv) {
   plot->add_option("result", o.result_file, "a run's result.h5")->required();
   plot->add_option("-o,--output", o.figure, "figure file, .png or .svg (default: beside the result, .png)");
 
-  CLI11_PARSE(app, argc, argv);
+  try {
+    app.parse(argc, argv);
+  } catch (const CLI::ParseError& e) {  // (--help and --version too: exit 0)
+    const int code = app.exit(e);
+    return code == 0 ? kExitOk : kExitBadInput;
+  }
   try {
     if (kinds->parsed()) {
       for (const auto& k : gabion::app::allKinds()) std::cout << k.kind << "\t" << k.description << "\n";

@@ -187,11 +187,53 @@ struct StageClock {
   }
 };
 
+/// A stage's case as it will run (its --set lines applied, the calibrated
+/// laws in place of its own for the macro stages) and its content key: the
+/// program's version, that case and the bytes of every file it reads.
+struct StagedCase {
+  json value;
+  std::string key;
+};
+
+StagedCase stageCase(json case_value, const std::vector<fs::path>& inputs, const std::vector<std::string>& settings,
+                     const fs::path& dir, const std::optional<fs::path>& law) {
+  // The settings go through the case document (as --set does).
+  {
+    JsonDocument staged(case_value, (dir / "case.json").string());
+    for (const auto& s : settings) staged.applySet(s);
+    case_value = staged.json();
+  }
+  std::vector<fs::path> all = inputs;
+  if (law) {
+    case_value.erase("laws");
+    case_value["law_file"] = law->string();
+    all.push_back(*law);
+  }
+  const std::string key = stageKey(case_value, all);
+  return {std::move(case_value), key};
+}
+
+/// The summary and wall time of the stage in `dir` when it ran with `key`
+/// and ended ok; nullopt when it must run (again).
+std::optional<std::pair<json, double>> reusable(const fs::path& dir, const std::string& key) {
+  if (!fs::exists(dir / "stage.json") || !fs::exists(dir / "summary.json")) return std::nullopt;
+  try {
+    std::ifstream in(dir / "stage.json");
+    const json st = json::parse(in);
+    std::ifstream sin(dir / "summary.json");
+    json summary = json::parse(sin);
+    if (st.value("key", "") == key && summary.value("status", "") == "ok")
+      return std::make_pair(std::move(summary), st.value("wall_time_s", 0.0));
+  } catch (const std::exception&) {
+    // A damaged record: run the stage again.
+  }
+  return std::nullopt;
+}
+
 /// Runs one stage through its kind's public CaseKind, in its own folder:
-/// the case written to `dir/case.json` (with the pipeline's --set lines for
-/// this stage applied), the summary beside it, and `stage.json` written last
-/// with the stage's content key. A stage whose key is unchanged and whose
-/// summary says ok is not run again.
+/// the case written to `dir/case.json`, the summary beside it, and
+/// `stage.json` written last with the stage's content key. A stage whose key
+/// is unchanged and whose summary says ok is not run again.
 StageResult runStage(const std::string& name, const std::string& kind, json case_value,
                      const std::vector<fs::path>& inputs, const std::vector<std::string>& settings,
                      const bridge::RunContext& parent, const fs::path& dir, StageClock& clock,
@@ -200,40 +242,19 @@ StageResult runStage(const std::string& name, const std::string& kind, json case
   out.name = name;
   out.dir = dir;
   fs::create_directories(dir);
-  // The settings go through the case document (as --set does), so the key
-  // is that of the case the stage runs.
-  {
-    JsonDocument staged(case_value, (dir / "case.json").string());
-    for (const auto& s : settings) staged.applySet(s);
-    case_value = staged.json();
-  }
-  std::vector<fs::path> all = inputs;
-  if (law) {  // (the macro stages: the calibrated laws in place of the case's)
-    case_value.erase("laws");
-    case_value["law_file"] = law->string();
-    all.push_back(*law);
-  }
-  const std::string key = stageKey(case_value, all);
+  StagedCase staged = stageCase(std::move(case_value), inputs, settings, dir, law);
+  case_value = std::move(staged.value);
+  const std::string& key = staged.key;
   const auto t0 = std::chrono::steady_clock::now();
   clock.begin(name);
-  if (fs::exists(dir / "stage.json") && fs::exists(dir / "summary.json")) {
-    try {
-      std::ifstream in(dir / "stage.json");
-      const json st = json::parse(in);
-      std::ifstream sin(dir / "summary.json");
-      json summary = json::parse(sin);
-      if (st.value("key", "") == key && summary.value("status", "") == "ok") {
-        out.summary = std::move(summary);
-        out.reused = true;
-        out.wall_time_s = st.value("wall_time_s", 0.0);
-        if (parent.progress)
-          std::printf("%s %s: unchanged, reused (%s)\n", clock.prefix().c_str(), name.c_str(), dir.c_str());
-        clock.end(name, false, out.wall_time_s);
-        return out;
-      }
-    } catch (const std::exception&) {
-      // A damaged record: run the stage again.
-    }
+  if (auto done = reusable(dir, key)) {
+    out.summary = std::move(done->first);
+    out.reused = true;
+    out.wall_time_s = done->second;
+    if (parent.progress)
+      std::printf("%s %s: unchanged, reused (%s)\n", clock.prefix().c_str(), name.c_str(), dir.c_str());
+    clock.end(name, false, out.wall_time_s);
+    return out;
   }
   fs::remove(dir / "stage.json");
   bridge::writeJsonAtomic(dir / "case.json", case_value);
@@ -535,10 +556,11 @@ bridge::RunOutcome runStages(const JsonDocument& doc, const bridge::RunContext& 
       tc["velocities_m_s"] = c.uci_velocities_m_s;
     }
     test_cases[t] = tc;
-    // What it will cost, for the ETA (the stage's settings applied as it will run).
-    JsonDocument staged(tc, (out / ("2_" + t) / "case.json").string());
-    for (const auto& setting : settingsOf(t)) staged.applySet(setting);
-    if (const auto e = findKind(kTestKind.at(t))->estimate(staged))
+    // What it will cost, for the ETA: nothing when it will be reused.
+    const fs::path dir = out / ("2_" + t);
+    const StagedCase staged = stageCase(tc, cells, settingsOf(t), dir, std::nullopt);
+    if (reusable(dir, staged.key)) continue;
+    if (const auto e = findKind(kTestKind.at(t))->estimate(JsonDocument(staged.value, (dir / "case.json").string())))
       clock.estimated[t] = clock.pending[t] = e->body_steps;
   }
   for (const auto& t : kTests) {
@@ -631,13 +653,15 @@ bridge::RunOutcome runStages(const JsonDocument& doc, const bridge::RunContext& 
   std::vector<std::vector<std::string>> rows;
   for (const auto& t : kTests) {
     const StageResult& st = lab.at(t);
-    rows.push_back({t, kTestKind.at(t), fmt(labMax(st, "peak_force_N") / 1e3), st.reused ? "reused" : "run",
-                    fmt(st.wall_time_s, 3)});
+    // (the shear test's peak is that of the push, across the interface)
+    const char* peak = t == "shear" ? "peak_tangential_force_N" : "peak_force_N";
+    rows.push_back({t, kTestKind.at(t), fmt(labMax(st, peak) / 1e3), fmt(labMax(st, "kinetic_to_work_ratio"), 3),
+                    st.reused ? "reused" : "run", fmt(st.wall_time_s, 3)});
     const json& s = st.summary;
     if (s.contains("quasi_static") && s.at("quasi_static").is_boolean() && !s.at("quasi_static").get<bool>())
       rep.warning(t + ": the test left its quasi-static range (kinetic energy over work above the limit)");
   }
-  rep.table({"test", "kind", "peak force (kN)", "stage", "wall time (s)"}, rows);
+  rep.table({"test", "kind", "peak force (kN; shear: tangential)", "kinetic / work", "stage", "wall time (s)"}, rows);
   rep.figure(out / "2_cc" / "cc_curve.png", "cc_curve.png", "CC: axial force against shortening");
   rep.figure(out / "2_uc" / "uc_curve.png", "uc_curve.png", "UC: axial force against shortening");
   rep.figure(out / "2_shear" / "shear_curve.png", "shear_curve.png", "Interface shear");
@@ -653,15 +677,24 @@ bridge::RunOutcome runStages(const JsonDocument& doc, const bridge::RunContext& 
       const std::string interval =
           iv.is_null() ? "-"
                        : fmt(inUnit(pname, iv[0].get<double>())) + " to " + fmt(inUnit(pname, iv[1].get<double>()));
-      rows.push_back(
-          {law_name, l.at("model").get<std::string>(), pname, unitOf(pname), fmt(inUnit(pname, v)), interval});
+      std::vector<std::string> row = {
+          law_name, l.at("model").get<std::string>(), pname, unitOf(pname), fmt(inUnit(pname, v)), interval};
+      if (c.replicates > 1) {  // the scatter between the cells: the replicate mean's interval
+        const json& rv = p.contains("replicate_mean_95") ? p.at("replicate_mean_95") : json();
+        row.push_back(rv.is_null()
+                          ? "-"
+                          : fmt(inUnit(pname, rv[0].get<double>())) + " to " + fmt(inUnit(pname, rv[1].get<double>())));
+      }
+      rows.push_back(row);
     }
     const double nrms = l.at("nrms").get<double>();
     if (nrms > fitting::kPoorFitNrms)
       rep.warning(std::string(law_name) + " law: a poor fit (normalised RMS error " + fmt(nrms, 3) + " > " +
                   fmt(fitting::kPoorFitNrms) + ")");
   }
-  rep.table({"law", "model", "parameter", "unit", "value", "95 % interval"}, rows);
+  std::vector<std::string> columns = {"law", "model", "parameter", "unit", "value", "95 % interval"};
+  if (c.replicates > 1) columns.push_back("95 % interval of the mean over " + std::to_string(c.replicates) + " cells");
+  rep.table(columns, rows);
   for (const char* law_name : {"axial", "lateral", "interface", "impact"})
     rep.figure(out / "3_fit" / ("fit_" + std::string(law_name) + ".png"), "fit_" + std::string(law_name) + ".png",
                std::string("Data and fitted ") + law_name + " law");

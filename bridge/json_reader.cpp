@@ -106,10 +106,10 @@ JsonDocument JsonDocument::load(const std::filesystem::path& path) {
   try {
     value = Json::parse(in);  // from the stream: no copy of a large file's text beside its DOM
     if (in.bad()) throw InputError(file, "", "read error");
-  } catch (const Json::parse_error& e) {
+  } catch (const Json::exception& e) {  // (a syntax error, or a number beyond double: 1e400)
     std::string what = e.what();
-    const auto pos = what.find("parse error");
-    throw InputError(file, "", "invalid JSON: " + (pos == std::string::npos ? what : what.substr(pos)));
+    const auto pos = what.find("] ");
+    throw InputError(file, "", "invalid JSON: " + (pos == std::string::npos ? what : what.substr(pos + 2)));
   }
   if (!value.is_object()) throw InputError(file, "", "top level must be a JSON object");
   return JsonDocument(std::move(value), file);
@@ -133,6 +133,9 @@ void JsonDocument::applySet(const std::string& assignment) {
   Json value;
   try {
     value = Json::parse(text);
+  } catch (const Json::out_of_range& e) {  // (a number beyond double: 1e400)
+    const std::string what = e.what();
+    throw InputError(state_->file, "", "--set '" + assignment + "': " + what.substr(what.find("] ") + 2));
   } catch (const Json::parse_error&) {
     value = text;  // a bare word is a string
   }

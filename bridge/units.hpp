@@ -5,6 +5,9 @@
 /// "stiffness_N_m", "velocity_m_s") shown in mm, kN, kN/m or m/s. Files keep
 /// SI; only the display converts.
 #include <algorithm>
+#include <cmath>
+#include <iomanip>
+#include <sstream>
 #include <string>
 
 namespace gabion::bridge {
@@ -36,6 +39,22 @@ inline DisplayUnit displayUnit(const std::string& name) {
       return {spaced(name.substr(0, name.size() - suffix.size())), r.unit, r.scale};
   }
   return {spaced(name), "-", 1.0};
+}
+
+/// A number for people: `significant` digits in plain notation (4890 kN,
+/// 0.0425 mm, 14960 kN/m), scientific only below 1e-3 or from 1e9 on.
+inline std::string showNumber(double v, int significant = 3) {
+  if (!std::isfinite(v)) return std::isnan(v) ? "NaN" : (v > 0 ? "inf" : "-inf");
+  const double a = std::fabs(v);
+  std::ostringstream o;
+  if (a == 0.0) return "0";
+  if (a >= 1e-3 && a < 1e9) {
+    const int before = static_cast<int>(std::floor(std::log10(a))) + 1;  // digits before the point
+    o << std::fixed << std::setprecision(std::max(0, significant - before)) << v;
+  } else {
+    o << std::setprecision(significant) << v;
+  }
+  return o.str();
 }
 
 }  // namespace gabion::bridge

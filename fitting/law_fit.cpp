@@ -130,23 +130,27 @@ nlohmann::json intervalJson(const Interval& iv) {
 }  // namespace
 
 std::string describeFit(const std::string& law, const nlohmann::json& entry) {
-  const auto show = [](double v) {
-    std::ostringstream o;
-    o << std::setprecision(4) << v;
-    return o.str();
-  };
+  using bridge::showNumber;
   const double nrms = entry.at("nrms").get<double>();
   std::ostringstream line;
-  line << law << " (" << entry.at("model").get<std::string>() << ", nRMS " << std::setprecision(3) << nrms
+  line << law << " (" << entry.at("model").get<std::string>() << ", nRMS " << showNumber(nrms)
        << (nrms > kPoorFitNrms ? ", POOR FIT" : "") << "):";
+  const char* sep = " ";
   for (const auto& [name, p] : entry.at("parameters").items()) {
     const bridge::DisplayUnit u = bridge::displayUnit(name);
-    line << " " << u.stem << " " << show(u.scale * p.at("value").get<double>());
+    line << sep << u.stem << " " << showNumber(u.scale * p.at("value").get<double>(), 4)
+         << (u.unit == "-" ? "" : " " + u.unit);
     const nlohmann::json& iv =
         p.contains("profile_95") && !p.at("profile_95").is_null() ? p.at("profile_95") : p.at("jacobian_95");
     if (!iv.is_null())
-      line << " [" << show(u.scale * iv[0].get<double>()) << ", " << show(u.scale * iv[1].get<double>()) << "]";
-    line << (u.unit == "-" ? "" : " " + u.unit) << ";";
+      line << " [" << showNumber(u.scale * iv[0].get<double>(), 4) << ", "
+           << showNumber(u.scale * iv[1].get<double>(), 4) << "]";
+    if (p.contains("replicate_mean_95") && !p.at("replicate_mean_95").is_null()) {
+      const nlohmann::json& rv = p.at("replicate_mean_95");
+      line << ", between replicates [" << showNumber(u.scale * rv[0].get<double>(), 4) << ", "
+           << showNumber(u.scale * rv[1].get<double>(), 4) << "]";
+    }
+    sep = "; ";
   }
   return line.str();
 }

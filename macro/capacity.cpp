@@ -10,6 +10,7 @@
 #include "bridge/errors.hpp"
 #include "bridge/output.hpp"
 #include "bridge/plot.hpp"
+#include "bridge/units.hpp"
 #include "macro/case_reader.hpp"
 #include "macro/criteria.hpp"
 #include "macro/runs.hpp"
@@ -143,9 +144,11 @@ bridge::RunOutcome runCapacityCase(const JsonDocument& doc, const bridge::RunCon
     if (std::isfinite(s.criteria.max_penetration_m))
       margin["penetration"] = 1.0 - g.max_penetration_m / s.criteria.max_penetration_m;
     r["margins_at_capacity"] = margin;
-    answer << "capacity " << good.energy_J / 1e3 << " kJ (" << key << " " << good.x << "; " << outcomeName(g.outcome)
-           << ", penetration " << 1e3 * g.max_penetration_m << " mm, back face " << 1e3 * g.max_back_face_displacement_m
-           << " mm); above it " << criterionText(bad.verdict.failed) << " governs (at " << bad.energy_J / 1e3 << " kJ)";
+    const bridge::DisplayUnit u = bridge::displayUnit(key);  // (the boulder's velocity or mass at the capacity)
+    answer << "capacity " << good.energy_J / 1e3 << " kJ (" << u.stem << " " << u.scale * good.x << " " << u.unit
+           << "; " << outcomeName(g.outcome) << ", penetration " << 1e3 * g.max_penetration_m << " mm, back face "
+           << 1e3 * g.max_back_face_displacement_m << " mm); above it " << criterionText(bad.verdict.failed)
+           << " governs (at " << bad.energy_J / 1e3 << " kJ)";
   }
   r["answer"] = answer.str();
   r["criteria"] = {{"held", true},

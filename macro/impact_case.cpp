@@ -7,6 +7,7 @@
 
 #include "bridge/errors.hpp"
 #include "bridge/output.hpp"
+#include "bridge/units.hpp"
 #include "macro/case_reader.hpp"
 #include "macro/runs.hpp"
 
@@ -85,7 +86,7 @@ void writeResults(const std::filesystem::path& outdir, const Structure& s, const
   }
   h5.write("/nodes/initial_position_m", p0, {n, 3}, "m");
   h5.write("/nodes/material", mat);
-  h5.writeInts("/nodes/grid_index", grid);
+  h5.writeInts("/nodes/grid_index", grid, {n, 3});
   std::vector<double> peak, pen, dur;
   for (const auto& r : results) {
     peak.push_back(r.peak_force_N);
@@ -195,14 +196,16 @@ bridge::RunOutcome runImpactCase(const JsonDocument& doc, const bridge::RunConte
       {"front_elements", s.front.node.size()}};
   r["laws"] = {{"source", p.c.law_source}, {"file", bridge::toJson(p.c.laws)}};
   std::ostringstream answer;
-  answer << std::setprecision(3);
+  using bridge::showNumber;
   for (std::size_t i = 0; i < results.size(); ++i) {
     const ImpactResult& x = results[i];
     if (!x.ok) continue;
     answer << "macro.impact" << (results.size() > 1 ? " " + std::to_string(i) : "") << ": " << outcomeName(x.outcome)
-           << " (" << x.input_energy_J / 1e3 << " kJ): peak force " << x.peak_force_N / 1e3 << " kN, penetration "
-           << 1e3 * x.max_penetration_m << " mm, back face " << 1e3 * x.max_back_face_displacement_m << " mm, contact "
-           << 1e3 * x.contact_duration_s << " ms; energy balance error " << x.balance_rel_error << "\n";
+           << " (" << showNumber(x.input_energy_J / 1e3) << " kJ): peak force " << showNumber(x.peak_force_N / 1e3)
+           << " kN, penetration " << showNumber(1e3 * x.max_penetration_m) << " mm, back face "
+           << showNumber(1e3 * x.max_back_face_displacement_m) << " mm, contact "
+           << showNumber(1e3 * x.contact_duration_s) << " ms; energy balance error "
+           << showNumber(x.balance_rel_error, 2) << "\n";
     if (!x.perforation.empty()) answer << "  " << x.perforation << "\n";
   }
   out.answer = answer.str();

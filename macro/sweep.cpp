@@ -14,6 +14,7 @@
 #include "bridge/errors.hpp"
 #include "bridge/output.hpp"
 #include "bridge/plot.hpp"
+#include "bridge/units.hpp"
 #include "macro/case_reader.hpp"
 #include "macro/parallel.hpp"
 #include "macro/runs.hpp"
@@ -290,10 +291,11 @@ bridge::RunOutcome runSweepCase(const JsonDocument& doc, const bridge::RunContex
   out.results["files"] = files;
   {
     std::ostringstream answer;
-    answer << "macro.sweep: " << np << " impacts in " << std::setprecision(3) << wall << " s:";
-    for (const auto& [name, count] : outcomes) answer << " " << count << " " << name << ";";
-    answer << " " << failed << " failed; worst energy balance error " << worst_balance << "\n";
+    answer << "macro.sweep: " << np << " impacts:";
+    for (const auto& [name, count] : outcomes) answer << " " << count << " " << name << ",";
+    answer << " " << failed << " failed; worst energy balance error " << bridge::showNumber(worst_balance, 2) << "\n";
     out.answer = answer.str();
+    out.report = "macro.sweep: " + bridge::showNumber(wall) + " s on " + std::to_string(nthreads) + " threads\n";
   }
   out.results["laws_source"] = p.c.law_source;
   // A sweep in which every point failed has produced nothing usable.

@@ -32,6 +32,8 @@ TEST(Cli, BadInputsExitTwoAndNameTheField) {
       {"no_format", "{\"kind\": \"micro.scene\"}", "/format: missing required key"},
       {"wrong_format", "{\"format\": \"gabion.case/9\", \"kind\": \"x\"}", "/format: expected 'gabion.case/1'"},
       {"unknown_kind", "{\"format\": \"gabion.case/1\", \"kind\": \"no.such.kind\"}", "/kind: unknown case kind"},
+      {"number_overflow", "{\"format\": \"gabion.case/1\", \"kind\": \"macro.impact\", \"x\": 1e400}",
+       "number overflow parsing '1e400'"},
   };
   for (const auto& c : cases) {
     const auto path = dir / (std::string(c.name) + ".json");
@@ -45,6 +47,33 @@ TEST(Cli, BadInputsExitTwoAndNameTheField) {
     EXPECT_EQ(rr.exit_code, 2) << c.name;
     EXPECT_FALSE(std::filesystem::exists(out)) << c.name << ": a rejected case must write nothing";
   }
+}
+
+// Command-line mistakes are bad input too (exit 2, not the parser's own
+// codes), as is an output folder that cannot be made or a --set value
+// beyond double; --help and --version exit 0.
+TEST(Cli, CommandLineMistakesExitTwo) {
+  const auto dir = scratchDir("cli_mistakes");
+  const std::string wall = std::string(GABION_SOURCE_DIR) + "/cases/wall_impact.json";
+  writeFile(dir / "a_file", "x");
+  const struct {
+    std::string args, expected;
+  } cases[] = {
+      {"run", "case is required"},
+      {"run " + wall + " --threads 0", "--threads"},
+      {"run " + wall + " --no-such-option", "--no-such-option"},
+      {"no-such-command", "A subcommand is required"},
+      {"run " + wall + " -q -o " + (dir / "a_file" / "out").string(), "cannot make the output folder (-o)"},
+      {"run " + wall + " -q -o " + (dir / "o").string() + " --set boulder.velocity_m_s=1e400",
+       "--set 'boulder.velocity_m_s=1e400': number overflow"},
+  };
+  for (const auto& c : cases) {
+    const auto r = runGabion(c.args);
+    EXPECT_EQ(r.exit_code, 2) << c.args << ": " << r.output;
+    EXPECT_NE(r.output.find(c.expected), std::string::npos) << c.args << ": " << r.output;
+  }
+  EXPECT_EQ(runGabion("--help").exit_code, 0);
+  EXPECT_EQ(runGabion("run --help").exit_code, 0);
 }
 
 // `gabion plot`: the standard figure of a structure impact's result file, as

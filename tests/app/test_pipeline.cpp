@@ -171,6 +171,36 @@ TEST(Pipeline, ReducedChainRunsEveryStageThenReusesThem) {
                     "not opened in a browser";
 }
 
+// Replicate cells: two seeds, every lab test on each, and the fitted laws
+// report the scatter between the cells (the replicate mean's interval)
+// beside the fit's own, in the summary, the console and the report.
+TEST(Pipeline, ReplicateCellsGiveTheScatterOfTheFit) {
+  const auto dir = scratchDir("pipeline_replicates");
+  writeSmallChain(dir);
+  auto j = readJson(dir / "pipeline.json");
+  j["replicates"] = 2;
+  j.erase("sweep"), j.erase("capacity"), j.erase("design");
+  j["structure"]["velocities_m_s"] = {8};
+  writeFile(dir / "pipeline.json", j.dump());
+  const fs::path out = dir / "out";
+  const auto r = runGabion("run " + (dir / "pipeline.json").string() + " -q --threads 2 -o " + out.string());
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  for (const char* f : {"1_cell_seed3/cell.h5", "1_cell_seed4/cell.h5", "2_cc/replicate_0/result.h5",
+                        "2_cc/replicate_1/result.h5", "2_uci/v8_replicate_1/result.h5"})
+    EXPECT_TRUE(fs::exists(out / f)) << f;
+  const auto s = readJson(out / "summary.json");
+  for (const char* law : {"axial", "lateral", "interface", "impact"}) {
+    const auto& fit = s.at("fit").at(law);
+    EXPECT_EQ(fit.at("replicates").size(), 2u) << law;
+    for (const auto& [name, p] : fit.at("parameters").items()) {
+      ASSERT_TRUE(p.contains("replicate_mean_95")) << law << " " << name;
+      EXPECT_EQ(p.at("replicate_values").size(), 2u) << law << " " << name;
+    }
+  }
+  EXPECT_NE(r.output.find("between replicates"), std::string::npos) << r.output;
+  EXPECT_NE(readText(out / "report.html").find("interval of the mean over 2 cells"), std::string::npos);
+}
+
 TEST(Pipeline, BadInputNamesTheField) {
   const auto dir = scratchDir("pipeline_bad");
   writeSmallChain(dir);

@@ -2,6 +2,8 @@
 // the factor; the longer suffix wins ("_N_m" over "_m", "_m_s" over "_s").
 #include <gtest/gtest.h>
 
+#include <cmath>
+
 #include "bridge/units.hpp"
 
 using gabion::bridge::displayUnit;
@@ -25,4 +27,20 @@ TEST(DisplayUnit, SiSuffixToEngineersUnit) {
     EXPECT_EQ(u.unit, c.unit) << c.name;
     EXPECT_EQ(u.scale, c.scale) << c.name;
   }
+}
+
+// Numbers for people: plain notation with the significant digits asked for
+// (no "4.89e+03 kN"), scientific only for the very small or very large.
+TEST(DisplayUnit, NumbersInPlainNotation) {
+  using gabion::bridge::showNumber;
+  EXPECT_EQ(showNumber(4886.2), "4886");
+  EXPECT_EQ(showNumber(14964.3, 4), "14964");
+  EXPECT_EQ(showNumber(472.04), "472");
+  EXPECT_EQ(showNumber(5.886), "5.89");
+  EXPECT_EQ(showNumber(0.0426), "0.0426");
+  EXPECT_EQ(showNumber(-12.345, 4), "-12.35");
+  EXPECT_EQ(showNumber(0.0), "0");
+  EXPECT_EQ(showNumber(6.2e-4, 2), "0.00062");
+  EXPECT_EQ(showNumber(3.1e12), "3.1e+12");
+  EXPECT_EQ(showNumber(std::nan("")), "NaN");
 }
