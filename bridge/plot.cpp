@@ -121,6 +121,14 @@ std::string tickLabel(double v, const Ticks& ticks) {
 
 // ---------------------------------------------------------------- drawing
 
+}  // namespace
+
+int paletteColor(std::size_t index) {
+  return static_cast<int>(kPalette[index % kPalette.size()]);
+}
+
+namespace {
+
 Rgb seriesColor(const PlotSeries& s, std::size_t index) {
   const auto v = s.color_rgb >= 0 ? static_cast<std::uint32_t>(s.color_rgb) : kPalette[index % kPalette.size()];
   return {((v >> 16) & 0xFFu) / 255.0, ((v >> 8) & 0xFFu) / 255.0, (v & 0xFFu) / 255.0};
@@ -135,11 +143,12 @@ MarkerShape seriesMarker(std::size_t index) {
 }
 
 bool hasLine(PlotSeries::Style s) {
-  return s != PlotSeries::Style::Markers;
+  return s == PlotSeries::Style::Line || s == PlotSeries::Style::LineMarkers;
 }
 bool hasMarkers(PlotSeries::Style s) {
-  return s != PlotSeries::Style::Line;
+  return s == PlotSeries::Style::Markers || s == PlotSeries::Style::LineMarkers;
 }
+constexpr double kBandAlpha = 0.22;
 
 // Pixel coordinates far outside the image are clamped (cairo works in
 // fixed point: huge values would wrap).
@@ -252,6 +261,11 @@ void drawLegend(Painter& p, const PlotSpec& spec, const Frame& f, const std::vec
       cairo_stroke(p.raw());
     }
     if (hasMarkers(s.style)) p.marker(bx + pad + sample_w / 2.0, y, seriesMarker(i));
+    if (s.style == PlotSeries::Style::Band) {
+      p.color(seriesColor(s, i), kBandAlpha);
+      p.rect(bx + pad, y - 5.0, bx + pad + sample_w, y + 5.0);
+      cairo_fill(p.raw());
+    }
     p.color(kText);
     p.text(bx + pad + sample_w + pad, y + 0.36 * kFontPx, s.label, kFontPx);
     y += row_h;
@@ -262,10 +276,15 @@ void validate(const std::filesystem::path& path, const PlotSpec& spec) {
   if (spec.width_px < 1 || spec.height_px < 1 || spec.width_px > kMaxSidePx || spec.height_px > kMaxSidePx)
     throw std::invalid_argument("plot " + path.string() + ": size " + std::to_string(spec.width_px) + "x" +
                                 std::to_string(spec.height_px) + " px outside 1.." + std::to_string(kMaxSidePx));
-  for (const PlotSeries& s : spec.series)
+  for (const PlotSeries& s : spec.series) {
     if (s.x.size() != s.y.size())
       throw std::invalid_argument("plot " + path.string() + ": series '" + s.label + "' has " +
                                   std::to_string(s.x.size()) + " x but " + std::to_string(s.y.size()) + " y values");
+    if (s.style == PlotSeries::Style::Band && s.y_upper.size() != s.x.size())
+      throw std::invalid_argument("plot " + path.string() + ": band '" + s.label + "' has " +
+                                  std::to_string(s.x.size()) + " x but " + std::to_string(s.y_upper.size()) +
+                                  " upper values");
+  }
 }
 
 // Draws the chart on `cr`, a W x H canvas.
@@ -283,6 +302,8 @@ void render(cairo_t* cr, const PlotSpec& spec) {
       if (!std::isfinite(s.x[i]) || !std::isfinite(s.y[i])) continue;
       const double x = std::clamp(s.x[i], -kHuge, kHuge), y = std::clamp(s.y[i], -kHuge, kHuge);
       xmin = std::min(xmin, x), xmax = std::max(xmax, x), ymin = std::min(ymin, y), ymax = std::max(ymax, y);
+      if (s.style == PlotSeries::Style::Band && std::isfinite(s.y_upper[i]))
+        ymax = std::max(ymax, std::clamp(s.y_upper[i], -kHuge, kHuge));
       any = true;
     }
   const Range xr = autoRange(xmin, xmax, any), yr = autoRange(ymin, ymax, any);
@@ -334,6 +355,29 @@ void render(cairo_t* cr, const PlotSpec& spec) {
   cairo_set_line_cap(cr, CAIRO_LINE_CAP_ROUND);
   for (std::size_t k = 0; k < spec.series.size(); ++k) {
     const PlotSeries& s = spec.series[k];
+    if (s.style == PlotSeries::Style::Band) {
+      // One filled polygon per run of finite points: along the lower edge,
+      // back along the upper one.
+      p.color(seriesColor(s, k), kBandAlpha);
+      std::size_t i = 0;
+      while (i < s.x.size()) {
+        const auto finite = [&](std::size_t j) {
+          return std::isfinite(s.x[j]) && std::isfinite(s.y[j]) && std::isfinite(s.y_upper[j]);
+        };
+        while (i < s.x.size() && !finite(i)) ++i;
+        std::size_t end = i;
+        while (end < s.x.size() && finite(end)) ++end;
+        if (end > i + 1) {
+          cairo_move_to(cr, px(s.x[i]), py(s.y[i]));
+          for (std::size_t j = i + 1; j < end; ++j) cairo_line_to(cr, px(s.x[j]), py(s.y[j]));
+          for (std::size_t j = end; j-- > i;) cairo_line_to(cr, px(s.x[j]), py(s.y_upper[j]));
+          cairo_close_path(cr);
+          cairo_fill(cr);
+        }
+        i = end;
+      }
+      continue;
+    }
     p.color(seriesColor(s, k));
     cairo_set_line_width(cr, kLineWidthPx);
     bool have_prev = false;

@@ -11,12 +11,18 @@ namespace gabion::bridge {
 
 /// One data series of a chart.
 struct PlotSeries {
-  enum class Style { Line, Markers, LineMarkers };
+  /// Band: the region between y (lower edge) and y_upper, filled pale.
+  enum class Style { Line, Markers, LineMarkers, Band };
   std::string label;         ///< legend text (empty: not in the legend)
   std::vector<double> x, y;  ///< same length; non-finite points are skipped
   Style style = Style::Line;
-  int color_rgb = -1;  ///< 0xRRGGBB, or -1: the palette colour of the series' index
+  int color_rgb = -1;                ///< 0xRRGGBB, or -1: the palette colour of the series' index
+  std::vector<double> y_upper = {};  ///< Band only: the upper edge, as long as x
 };
+
+/// The palette colour (0xRRGGBB) a series at `index` gets by default: to
+/// draw a band in the colour of the line it belongs to.
+int paletteColor(std::size_t index);
 
 /// A series of (x_scale * x[k], y_scale * y[k]): data in SI units drawn in
 /// the chart's (mm, kN, ...).

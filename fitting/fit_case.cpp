@@ -194,8 +194,48 @@ std::pair<std::string, double> axisOf(const std::string& name) {
   return {u.stem + " (" + u.unit + ")", u.scale};
 }
 
-void plotFit(const fs::path& file, const TestSpec& t, const std::vector<PathGrid>& grids, const ModelFit& fit,
+// The fitted curve's pointwise 95 % confidence band on a grid: the model
+// +- t sqrt(g' C g), g its gradient in the parameters (central differences),
+// C their covariance. Empty where it cannot be had (singular covariance, a
+// parameter at the edge of the model's domain).
+std::pair<std::vector<double>, std::vector<double>> confidenceBand(const LawFitResult& r, const PathGrid& g,
+                                                                   const Lockup& lockup) {
+  const ModelFit& fit = r.best();
+  const std::size_t p = fit.theta.size(), n = g.x.size();
+  const double dof = r.effective_observations - static_cast<double>(p);
+  if (r.covariance.size() != p * p || !(dof >= 1.0)) return {};
+  std::vector<double> model;
+  evaluateModel(fit.model, fit.theta, g, model, lockup);
+  std::vector<std::vector<double>> grad(p);
+  try {
+    for (std::size_t j = 0; j < p; ++j) {
+      const double h = std::max(1e-6 * std::abs(fit.theta[j]), 1e-12);
+      auto plus = fit.theta, minus = fit.theta;
+      plus[j] += h, minus[j] -= h;
+      std::vector<double> fp, fm;
+      evaluateModel(fit.model, plus, g, fp, lockup);
+      evaluateModel(fit.model, minus, g, fm, lockup);
+      grad[j].resize(n);
+      for (std::size_t i = 0; i < n; ++i) grad[j][i] = (fp[i] - fm[i]) / (2.0 * h);
+    }
+  } catch (const Infeasible&) {
+    return {};
+  }
+  const double t = studentT975(dof);
+  std::vector<double> lo(n), hi(n);
+  for (std::size_t i = 0; i < n; ++i) {
+    double var = 0.0;
+    for (std::size_t a = 0; a < p; ++a)
+      for (std::size_t b = 0; b < p; ++b) var += grad[a][i] * r.covariance[a * p + b] * grad[b][i];
+    const double half = t * std::sqrt(std::max(var, 0.0));
+    lo[i] = model[i] - half, hi[i] = model[i] + half;
+  }
+  return {lo, hi};
+}
+
+void plotFit(const fs::path& file, const TestSpec& t, const std::vector<PathGrid>& grids, const LawFitResult& r,
              const Lockup& lockup) {
+  const ModelFit& fit = r.best();
   bridge::PlotSpec spec;
   std::ostringstream nrms;
   nrms.precision(3);
@@ -224,6 +264,15 @@ void plotFit(const fs::path& file, const TestSpec& t, const std::vector<PathGrid
         bridge::scaledSeries("data " + tag, g.x, g.y, x_scale, y_scale, bridge::PlotSeries::Style::Markers));
     evaluateModel(fit.model, fit.theta, g, model, lockup);
     spec.series.push_back(bridge::scaledSeries("fit " + tag, g.x, model, x_scale, y_scale));
+    const auto [lo, hi] = confidenceBand(r, g, lockup);
+    if (!lo.empty()) {  // (in the fit's colour, behind it)
+      bridge::PlotSeries band = bridge::scaledSeries(i == 0 ? "95 % band of the fit" : "", g.x, lo, x_scale, y_scale,
+                                                     bridge::PlotSeries::Style::Band);
+      band.y_upper = hi;
+      for (double& y : band.y_upper) y *= y_scale;
+      band.color_rgb = spec.series.back().color_rgb = bridge::paletteColor(spec.series.size() - 1);
+      spec.series.insert(spec.series.end() - 1, band);
+    }
   }
   bridge::writePlotPng(file, spec);
 }
@@ -328,7 +377,7 @@ bridge::RunOutcome runCase(const bridge::JsonDocument& doc, const bridge::RunCon
     }
     if (c.plots) {
       const std::string png = "fit_" + t.name + ".png";
-      plotFit(ctx.outdir / png, t, grids, best, law_settings.lockup);
+      plotFit(ctx.outdir / png, t, grids, r, law_settings.lockup);
       plots.push_back(png);
     }
   }

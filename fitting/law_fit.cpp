@@ -77,7 +77,7 @@ LawFitResult fitLaw(const std::vector<LawModel>& candidates, const std::vector<P
   r.effective_observations = effectiveObservations(set);
 
   std::vector<double> se;
-  const auto jac = jacobianIntervals(set, best.params, best.theta, se);
+  const auto jac = jacobianIntervals(set, best.params, best.theta, se, &r.covariance);
   r.evaluations += static_cast<int>(2 * best.theta.size() + 1);
   std::vector<Interval> prof(best.theta.size(), Interval{kNaN, kNaN});
   if (settings.profile) prof = profileIntervals(set, best.params, best.theta, se, settings.optimizer, r.evaluations);

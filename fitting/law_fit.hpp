@@ -56,6 +56,9 @@ struct LawFitResult {
   std::vector<ModelFit> candidates;
   std::size_t chosen = 0;
   std::vector<ParameterEstimate> parameters;  ///< of candidates[chosen]
+  /// Their linearised covariance (p x p, row-major, physical units; empty
+  /// when singular): the fitted curve's confidence band.
+  std::vector<double> covariance;
   double effective_observations = 0.0;
   std::vector<std::string> replicate_labels;
   int evaluations = 0;  ///< every objective evaluation (fits, profiles, replicates)

@@ -24,8 +24,10 @@ double studentT975(double dof) {
 }
 
 std::vector<Interval> jacobianIntervals(const CurveSet& set, const std::vector<Parameter>& params,
-                                        const std::vector<double>& theta, std::vector<double>& stderr_out) {
+                                        const std::vector<double>& theta, std::vector<double>& stderr_out,
+                                        std::vector<double>* covariance_out) {
   const std::size_t p = theta.size();
+  if (covariance_out != nullptr) covariance_out->clear();
   const auto r0 = residuals(set, theta);
   const std::size_t m = r0.size();
   // Row weights: effective-point factor of the row's curve times the robust weight.
@@ -85,6 +87,13 @@ std::vector<Interval> jacobianIntervals(const CurveSet& set, const std::vector<P
   lu.setThreshold(1e-12);
   if (!lu.isInvertible()) return out;
   const Eigen::MatrixXd cov = s2 * lu.inverse();
+  if (covariance_out != nullptr) {
+    covariance_out->resize(p * p);
+    for (std::size_t i = 0; i < p; ++i)
+      for (std::size_t j = 0; j < p; ++j)
+        (*covariance_out)[i * p + j] =
+            scale[i] * scale[j] * cov(static_cast<Eigen::Index>(i), static_cast<Eigen::Index>(j));
+  }
   const double t = studentT975(dof);
   for (std::size_t j = 0; j < p; ++j) {
     const double var = cov(static_cast<Eigen::Index>(j), static_cast<Eigen::Index>(j));

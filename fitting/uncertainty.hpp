@@ -26,9 +26,12 @@ constexpr double kChiSquare1_95 = 3.841458820694124;
 /// differences), W = a_c w_i (effective-point factor times the robust IRLS weight
 /// at the optimum), s^2 = residualVariance (on the original points, since
 /// resampling smooths the noise); theta +- t_{n_eff-p} sqrt(cov).
-/// Also returns the standard errors in `stderr_out` (NaN when singular).
+/// Also returns the standard errors in `stderr_out` (NaN when singular) and,
+/// when asked, the covariance (p x p, row-major, physical units; empty when
+/// singular) in `covariance_out`, for the fitted curve's confidence band.
 std::vector<Interval> jacobianIntervals(const CurveSet& set, const std::vector<Parameter>& params,
-                                        const std::vector<double>& theta, std::vector<double>& stderr_out);
+                                        const std::vector<double>& theta, std::vector<double>& stderr_out,
+                                        std::vector<double>* covariance_out = nullptr);
 
 /// Profile-likelihood intervals: for each parameter, the values where
 /// (S_prof - S_min) / s^2 = chi2_{1,0.95}, with S_prof the misfit minimised over

@@ -348,6 +348,42 @@ TEST(Plot, UnwritablePathThrows) {
                std::runtime_error);
 }
 
+// A band (the fitted curve's confidence band) fills pale between its lower
+// and upper edges and nowhere else; the auto-range includes its upper edge.
+TEST(Plot, BandFillsBetweenItsEdges) {
+  PlotSpec spec;
+  PlotSeries band;
+  band.style = PlotSeries::Style::Band;
+  band.color_rgb = 0x0000FF;
+  band.x = {0.0, 1.0};
+  band.y = {0.0, 0.0};
+  band.y_upper = {1.0, 1.0};
+  spec.series.push_back(band);
+  PlotSeries below;  // (a point at -1 so that the band does not start at the frame's bottom)
+  below.style = PlotSeries::Style::Markers;
+  below.color_rgb = 0xFFFFFF;
+  below.x = {0.5};
+  below.y = {-1.0};
+  spec.series.push_back(below);
+  const fs::path path = tempPng("band.png");
+  writePlotPng(path, spec);
+  const Image img = readPng(path);
+  const FrameBox f = findFrame(img);
+  ASSERT_GE(f.left, 0);
+  // x from 0 to 1 and y from -1 to 1, with 5 % margins; points off the grid lines.
+  const auto at = [&](double x, double y) {
+    return img.at(static_cast<int>(std::lround(f.left + (x + 0.05) / 1.1 * (f.right - f.left))),
+                  static_cast<int>(std::lround(f.bottom - (y + 1.1) / 2.2 * (f.bottom - f.top))));
+  };
+  const auto inside = at(0.53, 0.65), outside = at(0.53, -0.35);
+  EXPECT_GT(inside[2], inside[0] + 40) << "pale blue inside the band";
+  EXPECT_GT(inside[0], 120) << "pale, not solid";
+  EXPECT_EQ(outside, (std::array<int, 3>{255, 255, 255})) << "white below the band";
+  band.y_upper = {1.0};
+  spec.series = {band};
+  EXPECT_THROW(writePlotPng(tempPng("bad_band.png"), spec), std::invalid_argument);
+}
+
 TEST(Plot, InvalidSpecThrows) {
   PlotSpec spec;
   spec.width_px = 0;
