@@ -57,7 +57,7 @@ fs::path relative(const JsonDocument& doc, const std::string& p) {
 PipelineCase readPipeline(const JsonDocument& doc) {
   const JsonReader root = doc.root();
   PipelineCase c;
-  c.seed = static_cast<unsigned long>(root.integer("seed", 1, 0));
+  c.seed = static_cast<unsigned long>(root.seed("seed", 1));
   c.cell = relative(doc, root.string("cell"));
   c.cell_is_file = c.cell.extension() == ".h5";
   if (root.has("cell_edge_m")) {

@@ -7,6 +7,8 @@
 
 #include <cmath>
 #include <fstream>
+#include <limits>
+#include <set>
 #include <sstream>
 
 #include "bridge/errors.hpp"
@@ -31,6 +33,74 @@ std::string escapePointerToken(const std::string& key) {
 }
 
 namespace {
+
+// Nesting deeper than this is refused on reading: no case or law file needs
+// it, and writing a deeper document back (summary.json copies the laws)
+// recurses once per level.
+constexpr int kMaxDepth = 64;
+
+// A first, DOM-less pass over a document (nlohmann's SAX interface):
+// refuses a key repeated within one object (JSON leaves it undefined; the
+// last one would silently win) and nesting deeper than kMaxDepth, naming
+// the JSON pointer. Syntax errors are left to the parse that follows.
+class ParseGuard : public nlohmann::json_sax<Json> {
+ public:
+  explicit ParseGuard(std::string file) : file_(std::move(file)) {}
+  bool null() override { return element(); }
+  bool boolean(bool) override { return element(); }
+  bool number_integer(number_integer_t) override { return element(); }
+  bool number_unsigned(number_unsigned_t) override { return element(); }
+  bool number_float(number_float_t, const string_t&) override { return element(); }
+  bool string(string_t&) override { return element(); }
+  bool binary(binary_t&) override { return element(); }
+  bool start_object(std::size_t) override { return open(false); }
+  bool start_array(std::size_t) override { return open(true); }
+  bool end_object() override { return close(); }
+  bool end_array() override { return close(); }
+  bool key(string_t& k) override {
+    Frame& f = frames_.back();
+    f.key = k;
+    if (!f.keys.insert(k).second)
+      throw InputError(file_, pointer(), "duplicate key '" + k + "' (each key once per object)");
+    return true;
+  }
+  bool parse_error(std::size_t, const std::string&, const nlohmann::detail::exception&) override { return false; }
+
+ private:
+  struct Frame {
+    bool array;
+    long long index;
+    std::string key;
+    std::set<std::string> keys;
+  };
+  bool element() {
+    if (!frames_.empty() && frames_.back().array) ++frames_.back().index;
+    return true;
+  }
+  bool open(bool array) {
+    element();
+    frames_.push_back({array, -1, {}, {}});
+    if (frames_.size() > static_cast<std::size_t>(kMaxDepth))
+      throw InputError(file_, pointer(), "nested deeper than " + std::to_string(kMaxDepth) + " levels");
+    return true;
+  }
+  bool close() {
+    frames_.pop_back();
+    return true;
+  }
+  // Where the parser is: every open container's current element; the
+  // innermost one only once it has an element (a key, an index).
+  std::string pointer() const {
+    std::string p;
+    for (const Frame& f : frames_) {
+      if (f.array ? f.index < 0 : f.key.empty() && f.keys.empty()) break;
+      p += "/" + (f.array ? std::to_string(f.index) : escapePointerToken(f.key));
+    }
+    return p;
+  }
+  std::string file_;
+  std::vector<Frame> frames_;
+};
 
 std::string typeName(const Json& v) {
   if (v.is_number()) return "a number";
@@ -100,8 +170,16 @@ JsonDocument JsonDocument::load(const std::filesystem::path& path) {
   std::error_code ec;
   if (!std::filesystem::exists(path, ec)) throw InputError(file, "", "file does not exist");
   if (std::filesystem::is_directory(path, ec)) throw InputError(file, "", "is a directory, not a JSON file");
+  if (!std::filesystem::is_regular_file(path, ec))  // (a FIFO or a device would block or never end)
+    throw InputError(file, "", "not a regular file");
   std::ifstream in(path, std::ios::binary);
   if (!in) throw InputError(file, "", "cannot open file for reading");
+  {
+    ParseGuard guard(file);
+    Json::sax_parse(in, &guard);
+    in.clear();
+    in.seekg(0);
+  }
   Json value;
   try {
     value = Json::parse(in);  // from the stream: no copy of a large file's text beside its DOM
@@ -131,6 +209,8 @@ void JsonDocument::applySet(const std::string& assignment) {
   const std::string path = assignment.substr(0, eq);
   const std::string text = assignment.substr(eq + 1);
   Json value;
+  ParseGuard guard(state_->file + ": --set '" + assignment + "'");
+  Json::sax_parse(text, &guard);
   try {
     value = Json::parse(text);
   } catch (const Json::out_of_range& e) {  // (a number beyond double: 1e400)
@@ -255,12 +335,32 @@ std::optional<double> JsonReader::optionalNumber(const std::string& key, Check c
   return checkedNumber(key, *v, check);
 }
 
+namespace {
+
+// An integer value as written (a positive one beyond 2^63 - 1 stays
+// positive: "too large", not a wrapped negative), or fails.
+long long integerValue(const JsonReader& r, const std::string& key, const Json& v, long long maximum) {
+  if (!v.is_number_integer()) r.fail(key, "expected an integer, got " + typeName(v));
+  if (v.is_number_unsigned() && v.get<unsigned long long>() > static_cast<unsigned long long>(maximum))
+    r.fail(key, "must be <= " + std::to_string(maximum) + " (got " + std::to_string(v.get<unsigned long long>()) + ")");
+  return v.get<long long>();
+}
+
+}  // namespace
+
 long long JsonReader::integer(const std::string& key, long long minimum) const {
-  const Json& v = required(key);
-  if (!v.is_number_integer()) fail(key, "expected an integer, got " + typeName(v));
-  const long long x = v.get<long long>();
+  constexpr long long kMax = std::numeric_limits<int>::max();
+  const long long x = integerValue(*this, key, required(key), kMax);
   if (x < minimum) fail(key, "must be >= " + std::to_string(minimum) + " (got " + std::to_string(x) + ")");
+  if (x > kMax) fail(key, "must be <= " + std::to_string(kMax) + " (got " + std::to_string(x) + ")");
   return x;
+}
+
+std::uint64_t JsonReader::seed(const std::string& key, std::uint64_t fallback) const {
+  if (!has(key)) return fallback;
+  const long long x = integerValue(*this, key, required(key), std::numeric_limits<long long>::max());
+  if (x < 0) fail(key, "must be >= 0 (got " + std::to_string(x) + ")");
+  return static_cast<std::uint64_t>(x);
 }
 
 long long JsonReader::integer(const std::string& key, long long fallback, long long minimum) const {

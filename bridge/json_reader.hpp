@@ -8,6 +8,7 @@
 /// then rejects every key nobody read (an unknown key, usually a typo), the way
 /// pbrt-v4 stops on an unused parameter. Validation stays on in Release builds.
 #include <Eigen/Core>
+#include <cstdint>
 #include <filesystem>
 #include <memory>
 #include <nlohmann/json.hpp>
@@ -76,9 +77,12 @@ class JsonReader {
   /// An optional number with no default: empty when absent (a change that
   /// replaces a value only where one is given).
   std::optional<double> optionalNumber(const std::string& key, Check check = Check::Finite) const;
-  /// A required integer >= minimum.
+  /// A required integer in [minimum, 2^31 - 1]: every count, index and
+  /// step number fits an int, so what a caller narrows it to cannot wrap.
   long long integer(const std::string& key, long long minimum) const;
   long long integer(const std::string& key, long long fallback, long long minimum) const;
+  /// A random seed: an integer in [0, 2^63 - 1].
+  std::uint64_t seed(const std::string& key, std::uint64_t fallback) const;
   std::string string(const std::string& key) const;
   std::string string(const std::string& key, const std::string& fallback) const;
   /// A string that must be one of `options`.

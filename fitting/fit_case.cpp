@@ -101,7 +101,7 @@ FitCase readFitCase(const bridge::JsonDocument& doc) {
   const JsonReader root = doc.root();
   const fs::path dir = caseDirectory(doc);
   FitCase c;
-  const auto seed = static_cast<unsigned long>(root.integer("seed", 1, 0));
+  const auto seed = static_cast<unsigned long>(root.seed("seed", 1));
   c.settings.optimizer = readOptimizer(root.optionalObject("optimizer"), seed, OptimizerSettings{});
   c.settings.loss = readLoss(root.optionalObject("objective"), c.grid_points);
   if (auto u = root.optionalObject("uncertainty")) c.settings.profile = u->boolean("profile", true);

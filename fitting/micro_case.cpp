@@ -124,7 +124,7 @@ MicroCase readMicroCase(const bridge::JsonDocument& doc) {
       curves[i].fail("path", "fit.micro compares monotonic loading curves (the model is interpolated in x)");
   }
   c.loss = readLoss(root.optionalObject("objective"), c.grid_points);
-  c.search.seed = static_cast<unsigned long>(root.integer("seed", 1, 0));
+  c.search.seed = static_cast<unsigned long>(root.seed("seed", 1));
   if (auto s = root.optionalObject("search")) {
     c.search.initial_samples = static_cast<std::size_t>(s->integer("initial_samples", 8, 1));
     c.search.starts = static_cast<std::size_t>(s->integer("starts", 2, 0));

@@ -144,7 +144,7 @@ nlohmann::json addBlockFills(const JsonReader& root, Scene& scene) {
       if (fraction >= 1.0) r.fail("solid_fraction", "must be below 1");
       target = fraction * mat->density_kg_m3 * (hi - lo).prod();
     }
-    const auto seed = static_cast<std::uint64_t>(r.integer("seed", 1, 0));
+    const std::uint64_t seed = r.seed("seed", 1);
     reports.push_back(
         addBlockFill(r, scene, material, lo, hi, target, seed, [&](const std::string& m) { region.failHere(m); }));
   }

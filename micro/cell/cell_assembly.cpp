@@ -83,7 +83,7 @@ CellCase parseCase(const bridge::JsonDocument& doc) {
   c.edge_m = root.number("edge_m", c.edge_m, Check::Positive);
   c.target_porosity = root.number("target_porosity", c.target_porosity, Check::Positive);
   if (c.target_porosity >= 1.0) root.fail("target_porosity", "must be below 1");
-  c.seed = static_cast<std::uint64_t>(root.integer("seed", 1, 0));
+  c.seed = root.seed("seed", 1);
   c.gravity = root.vec3("gravity_m_s2", c.gravity);
   if (!(c.gravity.z() < 0.0)) root.fail("gravity_m_s2", "a cell is filled under gravity: its z component must be < 0");
   c.rock = parseNamedMaterial("rock", root.object("rock"));

@@ -57,7 +57,7 @@ CellSource parseSource(const JsonReader& root, const fs::path& dir) {
   }
   s.generate = dir / c.string("case");
   if (!fs::is_regular_file(s.generate)) c.fail("case", "no such case file " + s.generate.string());
-  if (c.has("seed")) s.seed = static_cast<std::uint64_t>(c.integer("seed", 0));
+  if (c.has("seed")) s.seed = c.seed("seed", 0);
   return s;
 }
 

@@ -1,6 +1,9 @@
 // JSON reading: every error names the file and the JSON pointer; unknown keys
 // are rejected; --set overrides reach nested values.
 #include <gtest/gtest.h>
+#include <sys/stat.h>
+
+#include <cstdio>
 
 #include "bridge/errors.hpp"
 #include "bridge/json_reader.hpp"
@@ -109,4 +112,61 @@ TEST(JsonReader, UnreadableAndInvalidFiles) {
   const std::string msg = errorOf([&] { JsonDocument::load(bad); });
   EXPECT_NE(msg.find("invalid JSON"), std::string::npos) << msg;
   EXPECT_NE(msg.find("line 2"), std::string::npos) << msg;
+}
+
+namespace {
+
+std::string writeText(const std::string& name, const std::string& text) {
+  const std::string path = ::testing::TempDir() + name;
+  FILE* f = std::fopen(path.c_str(), "w");
+  std::fputs(text.c_str(), f);
+  std::fclose(f);
+  return path;
+}
+
+}  // namespace
+
+// A key given twice in one object is refused with its pointer (the last one
+// would silently win), in a file and in a --set value; nesting deeper than
+// 64 levels is refused before it can be written back recursively; a FIFO
+// (which would block) is not read.
+TEST(JsonReader, DuplicateKeysDeepNestingAndNonRegularFilesAreRefused) {
+  const std::string dup = writeText("dup.json", R"({"run": {"a": 1, "b": [0, {"c": 1, "c": 2}]}})");
+  EXPECT_EQ(errorOf([&] { JsonDocument::load(dup); }),
+            dup + ": /run/b/1/c: duplicate key 'c' (each key once per object)");
+  const std::string same_elsewhere = writeText("same.json", R"({"a": {"x": 1}, "b": {"x": 2}})");
+  EXPECT_NO_THROW(JsonDocument::load(same_elsewhere));
+
+  const std::string deep = writeText("deep.json", "{\"x\": " + std::string(200, '[') + std::string(200, ']') + "}");
+  const std::string msg = errorOf([&] { JsonDocument::load(deep); });
+  EXPECT_NE(msg.find("nested deeper than 64 levels"), std::string::npos) << msg;
+  const std::string ok = writeText("deep_ok.json", "{\"x\": " + std::string(60, '[') + std::string(60, ']') + "}");
+  EXPECT_NO_THROW(JsonDocument::load(ok));
+
+  auto d = doc(R"({"a": 1})");
+  EXPECT_EQ(errorOf([&] { d.applySet(R"(b={"k": 1, "k": 2})"); }),
+            "case.json: --set 'b={\"k\": 1, \"k\": 2}': /k: duplicate key 'k' (each key once per object)");
+
+  const std::string fifo = ::testing::TempDir() + "case_fifo.json";
+  std::remove(fifo.c_str());
+  ASSERT_EQ(mkfifo(fifo.c_str(), 0600), 0);
+  EXPECT_EQ(errorOf([&] { JsonDocument::load(fifo); }), fifo + ": not a regular file");
+  std::remove(fifo.c_str());
+}
+
+// Integers are checked in 64 bits before anything narrows them: a count
+// past 2^31 - 1 is refused (it would wrap in an int), a seed may use 63
+// bits, and a number beyond double is an input error.
+TEST(JsonReader, IntegersAreRangeCheckedBeforeNarrowing) {
+  auto d = doc(R"({"n": 4294967297, "m": 2147483647, "seed": 9223372036854775807, "big": 18446744073709551615})");
+  EXPECT_EQ(errorOf([&] { d.root().integer("n", 1); }), "case.json: /n: must be <= 2147483647 (got 4294967297)");
+  EXPECT_EQ(d.root().integer("m", 1), 2147483647);
+  EXPECT_EQ(d.root().seed("seed", 1), 9223372036854775807ULL);
+  EXPECT_EQ(errorOf([&] { d.root().seed("big", 1); }),
+            "case.json: /big: must be <= 9223372036854775807 (got 18446744073709551615)");
+  EXPECT_EQ(errorOf([&] { d.root().integer("big", 1); }),
+            "case.json: /big: must be <= 2147483647 (got 18446744073709551615)");
+  EXPECT_EQ(d.root().seed("absent", 7), 7u);
+  const std::string huge = writeText("huge.json", R"({"x": 1e400})");
+  EXPECT_NE(errorOf([&] { JsonDocument::load(huge); }).find("number overflow parsing '1e400'"), std::string::npos);
 }

@@ -163,7 +163,9 @@ TEST(MicroCell, BadInputIsNamed) {
       {"bending", smallCell(R"(, "netting": {"bending": 1})"), "/netting/bending"},
   };
   for (const auto& c : cases) {
-    writeFile(dir / (c.name + ".json"), c.text);
+    // (the extra key replaces the base case's one: nlohmann's parser keeps the
+    // last of a repeated key, which gabion refuses in a case file)
+    writeFile(dir / (c.name + ".json"), nlohmann::json::parse(c.text).dump());
     const auto r = runGabion("check " + (dir / (c.name + ".json")).string());
     EXPECT_EQ(r.exit_code, 2) << c.name << ": " << r.output;
     EXPECT_NE(r.output.find(c.pointer), std::string::npos) << c.name << ": " << r.output;
