@@ -204,6 +204,8 @@ class Engine {
   int hcur_ = 0;  // which of the two contact sets of each partition holds the last step's contacts
   double skin_m_ = 0.0;
   bool need_rebuild_ = true;
+  bool just_rebuilt_ = false;  ///< the displacement test measures one step's move (the tunnelling check)
+  double tunnel_m_ = 0.0;      ///< a larger move in one step is tunnelling: the smallest radius (or the skin)
   std::size_t rebuilds_ = 0;
 
   Vec3 gravity_;

@@ -10,9 +10,10 @@ enum class StepStatus {
   NonFinite,      ///< a position, velocity or force became NaN or infinite
   Overlap,        ///< a contact overlap passed run.max_overlap_ratio of the smaller radius
   EnergyRunaway,  ///< kinetic + elastic energy grew past run.energy_runaway_factor x the energy supplied
+  Tunnelling,     ///< a body moved more than the smallest radius in one step: it can pass through others unseen
 };
 
-/// A short name of the status ("ok", "non_finite", "overlap", "energy_runaway").
+/// A short name of the status ("ok", "non_finite", "overlap", "energy_runaway", "tunnelling").
 inline const char* statusName(StepStatus s) {
   switch (s) {
     case StepStatus::Ok:
@@ -23,6 +24,8 @@ inline const char* statusName(StepStatus s) {
       return "overlap";
     case StepStatus::EnergyRunaway:
       return "energy_runaway";
+    case StepStatus::Tunnelling:
+      return "tunnelling";
   }
   return "unknown";
 }

@@ -3,6 +3,7 @@
 // (exit 3), determinism and the result files.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <fstream>
 #include <nlohmann/json.hpp>
 #include <string>
@@ -167,6 +168,36 @@ TEST(MicroSceneCli, TimeStepAboveCriticalIsRefusedUnlessForced) {
       << f.output;
   EXPECT_TRUE(std::filesystem::exists(dir / "out2" / "result.h5"));
   EXPECT_TRUE(std::filesystem::exists(dir / "out2" / "summary.json"));
+}
+
+// Two spheres closing at 1,000 m/s would pass through each other between two
+// steps (0.032 m a step each, radii 0.01 m) and the run would say ok with
+// no contact: a body moving more than the smallest radius in one step is a
+// numerical failure that names it. At 10 m/s they meet, touch and bounce
+// back (the step then moves them 0.3 mm, well below their radius).
+TEST(MicroSceneCli, BodiesTooFastForTheStepAreTunnellingNotOk) {
+  const auto dir = scratchDir("micro_scene_tunnel");
+  const auto pair = [](double v) {
+    return R"({"format": "gabion.case/1", "kind": "micro.scene", "gravity_m_s2": [0, 0, 0],
+ "materials": {"m": {"density_kg_m3": 2500, "normal_stiffness_N_m": 1e5, "shear_stiffness_N_m": 2.5e4, "friction": 0.5}},
+ "spheres": [{"center_m": [0, 0, 0], "radius_m": 0.01, "material": "m", "velocity_m_s": [)" +
+           std::to_string(v) + R"(, 0, 0]},
+             {"center_m": [0.1, 0, 0], "radius_m": 0.01, "material": "m", "velocity_m_s": [)" +
+           std::to_string(-v) + R"(, 0, 0]}],
+ "run": {"duration_s": 0.01, "series_interval_s": 6.472086375185664e-05}})";
+  };
+  writeFile(dir / "fast.json", pair(500.0));
+  auto r = runGabion("run " + (dir / "fast.json").string() + " -q -o " + (dir / "fast").string());
+  EXPECT_EQ(r.exit_code, 3) << r.output;
+  EXPECT_NE(r.output.find("tunnelling: sphere"), std::string::npos) << r.output;
+  EXPECT_EQ(nlohmann::json::parse(std::ifstream(dir / "fast" / "summary.json"))["step_status"], "tunnelling");
+
+  writeFile(dir / "slow.json", pair(5.0));
+  r = runGabion("run " + (dir / "slow.json").string() + " -q -o " + (dir / "slow").string());
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  const gabion::bridge::H5Reader h5(dir / "slow" / "result.h5");
+  const auto contacts = h5.read("/series/contacts");
+  EXPECT_GT(*std::max_element(contacts.begin(), contacts.end()), 0.0) << "the spheres touched";
 }
 
 TEST(MicroSceneCli, SameCaseSameThreadsGivesIdenticalArrays) {
