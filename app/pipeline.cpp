@@ -130,8 +130,8 @@ std::string stageKey(const json& case_value, const std::vector<fs::path>& inputs
 /// rest should take (for the progress lines on a terminal). The ETA counts
 /// the stages whose kind estimates its cost (the micro lab tests, known once
 /// the cell exists) in body-steps, at the seconds per body-step measured on
-/// those already run (at first a rate typical of the cell's tests on two
-/// cores); the fit and macro stages take about a second together.
+/// those already run (at first the rate of the default cell's tests); the
+/// fit and macro stages take about a second together.
 struct StageClock {
   int done = 0, total = 0;
   std::chrono::steady_clock::time_point start = std::chrono::steady_clock::now();
@@ -140,8 +140,9 @@ struct StageClock {
   std::string current;                      ///< the stage running
   std::chrono::steady_clock::time_point current_start = start;
   double measured_s = 0.0, measured_body_steps = 0.0;
-  // (the default pipeline's four tests on two cores: 272 s for 7.75e9
-  // estimated body-steps, 2.4e-8 to 4.9e-8 s each; summary.json, stages)
+  // (the default pipeline's four tests as the README's command runs them:
+  // 272 s for 7.75e9 estimated body-steps, 2.4e-8 to 4.9e-8 s each;
+  // summary.json, stages)
   static constexpr double kInitialSecondsPerBodyStep = 3.5e-8;
 
   double secondsPerBodyStep() const {
