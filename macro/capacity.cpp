@@ -64,6 +64,11 @@ Plan plan(const JsonDocument& doc) {
     throw bridge::InputError(doc.file(), "/structure", e.what());
   }
   resolveAims(doc, p.c, p.structure);
+  {
+    Model probe(p.structure, p.c.run.kinematics);
+    probe.placeBoulder(p.c.impacts.front());
+    checkImpactCost(doc, p.c.run, p.structure, probe.criticalTimeStep());
+  }
   return p;
 }
 

@@ -1,9 +1,11 @@
 #include "macro/case_reader.hpp"
 
 #include <cmath>
+#include <sstream>
 #include <stdexcept>
 
 #include "bridge/errors.hpp"
+#include "bridge/units.hpp"
 
 namespace gabion::macro {
 
@@ -259,6 +261,20 @@ Structure buildCaseStructure(const JsonDocument& doc, const ImpactCase& c) {
   } catch (const std::invalid_argument& e) {
     throw InputError(doc.file(), "/structure", e.what());
   }
+}
+
+void checkImpactCost(const JsonDocument& doc, const RunSettings& run, const Structure& s, double critical_s) {
+  const double dt = run.time_step_s > 0.0 ? run.time_step_s : run.time_step_fraction * critical_s;
+  const double steps = run.max_duration_s / dt;
+  if (steps <= kMaxImpactSteps) return;
+  const double samples = steps / run.series_every_steps;
+  std::ostringstream m;
+  m << "an impact of up to " << run.max_duration_s << " s at a step of " << dt << " s may take " << steps
+    << " steps on " << s.nodeCount() << " cells and record " << samples << " samples (about "
+    << bridge::showNumber(samples * 14 * 8 / 1e9) << " GB); at most " << kMaxImpactSteps
+    << " steps: shorten run.duration_s or run.max_duration_s";
+  const auto r = doc.root().optionalObject("run");
+  throw InputError(doc.file(), r && r->has("max_duration_s") ? "/run/max_duration_s" : "/run/duration_s", m.str());
 }
 
 SweepSpec readSweep(const JsonReader& sw) {

@@ -46,6 +46,16 @@ struct SweepSpec {
 /// material the structure names must be in its laws. With `sweep` the case
 /// may not list impacts and does not relax after the impact. Throws InputError.
 ImpactCase readImpactCase(const bridge::JsonDocument& doc, bool sweep);
+/// The most steps an impact may take (it ends at its outcome: a few
+/// thousand on the default wall).
+constexpr double kMaxImpactSteps = 1e7;
+
+/// Refuses (InputError on /run/duration_s or /run/max_duration_s) an impact
+/// whose longest run, max_duration_s at its time step (from `critical_s`, the
+/// structure's critical step with the boulder placed), would pass
+/// kMaxImpactSteps, with the steps and the memory its series would take.
+void checkImpactCost(const bridge::JsonDocument& doc, const RunSettings& run, const Structure& s, double critical_s);
+
 /// Reads the "sweep" object of a macro.sweep case.
 SweepSpec readSweep(const bridge::JsonReader& sweep);
 /// Builds the structure of a case; an inconsistency (unknown material, mixed

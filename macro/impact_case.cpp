@@ -36,6 +36,7 @@ Prepared prepare(const JsonDocument& doc) {
     } catch (const std::invalid_argument& e) {
       throw InputError(doc.file(), doc.root().has("impacts") ? "/impacts/" + std::to_string(i) : "/boulder", e.what());
     }
+    checkImpactCost(doc, p.c.run, p.structure, probe.criticalTimeStep());
   }
   return p;
 }

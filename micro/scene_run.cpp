@@ -94,6 +94,7 @@ std::string timingReport(const Engine& engine, double loop_s, double body_steps_
 // case in the error.
 double chooseDt(const Scene& scene, double critical, const std::string& file) {
   const RunSpec& rs = scene.run;
+  double dt = rs.series_interval_s;  // (nothing moves: any step is stable)
   if (rs.dt_s > 0.0) {
     if (rs.dt_s > critical && !rs.allow_dt_above_critical) {
       std::ostringstream m;
@@ -101,10 +102,22 @@ double chooseDt(const Scene& scene, double critical, const std::string& file) {
         << " s (set run.allow_dt_above_critical = true to run anyway)";
       throw bridge::InputError(file, "/run/dt_s", m.str());
     }
-    return rs.dt_s;
+    dt = rs.dt_s;
+  } else if (std::isfinite(critical)) {
+    dt = rs.dt_safety * critical;
   }
-  if (std::isfinite(critical)) return rs.dt_safety * critical;
-  return rs.series_interval_s;  // nothing moves: any step is stable
+  // A step that underflows (a radius of 1e-200 m) or a run of more steps
+  // than any machine gets through is refused before it starts, not run as
+  // "0 steps, ok" or left to run for years.
+  const double steps = rs.duration_s / dt;
+  if (!(dt > 0.0) || !std::isfinite(steps) || steps > kMaxSteps) {
+    std::ostringstream m;
+    m << "the time step would be " << dt << " s (critical " << critical << " s), " << steps << " steps for "
+      << rs.duration_s << " s: more than " << kMaxSteps
+      << "; check the bodies' sizes, masses and stiffnesses, or shorten run.duration_s";
+    throw bridge::InputError(file, rs.dt_s > 0.0 ? "/run/dt_s" : "/run/duration_s", m.str());
+  }
+  return dt;
 }
 
 bridge::RunOutcome runScene(Scene scene, const std::string& file, const bridge::RunContext& ctx,

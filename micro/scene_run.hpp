@@ -38,6 +38,10 @@ struct SceneRunHooks {
 /// run.dt_safety x critical.
 double chooseDt(const Scene& scene, double critical, const std::string& file);
 
+/// The most steps a run may take: more is an input error before it starts
+/// (a 1e-200 m radius, a duration of centuries).
+constexpr double kMaxSteps = 1e10;
+
 /// Runs the scene into ctx.outdir; the outcome holds the shared summary.
 bridge::RunOutcome runScene(Scene scene, const std::string& file, const bridge::RunContext& ctx,
                             const SceneRunHooks& hooks = {});

@@ -393,7 +393,10 @@ TEST(MacroCli, BadInputNamesTheField) {
          c["boulder"]["aim_point_m"] = {20, 1};
        },
        "/boulder/aim_point_m"},
-      {"unknown_material", [](json& c) { c["structure"]["material"]["core"] = "granite"; }, "/structure"},
+      {"unknown_material", [](json& c) { c["structure"]["material"]["core"] = "granite"; }, "/structure/material/core"},
+      // (an impact that could run 1.3e14 steps and record petabytes is refused with its cost)
+      {"endless", [](json& c) { c["run"]["duration_s"] = 1e9; }, "/run/duration_s"},
+      {"endless_max", [](json& c) { c["run"]["max_duration_s"] = 1e7; }, "/run/max_duration_s"},
       {"no_laws", [](json& c) { c.erase("law_file"); }, "/law_file"},
       {"bad_kinematics", [](json& c) { c["run"]["kinematics"] = "2d"; }, "/run/kinematics"},
       {"boulder_disagrees", [](json& c) { c["boulder"]["mass_kg"] = 2000; }, "/boulder/density_kg_m3"},

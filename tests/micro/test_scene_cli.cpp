@@ -200,6 +200,23 @@ TEST(MicroSceneCli, BodiesTooFastForTheStepAreTunnellingNotOk) {
   EXPECT_GT(*std::max_element(contacts.begin(), contacts.end()), 0.0) << "the spheres touched";
 }
 
+// A step that underflows (a radius of 1e-200 m) or a run of more than 1e10
+// steps is refused before it starts, with the step and the step count; it
+// does not run as "0 steps, ok" nor start on centuries.
+TEST(MicroSceneCli, RunsOfZeroOrCountlessStepsAreRefused) {
+  const auto dir = scratchDir("micro_scene_steps");
+  writeFile(dir / "case.json", scene());
+  auto r = runGabion("check " + (dir / "case.json").string() +
+                     R"( --set 'spheres=[{"center_m": [0.05, 0.05, 0.05], "radius_m": 1e-200, "material": "rock"}]')");
+  EXPECT_EQ(r.exit_code, 2) << r.output;
+  EXPECT_NE(r.output.find("/run/duration_s: the time step would be 0 s"), std::string::npos) << r.output;
+  r = runGabion("run " + (dir / "case.json").string() + " -q -o " + (dir / "long").string() +
+                " --set run.duration_s=3e8");
+  EXPECT_EQ(r.exit_code, 2) << r.output;
+  EXPECT_NE(r.output.find("steps for 3e+08 s: more than 1e+10"), std::string::npos) << r.output;
+  EXPECT_FALSE(std::filesystem::exists(dir / "long"));
+}
+
 TEST(MicroSceneCli, SameCaseSameThreadsGivesIdenticalArrays) {
   const auto dir = scratchDir("micro_scene_det");
   writeFile(dir / "case.json", scene());
