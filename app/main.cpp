@@ -1,6 +1,7 @@
 // The `gabion` command line: run or check a case, draw a result's figure,
 // print the version.
-// Exit codes: 0 ok, 1 internal error, 2 bad input, 3 numerical failure.
+// Exit codes: 0 ok, 1 internal error, 2 bad input, 3 numerical failure,
+// 128 + the signal when SIGINT or SIGTERM stopped the run.
 #include <unistd.h>
 
 #include <CLI/CLI.hpp>
@@ -12,6 +13,7 @@
 #include "app/registry.hpp"
 #include "app/standard_figure.hpp"
 #include "bridge/errors.hpp"
+#include "bridge/interrupt.hpp"
 #include "bridge/output.hpp"
 #include "gabion_version.hpp"
 
@@ -25,6 +27,7 @@ constexpr int kExitOk = 0;
 constexpr int kExitInternal = 1;
 constexpr int kExitBadInput = 2;
 constexpr int kExitNumerical = 3;
+constexpr int kExitInterrupted = 128;  // + the signal: 130 for SIGINT, 143 for SIGTERM (the shell's convention)
 
 struct Options {
   std::string case_file;
@@ -94,12 +97,20 @@ int commandRun(const Options& o) {
     outcome.message = e.what();
   }
   const double wall = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  // A signal that stopped the run (bridge/interrupt.hpp) is what ended it,
+  // whatever a part of it made of being stopped.
+  if (outcome.status != gabion::bridge::RunOutcome::Status::Ok && gabion::bridge::interrupted()) {
+    outcome.status = gabion::bridge::RunOutcome::Status::Interrupted;
+    if (outcome.message.find("interrupted") == std::string::npos)
+      outcome.message = std::string("interrupted by ") + gabion::bridge::signalName(gabion::bridge::interruptSignal()) +
+                        ": " + outcome.message;
+  }
 
   nlohmann::json summary;
   summary["format"] = "gabion.summary/1";
   summary["kind"] = kind->kind;
   const bool ok = outcome.status == gabion::bridge::RunOutcome::Status::Ok;
-  summary["status"] = ok ? "ok" : "numerical_failure";
+  summary["status"] = gabion::bridge::statusName(outcome.status);
   if (!outcome.message.empty()) summary["message"] = outcome.message;
   summary["version"] = gabion::kVersion;
   summary["wall_time_s"] = wall;
@@ -109,6 +120,11 @@ int commandRun(const Options& o) {
   for (auto it = outcome.results.begin(); it != outcome.results.end(); ++it) summary[it.key()] = it.value();
   gabion::bridge::writeJsonAtomic(outdir / "summary.json", summary);
 
+  if (outcome.status == gabion::bridge::RunOutcome::Status::Interrupted) {
+    std::cerr << "gabion: " << outcome.message << "\n"
+              << "gabion: what was written so far is in " << outdir.string() << "\n";
+    return kExitInterrupted + gabion::bridge::interruptSignal();
+  }
   if (!ok) {
     std::cerr << "gabion: numerical failure: " << outcome.message << "\n"
               << "gabion: what was written so far is in " << outdir.string() << "\n";
@@ -125,6 +141,7 @@ int commandRun(const Options& o) {
 }  // namespace
 
 int main(int argc, char** argv) {
+  gabion::bridge::installInterruptHandlers();
   CLI::App app{"gabion: two-scale DEM for cellular rockfall protection structures"};
   app.set_version_flag("--version", std::string("gabion ") + gabion::kVersion);
   app.require_subcommand(1);

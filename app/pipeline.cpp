@@ -11,6 +11,7 @@
 
 #include "app/registry.hpp"
 #include "bridge/errors.hpp"
+#include "bridge/interrupt.hpp"
 #include "bridge/law_file.hpp"
 #include "bridge/output.hpp"
 #include "bridge/plot.hpp"
@@ -239,6 +240,9 @@ StageResult runStage(const std::string& name, const std::string& kind, json case
                      const std::vector<fs::path>& inputs, const std::vector<std::string>& settings,
                      const bridge::RunContext& parent, const fs::path& dir, StageClock& clock,
                      const std::optional<fs::path>& law = std::nullopt) {
+  if (bridge::interrupted())
+    throw StageFailure(std::string("interrupted by ") + bridge::signalName(bridge::interruptSignal()) +
+                       " before stage '" + name + "'");
   StageResult out;
   out.name = name;
   out.dir = dir;
@@ -272,7 +276,7 @@ StageResult runStage(const std::string& name, const std::string& kind, json case
   json summary = ran.results;
   summary["format"] = "gabion.summary/1";
   summary["kind"] = kind;
-  summary["status"] = ran.status == bridge::RunOutcome::Status::Ok ? "ok" : "numerical_failure";
+  summary["status"] = bridge::statusName(ran.status);
   if (!ran.message.empty()) summary["message"] = ran.message;
   summary["wall_time_s"] = out.wall_time_s;
   summary["case"] = doc.json();

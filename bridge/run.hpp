@@ -62,7 +62,9 @@ class Progress {
 
 /// What a run gives back. `results` is merged into summary.json.
 struct RunOutcome {
-  enum class Status { Ok, NumericalFailure };
+  /// Interrupted: SIGINT or SIGTERM asked it to stop (bridge/interrupt.hpp);
+  /// what it wrote so far stays.
+  enum class Status { Ok, NumericalFailure, Interrupted };
   Status status = Status::Ok;
   std::string message;  ///< why it failed (step, time, bodies)
   /// A short account for the person at the terminal of how the run went
@@ -85,6 +87,19 @@ struct Estimate {
   double body_steps = 0.0;  ///< bodies x steps, over its runs: what its wall time scales with
   std::size_t runs = 0;     ///< engine runs (variants x replicates)
 };
+
+/// The summary's "status": "ok", "numerical_failure" or "interrupted".
+inline const char* statusName(RunOutcome::Status s) {
+  switch (s) {
+    case RunOutcome::Status::Ok:
+      return "ok";
+    case RunOutcome::Status::NumericalFailure:
+      return "numerical_failure";
+    case RunOutcome::Status::Interrupted:
+      return "interrupted";
+  }
+  return "unknown";
+}
 
 /// One case kind: `check` parses and validates everything without running
 /// (throws InputError); `run` parses, runs and writes result files into

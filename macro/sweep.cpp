@@ -12,6 +12,7 @@
 #include <stdexcept>
 
 #include "bridge/errors.hpp"
+#include "bridge/interrupt.hpp"
 #include "bridge/output.hpp"
 #include "bridge/plot.hpp"
 #include "bridge/units.hpp"
@@ -135,7 +136,15 @@ bridge::RunOutcome runSweepCase(const JsonDocument& doc, const bridge::RunContex
   const auto t0 = std::chrono::steady_clock::now();
   const int nthreads = std::max(1, std::min<int>(ctx.threads, static_cast<int>(np)));
   bridge::Progress progress(ctx, "macro.sweep");
-  runParallel(np, nthreads, progress, [&](std::size_t i) { results[i] = runPoint(p, p.points[i]); });
+  // (once SIGINT or SIGTERM came, the points not started are recorded as not run)
+  runParallel(np, nthreads, progress, [&](std::size_t i) {
+    if (bridge::interrupted()) {
+      results[i].ok = false;
+      results[i].message = std::string("not run: interrupted by ") + bridge::signalName(bridge::interruptSignal());
+      return;
+    }
+    results[i] = runPoint(p, p.points[i]);
+  });
   const double wall = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
 
   // Table: CSV and HDF5, one row per point in grid order.
@@ -298,6 +307,12 @@ bridge::RunOutcome runSweepCase(const JsonDocument& doc, const bridge::RunContex
     out.report = "macro.sweep: " + bridge::showNumber(wall) + " s on " + std::to_string(nthreads) + " threads\n";
   }
   out.results["laws_source"] = p.c.law_source;
+  if (bridge::interrupted()) {
+    out.status = bridge::RunOutcome::Status::Interrupted;
+    out.message = "interrupted by " + std::string(bridge::signalName(bridge::interruptSignal())) + " after " +
+                  std::to_string(np - failed) + " of " + std::to_string(np) + " points; the table lists every point";
+    return out;
+  }
   // A sweep in which every point failed has produced nothing usable.
   if (np > 0 && failed == np) {
     out.status = bridge::RunOutcome::Status::NumericalFailure;

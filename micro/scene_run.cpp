@@ -6,6 +6,7 @@
 #include <sstream>
 
 #include "bridge/errors.hpp"
+#include "bridge/interrupt.hpp"
 #include "bridge/output.hpp"
 #include "micro/blocks/block_fill.hpp"
 #include "micro/cell/cell_file.hpp"
@@ -208,11 +209,16 @@ bridge::RunOutcome runScene(Scene scene, const std::string& file, const bridge::
   bridge::Progress progress(ctx, hooks.label);
   snapshot(0.0);
   StepStatus status = StepStatus::Ok;
-  bool ended = false;  // the kind's test is over before the duration
+  bool ended = false;    // the kind's test is over before the duration
+  bool stopped = false;  // SIGINT or SIGTERM asked the run to stop
   const auto t0 = std::chrono::steady_clock::now();
   for (long long n = 0; n < steps && !ended; ++n) {
     const bool measure = n % series_every == 0 || n + 1 == steps;
     const double t = engine.time();
+    if (bridge::interrupted()) {
+      stopped = true;
+      break;
+    }
     status = engine.step(measure);
     if (status != StepStatus::Ok) break;
     if (measure) {
@@ -226,7 +232,7 @@ bridge::RunOutcome runScene(Scene scene, const std::string& file, const bridge::
   }
   const double loop_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   progress.finish();
-  const bool ok = status == StepStatus::Ok;
+  const bool ok = status == StepStatus::Ok && !stopped;
   if (!ok) snapshot(engine.time());
 
   // Result files (the snapshots are in h5 already).
@@ -308,7 +314,7 @@ bridge::RunOutcome runScene(Scene scene, const std::string& file, const bridge::
     }
     out.results["porosity"] = 1.0 - solidFraction(centers, radii, b.min_m, b.max_m, b.spacing_m);
   }
-  out.results["ended_by"] = !ok ? "failure" : ended ? "test" : "duration";
+  out.results["ended_by"] = stopped ? "interrupt" : !ok ? "failure" : ended ? "test" : "duration";
   out.results["energy"] = energy;
   out.results["contacts"] = engine.contactCount();
   out.results["neighbour_rebuilds"] = engine.neighbourRebuilds();
@@ -334,7 +340,13 @@ bridge::RunOutcome runScene(Scene scene, const std::string& file, const bridge::
     writeCellFile(ctx.outdir / "cell.h5", scene, engine, summary);
   }
   if (ok && hooks.end) hooks.end(engine, scene);
-  if (!ok) {
+  if (stopped) {
+    std::ostringstream m;
+    m << "interrupted by " << bridge::signalName(bridge::interruptSignal()) << " at step " << engine.steps()
+      << ", t = " << engine.time() << " s of " << scene.run.duration_s << " s";
+    out.status = bridge::RunOutcome::Status::Interrupted;
+    out.message = m.str();
+  } else if (!ok) {
     out.status = bridge::RunOutcome::Status::NumericalFailure;
     out.message = engine.failure();
   }

@@ -9,6 +9,7 @@
 #include <thread>
 
 #include "bridge/errors.hpp"
+#include "bridge/interrupt.hpp"
 #include "bridge/output.hpp"
 #include "micro/cell/cell_assembly.hpp"
 #include "micro/cell/cell_file.hpp"
@@ -260,7 +261,7 @@ fs::path generateCell(const CellSource& source, const fs::path& dir, const bridg
   nlohmann::json summary = out.results;
   summary["format"] = "gabion.summary/1";
   summary["kind"] = "micro.cell";
-  summary["status"] = out.status == bridge::RunOutcome::Status::Ok ? "ok" : "numerical_failure";
+  summary["status"] = bridge::statusName(out.status);
   summary["case_file"] = source.generate.string();
   summary["case"] = doc.json();
   bridge::writeJsonAtomic(dir / "summary.json", summary);
@@ -399,7 +400,7 @@ bridge::RunOutcome runReplicates(const LabSetup& setup, const bridge::RunContext
     nlohmann::json summary = outs[j].results;
     summary["format"] = "gabion.summary/1";
     summary["kind"] = label;
-    summary["status"] = outs[j].status == bridge::RunOutcome::Status::Ok ? "ok" : "numerical_failure";
+    summary["status"] = bridge::statusName(outs[j].status);
     if (!outs[j].message.empty()) summary["message"] = outs[j].message;
     bridge::writeJsonAtomic(rc.outdir / "summary.json", summary);
   });
@@ -448,7 +449,8 @@ bridge::RunOutcome runReplicates(const LabSetup& setup, const bridge::RunContext
   out.results["scatter"] = scatter;
   out.answer = report.str();
   if (!failures.empty()) {
-    out.status = bridge::RunOutcome::Status::NumericalFailure;
+    out.status =
+        bridge::interrupted() ? bridge::RunOutcome::Status::Interrupted : bridge::RunOutcome::Status::NumericalFailure;
     out.message = failures;
   }
   return out;

@@ -4,6 +4,7 @@
 
 #include <fstream>
 #include <iterator>
+#include <nlohmann/json.hpp>
 #include <string>
 
 #include "tests/support/run_gabion.hpp"
@@ -102,4 +103,39 @@ TEST(Cli, PlotDrawsTheStandardFigureOfAResult) {
     EXPECT_EQ(r.exit_code, 2) << bad << ": " << r.output;
     EXPECT_NE(r.output.find(bad), std::string::npos) << r.output;
   }
+}
+
+// SIGINT (or SIGTERM) stops a run cleanly: it ends with 128 + the signal,
+// says where it stopped, and leaves a summary with status "interrupted"
+// beside the result file written so far (not an empty folder). A sweep
+// lists every point, those not run marked so.
+TEST(Cli, InterruptStopsTheRunAndKeepsWhatItWrote) {
+  const auto dir = scratchDir("cli_interrupt");
+  const std::string source = GABION_SOURCE_DIR;
+  // (a fill of blocks that runs for tens of seconds; stopped after one)
+  const auto r = gabion::testing::runCommand("sh -c '" + std::string(GABION_BINARY) + " run " + source +
+                                             "/cases/micro_block_fill.json -q -o " + (dir / "fill").string() +
+                                             " & p=$!; sleep 1; kill -INT $p; wait $p; echo exit=$?'");
+  EXPECT_NE(r.output.find("exit=130"), std::string::npos) << r.output;
+  EXPECT_NE(r.output.find("interrupted by SIGINT at step"), std::string::npos) << r.output;
+  std::ifstream in(dir / "fill" / "summary.json");
+  const auto summary = nlohmann::json::parse(in);
+  EXPECT_EQ(summary.at("status"), "interrupted");
+  EXPECT_EQ(summary.at("ended_by"), "interrupt");
+  EXPECT_TRUE(std::filesystem::exists(dir / "fill" / "result.h5"));
+
+  // A sweep of 60,000 points (minutes), stopped after one second: SIGTERM.
+  const auto w = gabion::testing::runCommand(
+      "sh -c '" + std::string(GABION_BINARY) + " run " + source + "/cases/macro_sweep.json -q -o " +
+      (dir / "sweep").string() +
+      " --set sweep.velocity_m_s.count=10000 & p=$!; sleep 1; kill -TERM $p; wait $p; echo exit=$?'");
+  EXPECT_NE(w.output.find("exit=143"), std::string::npos) << w.output;
+  std::ifstream sin(dir / "sweep" / "summary.json");
+  const auto sweep = nlohmann::json::parse(sin);
+  EXPECT_EQ(sweep.at("status"), "interrupted");
+  EXPECT_EQ(sweep.at("points"), 60000);
+  std::ifstream csv(dir / "sweep" / "sweep.csv");
+  const std::string table((std::istreambuf_iterator<char>(csv)), std::istreambuf_iterator<char>());
+  EXPECT_NE(table.find("not run: interrupted by SIGTERM"), std::string::npos);
+  EXPECT_NE(table.find(",ok,"), std::string::npos) << "the points run before the signal are in the table";
 }
