@@ -89,6 +89,9 @@ int commandRun(const Options& o) {
   ctx.may_release_case = true;
 
   const auto t0 = std::chrono::steady_clock::now();
+  // (the files this run writes are newer; the margin covers the coarse clock
+  // that file systems stamp files with)
+  const auto started = fs::file_time_type::clock::now() - std::chrono::milliseconds(100);
   gabion::bridge::RunOutcome outcome;
   try {
     outcome = kind->run(doc, ctx);
@@ -130,9 +133,18 @@ int commandRun(const Options& o) {
               << "gabion: what was written so far is in " << outdir.string() << "\n";
     return kExitNumerical;
   }
+  // The files this run wrote; a reused folder's older files are counted, not
+  // listed as results.
   std::cout << "results: " << fs::absolute(outdir).string() << "\n";
-  for (const auto& entry : fs::directory_iterator(outdir))
-    if (entry.is_regular_file()) std::cout << "  " << entry.path().filename().string() << "\n";
+  std::size_t older = 0;
+  for (const auto& entry : fs::directory_iterator(outdir)) {
+    if (!entry.is_regular_file()) continue;
+    if (entry.last_write_time() < started)
+      ++older;
+    else
+      std::cout << "  " << entry.path().filename().string() << "\n";
+  }
+  if (older > 0) std::cout << "  (and " << older << " older file" << (older > 1 ? "s" : "") << ", not from this run)\n";
   std::cout << outcome.answer;
   if (!o.quiet) std::cout << outcome.report;
   return kExitOk;

@@ -2,6 +2,7 @@
 // file and the field for bad input, and nothing written for a rejected case.
 #include <gtest/gtest.h>
 
+#include <chrono>
 #include <fstream>
 #include <iterator>
 #include <nlohmann/json.hpp>
@@ -138,4 +139,20 @@ TEST(Cli, InterruptStopsTheRunAndKeepsWhatItWrote) {
   const std::string table((std::istreambuf_iterator<char>(csv)), std::istreambuf_iterator<char>());
   EXPECT_NE(table.find("not run: interrupted by SIGTERM"), std::string::npos);
   EXPECT_NE(table.find(",ok,"), std::string::npos) << "the points run before the signal are in the table";
+}
+
+// A reused output folder: the run lists the files it wrote, and counts the
+// older ones instead of passing them off as its results.
+TEST(Cli, AReusedOutputFolderListsOnlyThisRunsFiles) {
+  const auto dir = scratchDir("cli_reused_out");
+  std::filesystem::create_directories(dir / "out");
+  writeFile(dir / "out" / "stale_table.csv", "left by an earlier run\n");
+  std::filesystem::last_write_time(dir / "out" / "stale_table.csv",
+                                   std::filesystem::file_time_type::clock::now() - std::chrono::hours(1));
+  const auto r =
+      runGabion("run " + std::string(GABION_SOURCE_DIR) + "/cases/wall_impact.json -q -o " + (dir / "out").string());
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  EXPECT_NE(r.output.find("  summary.json"), std::string::npos) << r.output;
+  EXPECT_EQ(r.output.find("stale_table.csv"), std::string::npos) << r.output;
+  EXPECT_NE(r.output.find("(and 1 older file, not from this run)"), std::string::npos) << r.output;
 }

@@ -396,6 +396,12 @@ TEST(MacroCli, BadInputNamesTheField) {
       {"unknown_material", [](json& c) { c["structure"]["material"]["core"] = "granite"; }, "/structure/material/core"},
       // (an impact that could run 1.3e14 steps and record petabytes is refused with its cost)
       {"endless", [](json& c) { c["run"]["duration_s"] = 1e9; }, "/run/duration_s"},
+      // (1e9 cells would take 450 GB: refused before anything is allocated)
+      {"huge",
+       [](json& c) {
+         c["structure"]["cells"] = {1000, 1000, 1000};
+       },
+       "/structure/cells"},
       {"endless_max", [](json& c) { c["run"]["max_duration_s"] = 1e7; }, "/run/max_duration_s"},
       {"no_laws", [](json& c) { c.erase("law_file"); }, "/law_file"},
       {"bad_kinematics", [](json& c) { c["run"]["kinematics"] = "2d"; }, "/run/kinematics"},
