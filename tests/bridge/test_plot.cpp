@@ -168,6 +168,22 @@ fs::path tempPng(const std::string& name) {
   return p;
 }
 
+// A single-series chart (plus `extra`) drawn to a PNG and read back, with its frame.
+struct Drawn {
+  Image img;
+  FrameBox frame;
+};
+Drawn draw(const std::string& name, const PlotSeries& series, const std::vector<PlotSeries>& extra = {}) {
+  PlotSpec spec;
+  spec.series.push_back(series);
+  for (const PlotSeries& e : extra) spec.series.push_back(e);
+  const fs::path path = tempPng(name);
+  writePlotPng(path, spec);
+  Drawn d{readPng(path), {}};
+  d.frame = findFrame(d.img);
+  return d;
+}
+
 }  // namespace
 
 TEST(Plot, ValidPngWithRequestedSize) {
@@ -233,17 +249,12 @@ TEST(Plot, RedHorizontalLineOnItsRowAndWhiteBackground) {
 }
 
 TEST(Plot, AutoRangeKeepsEveryPointInsideTheFrame) {
-  PlotSpec spec;
   PlotSeries s;
   s.color_rgb = 0x0000FF;
   s.style = PlotSeries::Style::Markers;
   s.x = {-3.0, 7.0};
   s.y = {1e-3, 2e-3};
-  spec.series.push_back(s);
-  const fs::path path = tempPng("corners.png");
-  writePlotPng(path, spec);
-  const Image img = readPng(path);
-  const FrameBox f = findFrame(img);
+  const auto [img, f] = draw("corners.png", s);
   ASSERT_GE(f.left, 0);
   // A 5 % margin puts the points 1/22 of the frame in from two corners.
   const double fx = (f.right - f.left) / 22.0, fy = (f.bottom - f.top) / 22.0;
@@ -351,24 +362,18 @@ TEST(Plot, UnwritablePathThrows) {
 // A band (the fitted curve's confidence band) fills pale between its lower
 // and upper edges and nowhere else; the auto-range includes its upper edge.
 TEST(Plot, BandFillsBetweenItsEdges) {
-  PlotSpec spec;
   PlotSeries band;
   band.style = PlotSeries::Style::Band;
   band.color_rgb = 0x0000FF;
   band.x = {0.0, 1.0};
   band.y = {0.0, 0.0};
   band.y_upper = {1.0, 1.0};
-  spec.series.push_back(band);
   PlotSeries below;  // (a point at -1 so that the band does not start at the frame's bottom)
   below.style = PlotSeries::Style::Markers;
   below.color_rgb = 0xFFFFFF;
   below.x = {0.5};
   below.y = {-1.0};
-  spec.series.push_back(below);
-  const fs::path path = tempPng("band.png");
-  writePlotPng(path, spec);
-  const Image img = readPng(path);
-  const FrameBox f = findFrame(img);
+  const auto [img, f] = draw("band.png", band, {below});
   ASSERT_GE(f.left, 0);
   // x from 0 to 1 and y from -1 to 1, with 5 % margins; points off the grid lines.
   const auto at = [&](double x, double y) {
@@ -380,8 +385,9 @@ TEST(Plot, BandFillsBetweenItsEdges) {
   EXPECT_GT(inside[0], 120) << "pale, not solid";
   EXPECT_EQ(outside, (std::array<int, 3>{255, 255, 255})) << "white below the band";
   band.y_upper = {1.0};
-  spec.series = {band};
-  EXPECT_THROW(writePlotPng(tempPng("bad_band.png"), spec), std::invalid_argument);
+  PlotSpec bad;
+  bad.series = {band};
+  EXPECT_THROW(writePlotPng(tempPng("bad_band.png"), bad), std::invalid_argument);
 }
 
 TEST(Plot, InvalidSpecThrows) {
