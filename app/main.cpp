@@ -100,13 +100,15 @@ int commandRun(const Options& o) {
     outcome.message = e.what();
   }
   const double wall = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
-  // A signal that stopped the run (bridge/interrupt.hpp) is what ended it,
-  // whatever a part of it made of being stopped.
-  if (outcome.status != gabion::bridge::RunOutcome::Status::Ok && gabion::bridge::interrupted()) {
+  // A signal that came during the run (bridge/interrupt.hpp) is what ended
+  // it, whatever a part of it made of being stopped (a calibration records
+  // its stopped evaluations as failed ones and goes on): its summary never
+  // says ok.
+  if (gabion::bridge::interrupted()) {
     outcome.status = gabion::bridge::RunOutcome::Status::Interrupted;
     if (outcome.message.find("interrupted") == std::string::npos)
       outcome.message = std::string("interrupted by ") + gabion::bridge::signalName(gabion::bridge::interruptSignal()) +
-                        ": " + outcome.message;
+                        (outcome.message.empty() ? "" : ": " + outcome.message);
   }
 
   nlohmann::json summary;
