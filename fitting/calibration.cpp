@@ -6,6 +6,7 @@
 #include <cmath>
 #include <condition_variable>
 #include <fstream>
+#include <iterator>
 #include <limits>
 #include <mutex>
 #include <nlopt.hpp>
@@ -29,19 +30,31 @@ EvaluationLog::EvaluationLog(fs::path file, std::string case_sha256, std::vector
       {"format", "gabion.evaluations/1"}, {"case_sha256", case_sha256}, {"parameters", parameter_names}};
   std::error_code ec;
   if (resume && fs::exists(file_, ec)) {
-    std::ifstream in(file_);
-    std::string line;
-    std::size_t line_no = 0;
-    while (std::getline(in, line)) {
+    std::string text;
+    {
+      std::ifstream in(file_, std::ios::binary);
+      text.assign(std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>());
+    }
+    std::size_t line_no = 0, at = 0, kept = 0;  // kept: bytes of whole, valid lines
+    bool unterminated = false;
+    while (at < text.size()) {
+      const std::size_t end = text.find('\n', at);
+      const bool last = end == std::string::npos;
+      const std::string line = text.substr(at, last ? std::string::npos : end - at);
       ++line_no;
       json j;
       try {
         j = json::parse(line);
       } catch (const json::exception&) {
-        // Only a last, truncated line (the run was killed while writing) is tolerated.
-        if (in.peek() == std::char_traits<char>::eof()) break;
+        // Only a last line cut short (the run was killed while writing it) is
+        // tolerated: it is cut off below, so that the records appended next
+        // start on a line of their own.
+        if (last) break;
         throw bridge::InputError(file_.string(), "line " + std::to_string(line_no), "not valid JSON");
       }
+      at = last ? text.size() : end + 1;
+      kept = at;
+      unterminated = last;
       if (line_no == 1) {
         if (j.value("format", "") != "gabion.evaluations/1")
           throw bridge::InputError(file_.string(), "line 1", "not a gabion.evaluations/1 log");
@@ -67,8 +80,10 @@ EvaluationLog::EvaluationLog(fs::path file, std::string case_sha256, std::vector
                                  std::string("bad record: ") + e.what());
       }
     }
+    if (kept < text.size()) fs::resize_file(file_, kept);  // (the torn line)
+    if (unterminated) std::ofstream(file_, std::ios::app) << "\n";
     resumed_ = records_.size();
-    if (line_no > 0) return;  // keep appending to the existing log
+    if (kept > 0) return;  // keep appending to the existing log
   }
   std::ofstream out(file_, std::ios::trunc);
   if (!out) throw bridge::InputError(file_.string(), "", "cannot write the evaluation log");

@@ -6,6 +6,7 @@
 #include <atomic>
 #include <cmath>
 #include <fstream>
+#include <iterator>
 
 #include "bridge/errors.hpp"
 #include "fitting/calibration.hpp"
@@ -106,6 +107,20 @@ TEST(Calibration, InterruptedRunResumesFromItsLog) {
   EXPECT_EQ(calls.load(), full_calls) << "no evaluation is run twice across the two sessions";
   EXPECT_EQ(r2.best, full.best);
   EXPECT_EQ(r2.best_error, full.best_error);
+  // The torn line was cut off before session 2 appended to the log: a third
+  // session reads every record (the records glued onto it broke the next
+  // resume), and a last record that lost only its newline is kept.
+  const std::size_t records = static_cast<std::size_t>(full_calls);
+  EXPECT_EQ(EvaluationLog(dir / "evaluations.jsonl", "case", {"k_n", "friction"}, true).resumed(), records);
+  {
+    std::ifstream in(dir / "evaluations.jsonl");
+    std::string text((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+    ASSERT_EQ(text.back(), '\n');
+    text.pop_back();
+    std::ofstream(dir / "evaluations.jsonl", std::ios::trunc) << text;
+  }
+  EXPECT_EQ(EvaluationLog(dir / "evaluations.jsonl", "case", {"k_n", "friction"}, true).resumed(), records);
+  EXPECT_EQ(EvaluationLog(dir / "evaluations.jsonl", "case", {"k_n", "friction"}, true).resumed(), records);
 }
 
 TEST(Calibration, LogOfAnotherCaseIsRefused) {
