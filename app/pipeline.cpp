@@ -677,8 +677,7 @@ bridge::RunOutcome runStages(const JsonDocument& doc, const bridge::RunContext& 
     const json& l = fj.at(law_name);
     for (const auto& [pname, p] : l.at("parameters").items()) {
       const double v = p.at("value").get<double>();
-      const json& iv =
-          p.contains("profile_95") && !p.at("profile_95").is_null() ? p.at("profile_95") : p.at("jacobian_95");
+      const json& iv = fitting::reportedInterval(p);
       const std::string interval =
           iv.is_null() ? "-"
                        : fmt(inUnit(pname, iv[0].get<double>())) + " to " + fmt(inUnit(pname, iv[1].get<double>()));

@@ -129,6 +129,11 @@ nlohmann::json intervalJson(const Interval& iv) {
 }
 }  // namespace
 
+const nlohmann::json& reportedInterval(const nlohmann::json& parameter) {
+  const nlohmann::json& profile = parameter.at("profile_95");
+  return profile.is_null() ? parameter.at("jacobian_95") : profile;
+}
+
 std::string describeFit(const std::string& law, const nlohmann::json& entry) {
   using bridge::showNumber;
   const double nrms = entry.at("nrms").get<double>();
@@ -140,8 +145,7 @@ std::string describeFit(const std::string& law, const nlohmann::json& entry) {
     const bridge::DisplayUnit u = bridge::displayUnit(name);
     line << sep << u.stem << " " << showNumber(u.scale * p.at("value").get<double>(), 4)
          << (u.unit == "-" ? "" : " " + u.unit);
-    const nlohmann::json& iv =
-        p.contains("profile_95") && !p.at("profile_95").is_null() ? p.at("profile_95") : p.at("jacobian_95");
+    const nlohmann::json& iv = reportedInterval(p);
     if (!iv.is_null())
       line << " [" << showNumber(u.scale * iv[0].get<double>(), 4) << ", "
            << showNumber(u.scale * iv[1].get<double>(), 4) << "]";

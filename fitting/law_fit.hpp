@@ -80,6 +80,11 @@ LawFitResult fitLaw(const std::vector<LawModel>& candidates, const std::vector<P
 /// A fit whose normalised RMS error is above this is called poor (warned of).
 constexpr double kPoorFitNrms = 0.1;
 
+/// The 95 % interval a parameter's summary entry (toJson) is reported with:
+/// the profile likelihood's where it was computed, else the linearised one
+/// (null when neither could be).
+const nlohmann::json& reportedInterval(const nlohmann::json& parameter);
+
 /// One line for people from a summary entry (toJson): the law, its model,
 /// its nRMS error, each parameter in engineers' units with its 95 %
 /// interval (profile, else linearised); "poor fit" past kPoorFitNrms.

@@ -438,17 +438,26 @@ TEST(MacroCli, TimeStepAboveCriticalExitsThree) {
   EXPECT_NE(r.output.find("critical time step"), std::string::npos) << r.output;
 }
 
+// cases/macro_design.json on smaller bounds, its law file by absolute path
+// (the copy is written elsewhere), without the capacity chart.
+namespace {
+json smallDesignCase(const json& thickness_cells, const json& height_cells) {
+  json c = readJson(kSource + "/cases/macro_design.json");
+  c["law_file"] = kSource + "/cases/laws/illustrative.json";
+  c["design"]["thickness_cells"] = thickness_cells;
+  c["design"]["height_cells"] = height_cells;
+  c["design"]["capacity_chart"] = false;
+  return c;
+}
+}  // namespace
+
 // macro.design (cases/macro_design.json on smaller bounds): the bisection
 // over the thickness returns the section exhaustive enumeration finds; the
 // chosen section holds its design impacts (residual capacity at least the
 // number asked) and the next thinner one of its height and material does not.
 TEST(MacroCli, DesignBisectionAgreesWithExhaustiveEnumeration) {
   const auto dir = scratchDir("macro_design");
-  json c = readJson(kSource + "/cases/macro_design.json");
-  c["law_file"] = kSource + "/cases/laws/illustrative.json";
-  c["design"]["thickness_cells"] = {2, 7};
-  c["design"]["height_cells"] = {2, 4};
-  c["design"]["capacity_chart"] = false;
+  json c = smallDesignCase({2, 7}, {2, 4});
   json answers[2];
   int k = 0;
   for (const char* search : {"bisection", "exhaustive"}) {
@@ -489,11 +498,7 @@ TEST(MacroCli, DesignBisectionAgreesWithExhaustiveEnumeration) {
 // impact; bad bounds, materials and tables are input errors naming the field.
 TEST(MacroCli, DesignAnswersImpossibleCriteriaAndRefusesBadBounds) {
   const auto dir = scratchDir("macro_design_bad");
-  json c = readJson(kSource + "/cases/macro_design.json");
-  c["law_file"] = kSource + "/cases/laws/illustrative.json";
-  c["design"]["thickness_cells"] = {2, 3};
-  c["design"]["height_cells"] = {3, 3};
-  c["design"]["capacity_chart"] = false;
+  json c = smallDesignCase({2, 3}, {3, 3});
   c["design"]["criteria"]["max_back_face_displacement_m"] = 1e-6;
   writeFile(dir / "none.json", c.dump());
   auto r = runGabion("run " + (dir / "none.json").string() + " -q -o " + (dir / "none").string());
