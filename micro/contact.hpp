@@ -31,7 +31,9 @@ struct PairLaw {
 /// damping ratio is the mean.
 inline PairLaw mixMaterials(const Material& a, const Material& b) {
   PairLaw p;
-  const auto series = [](double x, double y) { return 2.0 * x * y / (x + y); };
+  // (as 2 / (1/k1 + 1/k2): 2 k1 k2 underflows to 0 below k = 1e-154, and a
+  // zero stiffness makes the stored energy F^2 / 2k a NaN)
+  const auto series = [](double x, double y) { return x == y ? x : 2.0 / (1.0 / x + 1.0 / y); };
   p.normal.stiffness_N_m = series(a.normal_stiffness_N_m, b.normal_stiffness_N_m);
   p.normal.force_limit_N = std::min(a.normal_force_limit_N, b.normal_force_limit_N);
   p.tangential.stiffness_N_m = series(a.shear_stiffness_N_m, b.shear_stiffness_N_m);

@@ -2,8 +2,31 @@
 
 #include <algorithm>
 #include <cmath>
+#include <string>
+#include <utility>
+#include <vector>
 
 namespace gabion::micro {
+
+const std::vector<std::pair<std::string, double EnergyTotals::*>>& energyTerms() {
+  static const std::vector<std::pair<std::string, double EnergyTotals::*>> terms = {
+      {"kinetic_translational_J", &EnergyTotals::kinetic_translational_J},
+      {"kinetic_rotational_J", &EnergyTotals::kinetic_rotational_J},
+      {"gravity_potential_J", &EnergyTotals::gravity_potential_J},
+      {"elastic_contact_J", &EnergyTotals::elastic_contact_J},
+      {"elastic_link_J", &EnergyTotals::elastic_link_J},
+      {"friction_dissipation_J", &EnergyTotals::friction_dissipation_J},
+      {"plastic_dissipation_J", &EnergyTotals::plastic_dissipation_J},
+      {"local_damping_dissipation_J", &EnergyTotals::local_damping_dissipation_J},
+      {"viscous_damping_dissipation_J", &EnergyTotals::viscous_damping_dissipation_J},
+      {"link_rupture_dissipation_J", &EnergyTotals::link_rupture_dissipation_J},
+      {"link_plastic_dissipation_J", &EnergyTotals::link_plastic_dissipation_J},
+      {"wall_work_J", &EnergyTotals::wall_work_J},
+      {"driven_work_J", &EnergyTotals::driven_work_J},
+      {"total_J", &EnergyTotals::total_J},
+      {"balance_rel_error", &EnergyTotals::balance_rel_error}};
+  return terms;
+}
 
 bool EnergyLedger::close(double runaway_factor) {
   EnergyTotals& e = totals_;
@@ -32,13 +55,26 @@ bool EnergyLedger::close(double runaway_factor) {
     pe0_ = e.gravity_potential_J;
     scale0_ = stored;
   }
-  // Scale of the balance: all the energy that has been moved around.
-  const double scale =
-      std::max(scale0_, stored + std::fabs(e.gravity_potential_J - pe0_) + dissipated + std::fabs(work));
-  e.balance_rel_error = scale > 0.0 ? (e.total_J - e0_) / scale : 0.0;
+  // Scale of the balance: the most energy ever moved around (stored,
+  // exchanged with gravity, dissipated, worked). A running maximum, so it
+  // never vanishes: a ball at the top of an undamped bounce has almost no
+  // energy in motion, and a scale taken at that instant would blow the
+  // round-off of the contacts up into a large relative error.
+  scale_ = std::max({scale_, scale0_, stored + std::fabs(e.gravity_potential_J - pe0_) + dissipated + std::fabs(work)});
+  e.balance_rel_error = scale_ > 0.0 ? (e.total_J - e0_) / scale_ : 0.0;
   stored_ = stored;
-  supplied_ = scale0_ + std::fabs(e.gravity_potential_J - pe0_) + std::fabs(work);
+  // The energy supplied: the most ever given by the initial motion, gravity
+  // and the walls. A running maximum for the same reason: a runaway is
+  // stored energy far above anything the system was ever given, not above
+  // what it holds at one instant of a conservative motion.
+  supplied_ = std::max(supplied_, scale0_ + std::fabs(e.gravity_potential_J - pe0_) + std::fabs(work));
   return !(stored > runaway_factor * supplied_ && stored > 0.0);
+}
+
+const char* EnergyLedger::nonFiniteTerm() const {
+  for (const auto& [name, member] : energyTerms())
+    if (!std::isfinite(totals_.*member)) return name.c_str();
+  return nullptr;
 }
 
 }  // namespace gabion::micro

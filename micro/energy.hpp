@@ -7,10 +7,15 @@
 /// E = kinetic + gravity + elastic + dissipated - wall work - driven work is constant in
 /// an exact integration; its relative drift is reported, and stored energy
 /// far above all the energy ever supplied is a runaway (docs/micro.md).
+#include <string>
+#include <utility>
+#include <vector>
+
 namespace gabion::micro {
 
 /// Energy terms of the whole system (J). balance_rel_error is
-/// (E(t) - E(0)) / scale with E = kinetic + gravity + elastic + dissipated - wall work - driven work.
+/// (E(t) - E(0)) / scale with E = kinetic + gravity + elastic + dissipated - wall work - driven work,
+/// and scale the most energy moved around so far (a running maximum: it never vanishes).
 struct EnergyTotals {
   double kinetic_translational_J = 0.0;
   double kinetic_rotational_J = 0.0;
@@ -29,6 +34,10 @@ struct EnergyTotals {
   double balance_rel_error = 0.0;
 };
 
+/// Every term of EnergyTotals with its name, in the order of the output
+/// series (`/series/<name>` in result.h5, `energy` in summary.json).
+const std::vector<std::pair<std::string, double EnergyTotals::*>>& energyTerms();
+
 class EnergyLedger {
  public:
   // Running sums since the start (J).
@@ -46,10 +55,13 @@ class EnergyLedger {
   /// last close(), for a runaway message.
   double stored() const { return stored_; }
   double supplied() const { return supplied_; }
+  /// The name of the first term of the last close() that is NaN or infinite
+  /// (a stiffness that underflows, a force that overflows), or nullptr.
+  const char* nonFiniteTerm() const;
 
  private:
   EnergyTotals totals_;
-  double e0_ = 0.0, scale0_ = 0.0, pe0_ = 0.0, stored_ = 0.0, supplied_ = 0.0;
+  double e0_ = 0.0, scale0_ = 0.0, pe0_ = 0.0, stored_ = 0.0, supplied_ = 0.0, scale_ = 0.0;
   bool have_e0_ = false;
 };
 

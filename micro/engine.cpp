@@ -712,6 +712,12 @@ void Engine::checkStep(bool measure) {
 void Engine::measureEnergy() {
   const bool ok = energy_.close(runaway_factor_);
   energy_.elastic_contact = energy_.elastic_link = energy_.link_plastic = 0.0;
+  if (const char* term = energy_.nonFiniteTerm()) {
+    fail(StepStatus::NonFinite, std::string("the energy term ") + term +
+                                    " is not finite (a stiffness or mass so small or so large that its products "
+                                    "underflow or overflow?)");
+    return;
+  }
   if (ok) return;
   std::ostringstream m;
   m << "energy runaway: kinetic + elastic energy " << energy_.stored() << " J exceeds " << runaway_factor_

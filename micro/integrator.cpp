@@ -58,10 +58,16 @@ SphereSums sphereLoop(Particles& p, std::size_t b, std::size_t e, double dt, con
     const double x0 = X[i], y0 = Y[i], z0 = Z[i];
     const double x1 = x0 + dt * vx, y1 = y0 + dt * vy, z1 = z0 + dt * vz;
     if (kMeasure) {
-      // (m g is the weight; the kinetic energy is that of the inertial mass 1 / im: mass scaling)
-      ke_t += im > 0.0 ? 0.5 * (vx * vx + vy * vy + vz * vz) / im : 0.0;
-      pe -= m * (gx * 0.5 * (x0 + x1) + gy * 0.5 * (y0 + y1) + gz * 0.5 * (z0 + z1));
-      ke_r += ii > 0.0 ? 0.5 * (wx * wx + wy * wy + wz * wz) / ii : 0.0;
+      // The energy at the positions x0 where the forces (and the elastic
+      // energy) were taken, between the velocities of the half steps before
+      // and after: (1/2) m v- . v+. This is the energy the leapfrog conserves
+      // exactly for a linear spring and for gravity; (1/2) m v+^2 would be
+      // half a step off the elastic energy and swing by omega dt / 2 through
+      // every contact. (m g is the weight; the kinetic energy is that of the
+      // inertial mass 1 / im: mass scaling.)
+      ke_t += im > 0.0 ? 0.5 * (VX[i] * vx + VY[i] * vy + VZ[i] * vz) / im : 0.0;
+      pe -= m * (gx * x0 + gy * y0 + gz * z0);
+      ke_r += ii > 0.0 ? 0.5 * (WX[i] * wx + WY[i] * wy + WZ[i] * wz) / ii : 0.0;
     }
     VX[i] = vx, VY[i] = vy, VZ[i] = vz, WX[i] = wx, WY[i] = wy, WZ[i] = wz;
     X[i] = x1, Y[i] = y1, Z[i] = z1;
@@ -97,7 +103,7 @@ SphereSums integrateBlock(RigidBlock& b, Particles& p, double dt, const Vec3& g,
     Fd[c] = bridge::locallyDampedForce(ld, F[c], b.v[c]) - F[c];
     Td[c] = bridge::locallyDampedForce(ld, T[c], b.omega[c]) - T[c];
   }
-  const Vec3 v0 = b.v, w0 = b.omega, x0 = b.x;
+  const Vec3 v0 = b.v, w0 = b.omega, x0 = b.x, L0 = b.L;
   b.v += dt * b.inv_mass * (F + Fd);
   b.L += dt * (T + Td);
   b.x += dt * b.v;
@@ -105,9 +111,10 @@ SphereSums integrateBlock(RigidBlock& b, Particles& p, double dt, const Vec3& g,
   b.omega = angularVelocityWorld(b.q, b.L, b.inertia);
   s.local = -(Fd.dot(v0 + b.v) + Td.dot(w0 + b.omega)) * 0.5 * dt;
   if (measure) {
-    s.ke_t = 0.5 * b.mass * b.v.squaredNorm();
-    s.ke_r = 0.5 * b.L.dot(b.omega);
-    s.pe = -b.mass * g.dot(0.5 * (x0 + b.x));
+    // (at the positions of the forces, between the half steps: as for spheres)
+    s.ke_t = 0.5 * b.mass * v0.dot(b.v);
+    s.ke_r = 0.5 * L0.dot(b.omega);
+    s.pe = -b.mass * g.dot(x0);
   }
   s.finite = b.x.sum() + b.v.sum() + b.L.sum();
   const Eigen::Matrix3d R = b.q.toRotationMatrix();  // (once for all the members)

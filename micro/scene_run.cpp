@@ -24,26 +24,6 @@ struct Series {
   std::vector<std::vector<double>> wall_force, wall_position;  // per wall, (n, 3) flat
 };
 
-const std::vector<std::pair<std::string, double EnergyTotals::*>>& energyTerms() {
-  static const std::vector<std::pair<std::string, double EnergyTotals::*>> terms = {
-      {"kinetic_translational_J", &EnergyTotals::kinetic_translational_J},
-      {"kinetic_rotational_J", &EnergyTotals::kinetic_rotational_J},
-      {"gravity_potential_J", &EnergyTotals::gravity_potential_J},
-      {"elastic_contact_J", &EnergyTotals::elastic_contact_J},
-      {"elastic_link_J", &EnergyTotals::elastic_link_J},
-      {"friction_dissipation_J", &EnergyTotals::friction_dissipation_J},
-      {"plastic_dissipation_J", &EnergyTotals::plastic_dissipation_J},
-      {"local_damping_dissipation_J", &EnergyTotals::local_damping_dissipation_J},
-      {"viscous_damping_dissipation_J", &EnergyTotals::viscous_damping_dissipation_J},
-      {"link_rupture_dissipation_J", &EnergyTotals::link_rupture_dissipation_J},
-      {"link_plastic_dissipation_J", &EnergyTotals::link_plastic_dissipation_J},
-      {"wall_work_J", &EnergyTotals::wall_work_J},
-      {"driven_work_J", &EnergyTotals::driven_work_J},
-      {"total_J", &EnergyTotals::total_J},
-      {"balance_rel_error", &EnergyTotals::balance_rel_error}};
-  return terms;
-}
-
 // Where the step loop's time went, as a small table (printed after a run):
 // each stage's wall time and share, with several threads the busiest
 // partition over the mean (1.00: balanced), and the rest of the loop

@@ -217,6 +217,25 @@ TEST(MicroSceneCli, RunsOfZeroOrCountlessStepsAreRefused) {
   EXPECT_FALSE(std::filesystem::exists(dir / "long"));
 }
 
+// A stiffness of 1e-300 N/m: the ball sinks into the floor and the run stops
+// on the overlap, with every energy a number. Before, the mixing rule
+// 2 k1 k2 / (k1 + k2) underflowed to 0 and the stored energy F^2 / 2k was
+// written as null; a ledger that is not finite now stops the run (exit 3,
+// non_finite, the term named: test EnergyLedger.NamesItsFirstNonFiniteTerm).
+TEST(MicroSceneCli, AnUnderflowingStiffnessGivesNumbersNotNulls) {
+  const auto dir = scratchDir("micro_scene_soft");
+  writeFile(dir / "soft.json", R"({"format": "gabion.case/1", "kind": "micro.scene", "gravity_m_s2": [0, 0, -9.81],
+ "materials": {"m": {"density_kg_m3": 2500, "normal_stiffness_N_m": 1e-300, "shear_stiffness_N_m": 2.5e4, "friction": 0.5}},
+ "walls": [{"name": "floor", "point_m": [0, 0, 0], "normal": [0, 0, 1], "material": "m"}],
+ "spheres": [{"center_m": [0, 0, 0.2], "radius_m": 0.01, "material": "m"}],
+ "run": {"duration_s": 0.5}})");
+  const auto r = runGabion("run " + (dir / "soft.json").string() + " -q -o " + (dir / "out").string());
+  EXPECT_EQ(r.exit_code, 3) << r.output;
+  const auto summary = nlohmann::json::parse(std::ifstream(dir / "out" / "summary.json"));
+  EXPECT_EQ(summary["step_status"], "overlap");
+  for (const auto& [name, value] : summary["energy"].items()) EXPECT_TRUE(value.is_number()) << name << " " << value;
+}
+
 TEST(MicroSceneCli, SameCaseSameThreadsGivesIdenticalArrays) {
   const auto dir = scratchDir("micro_scene_det");
   writeFile(dir / "case.json", scene());
