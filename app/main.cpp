@@ -7,6 +7,7 @@
 #include <CLI/CLI.hpp>
 #include <chrono>
 #include <cstdio>
+#include <cstdlib>
 #include <filesystem>
 #include <iostream>
 
@@ -154,7 +155,25 @@ int commandRun(const Options& o) {
 
 }  // namespace
 
+namespace {
+int runCommandLine(int argc, char** argv);
+}
+
+// A result file that failed to write (a full disk) leaves an HDF5 handle
+// that the library's clean-up at exit would crash on: the process then ends
+// without it, its streams flushed (bridge/output.hpp).
 int main(int argc, char** argv) {
+  const int code = runCommandLine(argc, argv);
+  if (gabion::bridge::hdf5HandlesAbandoned()) {
+    std::cout.flush();
+    std::cerr.flush();
+    std::_Exit(code);
+  }
+  return code;
+}
+
+namespace {
+int runCommandLine(int argc, char** argv) {
   gabion::bridge::installInterruptHandlers();
   CLI::App app{"gabion: two-scale DEM for cellular rockfall protection structures"};
   app.set_version_flag("--version", std::string("gabion ") + gabion::kVersion);
@@ -202,8 +221,12 @@ int main(int argc, char** argv) {
   } catch (const InputError& e) {
     std::cerr << e.what() << "\n";
     return kExitBadInput;
+  } catch (const gabion::bridge::WriteError& e) {
+    std::cerr << "gabion: " << e.what() << "\n";
+    return kExitInternal;
   } catch (const std::exception& e) {
     std::cerr << "gabion: internal error: " << e.what() << "\n";
     return kExitInternal;
   }
 }
+}  // namespace

@@ -3,6 +3,7 @@
 /// The failures that cross module boundaries (STYLE.md rule 6):
 /// bad input is an exception thrown at load time; numerical trouble is a
 /// status that a run reports and stops on (modules turn it into a RunOutcome).
+#include <filesystem>
 #include <stdexcept>
 #include <string>
 
@@ -32,6 +33,15 @@ class NumericalError : public std::runtime_error {
  private:
   long long step_;
   double time_s_;
+};
+
+/// A result file that could not be written (a full disk, a file-size limit,
+/// a folder that went away). what() names the file and says how much room
+/// the disk holding it has left. The run ends with exit 1; the file's
+/// earlier complete version, if any, is left as it was (bridge/output.hpp).
+class WriteError : public std::runtime_error {
+ public:
+  WriteError(const std::string& file, const std::string& detail);
 };
 
 }  // namespace gabion::bridge

@@ -18,6 +18,10 @@ extern "C" void onInterrupt(int signal) {
 void installInterruptHandlers() {
   std::signal(SIGINT, onInterrupt);
   std::signal(SIGTERM, onInterrupt);
+  // A write past the file-size limit (ulimit -f) fails with EFBIG and ends
+  // the run with a message naming the file (bridge::WriteError), instead of
+  // killing the process in the middle of its files.
+  std::signal(SIGXFSZ, SIG_IGN);
 }
 
 int interruptSignal() {

@@ -2,6 +2,7 @@
 
 #include <H5Cpp.h>
 
+#include <atomic>
 #include <fstream>
 #include <iomanip>
 #include <numeric>
@@ -23,8 +24,7 @@ fs::path partPath(const fs::path& p) {
 void renameInto(const fs::path& part, const fs::path& final_path) {
   std::error_code ec;
   fs::rename(part, final_path, ec);
-  if (ec)
-    throw std::runtime_error("cannot rename " + part.string() + " to " + final_path.string() + ": " + ec.message());
+  if (ec) throw WriteError(final_path.string(), "cannot rename " + part.string() + " to it: " + ec.message());
 }
 
 // Creates every missing group of "/a/b/dataset" and returns the parent path.
@@ -37,8 +37,15 @@ void ensureGroups(H5::H5File& file, const std::string& dataset) {
   }
 }
 
+// HDF5 prints nothing (its errors become WriteError/InputError messages),
+// and does not close open files at exit: a writer whose writes failed
+// leaves its file handle open on purpose (H5Writer::~H5Writer), and closing
+// such a file crashes inside the library.
 struct QuietHdf5 {
-  QuietHdf5() { H5::Exception::dontPrint(); }
+  QuietHdf5() {
+    H5dont_atexit();
+    H5::Exception::dontPrint();
+  }
 };
 const QuietHdf5 kQuiet;
 
@@ -52,14 +59,14 @@ void writeAtomic(const fs::path& path, Emit emit) {
   const fs::path part = partPath(path);
   {
     std::ofstream out(part, std::ios::binary | std::ios::trunc);
-    if (!out) throw std::runtime_error("cannot write " + part.string());
+    if (!out) throw WriteError(part.string(), "cannot create the file");
     emit(out);
     out.flush();
+    out.close();
     if (!out) {
-      out.close();
       std::error_code ec;
       fs::remove(part, ec);
-      throw std::runtime_error("write failed: " + part.string());
+      throw WriteError(path.string(), "the write failed; the earlier file, if any, is kept");
     }
   }
   renameInto(part, path);
@@ -85,16 +92,35 @@ H5Writer::H5Writer(fs::path final_path) : final_(std::move(final_path)), part_(p
   try {
     impl_ = std::make_unique<Impl>(Impl{H5::H5File(part_.string(), H5F_ACC_TRUNC)});
   } catch (const H5::Exception& e) {
-    throw std::runtime_error("cannot create HDF5 file " + part_.string() + ": " + e.getDetailMsg());
+    throw WriteError(part_.string(), "cannot create the HDF5 file: " + e.getDetailMsg());
   }
 }
 
+namespace {
+std::atomic<bool> abandoned{false};
+}
+
+bool hdf5HandlesAbandoned() {
+  return abandoned.load();
+}
+
 H5Writer::~H5Writer() {
-  if (!committed_) {
-    impl_.reset();
-    std::error_code ec;
-    fs::remove(part_, ec);
+  if (committed_) return;
+  // A file whose writes failed (a full disk) cannot be closed: HDF5 1.10
+  // crashes flushing its metadata. Its handle is left open (the process is
+  // ending on the error) and the file is unlinked, which frees its space.
+  if (failed_) {
+    (void)impl_.release();
+    abandoned = true;
   }
+  impl_.reset();
+  std::error_code ec;
+  fs::remove(part_, ec);
+}
+
+void H5Writer::fail(const std::string& what, const std::string& detail) {
+  failed_ = true;
+  throw WriteError(final_.string(), what + ": " + detail);
 }
 
 void H5Writer::write(const std::string& dataset, const std::vector<double>& values, const std::string& unit) {
@@ -116,8 +142,9 @@ void H5Writer::write(const std::string& dataset, const std::vector<double>& data
       H5::Attribute a = ds.createAttribute("unit", st, H5::DataSpace(H5S_SCALAR));
       a.write(st, unit);
     }
+    ds.close();
   } catch (const H5::Exception& e) {
-    throw std::runtime_error("HDF5 write " + part_.string() + ":" + dataset + ": " + e.getDetailMsg());
+    fail("dataset " + dataset, e.getDetailMsg());
   }
 }
 
@@ -161,8 +188,9 @@ void H5Writer::appendRow(const std::string& dataset, const std::vector<double>& 
     file_space.selectHyperslab(H5S_SELECT_SET, count.data(), offset.data());
     H5::DataSpace mem_space(rank, count.data());
     ds.write(row.data(), H5::PredType::NATIVE_DOUBLE, mem_space, file_space);
+    ds.close();  // (here, so that a failed flush throws instead of printing from the destructor)
   } catch (const H5::Exception& e) {
-    throw std::runtime_error("HDF5 write " + part_.string() + ":" + dataset + ": " + e.getDetailMsg());
+    fail("dataset " + dataset, e.getDetailMsg());
   }
 }
 
@@ -182,8 +210,9 @@ void H5Writer::writeInts(const std::string& dataset, const std::vector<long long
     H5::DataSpace space(static_cast<int>(d.size()), d.data());
     H5::DataSet ds = impl_->file.createDataSet(dataset, H5::PredType::NATIVE_LLONG, space);
     if (!values.empty()) ds.write(values.data(), H5::PredType::NATIVE_LLONG);
+    ds.close();
   } catch (const H5::Exception& e) {
-    throw std::runtime_error("HDF5 write " + part_.string() + ":" + dataset + ": " + e.getDetailMsg());
+    fail("dataset " + dataset, e.getDetailMsg());
   }
 }
 
@@ -201,7 +230,7 @@ void H5Writer::attribute(const std::string& object, const std::string& name, con
       }
     }
   } catch (const H5::Exception& e) {
-    throw std::runtime_error("HDF5 attribute " + part_.string() + ":" + object + "@" + name + ": " + e.getDetailMsg());
+    fail("attribute " + object + "@" + name, e.getDetailMsg());
   }
 }
 
@@ -210,7 +239,7 @@ void H5Writer::commit() {
   try {
     impl_->file.close();
   } catch (const H5::Exception& e) {
-    throw std::runtime_error("HDF5 close " + part_.string() + ": " + e.getDetailMsg());
+    fail("closing the file", e.getDetailMsg());
   }
   renameInto(part_, final_);
   committed_ = true;

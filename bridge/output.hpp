@@ -20,7 +20,8 @@ void writeTextAtomic(const std::filesystem::path& path, const std::string& text)
 /// An HDF5 file being written. Datasets are float64 arrays addressed by path
 /// ("/series/time_s"); groups are created on the way. The file appears under
 /// its final name only after commit(); a writer destroyed without commit()
-/// removes its temporary file.
+/// removes its temporary file. A failed write throws WriteError (a full disk
+/// ends the run with exit 1 and a message, not a crash).
 class H5Writer {
  public:
   explicit H5Writer(std::filesystem::path final_path);
@@ -51,11 +52,18 @@ class H5Writer {
   const std::filesystem::path& path() const { return final_; }
 
  private:
+  [[noreturn]] void fail(const std::string& what, const std::string& detail);
   struct Impl;
   std::unique_ptr<Impl> impl_;
   std::filesystem::path final_, part_;
-  bool committed_ = false;
+  bool committed_ = false, failed_ = false;
 };
+
+/// True once a writer whose writes failed was destroyed: its HDF5 handle was
+/// left open (closing it crashes HDF5 1.10), and the library's clean-up at
+/// exit would crash on it. The process must then end with std::_Exit after
+/// flushing its streams (app/main.cpp does).
+bool hdf5HandlesAbandoned();
 
 /// Read access to an HDF5 file written by Gabion (or any float64 datasets).
 /// Errors (missing file, corrupt file, missing dataset) throw InputError naming

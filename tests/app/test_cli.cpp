@@ -156,3 +156,31 @@ TEST(Cli, AReusedOutputFolderListsOnlyThisRunsFiles) {
   EXPECT_EQ(r.output.find("stale_table.csv"), std::string::npos) << r.output;
   EXPECT_NE(r.output.find("(and 1 older file, not from this run)"), std::string::npos) << r.output;
 }
+
+// A write that fails (here past a file-size limit, as on a full disk) ends
+// the run with exit 1 and a message naming the file and the room left, not
+// a crash: HDF5 crashed closing such a file (SIGSEGV). The folder keeps the
+// earlier run's complete files, byte for byte, and no temporary file.
+TEST(Cli, AFailedWriteEndsTheRunWithAMessageAndKeepsTheEarlierFiles) {
+  const auto dir = scratchDir("cli_full_disk");
+  const std::string run = std::string(GABION_BINARY) + " run " + std::string(GABION_SOURCE_DIR) +
+                          "/cases/wall_impact.json -q -o " + (dir / "out").string();
+  ASSERT_EQ(gabion::testing::runCommand(run).exit_code, 0);
+  const auto read = [](const std::filesystem::path& p) {
+    std::ifstream in(p, std::ios::binary);
+    return std::string((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  };
+  const std::string h5 = read(dir / "out" / "result.h5"), summary = read(dir / "out" / "summary.json");
+  ASSERT_GT(h5.size(), 100000u);
+  // 100 blocks of 512 bytes: the result (about 300 kB) does not fit.
+  const auto r = gabion::testing::runCommand("sh -c 'ulimit -f 100; " + run + "'");
+  EXPECT_EQ(r.exit_code, 1) << r.output;
+  EXPECT_NE(r.output.find("cannot write " + (dir / "out" / "result.h5").string()), std::string::npos) << r.output;
+  EXPECT_NE(r.output.find("(ulimit -f)"), std::string::npos) << r.output;
+  EXPECT_EQ(r.output.find("internal error"), std::string::npos) << r.output;
+  EXPECT_EQ(r.output.find("H5Dclose failed\n"), std::string::npos) << "HDF5's own printing stays quiet: " << r.output;
+  EXPECT_EQ(read(dir / "out" / "result.h5"), h5);
+  EXPECT_EQ(read(dir / "out" / "summary.json"), summary);
+  for (const auto& entry : std::filesystem::directory_iterator(dir / "out"))
+    EXPECT_NE(entry.path().extension(), ".part") << entry.path();
+}
