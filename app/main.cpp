@@ -10,11 +10,14 @@
 #include <cstdlib>
 #include <filesystem>
 #include <iostream>
+#include <iterator>
+#include <set>
 
 #include "app/registry.hpp"
 #include "app/standard_figure.hpp"
 #include "bridge/errors.hpp"
 #include "bridge/interrupt.hpp"
+#include "bridge/manifest.hpp"
 #include "bridge/output.hpp"
 #include "gabion_version.hpp"
 
@@ -90,9 +93,9 @@ int commandRun(const Options& o) {
   ctx.may_release_case = true;
 
   const auto t0 = std::chrono::steady_clock::now();
-  // (the files this run writes are newer; the margin covers the coarse clock
-  // that file systems stamp files with)
-  const auto started = fs::file_time_type::clock::now() - std::chrono::milliseconds(100);
+  // The folder's earlier set of files is no longer trusted from here; its
+  // new manifest is written last (bridge/manifest.hpp).
+  gabion::bridge::beginManifest(outdir);
   gabion::bridge::RunOutcome outcome;
   try {
     outcome = kind->run(doc, ctx);
@@ -125,6 +128,7 @@ int commandRun(const Options& o) {
   summary["case"] = nlohmann::json::parse(case_text);
   for (auto it = outcome.results.begin(); it != outcome.results.end(); ++it) summary[it.key()] = it.value();
   gabion::bridge::writeJsonAtomic(outdir / "summary.json", summary);
+  gabion::bridge::writeManifest(outdir, summary["status"].get<std::string>());
 
   if (outcome.status == gabion::bridge::RunOutcome::Status::Interrupted) {
     std::cerr << "gabion: " << outcome.message << "\n"
@@ -136,17 +140,17 @@ int commandRun(const Options& o) {
               << "gabion: what was written so far is in " << outdir.string() << "\n";
     return kExitNumerical;
   }
-  // The files this run wrote; a reused folder's older files are counted, not
-  // listed as results.
+  // The files this run wrote (its manifest's, top level); a reused folder's
+  // older files are counted, not listed as results.
   std::cout << "results: " << fs::absolute(outdir).string() << "\n";
+  std::set<fs::path> ours;
+  for (const fs::path& f : gabion::bridge::writtenFiles(outdir))
+    if (std::distance(f.begin(), f.end()) == 1) ours.insert(f);
+  ours.insert("manifest.json");
+  for (const fs::path& f : ours) std::cout << "  " << f.string() << "\n";
   std::size_t older = 0;
-  for (const auto& entry : fs::directory_iterator(outdir)) {
-    if (!entry.is_regular_file()) continue;
-    if (entry.last_write_time() < started)
-      ++older;
-    else
-      std::cout << "  " << entry.path().filename().string() << "\n";
-  }
+  for (const auto& entry : fs::directory_iterator(outdir))
+    if (entry.is_regular_file() && ours.count(entry.path().filename()) == 0) ++older;
   if (older > 0) std::cout << "  (and " << older << " older file" << (older > 1 ? "s" : "") << ", not from this run)\n";
   std::cout << outcome.answer;
   if (!o.quiet) std::cout << outcome.report;

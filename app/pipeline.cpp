@@ -13,6 +13,7 @@
 #include "bridge/errors.hpp"
 #include "bridge/interrupt.hpp"
 #include "bridge/law_file.hpp"
+#include "bridge/manifest.hpp"
 #include "bridge/output.hpp"
 #include "bridge/plot.hpp"
 #include "bridge/units.hpp"
@@ -224,7 +225,9 @@ std::optional<std::pair<json, double>> reusable(const fs::path& dir, const std::
     const json st = json::parse(in);
     std::ifstream sin(dir / "summary.json");
     json summary = json::parse(sin);
-    if (st.value("key", "") == key && summary.value("status", "") == "ok")
+    // (and the stage's folder was committed whole: its manifest lists its
+    // files as they are; adopting them lists them in the pipeline's)
+    if (st.value("key", "") == key && summary.value("status", "") == "ok" && bridge::adoptManifest(dir))
       return std::make_pair(std::move(summary), st.value("wall_time_s", 0.0));
   } catch (const std::exception&) {
     // A damaged record: run the stage again.
@@ -261,6 +264,7 @@ StageResult runStage(const std::string& name, const std::string& kind, json case
     clock.end(name, false, out.wall_time_s);
     return out;
   }
+  bridge::beginManifest(dir);
   fs::remove(dir / "stage.json");
   bridge::writeJsonAtomic(dir / "case.json", case_value);
   JsonDocument doc = JsonDocument::load(dir / "case.json");
@@ -281,9 +285,12 @@ StageResult runStage(const std::string& name, const std::string& kind, json case
   summary["wall_time_s"] = out.wall_time_s;
   summary["case"] = doc.json();
   bridge::writeJsonAtomic(dir / "summary.json", summary);
-  if (ran.status != bridge::RunOutcome::Status::Ok)
+  if (ran.status != bridge::RunOutcome::Status::Ok) {
+    bridge::writeManifest(dir, bridge::statusName(ran.status));
     throw StageFailure("pipeline stage '" + name + "' (" + dir.string() + "): " + ran.message);
+  }
   bridge::writeJsonAtomic(dir / "stage.json", {{"key", key}, {"wall_time_s", out.wall_time_s}});
+  bridge::writeManifest(dir, "ok");
   out.summary = std::move(summary);
   if (parent.progress) std::printf("%s %s done in %.1f s\n", clock.prefix().c_str(), name.c_str(), out.wall_time_s);
   clock.end(name, true, out.wall_time_s);

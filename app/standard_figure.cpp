@@ -4,6 +4,7 @@
 #include <vector>
 
 #include "bridge/errors.hpp"
+#include "bridge/manifest.hpp"
 #include "bridge/output.hpp"
 #include "bridge/plot.hpp"
 
@@ -86,6 +87,7 @@ bool energyLedger(const bridge::H5Reader& h5, bridge::PlotSpec& spec) {
 void writeStandardFigure(const fs::path& result, const fs::path& figure) {
   if (!fs::exists(result)) throw bridge::InputError(result.string(), "", "file does not exist");
   if (!fs::is_regular_file(result)) throw bridge::InputError(result.string(), "", "not a regular file");
+  bridge::requireListed(result);  // (a result of the run that wrote its folder, complete)
   bridge::PlotSpec spec;
   {
     const bridge::H5Reader h5(result);

@@ -10,6 +10,7 @@
 #include <stdexcept>
 
 #include "bridge/errors.hpp"
+#include "bridge/manifest.hpp"
 
 namespace gabion::bridge {
 
@@ -25,6 +26,7 @@ void renameInto(const fs::path& part, const fs::path& final_path) {
   std::error_code ec;
   fs::rename(part, final_path, ec);
   if (ec) throw WriteError(final_path.string(), "cannot rename " + part.string() + " to it: " + ec.message());
+  noteWritten(final_path);
 }
 
 // Creates every missing group of "/a/b/dataset" and returns the parent path.

@@ -15,6 +15,7 @@
 #include <thread>
 
 #include "bridge/errors.hpp"
+#include "bridge/manifest.hpp"
 
 namespace gabion::fitting {
 
@@ -83,11 +84,17 @@ EvaluationLog::EvaluationLog(fs::path file, std::string case_sha256, std::vector
     if (kept < text.size()) fs::resize_file(file_, kept);  // (the torn line)
     if (unterminated) std::ofstream(file_, std::ios::app) << "\n";
     resumed_ = records_.size();
-    if (kept > 0) return;  // keep appending to the existing log
+    if (kept > 0) {  // keep appending to the existing log
+      bridge::noteWritten(file_);
+      return;
+    }
   }
   std::ofstream out(file_, std::ios::trunc);
   if (!out) throw bridge::InputError(file_.string(), "", "cannot write the evaluation log");
   out << header.dump() << "\n";
+  out.close();
+  if (!out) throw bridge::WriteError(file_.string(), "the evaluation log's header could not be written");
+  bridge::noteWritten(file_);  // (a log, appended line by line: listed in the run's manifest)
 }
 
 bool EvaluationLog::find(const std::vector<double>& parameters, EvaluationRecord& out) const {
@@ -110,7 +117,8 @@ void EvaluationLog::append(const EvaluationRecord& r) {
   // Append and close at once: a killed run loses at most the line being written.
   std::ofstream out(file_, std::ios::app);
   out << j.dump() << "\n";
-  out.flush();
+  out.close();
+  if (!out) throw bridge::WriteError(file_.string(), "evaluation " + std::to_string(r.id) + " could not be logged");
 }
 
 long long EvaluationLog::nextId() {

@@ -6,6 +6,7 @@
 #include <sstream>
 
 #include "bridge/errors.hpp"
+#include "bridge/manifest.hpp"
 #include "bridge/plot.hpp"
 #include "fitting/calibration.hpp"
 #include "fitting/case_input.hpp"
@@ -297,10 +298,16 @@ bridge::RunOutcome runCase(const bridge::JsonDocument& doc, const bridge::RunCon
   res["misfit"] = result.best_error;
 
   // Re-run the best point once, kept, to report its curve and plot it.
-  const fs::path best_dir = ctx.outdir / "best";
+  // Into best/, replacing only a folder an earlier run made (it has a
+  // manifest): a best/ of the user's is left alone and best_1/, best_2/, ...
+  // taken instead.
+  fs::path best_dir = ctx.outdir / "best";
+  for (int k = 1; fs::exists(best_dir) && !fs::exists(best_dir / "manifest.json"); ++k)
+    best_dir = ctx.outdir / ("best_" + std::to_string(k));
   fs::remove_all(best_dir, ec);
   fs::create_directories(best_dir);
   objective(result.best, best_dir);
+  bridge::writeManifest(best_dir, "ok");
   const bridge::Curve model = readModelCurve(best_dir / "result.h5", c.model);
   double sum = 0.0, count = 0.0;
   bridge::PlotSpec plot;
@@ -315,7 +322,7 @@ bridge::RunOutcome runCase(const bridge::JsonDocument& doc, const bridge::RunCon
   }
   plot.series.push_back({"micro run (best)", model.x, model.y, bridge::PlotSeries::Style::Line});
   res["nrms"] = std::sqrt(sum / count);
-  res["best_run"] = "best/result.h5";
+  res["best_run"] = (best_dir.filename() / "result.h5").generic_string();
   bridge::writePlotPng(ctx.outdir / "fit_micro.png", plot);
   res["plots"] = json::array({"fit_micro.png"});
   outcome.results["fit_micro"] = res;

@@ -10,6 +10,7 @@
 
 #include "bridge/errors.hpp"
 #include "bridge/interrupt.hpp"
+#include "bridge/manifest.hpp"
 #include "bridge/output.hpp"
 #include "micro/cell/cell_assembly.hpp"
 #include "micro/cell/cell_file.hpp"
@@ -246,12 +247,14 @@ fs::path generateCell(const CellSource& source, const fs::path& dir, const bridg
   const std::string text = doc.json().dump(1);
   const fs::path cell = dir / "cell.h5", stamp = dir / "case.json";
   // The same case and seed made this cell already: take it.
+  // (and its folder was committed whole: bridge/manifest.hpp)
   if (fs::exists(cell) && fs::exists(stamp)) {
     std::ifstream in(stamp);
     const std::string before((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
-    if (before == text) return cell;
+    if (before == text && bridge::adoptManifest(dir)) return cell;
   }
   fs::create_directories(dir);
+  bridge::beginManifest(dir);
   fs::remove(stamp);
   bridge::RunContext sub = ctx;
   sub.outdir = dir;
@@ -265,9 +268,12 @@ fs::path generateCell(const CellSource& source, const fs::path& dir, const bridg
   summary["case_file"] = source.generate.string();
   summary["case"] = doc.json();
   bridge::writeJsonAtomic(dir / "summary.json", summary);
-  if (out.status != bridge::RunOutcome::Status::Ok)
+  if (out.status != bridge::RunOutcome::Status::Ok) {
+    bridge::writeManifest(dir, bridge::statusName(out.status));
     throw bridge::NumericalError(0, 0.0, "generating the cell (" + dir.string() + "): " + out.message);
-  std::ofstream(stamp) << text;
+  }
+  bridge::writeTextAtomic(stamp, text);
+  bridge::writeManifest(dir, "ok");
   return cell;
 }
 

@@ -6,6 +6,7 @@
 #include <fstream>
 #include <iterator>
 #include <nlohmann/json.hpp>
+#include <set>
 #include <string>
 
 #include "tests/support/run_gabion.hpp"
@@ -183,4 +184,42 @@ TEST(Cli, AFailedWriteEndsTheRunWithAMessageAndKeepsTheEarlierFiles) {
   EXPECT_EQ(read(dir / "out" / "summary.json"), summary);
   for (const auto& entry : std::filesystem::directory_iterator(dir / "out"))
     EXPECT_NE(entry.path().extension(), ".part") << entry.path();
+}
+
+// An output folder is committed as a set: manifest.json, written last,
+// lists this run's files with their sizes, and `plot` reads only what it
+// lists. A run killed in a reused folder leaves no manifest, so the earlier
+// run's files there are no longer taken for results.
+TEST(Cli, AnOutputFolderIsCommittedAsASet) {
+  const auto dir = scratchDir("cli_manifest");
+  const std::string source = GABION_SOURCE_DIR;
+  const auto out = dir / "out";
+  ASSERT_EQ(runGabion("run " + source + "/cases/wall_impact.json -q -o " + out.string()).exit_code, 0);
+  const auto manifest = nlohmann::json::parse(std::ifstream(out / "manifest.json"));
+  EXPECT_EQ(manifest.at("format"), "gabion.manifest/1");
+  EXPECT_EQ(manifest.at("status"), "ok");
+  std::set<std::string> listed;
+  for (const auto& f : manifest.at("files")) {
+    listed.insert(f.at("path").get<std::string>());
+    EXPECT_EQ(f.at("bytes").get<std::uintmax_t>(), std::filesystem::file_size(out / f.at("path").get<std::string>()));
+  }
+  EXPECT_EQ(listed, (std::set<std::string>{"result.h5", "result.xdmf", "summary.json"}));
+  EXPECT_EQ(runGabion("plot " + (out / "result.h5").string()).exit_code, 0);
+
+  // A file the run did not write is not read as its result.
+  std::filesystem::copy_file(out / "result.h5", out / "other.h5");
+  auto r = runGabion("plot " + (out / "other.h5").string());
+  EXPECT_EQ(r.exit_code, 2) << r.output;
+  EXPECT_NE(r.output.find("other.h5: not listed in " + (out / "manifest.json").string()), std::string::npos)
+      << r.output;
+
+  // A run killed in the folder: the manifest is gone with the set it vouched for.
+  r = gabion::testing::runCommand("sh -c '" + std::string(GABION_BINARY) + " run " + source +
+                                  "/cases/micro_block_fill.json -q -o " + out.string() +
+                                  " & p=$!; sleep 1; kill -KILL $p; wait $p; echo exit=$?'");
+  EXPECT_NE(r.output.find("exit=137"), std::string::npos) << r.output;
+  EXPECT_FALSE(std::filesystem::exists(out / "manifest.json"));
+  r = runGabion("plot " + (out / "result.h5").string());
+  EXPECT_EQ(r.exit_code, 2) << r.output;
+  EXPECT_NE(r.output.find("no manifest.json beside it or above it"), std::string::npos) << r.output;
 }

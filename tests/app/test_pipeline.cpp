@@ -8,6 +8,7 @@
 
 #include <fstream>
 #include <regex>
+#include <set>
 #include <string>
 #include <vector>
 
@@ -166,6 +167,22 @@ TEST(Pipeline, ReducedChainRunsEveryStageThenReusesThem) {
   const auto third = readJson(out / "summary.json");
   for (const auto& st : third.at("stages"))
     EXPECT_EQ(st.at("reused").get<bool>(), st.at("folder") != "4_impact_14_m_s") << st.at("folder");
+  // The pipeline's manifest lists every stage's files, reused or run.
+  const auto manifest = readJson(out / "manifest.json");
+  std::set<std::string> listed;
+  for (const auto& f : manifest.at("files")) listed.insert(f.at("path").get<std::string>());
+  for (const auto& st : third.at("stages")) {
+    const std::string folder = st.at("folder").get<std::string>();
+    EXPECT_EQ(listed.count(folder + "/summary.json"), 1u) << folder;
+  }
+  // A stage whose folder lost its manifest (a run killed while it wrote
+  // there) is run again, even with its key unchanged.
+  fs::remove(out / "4_impact_8_m_s" / "manifest.json");
+  r = runGabion("run " + (dir / "pipeline.json").string() + " -q --threads 2 -o " + out.string() +
+                " --set structure.velocities_m_s=[8,14]");
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  for (const auto& st : readJson(out / "summary.json").at("stages"))
+    EXPECT_EQ(st.at("reused").get<bool>(), st.at("folder") != "4_impact_8_m_s") << st.at("folder");
   if (!have_chromium)
     GTEST_SKIP() << "chromium is not installed (scripts/deps.sh --tests installs it): the report was checked as files, "
                     "not opened in a browser";

@@ -159,7 +159,14 @@ TEST(MicroFit, InterruptedCalibrationResumesFromItsLog) {
   EXPECT_TRUE(first.at("interrupted").get<bool>());
   EXPECT_EQ(first.at("new_evaluations").get<long long>(), 9);
   c.erase("max_new_evaluations");
+  // A best/ folder without a manifest is not a run's: it is left alone.
+  EXPECT_EQ(first.at("best_run"), "best/result.h5");
+  fs::remove(dir / "resumed" / "best" / "manifest.json");
+  std::ofstream(dir / "resumed" / "best" / "notes.txt") << "the user's";
   const json second = runFitMicro(c, dir / "resumed");
+  EXPECT_EQ(second.at("best_run"), "best_1/result.h5");
+  EXPECT_TRUE(fs::exists(dir / "resumed" / "best" / "notes.txt"));
+  EXPECT_TRUE(fs::exists(dir / "resumed" / "best_1" / "result.h5"));
   EXPECT_FALSE(second.at("interrupted").get<bool>());
   EXPECT_EQ(second.at("resumed_from_log").get<long long>(), 9);
   EXPECT_EQ(first.at("new_evaluations").get<long long>() + second.at("new_evaluations").get<long long>(),
