@@ -11,10 +11,12 @@
 #include <filesystem>
 #include <iostream>
 #include <iterator>
+#include <optional>
 #include <set>
 
 #include "app/registry.hpp"
 #include "app/standard_figure.hpp"
+#include "bridge/cost.hpp"
 #include "bridge/errors.hpp"
 #include "bridge/interrupt.hpp"
 #include "bridge/manifest.hpp"
@@ -40,6 +42,7 @@ struct Options {
   std::vector<std::string> sets;
   int threads = 1;
   bool quiet = false;
+  bool force = false;       // run past the cost limits (bridge/cost.hpp)
   std::string result_file;  // plot
   std::string figure;       // plot: -o
 };
@@ -66,15 +69,44 @@ std::pair<JsonDocument, const gabion::bridge::CaseKind*> loadAndCheck(const Opti
   return {std::move(doc), kind};
 }
 
+// What the case will cost (bridge/cost.hpp), from a copy of the checked
+// document; nullopt where its kind cannot say. Bad input throws InputError
+// as check does.
+std::optional<gabion::bridge::Estimate> estimateOf(const gabion::bridge::CaseKind& kind, const JsonDocument& doc) {
+  if (!kind.estimate) return std::nullopt;
+  try {
+    return kind.estimate(JsonDocument(doc.json(), doc.file()));
+  } catch (const InputError&) {
+    throw;
+  } catch (const std::exception&) {
+    return std::nullopt;  // (what check passed but the estimate could not cost)
+  }
+}
+
 int commandCheck(const Options& o) {
-  loadAndCheck(o);
+  const auto [doc, kind] = loadAndCheck(o);
   std::cout << o.case_file << ": ok\n";
+  if (const auto e = estimateOf(*kind, doc)) std::cout << "  cost: " << gabion::bridge::describe(*e) << "\n";
   return kExitOk;
 }
 
 int commandRun(const Options& o) {
   auto [doc, kind] = loadAndCheck(o);
   const fs::path outdir = o.outdir.empty() ? fs::path("results") / fs::path(o.case_file).stem() : fs::path(o.outdir);
+  // Costed before anything is written: past the limits it is refused unless
+  // --force; a long or large run says so before it starts.
+  const auto estimate = estimateOf(*kind, doc);
+  if (estimate) {
+    const std::string why = gabion::bridge::overLimits(*estimate, outdir);
+    if (!why.empty() && !o.force)
+      throw InputError(o.case_file, "",
+                       "refused before it starts: " + why + " (estimate: " + gabion::bridge::describe(*estimate) +
+                           "); reduce the case, or run it anyway with --force");
+    if (!why.empty() || estimate->wall_time_s > gabion::bridge::kAnnounceWallTimeS ||
+        estimate->memory_bytes > gabion::bridge::kAnnounceBytes ||
+        estimate->output_bytes > gabion::bridge::kAnnounceBytes)
+      std::cerr << "gabion: this run: " << gabion::bridge::describe(*estimate) << "\n";
+  }
   std::error_code ec;
   fs::create_directories(outdir, ec);
   if (ec || !fs::is_directory(outdir))
@@ -125,6 +157,14 @@ int commandRun(const Options& o) {
   summary["wall_time_s"] = wall;
   summary["threads"] = o.threads;
   summary["case_file"] = o.case_file;
+  if (estimate)
+    summary["estimate"] = {{"bodies", estimate->bodies},
+                           {"steps", estimate->steps},
+                           {"runs", estimate->runs},
+                           {"wall_time_s", estimate->wall_time_s},
+                           {"memory_bytes", estimate->memory_bytes},
+                           {"output_bytes", estimate->output_bytes},
+                           {"partial", estimate->partial}};
   summary["case"] = nlohmann::json::parse(case_text);
   for (auto it = outcome.results.begin(); it != outcome.results.end(); ++it) summary[it.key()] = it.value();
   gabion::bridge::writeJsonAtomic(outdir / "summary.json", summary);
@@ -191,6 +231,9 @@ int runCommandLine(int argc, char** argv) {
   run->add_option("--set", o.sets, "override a case value: path.to.key=value (repeatable)");
   run->add_option("--threads", o.threads, "worker threads")->check(CLI::Range(1, 256));
   run->add_flag("-q,--quiet", o.quiet, "no progress line and no timing report");
+  run->add_flag("--force", o.force,
+                "run a case past the cost limits (more than a day on one thread, 80 % of the memory, the disk's free "
+                "space)");
 
   auto* check = app.add_subcommand("check", "Validate a case without running it");
   check->add_option("case", o.case_file, "case file (JSON)")->required();

@@ -10,6 +10,7 @@
 #include <sstream>
 
 #include "app/registry.hpp"
+#include "bridge/cost.hpp"
 #include "bridge/errors.hpp"
 #include "bridge/interrupt.hpp"
 #include "bridge/law_file.hpp"
@@ -145,7 +146,7 @@ struct StageClock {
   // (the default pipeline's four tests as the README's command runs them:
   // 272 s for 7.75e9 estimated body-steps, 2.4e-8 to 4.9e-8 s each;
   // summary.json, stages)
-  static constexpr double kInitialSecondsPerBodyStep = 3.5e-8;
+  static constexpr double kInitialSecondsPerBodyStep = bridge::kMicroSecondsPerBodyStep;
 
   double secondsPerBodyStep() const {
     return measured_body_steps > 0.0 ? measured_s / measured_body_steps : kInitialSecondsPerBodyStep;
@@ -874,13 +875,37 @@ void checkPipeline(const JsonDocument& doc) {
   if (c.design_case) check(*c.design_case, "macro.design", "/design");
 }
 
+// The cell stages, and the lab tests when the cell is a file; the lab
+// tests on a cell yet to be generated, and the structure stages (seconds
+// beside the micro ones), are not costed before the run: partial. While it
+// runs, the pipeline's ETA costs each test as soon as its cell exists.
+std::optional<bridge::Estimate> estimatePipeline(const JsonDocument& doc) {
+  const PipelineCase c = readPipeline(doc);
+  bridge::Estimate e;
+  e.partial = true;
+  if (c.cell_is_file) {
+    for (const auto& t : kTests) {
+      JsonDocument sub = JsonDocument::load(c.tests.at(t));
+      sub.applySet("cell=" + json(fs::absolute(c.cell).string()).dump());
+      sub.applySet("replicates=1");
+      if (const auto one = findKind(kTestKind.at(t))->estimate(sub)) bridge::addRun(e, *one);
+    }
+    return e;
+  }
+  json cell_case = absolutePaths(loadJson(c.cell), c.cell);
+  cell_case["seed"] = c.seed;
+  if (const auto one = findKind("micro.cell")->estimate(JsonDocument(cell_case, c.cell.string())))
+    bridge::addRun(e, bridge::times(*one, c.replicates));
+  return e;
+}
+
 }  // namespace
 
 bridge::CaseKind pipelineKind() {
   return {"pipeline",
           "the calibration chain: generate the cell, run CC, UC, UCI and shear on it, fit every law, run the wall "
           "with them (impacts, capacity, design), write report.html",
-          checkPipeline, runPipeline, nullptr};
+          checkPipeline, runPipeline, estimatePipeline};
 }
 
 }  // namespace gabion::app

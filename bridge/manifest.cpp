@@ -47,7 +47,8 @@ bool readManifest(const fs::path& folder, std::vector<std::pair<fs::path, std::u
   try {
     const nlohmann::json m = nlohmann::json::parse(in);
     if (m.value("format", "") != "gabion.manifest/1") return false;
-    for (const auto& f : m.at("files")) files.emplace_back(f.at("path").get<std::string>(), f.at("bytes").get<std::uintmax_t>());
+    for (const auto& f : m.at("files"))
+      files.emplace_back(f.at("path").get<std::string>(), f.at("bytes").get<std::uintmax_t>());
   } catch (const std::exception&) {
     return false;
   }

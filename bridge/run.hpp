@@ -80,12 +80,19 @@ struct RunOutcome {
 
 /// What a case will cost, estimated before it runs from its settings and
 /// input files: steps are an upper bound where a run may end early (a test
-/// that stops at its target). Summed over every run of the case.
+/// that stops at its target, an impact that ends when the boulder stops).
+/// Summed over every run of the case (bridge/cost.hpp: the rates, the
+/// limits and the sum).
 struct Estimate {
-  double bodies = 0.0;      ///< bodies of its largest run (spheres, block members counted one by one)
-  double steps = 0.0;       ///< time steps, over its runs
-  double body_steps = 0.0;  ///< bodies x steps, over its runs: what its wall time scales with
-  std::size_t runs = 0;     ///< engine runs (variants x replicates)
+  double bodies = 0.0;        ///< bodies (micro: spheres, block members one by one; macro: cells) of its largest run
+  double steps = 0.0;         ///< time steps, over its runs
+  double body_steps = 0.0;    ///< bodies x steps, over its runs: what its wall time scales with
+  std::size_t runs = 0;       ///< engine runs (variants x replicates, sweep points, evaluations)
+  double snapshots = 0.0;     ///< body snapshots or series samples written, over its runs
+  double memory_bytes = 0.0;  ///< peak memory of the process
+  double output_bytes = 0.0;  ///< result files
+  double wall_time_s = 0.0;   ///< on one thread, at the rates measured on the reference machine
+  bool partial = false;       ///< some of its work cannot be costed before it runs (a pipeline's lab tests)
 };
 
 /// The summary's "status": "ok", "numerical_failure" or "interrupted".

@@ -5,6 +5,7 @@
 #include <iomanip>
 #include <sstream>
 
+#include "bridge/cost.hpp"
 #include "bridge/errors.hpp"
 #include "bridge/manifest.hpp"
 #include "bridge/plot.hpp"
@@ -242,6 +243,23 @@ void checkCase(const bridge::JsonDocument& doc) {
   trial.finish();
 }
 
+// At most: the micro case (at the middle of the parameter box) once per
+// evaluation of the search's budget (samples, then each local search's
+// limit), and once more for the best point; fewer with max_new_evaluations.
+std::optional<bridge::Estimate> estimateCase(const bridge::JsonDocument& doc) {
+  const MicroCase c = readMicroCase(doc);
+  const bridge::JsonDocument base = bridge::JsonDocument::load(c.micro_case);
+  const auto& kind = microKind(base);
+  if (!kind.estimate) return std::nullopt;
+  const auto one = kind.estimate(substituted(base, c, midpoint(c)));
+  if (!one) return std::nullopt;
+  double evaluations = static_cast<double>(c.search.initial_samples) +
+                       static_cast<double>(c.search.starts) * c.search.local_max_evaluations;
+  if (c.search.max_new_evaluations >= 0)
+    evaluations = std::min(evaluations, static_cast<double>(c.search.max_new_evaluations));
+  return bridge::times(*one, evaluations + 1.0);
+}
+
 // A hash of the case that identifies its evaluations: the effective case
 // without the keys that only steer a session (budget, resume, threads).
 std::string caseHash(const bridge::JsonDocument& doc, const fs::path& micro_case) {
@@ -334,7 +352,7 @@ bridge::RunOutcome runCase(const bridge::JsonDocument& doc, const bridge::RunCon
 bridge::CaseKind fitMicroCaseKind() {
   return {"fit.micro",
           "identify micro contact parameters so that a micro case matches lab curves (DEM in the loop, resumable)",
-          checkCase, runCase, nullptr};
+          checkCase, runCase, estimateCase};
 }
 
 }  // namespace gabion::fitting

@@ -7,6 +7,7 @@
 #include <limits>
 #include <sstream>
 
+#include "bridge/cost.hpp"
 #include "bridge/errors.hpp"
 #include "bridge/output.hpp"
 #include "bridge/plot.hpp"
@@ -105,6 +106,16 @@ json toJson(const CapacityEvaluation& e, const CapacitySpec& s) {
 }
 
 }  // namespace
+
+std::optional<bridge::Estimate> estimateCapacityCase(const JsonDocument& doc) {
+  const Plan p = plan(doc);
+  Model probe(p.structure, p.c.run.kinematics);
+  probe.placeBoulder(p.c.impacts.front());
+  bridge::Estimate e =
+      bridge::times(impactEstimate(p.c.run, p.structure, probe.criticalTimeStep()), p.spec.max_evaluations);
+  e.output_bytes = 1e4 * p.spec.max_evaluations;  // (a table of the evaluations; no series)
+  return e;
+}
 
 void checkCapacityCase(const JsonDocument& doc) {
   plan(doc);

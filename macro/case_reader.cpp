@@ -4,6 +4,7 @@
 #include <sstream>
 #include <stdexcept>
 
+#include "bridge/cost.hpp"
 #include "bridge/errors.hpp"
 #include "bridge/units.hpp"
 
@@ -273,6 +274,12 @@ Structure buildCaseStructure(const JsonDocument& doc, const ImpactCase& c) {
   } catch (const std::invalid_argument& e) {
     throw InputError(doc.file(), "/structure", e.what());
   }
+}
+
+bridge::Estimate impactEstimate(const RunSettings& run, const Structure& s, double critical_s) {
+  const double dt = run.time_step_s > 0.0 ? run.time_step_s : run.time_step_fraction * critical_s;
+  const double steps = std::ceil(run.max_duration_s / dt);
+  return bridge::macroRun(static_cast<double>(s.nodeCount()), steps, steps / run.series_every_steps);
 }
 
 void checkImpactCost(const JsonDocument& doc, const RunSettings& run, const Structure& s, double critical_s) {

@@ -12,6 +12,7 @@
 
 #include "bridge/json_reader.hpp"
 #include "bridge/law_file.hpp"
+#include "bridge/run.hpp"
 #include "macro/impact.hpp"
 #include "macro/structure.hpp"
 
@@ -55,6 +56,9 @@ constexpr double kMaxImpactSteps = 1e7;
 /// structure's critical step with the boulder placed), would pass
 /// kMaxImpactSteps, with the steps and the memory its series would take.
 void checkImpactCost(const bridge::JsonDocument& doc, const RunSettings& run, const Structure& s, double critical_s);
+/// What one impact on `s` costs at most (bridge/cost.hpp): its cells, the
+/// steps up to run.max_duration_s, the series samples it records.
+bridge::Estimate impactEstimate(const RunSettings& run, const Structure& s, double critical_s);
 
 /// Reads the "sweep" object of a macro.sweep case.
 SweepSpec readSweep(const bridge::JsonReader& sweep);

@@ -7,15 +7,15 @@ namespace gabion::macro {
 std::vector<bridge::CaseKind> caseKinds() {
   return {
       {"macro.impact", "boulder impact(s) on a cellular structure, one node per cell (laws from a gabion.law/2 file)",
-       checkImpactCase, runImpactCase, nullptr},
+       checkImpactCase, runImpactCase, estimateImpactCase},
       {"macro.sweep", "a grid of macro impacts (velocity, mass, aim point, structure size) run in parallel",
-       checkSweepCase, runSweepCase, nullptr},
+       checkSweepCase, runSweepCase, estimateSweepCase},
       {"macro.capacity",
        "the largest impact energy a structure holds with the acceptance criteria met (bisection over velocity or mass)",
-       checkCapacityCase, runCapacityCase, nullptr},
+       checkCapacityCase, runCapacityCase, estimateCapacityCase},
       {"macro.design",
        "the smallest structure (thickness, height, front material) that holds the design impacts with the criteria met",
-       checkDesignCase, runDesignCase, nullptr},
+       checkDesignCase, runDesignCase, estimateDesignCase},
   };
 }
 

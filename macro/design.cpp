@@ -11,6 +11,7 @@
 #include <map>
 #include <sstream>
 
+#include "bridge/cost.hpp"
 #include "bridge/curve.hpp"
 #include "bridge/errors.hpp"
 #include "bridge/output.hpp"
@@ -323,6 +324,26 @@ json toJson(const Plan& p, const SectionResult& r) {
 }
 
 }  // namespace
+
+// At most: every section searched (exhaustive: all; bisection: about
+// log2 of the thicknesses per material and height) takes every design
+// impact `repeats` times, on the largest section; then the residual
+// capacity and the capacity chart (a bisection per thickness and material).
+std::optional<bridge::Estimate> estimateDesignCase(const JsonDocument& doc) {
+  const Plan p = plan(doc);
+  const DesignSpec& s = p.spec;
+  const Structure largest = buildStructure(sectionSpec(p, {s.t_hi, s.h_hi, 0}), p.c.laws);
+  Model probe(largest, p.c.run.kinematics);
+  probe.placeBoulder(p.impacts[p.design_impact].boulder);
+  const bridge::Estimate one = impactEstimate(p.c.run, largest, probe.criticalTimeStep());
+  const double nm = static_cast<double>(s.materials.size()), nh = s.h_hi - s.h_lo + 1.0, nt = s.t_hi - s.t_lo + 1.0;
+  const double sections = nm * nh * (s.exhaustive ? nt : std::ceil(std::log2(nt)) + 2.0);
+  double impacts = sections * static_cast<double>(p.impacts.size()) * s.repeats + s.residual_max;
+  if (s.capacity_chart) impacts += nm * nt * std::ceil(std::log2(1.0 / s.capacity_tolerance) + 4.0);
+  bridge::Estimate e = bridge::times(one, impacts);
+  e.output_bytes = 1e4 * sections + 1e6;  // (tables and charts; no series)
+  return e;
+}
 
 void checkDesignCase(const JsonDocument& doc) {
   plan(doc);

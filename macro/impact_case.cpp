@@ -5,6 +5,7 @@
 #include <sstream>
 #include <stdexcept>
 
+#include "bridge/cost.hpp"
 #include "bridge/errors.hpp"
 #include "bridge/output.hpp"
 #include "bridge/units.hpp"
@@ -146,6 +147,17 @@ json toJson(const ImpactResult& r) {
   j["critical_time_step_s"] = r.critical_time_step_s;
   j["steps"] = r.steps;
   return j;
+}
+
+std::optional<bridge::Estimate> estimateImpactCase(const JsonDocument& doc) {
+  const Prepared p = prepare(doc);
+  bridge::Estimate e;
+  for (const BoulderSpec& b : p.c.impacts) {
+    Model probe(p.structure, p.c.run.kinematics);
+    probe.placeBoulder(b);
+    bridge::addRun(e, impactEstimate(p.c.run, p.structure, probe.criticalTimeStep()));
+  }
+  return e;
 }
 
 void checkImpactCase(const JsonDocument& doc) {

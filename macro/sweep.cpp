@@ -11,6 +11,7 @@
 #include <sstream>
 #include <stdexcept>
 
+#include "bridge/cost.hpp"
 #include "bridge/errors.hpp"
 #include "bridge/interrupt.hpp"
 #include "bridge/output.hpp"
@@ -123,10 +124,42 @@ std::string csvQuote(const std::string& s) {
   return out + "\"";
 }
 
+// The critical step of each structure size, with the first boulder
+// placed at the size's default aim.
+std::vector<double> criticalSteps(const Plan& p) {
+  std::vector<double> out;
+  for (std::size_t i = 0; i < p.structures.size(); ++i) {
+    StructureSpec sized = p.c.structure;
+    sized.nx = p.sizes[i][0], sized.ny = p.sizes[i][1], sized.nz = p.sizes[i][2];
+    const auto aim = defaultAim(sized, p.structures[i].edge_m);
+    BoulderSpec b = p.c.impacts.front();
+    b.aim_y_m = aim.first, b.aim_z_m = aim.second;
+    Model probe(p.structures[i], p.c.run.kinematics);
+    probe.placeBoulder(b);
+    out.push_back(probe.criticalTimeStep());
+  }
+  return out;
+}
+
 }  // namespace
 
 void checkSweepCase(const JsonDocument& doc) {
-  plan(doc);
+  const Plan p = plan(doc);
+  // (an impact of endless steps is refused per size, as a single impact is)
+  const std::vector<double> critical = criticalSteps(p);
+  for (std::size_t i = 0; i < p.structures.size(); ++i) checkImpactCost(doc, p.c.run, p.structures[i], critical[i]);
+}
+
+std::optional<bridge::Estimate> estimateSweepCase(const JsonDocument& doc) {
+  const Plan p = plan(doc);
+  const std::vector<double> critical = criticalSteps(p);
+  bridge::Estimate e;
+  for (const Point& pt : p.points) {
+    const auto i = static_cast<std::size_t>(pt.size);
+    bridge::addRun(e, impactEstimate(p.c.run, p.structures[i], critical[i]));
+  }
+  e.output_bytes = 400.0 * static_cast<double>(p.points.size()) + 1e6;  // (a row per point, charts; no series)
+  return e;
 }
 
 bridge::RunOutcome runSweepCase(const JsonDocument& doc, const bridge::RunContext& ctx) {

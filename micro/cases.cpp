@@ -27,11 +27,16 @@ bridge::RunOutcome runSceneCase(const bridge::JsonDocument& doc, const bridge::R
   return runScene(std::move(scene), file, ctx);
 }
 
+std::optional<bridge::Estimate> estimateScene(const bridge::JsonDocument& doc) {
+  const Scene scene = parseScene(doc.root());
+  return sceneEstimate(scene, chooseDt(scene, criticalTimeStep(scene), doc.file()));
+}
+
 }  // namespace
 
 std::vector<bridge::CaseKind> caseKinds() {
   return {{"micro.scene", "fine DEM of explicit spheres, rigid multi-sphere blocks and planar walls (docs/micro.md)",
-           checkScene, runSceneCase, nullptr},
+           checkScene, runSceneCase, estimateScene},
           nettingTensileKind(),
           cellKind(),
           lab::confinedCompressionKind(),

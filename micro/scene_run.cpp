@@ -5,6 +5,7 @@
 #include <cmath>
 #include <sstream>
 
+#include "bridge/cost.hpp"
 #include "bridge/errors.hpp"
 #include "bridge/interrupt.hpp"
 #include "bridge/output.hpp"
@@ -69,6 +70,16 @@ std::string timingReport(const Engine& engine, double loop_s, double body_steps_
 }
 
 }  // namespace
+
+bridge::Estimate sceneEstimate(const Scene& scene, double dt) {
+  double bodies = static_cast<double>(scene.spheres.size());
+  for (const BlockSpec& b : scene.blocks) bodies += static_cast<double>(b.member_radii_m.size());
+  const RunSpec& rs = scene.run;
+  const double steps = std::ceil(rs.duration_s / dt);
+  return bridge::microRun(bodies, steps,
+                          rs.output_interval_s > 0.0 ? std::floor(rs.duration_s / rs.output_interval_s) + 1 : 101.0,
+                          rs.series_interval_s > 0.0 ? std::floor(rs.duration_s / rs.series_interval_s) + 1 : 101.0);
+}
 
 // The step to use: dt_s if given (refused above the critical step unless
 // run.allow_dt_above_critical), else dt_safety x critical. `file` names the

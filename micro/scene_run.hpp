@@ -38,6 +38,10 @@ struct SceneRunHooks {
 /// run.dt_safety x critical.
 double chooseDt(const Scene& scene, double critical, const std::string& file);
 
+/// What running `scene` at step `dt` costs (bridge/cost.hpp): its bodies
+/// (block members one by one), steps, snapshots and series samples.
+bridge::Estimate sceneEstimate(const Scene& scene, double dt);
+
 /// The most steps a run may take: more is an input error before it starts
 /// (a 1e-200 m radius, a duration of centuries).
 constexpr double kMaxSteps = 1e10;

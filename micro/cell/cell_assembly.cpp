@@ -319,6 +319,19 @@ void check(const bridge::JsonDocument& doc) {
   chooseDt(s, criticalTimeStep(s), doc.file());
 }
 
+// Every stage runs the fill's bodies (fewer once the surplus is removed),
+// each at most its max_duration_s, at the fill's step.
+std::optional<bridge::Estimate> estimate(const bridge::JsonDocument& doc) {
+  const CellCase c = parseCase(doc);
+  const CellNetting n = makeNetting(c, doc.file());
+  nlohmann::json report;
+  Scene s = fillScene(c, n, report);
+  const double dt = chooseDt(s, criticalTimeStep(s), doc.file());
+  s.run.duration_s =
+      c.fill.max_duration_s + c.vibration.max_duration_s + c.closing.max_duration_s + c.standing.max_duration_s;
+  return sceneEstimate(s, dt);
+}
+
 bridge::RunOutcome run(const bridge::JsonDocument& doc, const bridge::RunContext& ctx) {
   const CellCase c = parseCase(doc);
   const std::string file = doc.file();
@@ -608,7 +621,7 @@ bridge::CaseKind cellKind() {
   return {"micro.cell",
           "a gabion cell: netting basket filled with angular blocks by gravity, vibrated to a target porosity, "
           "closed and left to stand (docs/cell.md)",
-          check, run, nullptr};
+          check, run, estimate};
 }
 
 }  // namespace gabion::micro

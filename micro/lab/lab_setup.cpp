@@ -8,6 +8,7 @@
 #include <sstream>
 #include <thread>
 
+#include "bridge/cost.hpp"
 #include "bridge/errors.hpp"
 #include "bridge/interrupt.hpp"
 #include "bridge/manifest.hpp"
@@ -324,18 +325,9 @@ std::optional<bridge::Estimate> estimateReplicates(const LabSetup& setup, std::s
   for (std::size_t v = 0; v < variants; ++v) {
     const Scene scene = plan(sample, v);
     const double dt = scene.run.dt_s > 0.0 ? scene.run.dt_s : chooseDt(scene, criticalTimeStep(scene), setup.file);
-    double bodies = static_cast<double>(scene.spheres.size());
-    for (const BlockSpec& b : scene.blocks) bodies += static_cast<double>(b.member_radii_m.size());
-    const double steps = std::ceil(scene.run.duration_s / dt);
-    e.bodies = std::max(e.bodies, bodies);
-    e.steps += steps;
-    e.body_steps += bodies * steps;
+    bridge::addRun(e, sceneEstimate(scene, dt));
   }
-  const auto replicates = static_cast<double>(setup.cells.size());
-  e.steps *= replicates;
-  e.body_steps *= replicates;
-  e.runs = variants * setup.cells.size();
-  return e;
+  return bridge::times(e, static_cast<double>(setup.cells.size()));
 }
 
 bridge::RunOutcome runReplicates(const LabSetup& setup, const bridge::RunContext& ctx, const std::string& label,

@@ -148,6 +148,12 @@ nlohmann::json exchangeFile(const TensileCase& c, const Netting& net, const Scen
   return j;
 }
 
+std::optional<bridge::Estimate> estimate(const bridge::JsonDocument& doc) {
+  const TensileCase c = parseCase(doc);
+  const Scene s = buildScene(c, generate(c, doc.file()));
+  return sceneEstimate(s, chooseDt(s, criticalTimeStep(s), doc.file()));
+}
+
 bridge::RunOutcome run(const bridge::JsonDocument& doc, const bridge::RunContext& ctx) {
   const TensileCase c = parseCase(doc);
   const Netting net = generate(c, doc.file());
@@ -239,7 +245,7 @@ bridge::RunOutcome run(const bridge::JsonDocument& doc, const bridge::RunContext
 bridge::CaseKind nettingTensileKind() {
   return {"micro.netting_tensile",
           "tensile test of a sheet of double-twisted hexagonal wire netting to rupture (docs/netting.md)", check, run,
-          nullptr};
+          estimate};
 }
 
 }  // namespace gabion::micro

@@ -1,0 +1,57 @@
+#pragma once
+/// \file
+/// What a run will cost, before it runs: the rates measured on the
+/// reference machine (2 cores, docs/performance.md), the cost of one micro
+/// or macro run from its size, and the limits past which `gabion run`
+/// refuses a case unless `--force` (docs/getting-started.md, "Cost").
+#include <filesystem>
+#include <string>
+
+#include "bridge/run.hpp"
+
+namespace gabion::bridge {
+
+/// Fine DEM: seconds per body-step on one thread (the default pipeline's
+/// four lab tests measured 2.4e-8 to 4.9e-8), bytes of memory per body
+/// (27,000 spheres: 19 MB above the process's base), bytes per body per
+/// snapshot in result.h5 (position, velocity, angular velocity).
+constexpr double kMicroSecondsPerBodyStep = 3.5e-8;
+constexpr double kMicroBytesPerBody = 1000.0;
+constexpr double kMicroSnapshotBytesPerBody = 100.0;
+/// Structure scale: seconds per cell-step (a 1,000-cell impact, 525 steps,
+/// 9.4 ms) and bytes per cell (measured on 1e6 cells).
+constexpr double kMacroSecondsPerCellStep = 1.8e-8;
+constexpr double kMacroBytesPerCell = 450.0;
+/// The process itself (libraries, the case).
+constexpr double kBaseBytes = 20e6;
+
+/// One fine DEM run of `bodies` bodies, `steps` steps, `snapshots` body
+/// snapshots and `series` samples of the scalar series.
+Estimate microRun(double bodies, double steps, double snapshots, double series);
+/// One structure impact on `cells` cells, at most `steps` steps, recording
+/// `samples` samples of its 14 series.
+Estimate macroRun(double cells, double steps, double samples);
+/// Adds a run that follows `to` in the same process: steps, body-steps,
+/// runs, snapshots, files and time add up; bodies and memory are the larger.
+void addRun(Estimate& to, const Estimate& run);
+/// `runs` copies of `one`, run in turn.
+Estimate times(const Estimate& one, double runs);
+
+/// "7,920 bodies, at most 48,000 steps, about 16 s on one thread, 40 MB of
+/// memory, 120 MB of files".
+std::string describe(const Estimate& e);
+
+/// The limits: a run is refused (unless --force) past one day on one thread,
+/// past 80 % of the machine's memory, or with more files than the free
+/// space of the output folder's disk.
+constexpr double kMaxWallTimeS = 24.0 * 3600.0;
+constexpr double kMaxMemoryFraction = 0.8;
+/// Beyond these the run says what it will cost before it starts.
+constexpr double kAnnounceWallTimeS = 600.0;
+constexpr double kAnnounceBytes = 1e9;
+
+/// Why `e` is past a limit on this machine for a run into `outdir` (empty:
+/// it is not).
+std::string overLimits(const Estimate& e, const std::filesystem::path& outdir);
+
+}  // namespace gabion::bridge
