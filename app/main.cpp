@@ -42,7 +42,9 @@ struct Options {
   std::vector<std::string> sets;
   int threads = 1;
   bool quiet = false;
-  bool force = false;       // run past the cost limits (bridge/cost.hpp)
+  bool force = false;  // run past the cost limits (bridge/cost.hpp)
+  std::string resume;  // run: OUTDIR of the run to continue (its run.json)
+  bool threads_given = false;
   std::string result_file;  // plot
   std::string figure;       // plot: -o
 };
@@ -51,7 +53,31 @@ struct Options {
 // Throws InputError; writes nothing.
 // --law sets the case's "law_file" (in place of embedded "laws"): the case
 // is checked with the laws it will run with.
-std::pair<JsonDocument, const gabion::bridge::CaseKind*> loadAndCheck(const Options& o) {
+// The run to continue: the effective case OUTDIR/run.json recorded when it
+// started (after --set and --law), with its case file and threads.
+JsonDocument resumedCase(Options& o) {
+  if (!o.case_file.empty() || !o.sets.empty() || !o.law_file.empty() || !o.outdir.empty())
+    throw InputError(o.resume, "",
+                     "--resume continues a run as it was started: give no case file, --set, --law or -o with it");
+  const fs::path record = fs::path(o.resume) / "run.json";
+  if (!fs::is_regular_file(record))
+    throw InputError(record.string(), "", "--resume: no such file: the folder holds no run that `gabion run` started");
+  const JsonDocument r = JsonDocument::load(record);
+  const auto root = r.root();
+  if (root.string("format") != "gabion.run/1") root.fail("format", "expected \"gabion.run/1\"");
+  o.case_file = root.string("case_file");
+  if (!o.threads_given) o.threads = static_cast<int>(root.integer("threads", 1, 1));
+  o.outdir = o.resume;
+  return JsonDocument(r.json().at("case"), o.case_file);
+}
+
+std::pair<JsonDocument, const gabion::bridge::CaseKind*> loadAndCheck(Options& o) {
+  if (!o.resume.empty()) {
+    JsonDocument doc = resumedCase(o);
+    const auto* kind = &gabion::app::checkCase(doc);
+    return {std::move(doc), kind};
+  }
+  if (o.case_file.empty()) throw InputError("gabion run", "", "give a case file, or --resume OUTDIR");
   JsonDocument doc = JsonDocument::load(o.case_file);
   for (const auto& s : o.sets) doc.applySet(s);
   if (!o.law_file.empty()) {
@@ -83,14 +109,14 @@ std::optional<gabion::bridge::Estimate> estimateOf(const gabion::bridge::CaseKin
   }
 }
 
-int commandCheck(const Options& o) {
+int commandCheck(Options& o) {
   const auto [doc, kind] = loadAndCheck(o);
   std::cout << o.case_file << ": ok\n";
   if (const auto e = estimateOf(*kind, doc)) std::cout << "  cost: " << gabion::bridge::describe(*e) << "\n";
   return kExitOk;
 }
 
-int commandRun(const Options& o) {
+int commandRun(Options& o) {
   auto [doc, kind] = loadAndCheck(o);
   const fs::path outdir = o.outdir.empty() ? fs::path("results") / fs::path(o.case_file).stem() : fs::path(o.outdir);
   // Costed before anything is written: past the limits it is refused unless
@@ -128,6 +154,13 @@ int commandRun(const Options& o) {
   // The folder's earlier set of files is no longer trusted from here; its
   // new manifest is written last (bridge/manifest.hpp).
   gabion::bridge::beginManifest(outdir);
+  // What `gabion run --resume OUTDIR` continues: the effective case as it
+  // starts (kinds that keep their finished work take it: a sweep's rows, a
+  // calibration's evaluations, a pipeline's stages).
+  gabion::bridge::writeJsonAtomic(outdir / "run.json", {{"format", "gabion.run/1"},
+                                                        {"case_file", fs::absolute(o.case_file).string()},
+                                                        {"threads", o.threads},
+                                                        {"case", doc.json()}});
   gabion::bridge::RunOutcome outcome;
   try {
     outcome = kind->run(doc, ctx);
@@ -225,7 +258,10 @@ int runCommandLine(int argc, char** argv) {
   Options o;
 
   auto* run = app.add_subcommand("run", "Run a case and write results into OUTDIR");
-  run->add_option("case", o.case_file, "case file (JSON)")->required();
+  run->add_option("case", o.case_file, "case file (JSON)");
+  run->add_option("--resume", o.resume,
+                  "continue the run in OUTDIR as it was started (its run.json): a sweep runs only the points it had "
+                  "not finished, a calibration the evaluations it had not logged, a pipeline the stages not done");
   run->add_option("-o,--output", o.outdir, "output folder (default: results/<case name>)");
   run->add_option("--law", o.law_file, "law file (gabion.law/2, or /1) replacing the case's laws (macro cases)");
   run->add_option("--set", o.sets, "override a case value: path.to.key=value (repeatable)");
@@ -252,6 +288,7 @@ int runCommandLine(int argc, char** argv) {
     const int code = app.exit(e);
     return code == 0 ? kExitOk : kExitBadInput;
   }
+  o.threads_given = run->count("--threads") > 0;
   try {
     if (kinds->parsed()) {
       for (const auto& k : gabion::app::allKinds()) std::cout << k.kind << "\t" << k.description << "\n";

@@ -20,6 +20,7 @@
 #include "macro/case_reader.hpp"
 #include "macro/parallel.hpp"
 #include "macro/runs.hpp"
+#include "macro/sweep_rows.hpp"
 
 namespace gabion::macro {
 
@@ -167,16 +168,30 @@ bridge::RunOutcome runSweepCase(const JsonDocument& doc, const bridge::RunContex
   const std::size_t np = p.points.size();
   std::vector<ImpactResult> results(np);
   const auto t0 = std::chrono::steady_clock::now();
-  const int nthreads = std::max(1, std::min<int>(ctx.threads, static_cast<int>(np)));
+  // The rows an earlier run of this case finished are taken; the rest run,
+  // each written to rows.jsonl as it ends (macro/sweep_rows.hpp).
+  SweepRows rows(ctx.outdir / "rows.jsonl", doc.json(), np);
+  std::vector<std::size_t> todo;
+  for (std::size_t i = 0; i < np; ++i) {
+    const auto it = rows.done().find(i);
+    if (it == rows.done().end())
+      todo.push_back(i);
+    else
+      results[i] = it->second;
+  }
+  const std::size_t reused = np - todo.size();
+  const int nthreads = std::max(1, std::min<int>(ctx.threads, static_cast<int>(std::max<std::size_t>(1, todo.size()))));
   bridge::Progress progress(ctx, "macro.sweep");
   // (once SIGINT or SIGTERM came, the points not started are recorded as not run)
-  runParallel(np, nthreads, progress, [&](std::size_t i) {
+  runParallel(todo.size(), nthreads, progress, [&](std::size_t k) {
+    const std::size_t i = todo[k];
     if (bridge::interrupted()) {
       results[i].ok = false;
       results[i].message = std::string("not run: interrupted by ") + bridge::signalName(bridge::interruptSignal());
       return;
     }
     results[i] = runPoint(p, p.points[i]);
+    rows.append(i, results[i]);
   });
   const double wall = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
 
@@ -271,7 +286,7 @@ bridge::RunOutcome runSweepCase(const JsonDocument& doc, const bridge::RunContex
     h5.attribute("/table/outcome", "values", "0 stopped, 1 rebounded, 2 perforated, 3 unfinished");
     h5.commit();
   }
-  json files = json::array({"sweep.csv", "result.h5"});
+  json files = json::array({"sweep.csv", "result.h5", "rows.jsonl"});
   if (p.sweep.chart && !ok_energy.empty()) {
     // Three design charts against impact energy: one series per boulder
     // mass (up to 8 masses; beyond, one series), perforated points marked
@@ -324,11 +339,12 @@ bridge::RunOutcome runSweepCase(const JsonDocument& doc, const bridge::RunContex
 
   bridge::RunOutcome out;
   out.results["points"] = np;
+  out.results["points_reused"] = reused;  // (finished by an earlier run of this case into this folder: rows.jsonl)
   out.results["failed_points"] = failed;
   out.results["outcomes"] = outcomes;
   out.results["balance_rel_error"] = worst_balance;
   out.results["sweep_wall_time_s"] = wall;
-  out.results["points_per_second"] = wall > 0.0 ? static_cast<double>(np) / wall : 0.0;
+  out.results["points_per_second"] = wall > 0.0 ? static_cast<double>(todo.size()) / wall : 0.0;
   out.results["threads_used"] = nthreads;
   out.results["files"] = files;
   {

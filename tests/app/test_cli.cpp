@@ -3,12 +3,14 @@
 #include <gtest/gtest.h>
 
 #include <chrono>
+#include <cmath>
 #include <fstream>
 #include <iterator>
 #include <nlohmann/json.hpp>
 #include <set>
 #include <string>
 
+#include "bridge/output.hpp"
 #include "tests/support/run_gabion.hpp"
 
 using gabion::testing::runGabion;
@@ -62,7 +64,7 @@ TEST(Cli, CommandLineMistakesExitTwo) {
   const struct {
     std::string args, expected;
   } cases[] = {
-      {"run", "case is required"},
+      {"run", "gabion run: give a case file, or --resume OUTDIR"},
       {"run " + wall + " --threads 0", "--threads"},
       {"run " + wall + " --no-such-option", "--no-such-option"},
       {"no-such-command", "A subcommand is required"},
@@ -203,7 +205,7 @@ TEST(Cli, AnOutputFolderIsCommittedAsASet) {
     listed.insert(f.at("path").get<std::string>());
     EXPECT_EQ(f.at("bytes").get<std::uintmax_t>(), std::filesystem::file_size(out / f.at("path").get<std::string>()));
   }
-  EXPECT_EQ(listed, (std::set<std::string>{"result.h5", "result.xdmf", "summary.json"}));
+  EXPECT_EQ(listed, (std::set<std::string>{"result.h5", "result.xdmf", "run.json", "summary.json"}));
   EXPECT_EQ(runGabion("plot " + (out / "result.h5").string()).exit_code, 0);
 
   // A file the run did not write is not read as its result.
@@ -253,4 +255,46 @@ TEST(Cli, ACaseOverTheCostLimitsIsRefusedUnlessForced) {
   const auto summary = nlohmann::json::parse(std::ifstream(dir / "forced" / "summary.json"));
   EXPECT_EQ(summary.at("status"), "interrupted");
   EXPECT_NEAR(summary.at("estimate").at("wall_time_s").get<double>(), 1.77e5, 0.01e5);
+}
+
+// A sweep killed with SIGKILL keeps the rows it finished (rows.jsonl);
+// `gabion run --resume OUTDIR` runs only the rest, and its table is the
+// uninterrupted run's, bit for bit.
+TEST(Cli, AKilledSweepResumesToTheSameTable) {
+  const auto dir = scratchDir("cli_sweep_resume");
+  const std::string run = std::string(GABION_BINARY) + " run " + std::string(GABION_SOURCE_DIR) +
+                          "/cases/macro_sweep.json -q --threads 2 --set sweep.velocity_m_s.count=400 -o ";
+  ASSERT_EQ(gabion::testing::runCommand(run + (dir / "whole").string()).exit_code, 0);
+  const auto killed = dir / "killed";
+  const auto rows = (killed / "rows.jsonl").string();
+  const auto r = gabion::testing::runCommand(
+      "sh -c '" + run + killed.string() + " & p=$!; while [ $(cat " + rows +
+      " 2>/dev/null | wc -l) -lt 100 ]; do sleep 0.02; done; kill -KILL $p; wait $p; echo exit=$?'");
+  ASSERT_NE(r.output.find("exit=137"), std::string::npos) << r.output;
+  EXPECT_FALSE(std::filesystem::exists(killed / "manifest.json"));
+
+  const auto resumed = runGabion("run --resume " + killed.string() + " -q");
+  ASSERT_EQ(resumed.exit_code, 0) << resumed.output;
+  const auto summary = nlohmann::json::parse(std::ifstream(killed / "summary.json"));
+  const auto reused = summary.at("points_reused").get<long long>();
+  EXPECT_GE(reused, 99);
+  EXPECT_LT(reused, summary.at("points").get<long long>()) << "the kill came after the sweep ended";
+  const gabion::bridge::H5Reader a(dir / "whole" / "result.h5"), b(killed / "result.h5");
+  for (const char* column : {"velocity_m_s", "mass_kg", "peak_force_N", "max_penetration_m", "contact_duration_s",
+                             "max_back_face_displacement_m", "plastic_energy_J", "outcome"}) {
+    const auto x = a.read(std::string("/table/") + column), y = b.read(std::string("/table/") + column);
+    ASSERT_EQ(x.size(), y.size()) << column;
+    for (std::size_t i = 0; i < x.size(); ++i)
+      EXPECT_TRUE(x[i] == y[i] || (std::isnan(x[i]) && std::isnan(y[i]))) << column << "[" << i << "]";
+  }
+  const auto read = [](const std::filesystem::path& p) {
+    std::ifstream in(p);
+    return std::string((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  };
+  EXPECT_EQ(read(dir / "whole" / "sweep.csv"), read(killed / "sweep.csv"));
+
+  // --resume continues a run as it was: no case, --set or -o beside it.
+  const auto bad = runGabion("run cases/macro_sweep.json --resume " + killed.string());
+  EXPECT_EQ(bad.exit_code, 2) << bad.output;
+  EXPECT_NE(bad.output.find("--resume continues a run as it was started"), std::string::npos) << bad.output;
 }
