@@ -420,7 +420,8 @@ Vec3 JsonReader::vec3(const std::string& key, const Vec3& fallback) const {
 std::vector<double> JsonReader::numbers(const std::string& key, Check check, std::size_t min_size) const {
   const Json& v = required(key);
   if (!v.is_array()) fail(key, "expected an array of numbers, got " + typeName(v));
-  if (v.size() < min_size) fail(key, "expected at least " + std::to_string(min_size) + " values");
+  if (v.size() < min_size)
+    fail(key, "expected at least " + std::to_string(min_size) + (min_size == 1 ? " value" : " values"));
   std::vector<double> out;
   out.reserve(v.size());
   for (std::size_t i = 0; i < v.size(); ++i) {

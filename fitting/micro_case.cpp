@@ -81,6 +81,8 @@ MicroCase readMicroCase(const bridge::JsonDocument& doc) {
   const fs::path dir = caseDirectory(doc);
   MicroCase c;
   c.micro_case = dir / root.string("micro_case");
+  std::error_code ec;
+  if (!fs::is_regular_file(c.micro_case, ec)) root.fail("micro_case", "no such case file " + c.micro_case.string());
   const auto params = root.objects("parameters", true);
   if (params.empty()) root.fail("parameters", "at least one parameter is required");
   for (const auto& p : params) {
@@ -234,13 +236,29 @@ void checkCase(const bridge::JsonDocument& doc) {
   labGrids(c);
   const bridge::JsonDocument base = bridge::JsonDocument::load(c.micro_case);
   const auto& kind = microKind(base);
-  // The base case with parameters substituted must be a valid micro case.
+  // The base case with parameters substituted must be a valid micro case;
+  // an error there is the user's case's: it names the parameter whose `set`
+  // it comes from, or the micro_case.
   const bridge::JsonDocument trial = substituted(base, c, midpoint(c));
-  kind.check(trial);
-  if (trial.root().has("description")) trial.root().string("description");
-  trial.root().string("format");
-  trial.root().string("kind");
-  trial.finish();
+  try {
+    kind.check(trial);
+    if (trial.root().has("description")) trial.root().string("description");
+    trial.root().string("format");
+    trial.root().string("kind");
+    trial.finish();
+  } catch (const bridge::InputError& e) {
+    std::string at = "/micro_case";
+    for (std::size_t k = 0; k < c.params.size(); ++k)
+      for (const std::string& set : c.params[k].set) {
+        std::string path = "/" + set;
+        std::replace(path.begin(), path.end(), '.', '/');
+        if (!e.pointer().empty() && (e.pointer().rfind(path, 0) == 0 || path.rfind(e.pointer(), 0) == 0))
+          at = "/parameters/" + std::to_string(k) + "/set";
+      }
+    throw bridge::InputError(
+        doc.file(), at,
+        "the micro case with the parameters at the middle of their bounds is not valid: " + std::string(e.what()));
+  }
 }
 
 // At most: the micro case (at the middle of the parameter box) once per

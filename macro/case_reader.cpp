@@ -212,6 +212,8 @@ ImpactCase readImpactCase(const JsonDocument& doc, bool sweep) {
     c.law_source = "embedded";
   } else if (root.has("law_file")) {
     const std::filesystem::path p = std::filesystem::path(doc.file()).parent_path() / root.string("law_file");
+    std::error_code ec;
+    if (!std::filesystem::is_regular_file(p, ec)) root.fail("law_file", "no such law file " + p.string());
     c.laws = bridge::loadLawFile(p);
     c.law_source = p.string();
   } else {
