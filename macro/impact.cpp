@@ -88,12 +88,18 @@ ImpactResult runImpact(Model& model, const BoulderSpec& boulder, const RunSettin
     model.removeBoulder();
     return res;
   }
-  const Vec3 dir = boulder.velocity_m_s.normalized();
-  const double v0 = boulder.velocity_m_s.norm();
+  // Penetration, rebound and the outcome are measured along the wall's depth
+  // axis x (into the structure from its front face), not along the
+  // boulder's path: a boulder that strikes obliquely and glances off along
+  // the face goes no deeper for travelling far along its path. For a normal
+  // impact the two are the same.
+  const Vec3 dir = Vec3::UnitX();
+  const double v0 = boulder.velocity_m_s.dot(dir);  // (the normal speed: what a rebound is measured against)
   const double t_max = run.max_duration_s > 0.0 ? run.max_duration_s : 20.0 * run.duration_s;
   const auto nsteps = static_cast<long long>(std::ceil(t_max / dt - 1e-9));
-  // The structure's back plane along the boulder's path: beyond it (the
-  // boulder wholly past it) the boulder went through.
+  // The structure's back plane, x = its deepest back cell's back face:
+  // beyond it (the boulder wholly past it in x, whatever its direction) the
+  // boulder went through.
   double back_plane = -INFINITY;
   for (const int b : s.back_nodes)
     back_plane = std::max(back_plane, s.x0[static_cast<std::size_t>(b)] + 0.5 * s.edge_m);
@@ -226,7 +232,7 @@ ImpactResult runImpact(Model& model, const BoulderSpec& boulder, const RunSettin
     // the face no longer pushing it.
     if (!touched) continue;
     const double back_speed = -model.boulderVelocity().dot(dir);
-    if (model.boulderPositionAtForces().dot(dir) - boulder.diameter_m * 0.5 > back_plane) {
+    if (model.boulderPositionAtForces().x() - boulder.diameter_m * 0.5 > back_plane) {
       res.outcome = Outcome::Perforated;
       res.perforation = "the boulder passed the structure's back plane";
     } else if (!contact && back_speed >= 0.0) {

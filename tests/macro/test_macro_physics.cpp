@@ -213,6 +213,29 @@ TEST(MacroKinematics, ObliqueImpact3dBalances) {
   EXPECT_GT(uy, 0.0);
 }
 
+// An oblique boulder (45 degrees in plan) aimed at a wall far from its
+// edge: it glances off. Its penetration and outcome are measured along the
+// wall's depth x: it stops or rebounds, having gone no deeper than the same boulder
+// striking square on at its full speed. Measured along its path instead, the
+// glancing boulder was "perforated" (its projection passed the back plane)
+// or "unfinished" (never moving back along its path).
+TEST(MacroKinematics, AGlancingObliqueBoulderGoesNoDeeperThanASquareOne) {
+  Structure s = buildStructure(grid(4, 11, 5), oneMaterial(epp(1e7, 5e4), epp(2e7, 2e5), 183.0));
+  const auto impact = [&](double angle) {
+    Model model(s, Kinematics::ThreeD);
+    BoulderSpec b = boulderAt(s, 5, 2, 170.0, 20.0);
+    b.velocity_m_s = Eigen::Vector3d(20.0 * std::cos(angle), 20.0 * std::sin(angle), 0.0);
+    return runImpact(model, b, quickRun(0.05, 0.1), 0, nullptr);
+  };
+  const ImpactResult oblique = impact(0.25 * M_PI), square = impact(0.0);
+  ASSERT_TRUE(oblique.ok && square.ok) << oblique.message << square.message;
+  EXPECT_TRUE(oblique.outcome == Outcome::Rebounded || oblique.outcome == Outcome::Stopped)
+      << outcomeName(oblique.outcome);
+  EXPECT_GT(oblique.max_penetration_m, 0.0);
+  EXPECT_LT(oblique.max_penetration_m, square.max_penetration_m);
+  EXPECT_LT(oblique.balance_rel_error, 0.005);
+}
+
 // The critical time step: a run above it is refused; the leapfrog is stable below it.
 TEST(MacroStability, TimeStepAboveCriticalFails) {
   Structure s = buildStructure(grid(2, 3, 3), oneMaterial(epp(1e7, 5e4), epp(2e7, 2e5), 183.0));
