@@ -77,6 +77,7 @@ Engine::Engine(const Scene& scene, int threads) {
   gravity_ = scene.gravity_m_s2;
   max_overlap_ratio_ = scene.run.max_overlap_ratio;
   runaway_factor_ = scene.run.energy_runaway_factor;
+  max_balance_error_ = scene.run.max_balance_error;
 
   // Particles: free spheres (ids 0 .. spheres-1), then the members of each block.
   sphere_count_ = scene.spheres.size();
@@ -716,6 +717,19 @@ void Engine::measureEnergy() {
     fail(StepStatus::NonFinite, std::string("the energy term ") + term +
                                     " is not finite (a stiffness or mass so small or so large that its products "
                                     "underflow or overflow?)");
+    return;
+  }
+  // (from the 20th measurement: over the first few steps the energy moved is
+  // so small that the start-up error of the work terms, O(dt) of the first
+  // force, is a large fraction of it)
+  const double balance = energy_.totals().balance_rel_error;
+  if (++measurements_ > kBalanceWarmup && std::fabs(balance) > max_balance_error_) {
+    std::ostringstream m;
+    m << "energy balance error " << balance << " beyond run.max_balance_error (" << max_balance_error_
+      << "): the time step (" << dt_ << " s";
+    if (std::isfinite(dt_critical_) && dt_critical_ > 0.0) m << ", " << dt_ / dt_critical_ << " of the critical step";
+    m << ") is too large for the stiffness, or the run is unstable";
+    fail(StepStatus::EnergyBalance, m.str());
     return;
   }
   if (ok) return;

@@ -108,6 +108,7 @@ RunSpec parseRun(const JsonReader& run, double default_duration_s) {
   if (rs.max_overlap_ratio > 1.0) run.fail("max_overlap_ratio", "must be <= 1");
   rs.energy_runaway_factor = run.number("energy_runaway_factor", 10.0, Check::Positive);
   if (rs.energy_runaway_factor <= 1.0) run.fail("energy_runaway_factor", "must be > 1");
+  rs.max_balance_error = run.number("max_balance_error", rs.max_balance_error, Check::Positive);
   rs.verlet_skin_ratio = run.number("verlet_skin_ratio", 0.2, Check::Positive);
   if (rs.verlet_skin_ratio > 2.0) run.fail("verlet_skin_ratio", "must be <= 2");
   return rs;
@@ -494,6 +495,7 @@ void validateScene(const Scene& s, const std::string& file) {
   if (!(rs.dt_safety > 0.0 && rs.dt_safety <= 1.0)) fail("/run/dt_safety", "must be in (0, 1]");
   if (!(rs.max_overlap_ratio > 0.0 && rs.max_overlap_ratio <= 1.0)) fail("/run/max_overlap_ratio", "must be in (0, 1]");
   if (!(rs.energy_runaway_factor > 1.0)) fail("/run/energy_runaway_factor", "must be > 1");
+  if (!(rs.max_balance_error > 0.0)) fail("/run/max_balance_error", "must be > 0");
   if (!(rs.verlet_skin_ratio > 0.0 && rs.verlet_skin_ratio <= 2.0)) fail("/run/verlet_skin_ratio", "must be in (0, 2]");
 }
 

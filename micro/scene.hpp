@@ -185,6 +185,7 @@ struct RunSpec {
   double series_interval_s = 0.0;        ///< scalar series (0: output_interval_s)
   double max_overlap_ratio = 0.5;        ///< stop when an overlap exceeds this fraction of the smaller radius
   double energy_runaway_factor = 10.0;   ///< stop when KE + elastic energy exceeds this times the energy scale
+  double max_balance_error = 0.05;       ///< stop when |energy balance error| exceeds this (a step too large)
   double verlet_skin_ratio = 0.2;        ///< Verlet skin / mean radius of the grid spheres
 };
 

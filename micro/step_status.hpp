@@ -11,9 +11,10 @@ enum class StepStatus {
   Overlap,        ///< a contact overlap passed run.max_overlap_ratio of the smaller radius
   EnergyRunaway,  ///< kinetic + elastic energy grew past run.energy_runaway_factor x the energy supplied
   Tunnelling,     ///< a body moved more than the smallest radius in one step: it can pass through others unseen
+  EnergyBalance,  ///< the energy balance error passed run.max_balance_error: the integration is not to be trusted
 };
 
-/// A short name of the status ("ok", "non_finite", "overlap", "energy_runaway", "tunnelling").
+/// A short name of the status ("ok", "non_finite", "overlap", "energy_runaway", "tunnelling", "energy_balance").
 inline const char* statusName(StepStatus s) {
   switch (s) {
     case StepStatus::Ok:
@@ -26,6 +27,8 @@ inline const char* statusName(StepStatus s) {
       return "energy_runaway";
     case StepStatus::Tunnelling:
       return "tunnelling";
+    case StepStatus::EnergyBalance:
+      return "energy_balance";
   }
   return "unknown";
 }

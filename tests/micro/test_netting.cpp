@@ -119,7 +119,7 @@ TEST(NettingEngine, DrivenWireFollowsTheLawAndClosesTheLedger) {
   gabion::bridge::WireState mirror;
   bool broke = false;
   for (int n = 0; n < 40000 && !broke; ++n) {
-    ASSERT_EQ(e.step(true), StepStatus::Ok);
+    ASSERT_EQ(e.step(true), StepStatus::Ok) << e.failure();
     broke = e.linkBroken(0);
     // The force of this step came from the length at its start.
     const double length = L0 + v * dt * n;
