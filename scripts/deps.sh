@@ -1,9 +1,10 @@
 #!/usr/bin/env bash
 # Installs the Debian packages Gabion needs to build and run, if missing;
-# with --tests also what the tests need (Chromium opens the pipeline's report).
+# with --tests also what the tests need (Chromium opens the pipeline's report;
+# clang builds the fuzzing targets, scripts/fuzz.sh).
 set -euo pipefail
 pkgs=(g++ cmake make ccache libeigen3-dev libnlopt-cxx-dev libhdf5-dev nlohmann-json3-dev libcli11-dev libgtest-dev zlib1g-dev nettle-dev libcairo2-dev pkg-config fonts-dejavu-core clang-format)
-if [ "${1:-}" = "--tests" ]; then pkgs+=(chromium); fi
+if [ "${1:-}" = "--tests" ]; then pkgs+=(chromium clang); fi
 missing=()
 for p in "${pkgs[@]}"; do
   dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q "install ok installed" || missing+=("$p")

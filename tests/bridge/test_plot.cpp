@@ -373,7 +373,9 @@ TEST(Plot, BandFillsBetweenItsEdges) {
   below.color_rgb = 0xFFFFFF;
   below.x = {0.5};
   below.y = {-1.0};
-  const auto [img, f] = draw("band.png", band, {below});
+  const auto drawn = draw("band.png", band, {below});
+  const Image& img = drawn.img;
+  const FrameBox& f = drawn.frame;
   ASSERT_GE(f.left, 0);
   // x from 0 to 1 and y from -1 to 1, with 5 % margins; points off the grid lines.
   const auto at = [&](double x, double y) {
