@@ -10,13 +10,21 @@
 
 namespace gabion::bridge {
 
-Estimate microRun(double bodies, double steps, double snapshots, double series) {
+namespace {
+// One run: its size and steps; the kinds' rates fill the rest.
+Estimate oneRun(double bodies, double steps, double snapshots) {
   Estimate e;
   e.bodies = bodies;
   e.steps = steps;
   e.body_steps = bodies * steps;
   e.runs = 1;
   e.snapshots = snapshots;
+  return e;
+}
+}  // namespace
+
+Estimate microRun(double bodies, double steps, double snapshots, double series) {
+  Estimate e = oneRun(bodies, steps, snapshots);
   e.memory_bytes = kBaseBytes + kMicroBytesPerBody * bodies;
   // (the series: about 40 columns of doubles)
   e.output_bytes = kMicroSnapshotBytesPerBody * bodies * snapshots + 40.0 * 8.0 * series;
@@ -25,12 +33,7 @@ Estimate microRun(double bodies, double steps, double snapshots, double series) 
 }
 
 Estimate macroRun(double cells, double steps, double samples) {
-  Estimate e;
-  e.bodies = cells;
-  e.steps = steps;
-  e.body_steps = cells * steps;
-  e.runs = 1;
-  e.snapshots = samples;
+  Estimate e = oneRun(cells, steps, samples);
   // (the recording is held until the run ends: 14 series of doubles)
   e.memory_bytes = kBaseBytes + kMacroBytesPerCell * cells + 14.0 * 8.0 * samples;
   e.output_bytes = 14.0 * 8.0 * samples + 100.0 * cells;

@@ -49,7 +49,8 @@ seeds() {  # target -> seed folder, filled with the project's own files of that 
     fuzz_case_json) cp cases/*.json cases/hard/*.json "$d"/ ;;
     fuzz_law_file) cp cases/laws/*.json cases/data/fit/illustrative_law.json "$d"/ ;;
     fuzz_curve_csv) cp cases/data/fit/*.csv "$d"/ ;;
-    fuzz_curve_h5) find "$dir" build -maxdepth 6 -name 'result.h5' -size -200k 2>/dev/null | head -8 |
+    # (the result files the test suite's smoke runs left in the build folders)
+    fuzz_curve_h5) find build* -maxdepth 6 -name 'result.h5' -size -4M 2>/dev/null | sort | head -20 |
                      while read -r f; do cp "$f" "$d/$(echo "$f" | tr / _)"; done ;;
   esac
   echo "$d"
