@@ -59,6 +59,10 @@ TEST(HardCases, EachEndsAsExpectedJsonSays) {
     const auto summary = nlohmann::json::parse(in);
     const nlohmann::json equal = e.value("equal", nlohmann::json::object());
     const nlohmann::json max_abs = e.value("max_abs", nlohmann::json::object());
+    const nlohmann::json min = e.value("min", nlohmann::json::object());
+    for (const auto& [pointer, bound] : min.items())
+      EXPECT_GE(summary.at(nlohmann::json::json_pointer(pointer)).get<double>(), bound.get<double>())
+          << name << " " << pointer;
     for (const auto& [pointer, value] : equal.items())
       EXPECT_EQ(summary.at(nlohmann::json::json_pointer(pointer)), value) << name << " " << pointer;
     for (const auto& [pointer, bound] : max_abs.items()) {
