@@ -38,6 +38,11 @@ namespace {
 // it, and writing a deeper document back (summary.json copies the laws)
 // recurses once per level.
 constexpr int kMaxDepth = 64;
+// A string (a description, a law's provenance note) is at most 1 MB, and a
+// JSON file at most 1 GB: free text is bounded, and a file past these was
+// not written by hand nor by Gabion.
+constexpr std::size_t kMaxStringBytes = std::size_t{1} << 20;
+constexpr std::uintmax_t kMaxFileBytes = std::uintmax_t{1000} * 1000 * 1000;
 
 // A first, DOM-less pass over a document (nlohmann's SAX interface):
 // refuses a key repeated within one object (JSON leaves it undefined; the
@@ -51,7 +56,14 @@ class ParseGuard : public nlohmann::json_sax<Json> {
   bool number_integer(number_integer_t) override { return element(); }
   bool number_unsigned(number_unsigned_t) override { return element(); }
   bool number_float(number_float_t, const string_t&) override { return element(); }
-  bool string(string_t&) override { return element(); }
+  bool string(string_t& v) override {
+    element();
+    if (v.size() > kMaxStringBytes)
+      throw InputError(file_, pointer(),
+                       "a string of " + std::to_string(v.size()) + " bytes, more than " +
+                           std::to_string(kMaxStringBytes) + " (free text such as a description is bounded)");
+    return true;
+  }
   bool binary(binary_t&) override { return element(); }
   bool start_object(std::size_t) override { return open(false); }
   bool start_array(std::size_t) override { return open(true); }
@@ -172,6 +184,11 @@ JsonDocument JsonDocument::load(const std::filesystem::path& path) {
   if (std::filesystem::is_directory(path, ec)) throw InputError(file, "", "is a directory, not a JSON file");
   if (!std::filesystem::is_regular_file(path, ec))  // (a FIFO or a device would block or never end)
     throw InputError(file, "", "not a regular file");
+  if (const auto bytes = std::filesystem::file_size(path, ec); !ec && bytes > kMaxFileBytes)
+    throw InputError(file, "",
+                     "a JSON file of " + std::to_string(bytes / 1000000) + " MB, more than " +
+                         std::to_string(kMaxFileBytes / 1000000) +
+                         " MB (scenes of many bodies are generated, not listed: block_fills, nettings, cells)");
   std::ifstream in(path, std::ios::binary);
   if (!in) throw InputError(file, "", "cannot open file for reading");
   {

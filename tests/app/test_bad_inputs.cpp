@@ -66,6 +66,9 @@ std::vector<BadInput> badInputs(const fs::path& dir) {
   const std::string case_kind = file("kind.json", R"({"format": "gabion.case/1", "kind": "micro.nothing"})");
   const std::string case_format = file("format.json", R"({"format": "gabion.case/7", "kind": "micro.scene"})");
   const std::string case_big = file("big.json", R"({"format": "gabion.case/1", "kind": "macro.impact", "x": 1e400})");
+  const std::string case_long =
+      file("long.json", R"({"format": "gabion.case/1", "kind": "micro.scene", "description": ")" +
+                            std::string(std::size_t{2} << 20, 'x') + "\"}");
   const std::string fifo = (dir / "fifo.json").string();
   mkfifo(fifo.c_str(), 0600);
   const std::string curve = "axial.curves.0.file=";
@@ -207,6 +210,7 @@ std::vector<BadInput> badInputs(const fs::path& dir) {
       {"unknown kind", case_kind, case_kind, "/kind: unknown case kind"},
       {"unknown format", case_format, case_format, "/format: expected 'gabion.case/1'"},
       {"number overflow", case_big, case_big, "number overflow"},
+      {"free text too long", case_long, case_long, "/description: a string of 2097152 bytes, more than 1048576"},
       {"FIFO", fifo, fifo, "not a regular file"},
       {"directory", dir.string(), dir.string(), "is a directory"},
       {"missing case", (dir / "missing.json").string(), (dir / "missing.json").string(), "does not exist"},
