@@ -49,10 +49,6 @@ struct Options {
   std::string figure;       // plot: -o
 };
 
-// Loads the case, applies --set, finds its kind and validates every key.
-// Throws InputError; writes nothing.
-// --law sets the case's "law_file" (in place of embedded "laws"): the case
-// is checked with the laws it will run with.
 // The run to continue: the effective case OUTDIR/run.json recorded when it
 // started (after --set and --law), with its case file and threads.
 JsonDocument resumedCase(Options& o) {
@@ -71,6 +67,10 @@ JsonDocument resumedCase(Options& o) {
   return JsonDocument(r.json().at("case"), o.case_file);
 }
 
+// Loads the case (or the one --resume continues), applies --set, finds its
+// kind and validates every key. Throws InputError; writes nothing.
+// --law sets the case's "law_file" (in place of embedded "laws"): the case
+// is checked with the laws it will run with.
 std::pair<JsonDocument, const gabion::bridge::CaseKind*> loadAndCheck(Options& o) {
   if (!o.resume.empty()) {
     JsonDocument doc = resumedCase(o);
