@@ -126,7 +126,15 @@ TEST(Cli, InterruptStopsTheRunAndKeepsWhatItWrote) {
   const auto summary = nlohmann::json::parse(in);
   EXPECT_EQ(summary.at("status"), "interrupted");
   EXPECT_EQ(summary.at("ended_by"), "interrupt");
-  EXPECT_TRUE(std::filesystem::exists(dir / "fill" / "result.h5"));
+  // The result file was closed whole: it opens, and its series reach the step the signal stopped.
+  const gabion::bridge::H5Reader h5(dir / "fill" / "result.h5");
+  const auto time = h5.read("/series/time_s");
+  ASSERT_FALSE(time.empty());
+  // (the last series sample: within one series interval, 5 ms in this case, of the last step)
+  const double stopped_at = summary.at("steps").get<double>() * summary.at("dt_s").get<double>();
+  EXPECT_GT(stopped_at, 0.0);
+  EXPECT_NEAR(time.back(), stopped_at, 0.0051);
+  EXPECT_FALSE(h5.read("/bodies/position_m").empty());
 
   // A sweep of 60,000 points (minutes), stopped after one second: SIGTERM.
   const auto w = gabion::testing::runCommand(
