@@ -89,6 +89,8 @@ void sweep(const std::string& law, int threads, int points) {
   const bridge::JsonDocument doc(c, "bench-sweep");
   bridge::RunContext ctx;
   ctx.outdir = std::filesystem::temp_directory_path() / "gabion_bench_macro_sweep";
+  // (afresh: a folder with the rows of an earlier run of this sweep would be resumed, not run)
+  std::filesystem::remove_all(ctx.outdir);
   std::filesystem::create_directories(ctx.outdir);
   ctx.threads = threads;
   const auto t0 = std::chrono::steady_clock::now();
