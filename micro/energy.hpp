@@ -46,6 +46,10 @@ class EnergyLedger {
   // Terms of the current measuring step (J): stored, and the wires' plastic
   // work (a function of their state, summed over the links like the stored terms).
   double elastic_contact = 0.0, elastic_link = 0.0, ke_t = 0.0, ke_r = 0.0, pe = 0.0, link_plastic = 0.0;
+  /// The kinetic energy at the latest half step, (1/2) m v+^2 + (1/2) I w+^2
+  /// (J): how fast the bodies move now, what a stage's "at rest" criterion
+  /// reads (the balance uses the time-centred ke_t and ke_r).
+  double kinetic_now = 0.0;
 
   /// Closes a measuring step: fills totals() and the balance. Returns false
   /// when the stored energy exceeds runaway_factor x the energy supplied.

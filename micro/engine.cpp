@@ -559,7 +559,7 @@ void Engine::advanceLinkedNodes(bool measure) {
     }
     const SphereSums s = nodes_.advance(links_, k, substeps_, h, gravity_, m, energy_.driven_work);
     sums_.local += s.local, sums_.finite += s.finite, sums_.max_d2 = std::max(sums_.max_d2, s.max_d2);
-    if (m) sums_.ke_t += s.ke_t, sums_.ke_r += s.ke_r, sums_.pe += s.pe;
+    if (m) sums_.ke_t += s.ke_t, sums_.ke_r += s.ke_r, sums_.pe += s.pe, sums_.ke_now += s.ke_now;
   }
   nodes_.store(p_, dt_);
 }
@@ -662,7 +662,7 @@ void Engine::checkStep(bool measure) {
   const SphereSums& sum = sums_;
   const std::size_t n = p_.size();
   energy_.local += sum.local;
-  if (measure) energy_.ke_t = sum.ke_t, energy_.ke_r = sum.ke_r, energy_.pe = sum.pe;
+  if (measure) energy_.ke_t = sum.ke_t, energy_.ke_r = sum.ke_r, energy_.pe = sum.pe, energy_.kinetic_now = sum.ke_now;
   double wall_move = 0.0;
   for (Wall& w : walls_) {
     w.advance();

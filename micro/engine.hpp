@@ -89,6 +89,9 @@ class Engine {
 
   /// Energy terms as of the last measuring step.
   const EnergyTotals& energy() const { return energy_.totals(); }
+  /// The bodies' kinetic energy at the latest half step of the last
+  /// measuring step, (1/2) m v+^2 (J): what "at rest" criteria read.
+  double kineticEnergyNow() const { return energy_.kinetic_now; }
   /// Number of bodies: spheres (input order) then blocks.
   std::size_t bodyCount() const;
   std::size_t blockCount() const;

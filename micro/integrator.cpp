@@ -41,8 +41,8 @@ SphereSums sphereLoop(Particles& p, std::size_t b, std::size_t e, double dt, con
                *__restrict AL = p.alpha.data();
   const double* __restrict X0 = p.x0.data(), * __restrict Y0 = p.y0.data(), * __restrict Z0 = p.z0.data();
   const double gx = g.x(), gy = g.y(), gz = g.z();
-  double local = 0.0, ke_t = 0.0, ke_r = 0.0, pe = 0.0, finite = 0.0, max_d2 = 0.0;
-#pragma omp simd reduction(+ : local, ke_t, ke_r, pe, finite) reduction(max : max_d2)
+  double local = 0.0, ke_t = 0.0, ke_r = 0.0, pe = 0.0, finite = 0.0, max_d2 = 0.0, ke_now = 0.0;
+#pragma omp simd reduction(+ : local, ke_t, ke_r, pe, finite, ke_now) reduction(max : max_d2)
   for (std::size_t i = b; i < e; ++i) {
     const double m = M[i], im = IM[i], ii = II[i], al = AL[i];
     // (a node's physical force: held + links + weight)
@@ -58,16 +58,20 @@ SphereSums sphereLoop(Particles& p, std::size_t b, std::size_t e, double dt, con
     const double x0 = X[i], y0 = Y[i], z0 = Z[i];
     const double x1 = x0 + dt * vx, y1 = y0 + dt * vy, z1 = z0 + dt * vz;
     if (kMeasure) {
-      // The energy at the positions x0 where the forces (and the elastic
-      // energy) were taken, between the velocities of the half steps before
-      // and after: (1/2) m v- . v+. This is the energy the leapfrog conserves
-      // exactly for a linear spring and for gravity; (1/2) m v+^2 would be
-      // half a step off the elastic energy and swing by omega dt / 2 through
-      // every contact. (m g is the weight; the kinetic energy is that of the
-      // inertial mass 1 / im: mass scaling.)
+      // The ledger's kinetic energy: at the positions x0 where the forces
+      // (and the elastic energy) were taken, between the velocities of the
+      // half steps before and after, (1/2) m v- . v+, the energy the leapfrog
+      // conserves exactly for a linear spring; (1/2) m v+^2 would be half a
+      // step off the elastic energy and swing by omega dt / 2 through every
+      // contact; with the potential at x0 too, it is exact for gravity.
+      // ke_now is (1/2) m v+^2: how fast the bodies move now, what the
+      // stages' stop criteria read. (m g is the weight; the kinetic energy is
+      // that of the inertial mass 1 / im: mass scaling.)
       ke_t += im > 0.0 ? 0.5 * (VX[i] * vx + VY[i] * vy + VZ[i] * vz) / im : 0.0;
       pe -= m * (gx * x0 + gy * y0 + gz * z0);
       ke_r += ii > 0.0 ? 0.5 * (WX[i] * wx + WY[i] * wy + WZ[i] * wz) / ii : 0.0;
+      ke_now += (im > 0.0 ? 0.5 * (vx * vx + vy * vy + vz * vz) / im : 0.0) +
+                (ii > 0.0 ? 0.5 * (wx * wx + wy * wy + wz * wz) / ii : 0.0);
     }
     VX[i] = vx, VY[i] = vy, VZ[i] = vz, WX[i] = wx, WY[i] = wy, WZ[i] = wz;
     X[i] = x1, Y[i] = y1, Z[i] = z1;
@@ -75,7 +79,7 @@ SphereSums sphereLoop(Particles& p, std::size_t b, std::size_t e, double dt, con
     const double ex = x1 - X0[i], ey = y1 - Y0[i], ez = z1 - Z0[i];
     max_d2 = std::max(max_d2, ex * ex + ey * ey + ez * ez);
   }
-  return {local, ke_t, ke_r, pe, finite, max_d2};
+  return {local, ke_t, ke_r, pe, finite, max_d2, ke_now};
 }
 }  // namespace
 
@@ -111,10 +115,11 @@ SphereSums integrateBlock(RigidBlock& b, Particles& p, double dt, const Vec3& g,
   b.omega = angularVelocityWorld(b.q, b.L, b.inertia);
   s.local = -(Fd.dot(v0 + b.v) + Td.dot(w0 + b.omega)) * 0.5 * dt;
   if (measure) {
-    // (at the positions of the forces, between the half steps: as for spheres)
+    // (between the half steps, and now: as for spheres)
     s.ke_t = 0.5 * b.mass * v0.dot(b.v);
     s.ke_r = 0.5 * L0.dot(b.omega);
     s.pe = -b.mass * g.dot(x0);
+    s.ke_now = 0.5 * b.mass * b.v.squaredNorm() + 0.5 * b.L.dot(b.omega);
   }
   s.finite = b.x.sum() + b.v.sum() + b.L.sum();
   const Eigen::Matrix3d R = b.q.toRotationMatrix();  // (once for all the members)

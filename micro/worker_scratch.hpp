@@ -42,9 +42,10 @@ struct ContactSet {
 /// A worker's sums over its free spheres in the integration.
 struct SphereSums {
   double local = 0.0, ke_t = 0.0, ke_r = 0.0, pe = 0.0, finite = 0.0, max_d2 = 0.0;
+  double ke_now = 0.0;  ///< (1/2) m v+^2 + (1/2) I w+^2 at the latest half step (EnergyLedger::kinetic_now)
   /// Adds another pass's sums (the largest displacement: the larger).
   void add(const SphereSums& s) {
-    local += s.local, ke_t += s.ke_t, ke_r += s.ke_r, pe += s.pe, finite += s.finite;
+    local += s.local, ke_t += s.ke_t, ke_r += s.ke_r, pe += s.pe, finite += s.finite, ke_now += s.ke_now;
     max_d2 = std::max(max_d2, s.max_d2);
   }
 };

@@ -307,7 +307,7 @@ bridge::RunOutcome failed(const StageRun& st, const nlohmann::json& stages) {
 
 // Kinetic energy (J), translational and rotational, at the last measuring step.
 double kinetic(const Engine& e) {
-  return e.energy().kinetic_translational_J + e.energy().kinetic_rotational_J;
+  return e.kineticEnergyNow();
 }
 
 void check(const bridge::JsonDocument& doc) {

@@ -182,7 +182,7 @@ bridge::RunOutcome runOne(const CompressionCase& c, const Sample& sample, const 
       for (int k = 0; k < 4; ++k) cv.side[static_cast<std::size_t>(k)].push_back(f[k]);
       cv.lateral.push_back(0.25 * (f[0] + f[1] + f[2] + f[3]));
     }
-    cv.kinetic.push_back(e.energy().kinetic_translational_J + e.energy().kinetic_rotational_J);
+    cv.kinetic.push_back(e.kineticEnergyNow());
     cv.work.push_back(e.energy().wall_work_J);
   };
   // Unloading and reloading: at each unload strain the lid goes back up at

@@ -166,7 +166,7 @@ bridge::RunOutcome runOne(const ShearCase& c, const Sample& sample, const bridge
     sr.displacement.push_back(u);
     sr.force.push_back(-e.wallForce(rig.pusher).x());
     sr.normal.push_back(e.wallForce(rig.lid).z() + weight);
-    sr.kinetic.push_back(e.energy().kinetic_translational_J + e.energy().kinetic_rotational_J);
+    sr.kinetic.push_back(e.kineticEnergyNow());
     sr.work.push_back(e.energy().wall_work_J - work0);
   };
   // The push starts once the lid has held its force within 10 % for 20 ms

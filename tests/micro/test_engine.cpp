@@ -455,8 +455,8 @@ TEST(MicroEngine, ContactHistorySurvivesNeighbourRebuilds) {
 //   swung to 29 % at the apexes, where almost nothing moves; it is now
 //   normalised by the most energy ever moved (a running maximum);
 // - the kinetic energy was taken half a step after the elastic energy, which
-//   swung the measured total by omega dt / 2 (5 %) inside every contact; it is
-//   now (1/2) m v- . v+, at the positions of the forces.
+//   swung the measured total by omega dt / 2 (5 %) inside every contact; the
+//   ledger's is now (1/2) m v- . v+, at the positions of the forces.
 // Bound: what is left is the linear spring's onset error, measured at
 // 0.4-0.6 % at dt = 0.2 critical; 1 % leaves room for the contact phase.
 TEST(MicroEngine, UndampedBounceKeepsAStableBalanceAndNoRunaway) {
