@@ -21,6 +21,7 @@
 #include "bridge/interrupt.hpp"
 #include "bridge/manifest.hpp"
 #include "bridge/output.hpp"
+#include "bridge/state_archive.hpp"
 #include "gabion_version.hpp"
 
 namespace fs = std::filesystem;
@@ -148,6 +149,7 @@ int commandRun(Options& o) {
   // The effective case for summary.json, kept as text so that the kind may
   // free the document while it runs.
   const std::string case_text = doc.json().dump();
+  ctx.case_digest = gabion::bridge::hexDigest(gabion::bridge::fnv1a(case_text));
   ctx.may_release_case = true;
 
   const auto t0 = std::chrono::steady_clock::now();

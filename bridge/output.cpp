@@ -236,6 +236,30 @@ void H5Writer::attribute(const std::string& object, const std::string& name, con
   }
 }
 
+std::vector<double> H5Writer::readRows(const std::string& dataset, std::size_t first, std::size_t rows) {
+  try {
+    H5::DataSet ds = impl_->file.openDataSet(dataset);
+    H5::DataSpace file_space = ds.getSpace();
+    const int rank = file_space.getSimpleExtentNdims();
+    std::vector<hsize_t> dims(static_cast<std::size_t>(rank));
+    file_space.getSimpleExtentDims(dims.data());
+    if (rank == 0 || first + rows > dims[0])
+      throw std::logic_error("H5Writer::readRows " + dataset + ": rows beyond the dataset");
+    std::vector<hsize_t> offset(static_cast<std::size_t>(rank), 0), count(dims);
+    offset[0] = first;
+    count[0] = rows;
+    const std::size_t n = std::accumulate(count.begin(), count.end(), std::size_t{1}, std::multiplies<>());
+    std::vector<double> out(n);
+    if (n == 0) return out;
+    file_space.selectHyperslab(H5S_SELECT_SET, count.data(), offset.data());
+    H5::DataSpace mem_space(rank, count.data());
+    ds.read(out.data(), H5::PredType::NATIVE_DOUBLE, mem_space, file_space);
+    return out;
+  } catch (const H5::Exception& e) {
+    fail("reading back dataset " + dataset, e.getDetailMsg());
+  }
+}
+
 void H5Writer::commit() {
   if (committed_) return;
   try {
@@ -298,6 +322,18 @@ std::vector<double> H5Reader::read(const std::string& dataset) const {
   std::vector<double> out(n);
   try {
     if (n > 0) impl_->file.openDataSet(dataset).read(out.data(), H5::PredType::NATIVE_DOUBLE);
+  } catch (const H5::Exception& e) {
+    throw InputError(file_, dataset, "cannot read dataset (corrupt or not numeric): " + e.getDetailMsg());
+  }
+  return out;
+}
+
+std::vector<long long> H5Reader::readInts(const std::string& dataset) const {
+  const auto d = dims(dataset);
+  const std::size_t n = std::accumulate(d.begin(), d.end(), std::size_t{1}, std::multiplies<>());
+  std::vector<long long> out(n);
+  try {
+    if (n > 0) impl_->file.openDataSet(dataset).read(out.data(), H5::PredType::NATIVE_LLONG);
   } catch (const H5::Exception& e) {
     throw InputError(file_, dataset, "cannot read dataset (corrupt or not numeric): " + e.getDetailMsg());
   }

@@ -47,6 +47,10 @@ class H5Writer {
                  const std::vector<std::size_t>& dims);
   /// A string attribute on the root group or on an existing object.
   void attribute(const std::string& object, const std::string& name, const std::string& value);
+  /// Reads back rows [first, first + rows) of a dataset this writer wrote
+  /// (along its first dimension), as doubles in row-major order: a run copies
+  /// the snapshots it streamed into a checkpoint (micro/checkpoint.hpp).
+  std::vector<double> readRows(const std::string& dataset, std::size_t first, std::size_t rows);
   /// Closes the file and renames it to its final name.
   void commit();
   const std::filesystem::path& path() const { return final_; }
@@ -78,6 +82,8 @@ class H5Reader {
   std::vector<std::size_t> dims(const std::string& dataset) const;
   /// The whole dataset flattened in row-major order, converted to double.
   std::vector<double> read(const std::string& dataset) const;
+  /// The same, converted to 64-bit integers (exact for an integer dataset).
+  std::vector<long long> readInts(const std::string& dataset) const;
   /// A string attribute; empty when absent.
   std::string attribute(const std::string& object, const std::string& name) const;
 

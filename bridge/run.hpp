@@ -22,6 +22,9 @@ struct RunContext {
   int threads = 1;                  ///< --threads
   bool progress = false;            ///< show a progress line
   std::filesystem::path case_file;  ///< for provenance and messages
+  /// A digest of the effective case (its JSON after --set): a checkpoint
+  /// left in outdir is continued only by a run of the same case.
+  std::string case_digest;
   /// The kind may free the case document's parsed value once it has read it
   /// (JsonDocument::releaseValue; a large particle case would otherwise keep
   /// its DOM beside the engine). The caller then keeps its own copy.

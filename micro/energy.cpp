@@ -77,4 +77,15 @@ const char* EnergyLedger::nonFiniteTerm() const {
   return nullptr;
 }
 
+void EnergyLedger::archive(bridge::StateArchive& a) {
+  a("friction", friction), a("plastic", plastic), a("viscous", viscous), a("local", local);
+  a("wall_work", wall_work), a("driven_work", driven_work), a("link_rupture", link_rupture);
+  a("elastic_contact", elastic_contact), a("elastic_link", elastic_link), a("ke_t", ke_t), a("ke_r", ke_r);
+  a("pe", pe), a("link_plastic", link_plastic), a("kinetic_now", kinetic_now);
+  bridge::StateArchive t = a.group("totals");
+  for (const auto& [name, member] : energyTerms()) t(name, totals_.*member);
+  a("e0", e0_), a("scale0", scale0_), a("pe0", pe0_), a("stored", stored_), a("supplied", supplied_);
+  a("scale", scale_), a("have_e0", have_e0_);
+}
+
 }  // namespace gabion::micro

@@ -11,6 +11,8 @@
 #include <utility>
 #include <vector>
 
+#include "bridge/state_archive.hpp"
+
 namespace gabion::micro {
 
 /// Energy terms of the whole system (J). balance_rel_error is
@@ -62,6 +64,8 @@ class EnergyLedger {
   /// The name of the first term of the last close() that is NaN or infinite
   /// (a stiffness that underflows, a force that overflows), or nullptr.
   const char* nonFiniteTerm() const;
+  /// Every sum and reference of the ledger, into or out of a checkpoint.
+  void archive(bridge::StateArchive& a);
 
  private:
   EnergyTotals totals_;

@@ -293,13 +293,7 @@ void Engine::updateNeighbours() {
   const SavedContacts saved = saveContacts();
   reorderParticles(grid_.sortOrder(p_, skin_m_, rebuildBlocks(), neighbourBlocks()));
   grid_.buildList(p_, skin_m_, excluded_, rebuildBlocks(), neighbourBlocks(), list_);
-  std::uint32_t longest_row = 0;
-  for (std::size_t i = 0; i < p_.size(); ++i)
-    longest_row = std::max(longest_row, list_.row_begin[i + 1] - list_.row_begin[i]);
-  for (auto& sc : scratch_) {
-    sc.touch_i.resize(kChunk + longest_row);
-    sc.touch_k.resize(kChunk + longest_row);
-  }
+  sizeTouchBuffers();
   wallCandidates(p_, walls_, skin_m_, rebuildBlocks(), neighbourBlocks());
   partitionWallCandidates();
   restoreContacts(saved);
@@ -307,6 +301,17 @@ void Engine::updateNeighbours() {
   need_rebuild_ = false;
   just_rebuilt_ = true;
   ++rebuilds_;
+}
+
+// The contact kernel's buffers of touching pairs: a chunk plus the longest row.
+void Engine::sizeTouchBuffers() {
+  std::uint32_t longest_row = 0;
+  for (std::size_t i = 0; i < p_.size(); ++i)
+    longest_row = std::max(longest_row, list_.row_begin[i + 1] - list_.row_begin[i]);
+  for (auto& sc : scratch_) {
+    sc.touch_i.resize(kChunk + longest_row);
+    sc.touch_k.resize(kChunk + longest_row);
+  }
 }
 
 Engine::SavedContacts Engine::saveContacts() {
@@ -347,7 +352,8 @@ void permute(std::vector<T>& v, const std::vector<std::uint32_t>& order) {
 void Engine::reorderParticles(const std::vector<std::uint32_t>& order) {
   // One field per task (the store's one list of fields), tasks dealt to the workers in turn.
   std::vector<std::function<void()>> tasks;
-  p_.forEachStateField([&](auto& field) { tasks.emplace_back([&field, &order] { permute(field, order); }); });
+  p_.forEachStateField(
+      [&](const char*, auto& field) { tasks.emplace_back([&field, &order] { permute(field, order); }); });
   const std::size_t workers = scratch_.size();
   parallel(StageProfile::kNeighbours, [&](int t) {
     for (std::size_t a = static_cast<std::size_t>(t); a < tasks.size(); a += workers) tasks[a]();
@@ -748,6 +754,105 @@ void Engine::measureEnergy() {
       worst = blocks_[b].mass * blocks_[b].v.squaredNorm(), who = "block " + std::to_string(b);
   m << "; fastest body: " << who;
   fail(StepStatus::EnergyRunaway, m.str());
+}
+
+// ---------------------------------------------------------------------------
+// archive: the state between two steps. What the scene gives (masses,
+// laws, shapes, groups) is rebuilt by the constructor; this is what the
+// steps change. The last step's contact sets are stored with the list
+// they index, so no rebuild is forced: a run that saves a checkpoint takes
+// the same steps as one that does not.
+
+void Engine::archive(bridge::StateArchive& a) {
+  const std::size_t n = p_.size();
+  a("step", step_), a("time_s", time_), a("dt_s", dt_), a("link_substeps", substeps_);
+  a("measurements", measurements_), a("rebuilds", rebuilds_), a("nodes_rebuilds", nodes_rebuilds_);
+  a("contact_count", contacts_), a("last_contact_set", hcur_), a("need_rebuild", need_rebuild_);
+  a("just_rebuilt", just_rebuilt_);
+  bridge::StateArchive pa = a.group("particles");
+  p_.archive(pa);
+  {
+    const std::size_t nb = blocks_.size();
+    std::vector<Vec3> x(nb), v(nb), L(nb), omega(nb);
+    std::vector<double> q(4 * nb);
+    for (std::size_t b = 0; b < nb; ++b) {
+      const RigidBlock& k = blocks_[b];
+      x[b] = k.x, v[b] = k.v, L[b] = k.L, omega[b] = k.omega;
+      q[4 * b] = k.q.w(), q[4 * b + 1] = k.q.x(), q[4 * b + 2] = k.q.y(), q[4 * b + 3] = k.q.z();
+    }
+    bridge::StateArchive ba = a.group("blocks");
+    ba("x", x), ba("v", v), ba("L", L), ba("omega", omega), ba("q", q);
+    if (a.loading()) {
+      if (x.size() != nb || v.size() != nb || L.size() != nb || omega.size() != nb || q.size() != 4 * nb)
+        throw std::invalid_argument("checkpoint: blocks of another number than this run's");
+      for (std::size_t b = 0; b < nb; ++b) {
+        RigidBlock& k = blocks_[b];
+        k.x = x[b], k.v = v[b], k.L = L[b], k.omega = omega[b];
+        k.q = Eigen::Quaterniond(q[4 * b], q[4 * b + 1], q[4 * b + 2], q[4 * b + 3]);
+      }
+    }
+  }
+  for (Wall& w : walls_) {
+    bridge::StateArchive wa = a.group("walls/" + w.name);
+    w.archive(wa);
+  }
+  bridge::StateArchive la = a.group("links"), na = a.group("link_nodes"), ea = a.group("energy");
+  links_.archive(la);
+  nodes_.archive(na);
+  energy_.archive(ea);
+  {
+    std::vector<double> t, link;
+    std::vector<Vec3> at;
+    for (const LinkEvent& e : link_events_)
+      t.push_back(e.time_s), link.push_back(static_cast<double>(e.link)), at.push_back(e.position_m);
+    bridge::StateArchive ev = a.group("link_events");
+    ev("time_s", t), ev("link", link), ev("position_m", at);
+    if (a.loading()) {
+      link_events_.resize(t.size());
+      for (std::size_t k = 0; k < t.size(); ++k) link_events_[k] = {t[k], static_cast<std::size_t>(link[k]), at[k]};
+    }
+  }
+  bridge::StateArchive list = a.group("neighbour_list");
+  list("row_begin", list_.row_begin), list("neighbour", list_.nbr);
+  list("row_partitions", part_begin_), list("wall_partitions", wall_part_);
+  // The last step's contacts of each partition, with their history.
+  for (std::size_t t = 0; t < scratch_.size(); ++t) {
+    ContactSet& cs = scratch_[t].sets[hcur_];
+    std::vector<std::uint32_t> k(cs.k.begin(), cs.k.begin() + static_cast<std::ptrdiff_t>(cs.n));
+    const auto head = [&](const std::vector<double>& v) {
+      return v.size() >= cs.n ? std::vector<double>(v.begin(), v.begin() + static_cast<std::ptrdiff_t>(cs.n))
+                              : std::vector<double>();
+    };
+    std::vector<double> ux = head(cs.ux), uy = head(cs.uy), uz = head(cs.uz), pl = head(cs.plastic),
+                        vi = head(cs.viscous);
+    bridge::StateArchive ca = a.group("contacts/" + std::to_string(t));
+    ca("list_entry", k), ca("ux", ux), ca("uy", uy), ca("uz", uz), ca("plastic", pl), ca("viscous", vi);
+    if (!a.loading()) continue;
+    const std::size_t m = k.size();
+    if (ux.size() != m || uy.size() != m || uz.size() != m || (laws_.any_plastic && pl.size() != m) ||
+        (laws_.any_viscous && vi.size() != m))
+      throw std::invalid_argument("checkpoint: contact histories of unequal lengths");
+    cs.ensure(m, laws_.any_plastic, laws_.any_viscous);
+    std::copy(k.begin(), k.end(), cs.k.begin());
+    std::copy(ux.begin(), ux.end(), cs.ux.begin());
+    std::copy(uy.begin(), uy.end(), cs.uy.begin());
+    std::copy(uz.begin(), uz.end(), cs.uz.begin());
+    if (laws_.any_plastic) std::copy(pl.begin(), pl.end(), cs.plastic.begin());
+    if (laws_.any_viscous) std::copy(vi.begin(), vi.end(), cs.viscous.begin());
+    cs.n = m;
+  }
+  if (!a.loading()) return;
+  // A checkpoint of another scene or thread count is refused (runScene
+  // compares the digests of the engines first; this guards the rest).
+  // (before the first step there is no list yet: the first step builds it)
+  const bool listed = rebuilds_ > 0;
+  bool sizes_ok =
+      p_.slot.size() == n && (!listed || (part_begin_.size() == scratch_.size() + 1 &&
+                                          wall_part_.size() == scratch_.size() + 1 && list_.row_begin.size() == n + 1));
+  p_.forEachStateField([&](const char*, const auto& v) { sizes_ok = sizes_ok && v.size() == n; });
+  p_.forEachScratchField([&](const char*, const auto& v) { sizes_ok = sizes_ok && v.size() == n; });
+  if (!sizes_ok) throw std::invalid_argument("checkpoint: a state of another scene or number of threads");
+  if (listed) sizeTouchBuffers();
 }
 
 // ---------------------------------------------------------------------------

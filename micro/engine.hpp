@@ -136,6 +136,14 @@ class Engine {
   /// Every link that broke so far, in the order they broke (link order within a step).
   const std::vector<LinkEvent>& linkEvents() const { return link_events_; }
 
+  /// The whole state between two steps (bodies in their current order,
+  /// walls, links, contact histories, neighbour list and its partitions,
+  /// energy ledger, step and time), into or out of a checkpoint
+  /// (bridge/state_archive.hpp), or hashed. An engine built from the same
+  /// scene with the same number of threads, then loaded, steps on exactly as
+  /// the one saved would have: the same arrays, bit for bit.
+  void archive(bridge::StateArchive& a);
+
   std::size_t contactCount() const { return contacts_; }
   const StageProfile& profile() const { return profile_; }
   std::size_t neighbourRebuilds() const { return rebuilds_; }
@@ -159,6 +167,7 @@ class Engine {
   void restoreContacts(const SavedContacts& saved);
   void partitionRows(const std::vector<std::uint32_t>& from);
   void partitionWallCandidates();
+  void sizeTouchBuffers();
 
   void addForceBuffers(std::size_t b, std::size_t e);
   std::string bodyName(std::uint32_t id) const;

@@ -139,4 +139,12 @@ int linkSubsteps(double dt_s, double dt_safety, double link_critical_s) {
   return std::isfinite(h) && h > 0.0 ? std::max(1, static_cast<int>(std::ceil(dt_s / h - 1e-9))) : 1;
 }
 
+void LinkedNodes::archive(bridge::StateArchive& a) {
+  bridge::StateArchive store = a.group("store");
+  n_.archive(store);
+  a("held_fx", hfx_), a("held_fy", hfy_), a("held_fz", hfz_), a("held_tx", htx_), a("held_ty", hty_);
+  a("held_tz", htz_), a("start_x", sx_), a("start_y", sy_), a("start_z", sz_), a("turn_x", rx_), a("turn_y", ry_);
+  a("turn_z", rz_), a("link_fx", lfx_), a("link_fy", lfy_), a("link_fz", lfz_);
+}
+
 }  // namespace gabion::micro

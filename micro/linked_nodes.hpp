@@ -69,6 +69,8 @@ class LinkedNodes {
   const double* z() const { return n_.z.data(); }
   /// Particle id of node k.
   std::uint32_t id(std::size_t k) const { return n_.id[k]; }
+  /// The nodes' store and held forces, into or out of a checkpoint.
+  void archive(bridge::StateArchive& a);
 
  private:
   Particles n_;  // the nodes' own store: state, masses, and this sub-step's forces

@@ -3,6 +3,8 @@
 #include <algorithm>
 #include <cmath>
 #include <limits>
+#include <stdexcept>
+#include <string>
 
 namespace gabion::micro {
 
@@ -199,6 +201,37 @@ Vec3 Links::nodeForce(std::size_t k) const {
     fx += sg * fx_[l], fy += sg * fy_[l], fz += sg * fz_[l];
   }
   return {fx, fy, fz};
+}
+
+void Links::archive(bridge::StateArchive& a) {
+  const std::size_t n = size(), nb = beams_.size();
+  std::vector<double> eps_p(n), eps_r(n);
+  for (std::size_t l = 0; l < n; ++l)
+    eps_p[l] = wire_state_[l].plastic_strain, eps_r[l] = wire_state_[l].reached_strain;
+  a("wire_plastic_strain", eps_p), a("wire_reached_strain", eps_r);
+  a("broken", broken_);
+  a("fx", fx_), a("fy", fy_), a("fz", fz_), a("tension", tension_);
+  a("length", len_), a("ux", ux_), a("uy", uy_), a("uz", uz_);
+  std::vector<Vec3> shear(nb), moment(nb);
+  std::vector<double> dissipated(nb);
+  for (std::size_t k = 0; k < nb; ++k)
+    shear[k] = beam_state_[k].shear_N, moment[k] = beam_state_[k].moment_N_m,
+    dissipated[k] = beam_state_[k].dissipated_J;
+  bridge::StateArchive b = a.group("beams");
+  b("shear_N", shear), b("moment_N_m", moment), b("dissipated_J", dissipated);
+  b("chord", beam_chord_), b("force", beam_force_), b("torque_a", torque_a_), b("torque_b", torque_b_);
+  if (!a.loading()) return;
+  // (a checkpoint of another netting: refused before any of it is used)
+  const auto same = [&](std::size_t found, std::size_t expect, const char* what) {
+    if (found != expect)
+      throw std::invalid_argument(std::string("checkpoint: ") + what + " of another size than this run's links");
+  };
+  for (const std::size_t m : {eps_p.size(), eps_r.size(), broken_.size(), fx_.size(), tension_.size(), len_.size()})
+    same(m, n, "a link field");
+  for (const std::size_t m : {shear.size(), moment.size(), dissipated.size(), beam_chord_.size(), beam_force_.size()})
+    same(m, nb, "a beam field");
+  for (std::size_t l = 0; l < n; ++l) wire_state_[l] = {eps_p[l], eps_r[l]};
+  for (std::size_t k = 0; k < nb; ++k) beam_state_[k] = {shear[k], moment[k], dissipated[k]};
 }
 
 }  // namespace gabion::micro

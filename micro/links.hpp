@@ -78,6 +78,9 @@ class Links {
   bridge::WireBeamState beamState(std::size_t l) const {
     return beam_of_[l] == kNoBeam ? bridge::WireBeamState{} : beam_state_[beam_of_[l]];
   }
+  /// The links' state (wires, beams, broken flags, this step's forces), into
+  /// or out of a checkpoint.
+  void archive(bridge::StateArchive& a);
 
  private:
   std::size_t particles_ = 0;

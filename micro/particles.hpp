@@ -4,12 +4,14 @@
 /// contact detection (free spheres and the member spheres of rigid blocks),
 /// as structure-of-arrays. The fields are declared once, in
 /// forEachStateField() and forEachScratchField(); that list drives growth
-/// (resize) and the re-sort into cell order (permute). Every particle has a
+/// (resize), the re-sort into cell order (permute) and checkpoints (archive). Every particle has a
 /// stable id (its input order: free spheres, then block members) that
 /// survives the re-sort: `slot[id]` is its current index.
 #include <cstddef>
 #include <cstdint>
 #include <vector>
+
+#include "bridge/state_archive.hpp"
 
 namespace gabion::micro {
 
@@ -52,27 +54,32 @@ struct Particles {
 
   std::size_t size() const { return x.size(); }
 
-  /// Calls f(vector) for every state field (the one list of them).
+  /// Calls f(name, vector) for every state field (the one list of them).
   template <class F>
   void forEachStateField(F&& f) {
-    for (auto* v :
-         {&x, &y, &z, &vx, &vy, &vz, &wx, &wy, &wz, &r, &inv_body_mass, &mass, &inv_mass, &inv_inertia, &alpha})
-      f(*v);
-    f(body);
-    f(mat);
-    f(id);
-    f(group);
-    f(size_class);
+    f("x", x), f("y", y), f("z", z), f("vx", vx), f("vy", vy), f("vz", vz), f("wx", wx), f("wy", wy), f("wz", wz);
+    f("r", r), f("inv_body_mass", inv_body_mass), f("mass", mass), f("inv_mass", inv_mass);
+    f("inv_inertia", inv_inertia), f("alpha", alpha);
+    f("body", body), f("mat", mat), f("id", id), f("group", group), f("size_class", size_class);
   }
-  /// Calls f(vector) for every scratch field.
+  /// Calls f(name, vector) for every scratch field.
   template <class F>
   void forEachScratchField(F&& f) {
-    for (auto* v : {&fx, &fy, &fz, &tx, &ty, &tz, &x0, &y0, &z0}) f(*v);
+    f("fx", fx), f("fy", fy), f("fz", fz), f("tx", tx), f("ty", ty), f("tz", tz), f("x0", x0), f("y0", y0), f("z0", z0);
+  }
+  /// Every field, state and scratch, with the id -> index map, into or out
+  /// of a checkpoint (bridge/state_archive.hpp): what the store holds
+  /// between two steps.
+  void archive(bridge::StateArchive& a) {
+    const auto field = [&a](const char* name, auto& v) { a(name, v); };
+    forEachStateField(field);
+    forEachScratchField(field);
+    a("slot", slot);
   }
 
   /// n particles, all fields zero, stable ids 0 .. n-1 in place.
   void resize(std::size_t n) {
-    const auto zero = [n](auto& v) { v.assign(n, {}); };
+    const auto zero = [n](const char*, auto& v) { v.assign(n, {}); };
     forEachStateField(zero);
     forEachScratchField(zero);
     body.assign(n, -1);

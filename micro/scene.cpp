@@ -111,6 +111,7 @@ RunSpec parseRun(const JsonReader& run, double default_duration_s) {
   rs.max_balance_error = run.number("max_balance_error", rs.max_balance_error, Check::Positive);
   rs.verlet_skin_ratio = run.number("verlet_skin_ratio", 0.2, Check::Positive);
   if (rs.verlet_skin_ratio > 2.0) run.fail("verlet_skin_ratio", "must be <= 2");
+  rs.checkpoint_every_s = run.number("checkpoint_every_s", rs.checkpoint_every_s, Check::NonNegative);
   return rs;
 }
 

@@ -187,6 +187,8 @@ struct RunSpec {
   double energy_runaway_factor = 10.0;   ///< stop when KE + elastic energy exceeds this times the energy scale
   double max_balance_error = 0.05;       ///< stop when |energy balance error| exceeds this (a step too large)
   double verlet_skin_ratio = 0.2;        ///< Verlet skin / mean radius of the grid spheres
+  /// Wall-clock seconds between checkpoints (micro/checkpoint.hpp); 0: none.
+  double checkpoint_every_s = 600.0;
 };
 
 /// A whole scene.

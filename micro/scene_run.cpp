@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
+#include <iostream>
 #include <sstream>
 
 #include "bridge/cost.hpp"
@@ -12,6 +13,7 @@
 #include "micro/blocks/block_fill.hpp"
 #include "micro/cell/cell_file.hpp"
 #include "micro/cell/porosity.hpp"
+#include "micro/checkpoint.hpp"
 
 namespace gabion::micro {
 namespace {
@@ -29,14 +31,14 @@ struct Series {
 // each stage's wall time and share, with several threads the busiest
 // partition over the mean (1.00: balanced), and the rest of the loop
 // (series, snapshots, progress) as "other".
-std::string timingReport(const Engine& engine, double loop_s, double body_steps_per_s, int threads) {
+std::string timingReport(const Engine& engine, long long steps_run, double loop_s, double body_steps_per_s,
+                         int threads) {
   const StageProfile& prof = engine.profile();
   std::ostringstream r;
   r.setf(std::ios::fixed);
   r.precision(2);
-  r << "step loop: " << engine.steps() << " steps in " << loop_s << " s, " << body_steps_per_s / 1e6
-    << " M body-steps/s, " << threads << (threads == 1 ? " thread, " : " threads, ") << engine.neighbourRebuilds()
-    << " neighbour rebuilds\n";
+  r << "step loop: " << steps_run << " steps in " << loop_s << " s, " << body_steps_per_s / 1e6 << " M body-steps/s, "
+    << threads << (threads == 1 ? " thread, " : " threads, ") << engine.neighbourRebuilds() << " neighbour rebuilds\n";
   r << "  stage          wall s   share" << (threads > 1 ? "   busiest/mean partition" : "") << "\n";
   double staged = 0.0;
   const auto row = [&](const std::string& name, double s) {
@@ -134,6 +136,11 @@ bridge::RunOutcome runScene(Scene scene, const std::string& file, const bridge::
   series.wall_force.resize(nw);
   series.wall_position.resize(nw);
   bridge::H5Writer h5(ctx.outdir / "result.h5");
+  SnapshotLog log(h5);  // the snapshots streamed into h5, for the checkpoints
+  Checkpoints checkpoints(ctx.outdir / "checkpoint", scene.run.checkpoint_every_s,
+                          runIdentity(ctx.case_digest, hooks.label, engine,
+                                      {dt, static_cast<double>(steps), static_cast<double>(series_every),
+                                       static_cast<double>(output_every)}));
   std::vector<double> snap_t, row(3 * nb), row_q(4 * nblk);
   // The intact links at each snapshot, for the XDMF lines: a new table each
   // time links have broken since the last one.
@@ -154,7 +161,7 @@ bridge::RunOutcome runScene(Scene scene, const std::string& file, const bridge::
       const std::vector<long long> ends = linkEnds(true);
       lines.dataset.push_back("/links/intact/" + std::to_string(tables++));
       lines.count.push_back(ends.size() / 2);
-      h5.writeInts(lines.dataset.back(), ends, {ends.size() / 2, 2});
+      log.writeInts(lines.dataset.back(), ends, {ends.size() / 2, 2});
       broken_in_table = broken;
     } else {
       lines.dataset.push_back(lines.dataset.back());
@@ -174,14 +181,14 @@ bridge::RunOutcome runScene(Scene scene, const std::string& file, const bridge::
         const Vec3 v = engine.body(b).*(fields[f].second);
         row[3 * b] = v.x(), row[3 * b + 1] = v.y(), row[3 * b + 2] = v.z();
       }
-      h5.appendRow(std::string("/bodies/") + fields[f].first, row, {nb, 3}, units[f]);
+      log.appendRow(std::string("/bodies/") + fields[f].first, row, {nb, 3}, units[f]);
     }
     if (nblk == 0) return;
     for (std::size_t k = 0; k < nblk; ++k) {
       const Eigen::Quaterniond q = engine.blockOrientation(k);
       row_q[4 * k] = q.w(), row_q[4 * k + 1] = q.x(), row_q[4 * k + 2] = q.y(), row_q[4 * k + 3] = q.z();
     }
-    h5.appendRow("/blocks/orientation", row_q, {nblk, 4}, "1");
+    log.appendRow("/blocks/orientation", row_q, {nblk, 4}, "1");
   };
   const auto record = [&](double t) {
     series.time.push_back(t);
@@ -197,17 +204,51 @@ bridge::RunOutcome runScene(Scene scene, const std::string& file, const bridge::
     }
   };
 
+  // The run's own state for a checkpoint: its series so far, its snapshot
+  // times and link tables, and the kind's state.
+  const auto loop_state = [&](bridge::StateArchive& a) {
+    bridge::StateArchive sa = a.group("series");
+    sa("time_s", series.time);
+    for (std::size_t k = 0; k < energyTerms().size(); ++k) sa(energyTerms()[k].first, series.energy[k]);
+    sa("contacts", series.contacts);
+    for (std::size_t w = 0; w < nw; ++w) {
+      bridge::StateArchive wa = sa.group("walls/" + std::to_string(w));
+      wa("force_N", series.wall_force[w]), wa("position_m", series.wall_position[w]);
+    }
+    a("snapshot_time_s", snap_t);
+    bridge::StateArchive la = a.group("link_tables");
+    la("per_snapshot", lines.dataset), la("count", lines.count), la("tables", tables);
+    la("broken_in_table", broken_in_table);
+    if (hooks.archive) {
+      bridge::StateArchive ka = a.group("kind");
+      hooks.archive(ka);
+    }
+  };
+
+  long long first = 0;  // the step the loop starts from: 0, or a checkpoint's
+  const Checkpoints::Found found = checkpoints.find();
+  if (found == Checkpoints::Found::Other)
+    std::cerr << hooks.label << ": the checkpoint in " << checkpoints.dir().string()
+              << " is of another run (case, threads or version): starting from the beginning\n";
+  if (found == Checkpoints::Found::Ours) {
+    checkpoints.load(engine, log, loop_state);
+    first = engine.steps();
+    std::cerr << hooks.label << ": continuing from the checkpoint of step " << first << " (t = " << engine.time()
+              << " s) in " << checkpoints.dir().string() << "\n";
+  } else {
+    snapshot(0.0);
+  }
   bridge::Progress progress(ctx, hooks.label);
-  snapshot(0.0);
   StepStatus status = StepStatus::Ok;
   bool ended = false;    // the kind's test is over before the duration
   bool stopped = false;  // SIGINT or SIGTERM asked the run to stop
   const auto t0 = std::chrono::steady_clock::now();
-  for (long long n = 0; n < steps && !ended; ++n) {
+  for (long long n = first; n < steps && !ended; ++n) {
     const bool measure = n % series_every == 0 || n + 1 == steps;
     const double t = engine.time();
     if (bridge::interrupted()) {
       stopped = true;
+      checkpoints.save(engine, log, loop_state);  // (what --resume continues)
       break;
     }
     status = engine.step(measure);
@@ -219,6 +260,7 @@ bridge::RunOutcome runScene(Scene scene, const std::string& file, const bridge::
       ended = hooks.done && hooks.done(engine);
     }
     if ((n + 1) % output_every == 0 || n + 1 == steps || ended) snapshot(engine.time());
+    if (!ended && n + 1 < steps && checkpoints.due()) checkpoints.save(engine, log, loop_state);
     progress.update(static_cast<double>(n + 1) * dt, scene.run.duration_s, n + 1);
   }
   const double loop_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
@@ -291,6 +333,8 @@ bridge::RunOutcome runScene(Scene scene, const std::string& file, const bridge::
   out.results["broken_links"] = engine.linkEvents().size();
   out.results["size_classes"] = engine.sizeClassCount();
   out.results["step_status"] = statusName(status);
+  if (first > 0) out.results["resumed_from_step"] = first;
+  out.results["checkpoints"] = checkpoints.saved();
   for (const auto& [key, report] : scene.generated.items()) out.results[key] = report;
   if (scene.generated.contains("block_fills")) writeGradingFigures(ctx.outdir, scene.generated["block_fills"]);
   if (scene.porosity.enabled) {
@@ -311,7 +355,7 @@ bridge::RunOutcome runScene(Scene scene, const std::string& file, const bridge::
   out.results["neighbour_rebuilds"] = engine.neighbourRebuilds();
   out.results["step_loop_wall_time_s"] = loop_s;
   const double body_steps_per_s =
-      loop_s > 0.0 ? static_cast<double>(nb) * static_cast<double>(engine.steps()) / loop_s : 0.0;
+      loop_s > 0.0 ? static_cast<double>(nb) * static_cast<double>(engine.steps() - first) / loop_s : 0.0;
   out.results["body_steps_per_s"] = body_steps_per_s;
   // Where the time went (docs/micro.md, Output): per stage, and per partition.
   const StageProfile& prof = engine.profile();
@@ -323,7 +367,7 @@ bridge::RunOutcome runScene(Scene scene, const std::string& file, const bridge::
     if (k != StageProfile::kEnergy) busy[StageProfile::name(k)] = per;
   }
   out.results["profile"] = {{"stage_wall_time_s", stage_wall}, {"partition_busy_time_s", busy}};
-  out.report = timingReport(engine, loop_s, body_steps_per_s, ctx.threads);
+  out.report = timingReport(engine, engine.steps() - first, loop_s, body_steps_per_s, ctx.threads);
   if (scene.save_cell && ok) {
     // The packed state, for later runs (`from_cell`), with what this run measured.
     nlohmann::json summary = {{"time_s", engine.time()}, {"steps", engine.steps()}};
@@ -331,10 +375,12 @@ bridge::RunOutcome runScene(Scene scene, const std::string& file, const bridge::
     writeCellFile(ctx.outdir / "cell.h5", scene, engine, summary);
   }
   if (ok && hooks.end) hooks.end(engine, scene);
+  if (!stopped) checkpoints.remove();  // (a run that ended, ok or failed, has nothing to continue)
   if (stopped) {
     std::ostringstream m;
     m << "interrupted by " << bridge::signalName(bridge::interruptSignal()) << " at step " << engine.steps()
-      << ", t = " << engine.time() << " s of " << scene.run.duration_s << " s";
+      << ", t = " << engine.time() << " s of " << scene.run.duration_s << " s; its state is in "
+      << checkpoints.dir().string() << " (gabion run --resume continues it)";
     out.status = bridge::RunOutcome::Status::Interrupted;
     out.message = m.str();
   } else if (!ok) {

@@ -10,6 +10,7 @@
 
 #include "bridge/output.hpp"
 #include "bridge/run.hpp"
+#include "bridge/state_archive.hpp"
 #include "micro/engine.hpp"
 #include "micro/scene.hpp"
 
@@ -28,6 +29,10 @@ struct SceneRunHooks {
   std::function<bool(const Engine&)> done;
   /// Before the result file is committed: the kind's own datasets.
   std::function<void(const Engine&, bridge::H5Writer&)> write;
+  /// The kind's own state (its curves, its phase), into or out of a
+  /// checkpoint (micro/checkpoint.hpp): a kind whose hooks keep state must
+  /// list it here, or a resumed run would not be the run it continues.
+  std::function<void(bridge::StateArchive&)> archive;
   /// At the end of a run that did not fail, with the scene the engine was
   /// built from (e.g. to take its state, micro/cell/cell_file.hpp stateScene).
   std::function<void(const Engine&, const Scene&)> end;

@@ -90,6 +90,33 @@ void Wall::plan(double t, double dt) {
   velocity = step_displacement / dt;
 }
 
+void Wall::archive(bridge::StateArchive& a) {
+  bridge::StateArchive pa = a.group("program");
+  pa("kind", program.kind);
+  pa("velocity_m_s", program.velocity_m_s);
+  pa("table_time_s", program.table_time_s);
+  pa("table_velocity_m_s", program.table_velocity_m_s);
+  pa("direction", program.direction);
+  pa("amplitude_m", program.amplitude_m);
+  pa("frequency_hz", program.frequency_hz);
+  pa("phase_rad", program.phase_rad);
+  pa("target_force_N", program.target_force_N);
+  pa("max_speed_m_s", program.max_speed_m_s);
+  pa("gain_m_s_N", program.gain_m_s_N);
+  pa("approach_after_s", program.approach_after_s);
+  a("untouched_s", untouched_s);
+  a("position", position);
+  a("velocity", velocity);
+  a("step_displacement", step_displacement);
+  a("force_N", force_N);
+  a("force_position", force_position);
+  a("at_rebuild", at_rebuild);
+  a("candidates", cand);
+  bridge::StateArchive h = a.group("history");
+  h("ux", hist.ux), h("uy", hist.uy), h("uz", hist.uz), h("plastic", hist.plastic), h("viscous", hist.viscous);
+  h("stamp", hist.stamp);
+}
+
 void wallCandidates(const Particles& p, std::vector<Wall>& walls, double skin, std::size_t nblocks,
                     const ForBlocks& for_blocks) {
   const std::size_t n = p.size(), nwalls = walls.size();

@@ -72,6 +72,9 @@ struct Wall {
   void advance() { position += step_displacement; }
   /// Normal force the bodies exert on the wall (N; > 0 in compression).
   double normalForce() const { return -force_N.dot(n); }
+  /// What changes during a run (program, motion, force, candidates and
+  /// their history), into or out of a checkpoint.
+  void archive(bridge::StateArchive& a);
 };
 
 /// Lists each wall's candidates: particles that move, within reach of the

@@ -351,6 +351,7 @@ bridge::RunOutcome run(const bridge::JsonDocument& doc, const bridge::RunContext
     const double work = pe0 - eng.energy().gravity_potential_J;
     return eng.time() > 0.2 && work > 0.0 && kinetic(eng) < c.fill.settled_kinetic_ratio * work;
   };
+  fill_hooks.archive = [&](bridge::StateArchive& a) { a("pe0", pe0); };
   nlohmann::json stages;
   StageRun fill = runStage("fill", std::move(scene), file, ctx, fill_hooks, stages);
   if (fill.outcome.status != bridge::RunOutcome::Status::Ok) return failed(fill, stages);
@@ -410,6 +411,10 @@ bridge::RunOutcome run(const bridge::JsonDocument& doc, const bridge::RunContext
     vib_t.push_back(eng.time()), vib_n.push_back(porosity_vibrated);
     return porosity_vibrated <= c.target_porosity;
   };
+  vib_hooks.archive = [&](bridge::StateArchive& a) {
+    a("check_time_s", vib_t), a("porosity", vib_n), a("next_check", next_check);
+    a("porosity_vibrated", porosity_vibrated);
+  };
   StageRun vibration = runStage("vibration", std::move(vib), file, ctx, vib_hooks, stages);
   if (vibration.outcome.status != bridge::RunOutcome::Status::Ok) return failed(vibration, stages);
 
@@ -443,6 +448,7 @@ bridge::RunOutcome run(const bridge::JsonDocument& doc, const bridge::RunContext
     press_force = eng.wallForce(press_wall).z();  // the rock pushes it up
     return eng.wallPosition(press_wall).z() <= topFace(eng.wallPosition(0).z());
   };
+  close_hooks.archive = [&](bridge::StateArchive& a) { a("press_force", press_force); };
   StageRun closing = runStage("closing", std::move(close), file, ctx, close_hooks, stages);
   if (closing.outcome.status != bridge::RunOutcome::Status::Ok) return failed(closing, stages);
   const double top_face = topFace(closing.state.walls[0].point_m.z());
@@ -526,6 +532,7 @@ bridge::RunOutcome run(const bridge::JsonDocument& doc, const bridge::RunContext
     ke_ratio = kinetic(eng) / reference;
     return eng.time() > 0.1 && ke_ratio < c.standing.kinetic_ratio;
   };
+  stand_hooks.archive = [&](bridge::StateArchive& a) { a("ke_ratio", ke_ratio), a("reference", reference); };
   StageRun standing = runStage("standing", std::move(stand), file, ctx, stand_hooks, stages);
   if (standing.outcome.status != bridge::RunOutcome::Status::Ok) return failed(standing, stages);
 

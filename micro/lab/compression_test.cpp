@@ -207,6 +207,23 @@ bridge::RunOutcome runOne(const CompressionCase& c, const Sample& sample, const 
     }
   };
   hooks.done = [&](const Engine&) { return !unloading && cv.displacement.back() >= target; };
+  hooks.archive = [&](bridge::StateArchive& a) {
+    a("time_s", cv.time), a("displacement_m", cv.displacement), a("force_N", cv.force);
+    a("base_force_N", cv.base_force), a("lateral_N", cv.lateral), a("kinetic_J", cv.kinetic), a("work_J", cv.work);
+    for (std::size_t k = 0; k < cv.side.size(); ++k) a("side_N/" + std::to_string(k), cv.side[k]);
+    std::vector<double> strain, force, disp, stiff, u_low, f_low;
+    for (const Cycle& cy : cycles)
+      strain.push_back(cy.strain), force.push_back(cy.force_N), disp.push_back(cy.displacement_m),
+          stiff.push_back(cy.stiffness_N_m), u_low.push_back(cy.u_low), f_low.push_back(cy.f_low);
+    bridge::StateArchive ca = a.group("cycles");
+    ca("strain", strain), ca("force_N", force), ca("displacement_m", disp), ca("stiffness_N_m", stiff);
+    ca("u_low", u_low), ca("f_low", f_low);
+    a("next_cycle", next_cycle), a("unloading", unloading);
+    if (!a.loading()) return;
+    cycles.clear();
+    for (std::size_t k = 0; k < strain.size() && k < force.size() && k < disp.size(); ++k)
+      cycles.push_back({strain[k], force[k], disp[k], stiff.at(k), u_low.at(k), f_low.at(k)});
+  };
   hooks.write = [&](const Engine&, bridge::H5Writer& h5) {
     const std::string g = c.confined ? "/curves/axial/" : "/curves/uc/";
     h5.write(g + "time_s", cv.time, "s");

@@ -171,6 +171,11 @@ bridge::RunOutcome runOne(const ImpactCase& c, const Sample& sample, double v0, 
     if (vz > 0.0 && e.time() - t_last_force > 0.005) return true;
     return e.time() - t_contact > 0.02 && std::fabs(vz) < 0.002 * v0;
   };
+  hooks.archive = [&](bridge::StateArchive& a) {
+    a("time_s", sr.time), a("force_N", sr.force), a("base_force_N", sr.base_force);
+    a("penetration_m", sr.penetration), a("velocity_m_s", sr.velocity), a("z_contact", z_contact);
+    a("t_contact", t_contact), a("peak", peak), a("t_last_force", t_last_force);
+  };
   hooks.write = [&](const Engine&, bridge::H5Writer& h5) {
     h5.write("/curves/impact/time_s", sr.time, "s");
     h5.write("/curves/impact/penetration_m", sr.penetration, "m");

@@ -192,6 +192,12 @@ bridge::RunOutcome runOne(const ShearCase& c, const Sample& sample, const bridge
   hooks.done = [&](const Engine&) {
     return pushing && !sr.displacement.empty() && sr.displacement.back() >= c.displacement_m;
   };
+  hooks.archive = [&](bridge::StateArchive& a) {
+    a("time_s", sr.time), a("displacement_m", sr.displacement), a("force_N", sr.force), a("normal_N", sr.normal);
+    a("kinetic_J", sr.kinetic), a("work_J", sr.work), a("settle_time_s", sr.settle_time);
+    a("settle_force_N", sr.settle_force), a("x0", x0), a("held_since", held_since), a("t_push", t_push);
+    a("work0", work0), a("pushing", pushing);
+  };
   hooks.write = [&](const Engine&, bridge::H5Writer& h5) {
     h5.write("/curves/shear/time_s", sr.time, "s");
     h5.write("/curves/shear/displacement_m", sr.displacement, "m");

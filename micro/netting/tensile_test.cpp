@@ -192,6 +192,11 @@ bridge::RunOutcome run(const bridge::JsonDocument& doc, const bridge::RunContext
     checked = e.linkEvents().size();
     return !connected(net, e, net.top_edge, net.bottom_edge);
   };
+  hooks.archive = [&](bridge::StateArchive& a) {
+    a("time_s", curve.time), a("displacement_m", curve.displacement), a("force_N", curve.force);
+    a("peak", curve.peak), a("at_peak", curve.at_peak), a("checked", checked);
+    // (the first rupture is the first of the engine's link events, which the engine's state holds)
+  };
   hooks.write = [&](const Engine&, bridge::H5Writer& h5) {
     h5.write("/series/pull/time_s", curve.time, "s");
     h5.write("/series/pull/displacement_m", curve.displacement, "m");

@@ -194,6 +194,35 @@ TEST(MicroLab, TheFourTestsRunOnASmallCellAndKeepTheirBalances) {
                 0.1 * r["lid_force_N"].get<double>());
   }
 
+  // Each test killed (SIGKILL) at its first checkpoint and resumed gives
+  // the uninterrupted test's curves and results, bit for bit: the kinds'
+  // own state (CC's unloading cycles, UCI's contact, the shear's push)
+  // goes into the checkpoint with the engine's.
+  const std::vector<std::pair<std::string, std::vector<std::string>>> resumed = {
+      {"cc", {"/curves/axial/force_N", "/curves/axial/displacement_m", "/curves/lateral/lateral_force_N"}},
+      {"uci", {"/curves/impact/force_N", "/curves/impact/penetration_m", "/curves/impact/boulder_velocity_m_s"}},
+      {"shear", {"/curves/shear/force_N", "/curves/shear/normal_force_N", "/curves/shear/settle/time_s"}}};
+  for (const auto& [name, curves] : resumed) {
+    nlohmann::json c = nlohmann::json::parse(std::ifstream(dir / (name + ".json")));
+    c["run"]["checkpoint_every_s"] = 0.05;
+    writeFile(dir / (name + "_k.json"), c.dump());
+    const auto killed = dir / (name + "_k");
+    const std::string out =
+        gabion::testing::signalWhenThere("run -q " + (dir / (name + "_k.json")).string() + " -o " + killed.string(),
+                                         killed / "checkpoint" / "state.h5", "KILL");
+    ASSERT_NE(out.find("exit=137"), std::string::npos) << name << ": " << out;
+    const auto again = runGabion("run -q --resume " + killed.string());
+    ASSERT_EQ(again.exit_code, 0) << name << ": " << again.output;
+    const gabion::bridge::H5Reader whole(dir / name / "result.h5"), res(killed / "result.h5");
+    for (const std::string& d : curves) EXPECT_EQ(whole.read(d), res.read(d)) << name << " " << d;
+    nlohmann::json a = summaryOf(dir / name), b = summaryOf(killed);
+    EXPECT_GT(b["resumed_from_step"].get<long long>(), 0) << name;
+    for (const char* timing : {"wall_time_s", "step_loop_wall_time_s", "body_steps_per_s", "profile", "checkpoints",
+                               "resumed_from_step", "case", "case_file", "report"})
+      a.erase(timing), b.erase(timing);
+    EXPECT_EQ(a, b) << name;
+  }
+
   // The fitting reads the four tests' curves by their default dataset names:
   // the case names only the files.
   writeFile(dir / "fit.json", R"({"format": "gabion.case/1", "kind": "fit", "seed": 1,

@@ -34,6 +34,16 @@ inline CliResult runGabion(const std::string& args) {
   return runCommand(std::string(GABION_BINARY) + " " + args);
 }
 
+/// Starts `gabion ARGS` in the background, waits until `file` appears (or
+/// the run ends), then sends it `signal` ("KILL", "INT"); returns what the
+/// shell printed, ending with "exit=N" (137 for a SIGKILL).
+inline std::string signalWhenThere(const std::string& args, const std::filesystem::path& file, const char* signal) {
+  return runCommand("sh -c '" + std::string(GABION_BINARY) + " " + args + " & p=$!; while [ ! -e " + file.string() +
+                    " ] && kill -0 $p 2>/dev/null; do sleep 0.01; done; kill -" + signal +
+                    " $p; wait $p; echo exit=$?'")
+      .output;
+}
+
 /// A fresh scratch folder under the test temp dir, named by the test and
 /// the process (two test runs on one machine never share one).
 inline std::filesystem::path scratchDir(const std::string& name) {
