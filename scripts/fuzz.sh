@@ -1,7 +1,8 @@
 #!/usr/bin/env bash
 # Fuzzes the readers of user files (case and law JSON, CSV curves, HDF5
 # results) with libFuzzer, under AddressSanitizer and UndefinedBehaviorSanitizer,
-# and runs the bridge and macro modules' tests under the same sanitizers.
+# and runs the modules' tests under the same sanitizers (those that run in
+# process: the ones that drive the gabion binary are left out, this build has none).
 #   scripts/fuzz.sh [SECONDS] [--h5]   (per target; default 10: the bounded
 #                                       CI run. A longer run: scripts/fuzz.sh 600 --h5)
 # The HDF5 target mutates its inputs only with --h5: mutated HDF5 files reach
@@ -31,7 +32,7 @@ flags="-fsanitize=fuzzer-no-link,address,undefined -fno-sanitize-recover=undefin
 cmake -S . -B "$dir" -DCMAKE_BUILD_TYPE=RelWithDebInfo -DCMAKE_CXX_COMPILER=clang++ -DCMAKE_C_COMPILER=clang \
   -DCMAKE_CXX_FLAGS="$flags" -DGABION_FUZZ=ON -DGABION_BUILD_BENCH=OFF -DGABION_NATIVE=OFF >/dev/null
 cmake --build "$dir" -j "$(nproc)" --target fuzz_case_json fuzz_law_file fuzz_curve_csv fuzz_curve_h5 test_bridge \
-  test_macro >/dev/null
+  test_macro test_micro test_fitting >/dev/null
 # (allocator_may_return_null: as without ASan, a huge allocation that a corrupt
 # HDF5 header asks for fails, and HDF5 reports an error the reader turns into
 # an InputError)
@@ -39,10 +40,17 @@ export ASAN_OPTIONS=detect_leaks=1:abort_on_error=1:allocator_may_return_null=1 
 # (HDF5 keeps some allocations until exit by design: not ours)
 export LSAN_OPTIONS=suppressions=$PWD/fuzz/lsan.supp
 
-echo "bridge and macro tests under ASan + UBSan"
+echo "bridge, macro, micro and fitting tests under ASan + UBSan"
 "$dir"/tests/test_bridge --gtest_brief=1
-# (the macro tests that drive the gabion binary are left out: this build has none)
+# (left out: the tests that drive the gabion binary, which this build has
+# not; MicroDeterminism's pinned hash, which is the GCC build's bits; and
+# one netting equilibrium of a minute without sanitizers' slowdown)
 "$dir"/tests/test_macro --gtest_brief=1 --gtest_filter=-MacroCli.*:MacroCases.*:MacroDefaultWall.*
+micro_cli=MicroCell.*:CellFile.*:MicroCheckpoint.AKilled*:MicroLab.*:NettingScene.*:NettingTensile.*:MicroSceneCli.*
+micro_cli=$micro_cli:NettingEngine.DrivenWire*:Porosity.SceneReports*:BlockFill.SceneReports*:Grading.BadTables*
+"$dir"/tests/test_micro --gtest_brief=1 \
+  --gtest_filter=-$micro_cli:MicroDeterminism.*:NettingEngine.ClosedBoxHangingFromItsTopFaceReachesEquilibrium
+"$dir"/tests/test_fitting --gtest_brief=1 --gtest_filter=-FitCli.*
 
 seeds() {  # target -> seed folder, filled with the project's own files of that type
   local d=$dir/seeds/$1
