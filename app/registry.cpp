@@ -1,6 +1,7 @@
 #include "app/registry.hpp"
 
 #include "app/pipeline.hpp"
+#include "app/resolved.hpp"
 #include "fitting/cases.hpp"
 #include "macro/cases.hpp"
 #include "micro/cases.hpp"
@@ -13,6 +14,7 @@ const std::vector<bridge::CaseKind>& allKinds() {
     for (auto&& list : {micro::caseKinds(), macro::caseKinds(), fitting::caseKinds()})
       all.insert(all.end(), list.begin(), list.end());
     all.push_back(pipelineKind());
+    all.push_back(resolvedKind());
     return all;
   }();
   return kinds;

@@ -7,6 +7,7 @@
 #include "micro/lab/compression_test.hpp"
 #include "micro/lab/impact_test.hpp"
 #include "micro/lab/shear_test.hpp"
+#include "micro/lab/structure_impact.hpp"
 #include "micro/netting/tensile_test.hpp"
 #include "micro/scene.hpp"
 #include "micro/scene_run.hpp"
@@ -42,7 +43,8 @@ std::vector<bridge::CaseKind> caseKinds() {
           lab::confinedCompressionKind(),
           lab::unconfinedCompressionKind(),
           lab::unconfinedImpactKind(),
-          lab::interfaceShearKind()};
+          lab::interfaceShearKind(),
+          lab::structureImpactKind()};
 }
 
 }  // namespace gabion::micro

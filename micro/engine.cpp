@@ -3,7 +3,9 @@
 #include <algorithm>
 #include <atomic>
 #include <cmath>
+#include <cstring>
 #include <limits>
+#include <map>
 #include <numeric>
 #include <sstream>
 
@@ -13,12 +15,37 @@
 namespace gabion::micro {
 
 namespace {
+// Blocks of the same shape and density (a wall of copies of one cell, each
+// block a copy of its cell's) share one computation: the key is the exact
+// bytes of the shape, so each block gets what it would get alone.
 std::vector<MassProperties> blockMassProperties(const Scene& scene) {
   std::vector<MassProperties> out;
   out.reserve(scene.blocks.size());
-  for (const BlockSpec& b : scene.blocks)
-    out.push_back(clusterMassProperties(b.member_centers_m, b.member_radii_m,
-                                        scene.materials[static_cast<std::size_t>(b.material)].density_kg_m3));
+  std::map<std::string, MassProperties> computed;
+  for (const BlockSpec& b : scene.blocks) {
+    const double density = scene.materials[static_cast<std::size_t>(b.material)].density_kg_m3;
+    if (b.member_centers_m.size() != b.member_radii_m.size()) {  // (refused, with its message, by the computation)
+      out.push_back(clusterMassProperties(b.member_centers_m, b.member_radii_m, density));
+      continue;
+    }
+    std::string key(sizeof(double) * (1 + 4 * b.member_radii_m.size()), '\0');
+    char* at = key.data();
+    const auto put = [&at](double v) {
+      std::memcpy(at, &v, sizeof v);
+      at += sizeof v;
+    };
+    put(density);
+    for (std::size_t k = 0; k < b.member_radii_m.size(); ++k)
+      put(b.member_radii_m[k]), put(b.member_centers_m[k].x()), put(b.member_centers_m[k].y()),
+          put(b.member_centers_m[k].z());
+    const auto it = computed.find(key);
+    if (it != computed.end()) {
+      out.push_back(it->second);
+      continue;
+    }
+    out.push_back(clusterMassProperties(b.member_centers_m, b.member_radii_m, density));
+    computed.emplace(std::move(key), out.back());
+  }
   return out;
 }
 

@@ -23,3 +23,11 @@ endforeach()
 set(GABION_SMOKE_SET_pipeline --set cell=${GABION_SMOKE_CELL} --set uci_velocities_m_s=[8]
     --set "stage_settings={\"cc\":[\"loading.strain=0.004\",\"loading.unload_at_strain=[0.002]\"],\"uc\":[\"loading.strain=0.004\"],\"uci\":[\"boulder.diameter_m=0.3\",\"run.duration_s=0.02\"],\"shear\":[\"shear.displacement_m=0.001\",\"shear.max_settle_s=0.01\"]}")
 set(GABION_SMOKE_NEEDS_pipeline cell_file)
+# The resolved wall needs the pipeline's cell and laws: its check and smoke
+# run take the smoke cell and the illustrative laws instead, one cell, a few
+# steps (the full comparison: docs/resolved.md).
+set(GABION_CHECK_SET_macro_resolved --set cell=${GABION_SMOKE_CELL}
+    --set law_file=${PROJECT_SOURCE_DIR}/cases/laws/illustrative.json)
+set(GABION_SMOKE_SET_macro_resolved ${GABION_CHECK_SET_macro_resolved} --set structure.cells=[1,1,1]
+    --set boulder.diameter_m=0.3 --set resolved.settle.duration_s=0.001 --set resolved.run.duration_s=0.003)
+set(GABION_SMOKE_NEEDS_macro_resolved cell_file)

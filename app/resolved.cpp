@@ -1,0 +1,262 @@
+#include "app/resolved.hpp"
+
+#include <chrono>
+#include <cmath>
+#include <filesystem>
+#include <sstream>
+
+#include "app/registry.hpp"
+#include "bridge/cost.hpp"
+#include "bridge/errors.hpp"
+#include "bridge/law_file.hpp"
+#include "bridge/manifest.hpp"
+#include "bridge/output.hpp"
+#include "bridge/plot.hpp"
+
+namespace gabion::app {
+namespace {
+
+namespace fs = std::filesystem;
+using bridge::Check;
+using bridge::JsonDocument;
+using bridge::JsonReader;
+using nlohmann::json;
+
+/// The keys both runs report, compared.
+const std::vector<std::string>& comparedKeys() {
+  static const std::vector<std::string> keys = {"peak_force_N", "max_penetration_m", "contact_duration_s",
+                                                "max_back_face_displacement_m"};
+  return keys;
+}
+
+/// The two sub-cases of a macro.resolved case, as JSON.
+struct Plan {
+  json twin, resolved;
+  double law_edge_m = 0.0;  ///< the laws' cell edge (0: not known)
+};
+
+fs::path absoluteFrom(const JsonDocument& doc, const std::string& path) {
+  const fs::path p(path);
+  return p.is_absolute() ? p : fs::absolute(fs::path(doc.file()).parent_path() / p);
+}
+
+Plan plan(const JsonDocument& doc) {
+  const JsonReader root = doc.root();
+  Plan p;
+  const fs::path law = absoluteFrom(doc, root.string("law_file"));
+  const fs::path cell = absoluteFrom(doc, root.string("cell"));
+  const JsonReader st = root.object("structure");
+  const JsonReader b = root.object("boulder");
+  // The twin: a macro.impact of the same structure and boulder with the laws.
+  json boulder = {{"diameter_m", b.number("diameter_m", 0.5, Check::Positive)},
+                  {"density_kg_m3", b.number("density_kg_m3", 2600.0, Check::Positive)},
+                  {"velocity_m_s", b.number("velocity_m_s", Check::Positive)}};
+  p.twin = {{"format", "gabion.case/1"},
+            {"kind", "macro.impact"},
+            {"law_file", law.string()},
+            {"structure", root.raw("structure")},
+            {"boulder", boulder},
+            {"run", root.has("macro_run") ? root.raw("macro_run") : json{{"kinematics", "x-only"}}}};
+  // The resolved structure: its cells and back support; the aim as a
+  // fraction of the front face (the resolved cells are as wide as the cell
+  // file's extent, the macro's as the laws' edge).
+  const std::vector<double> cells = st.numbers("cells", Check::Positive, 3);
+  if (cells.size() != 3) st.fail("cells", "expected [x (depth), y (width), z (height)] cell counts");
+  json rs = {{"cells", cells}};
+  if (const auto sup = st.optionalObject("support")) rs["support"] = {{"back", sup->string("back", "fixed")}};
+  json rb = boulder;
+  try {
+    const bridge::LawFile lf = bridge::loadLawFile(law);
+    if (!lf.materials.empty()) p.law_edge_m = lf.materials.begin()->second.edge_m;
+  } catch (const bridge::InputError&) {
+    // (the twin's check names the law file's fault)
+  }
+  if (b.has("aim_point_m")) {
+    const std::vector<double> aim = b.numbers("aim_point_m", Check::Finite, 2);
+    p.twin["boulder"]["aim_point_m"] = aim;
+    const double edge = p.law_edge_m;
+    if (edge > 0.0 && aim.size() == 2)
+      rb["aim_face_fraction"] = {aim[0] / (cells[1] * edge), aim[1] / (cells[2] * edge)};
+  }
+  p.resolved = {{"format", "gabion.case/1"},
+                {"kind", "micro.structure"},
+                {"cell", cell.string()},
+                {"structure", rs},
+                {"boulder", rb}};
+  // (the resolved run's own keys, checked by micro.structure: settle, run, materials, ...)
+  if (root.has("resolved")) {
+    const json& extra = root.raw("resolved");
+    if (!extra.is_object()) root.fail("resolved", "expected an object of micro.structure keys");
+    for (const auto& [key, value] : extra.items()) p.resolved[key] = value;
+  }
+  return p;
+}
+
+/// A sub-case as a document named after the user's file and the part
+/// (errors then name both), checked by its kind.
+JsonDocument subDocument(const JsonDocument& doc, const json& value, const std::string& part) {
+  return JsonDocument(value, doc.file() + " (" + part + ")");
+}
+
+void check(const JsonDocument& doc) {
+  const Plan p = plan(doc);
+  for (const auto& [value, part] :
+       {std::pair<const json&, const char*>{p.twin, "macro_twin"}, {p.resolved, "resolved"}}) {
+    const JsonDocument sub = subDocument(doc, value, part);
+    checkCase(sub).check(sub);
+    sub.finish();
+  }
+}
+
+std::optional<bridge::Estimate> estimate(const JsonDocument& doc) {
+  const Plan p = plan(doc);
+  bridge::Estimate total;
+  for (const json* value : {&p.twin, &p.resolved}) {
+    const JsonDocument sub = subDocument(doc, *value, "part");
+    const bridge::CaseKind& k = checkCase(sub);
+    if (!k.estimate) continue;
+    const auto e = k.estimate(sub);
+    if (!e) return std::nullopt;
+    bridge::addRun(total, *e);
+  }
+  return total;
+}
+
+/// A part's run: its summary, wall time, and how it ended.
+struct Part {
+  json summary;
+  double wall_s = 0.0;
+  bridge::RunOutcome::Status status = bridge::RunOutcome::Status::Ok;
+  std::string message;
+};
+
+/// Runs a sub-case into `dir` (its case.json, summary.json and manifest).
+Part runPart(const std::string& name, const json& value, const bridge::RunContext& parent, const fs::path& dir) {
+  fs::create_directories(dir);
+  bridge::beginManifest(dir);
+  bridge::writeJsonAtomic(dir / "case.json", value);
+  const JsonDocument doc = JsonDocument::load(dir / "case.json");
+  const bridge::CaseKind& k = checkCase(doc);
+  bridge::RunContext ctx = parent;
+  ctx.outdir = dir;
+  ctx.case_file = doc.file();
+  const auto t0 = std::chrono::steady_clock::now();
+  const bridge::RunOutcome ran = k.run(doc, ctx);
+  const double wall = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  json summary = ran.results;
+  summary["format"] = "gabion.summary/1";
+  summary["kind"] = k.kind;
+  summary["status"] = bridge::statusName(ran.status);
+  if (!ran.message.empty()) summary["message"] = ran.message;
+  summary["wall_time_s"] = wall;
+  bridge::writeJsonAtomic(dir / "summary.json", summary);
+  bridge::writeManifest(dir, bridge::statusName(ran.status));
+  return {summary, wall, ran.status,
+          ran.status == bridge::RunOutcome::Status::Ok ? "" : name + " (" + dir.string() + "): " + ran.message};
+}
+
+/// A force history from first contact (ms, kN).
+bridge::PlotSeries history(const std::string& label, const std::vector<double>& t, const std::vector<double>& f) {
+  bridge::PlotSeries s{label, {}, {}, bridge::PlotSeries::Style::Line};
+  std::size_t first = 0;
+  while (first < f.size() && !(f[first] > 0.0)) ++first;
+  if (first == f.size()) return s;
+  for (std::size_t k = first > 0 ? first - 1 : 0; k < t.size(); ++k)
+    s.x.push_back(1000.0 * (t[k] - t[first])), s.y.push_back(1e-3 * f[k]);
+  return s;
+}
+
+bridge::RunOutcome run(const JsonDocument& doc, const bridge::RunContext& ctx) {
+  const Plan p = plan(doc);
+  const Part tp = runPart("the macro twin", p.twin, ctx, ctx.outdir / "macro_twin");
+  if (tp.status != bridge::RunOutcome::Status::Ok) return {tp.status, tp.message, "", "", {{"macro_twin", tp.summary}}};
+  const Part rp = runPart("the resolved structure", p.resolved, ctx, ctx.outdir / "resolved");
+  if (rp.status != bridge::RunOutcome::Status::Ok) return {rp.status, rp.message, "", "", {{"resolved", rp.summary}}};
+  const json &twin = tp.summary, &res = rp.summary;
+  const double twin_wall = tp.wall_s, res_wall = rp.wall_s;
+
+  bridge::RunOutcome out;
+  json& r = out.results;
+  json macro = json::object(), error = json::object();
+  std::vector<double> resolved_value, macro_value, rel;
+  const auto number = [](const json& j, const std::string& key) {
+    const auto it = j.find(key);
+    return it != j.end() && it->is_number() ? it->get<double>() : NAN;
+  };
+  for (const std::string& key : comparedKeys()) {
+    const double a = number(res, key), m = number(twin, key);
+    resolved_value.push_back(a), macro_value.push_back(m);
+    rel.push_back(std::isfinite(a) && std::isfinite(m) && a != 0.0 ? (m - a) / std::fabs(a) : NAN);
+    r[key] = a;
+    macro[key] = m;
+    error[key] = rel.back();
+  }
+  r["outcome"] = res.value("outcome", "unknown");
+  r["wall_time_s_resolved"] = res_wall;
+  macro["outcome"] = twin.value("outcome", "unknown");
+  macro["wall_time_s"] = twin_wall;
+  r["macro_twin"] = macro;
+  r["relative_error"] = error;
+  r["same_outcome"] = r["outcome"] == macro["outcome"];
+  r["wall_time_s_macro"] = twin_wall;
+  r["speed_up"] = twin_wall > 0.0 ? res_wall / twin_wall : NAN;
+  // The twin stands for the resolved structure only if its cells are as large.
+  json warnings = json::array();
+  const json pitch = res.value("cell_pitch_m", json());
+  if (p.law_edge_m > 0.0 && pitch.is_array() && pitch.size() == 3) {
+    const double mean = (pitch[0].get<double>() + pitch[1].get<double>() + pitch[2].get<double>()) / 3.0;
+    if (std::fabs(mean - p.law_edge_m) > 0.1 * p.law_edge_m) {
+      std::ostringstream m;
+      m << "the laws' cell edge (" << p.law_edge_m << " m) and the resolved cells' pitch (" << mean
+        << " m) differ by more than 10 %: the macro twin is not the same structure (laws fitted from another cell?)";
+      warnings.push_back(m.str());
+    }
+  }
+  r["warnings"] = warnings;
+  r["resolved"] = {
+      {"cells", res.value("cells", json())},
+      {"cell_pitch_m", res.value("cell_pitch_m", json())},
+      {"bodies", res.value("bodies", json())},
+      {"steps", res.value("steps", json())},
+      {"dt_s", res.value("dt_s", json())},
+      {"energy_balance_rel_error", res.contains("energy") ? res["energy"].value("balance_rel_error", NAN) : NAN}};
+
+  // Both force histories from first contact.
+  {
+    const bridge::H5Reader a(ctx.outdir / "resolved" / "result.h5"), m(ctx.outdir / "macro_twin" / "result.h5");
+    bridge::PlotSpec plot;
+    plot.title = "Force on the boulder: resolved cells against the macro twin";
+    plot.x_label = "time from first contact (ms)";
+    plot.y_label = "force (kN)";
+    plot.series = {
+        history("resolved (micro.structure)", a.read("/curves/impact/time_s"), a.read("/curves/impact/force_N")),
+        history("macro twin (macro.impact)", m.read("/series/time_s"), m.read("/series/boulder_force_N"))};
+    bridge::writePlotPng(ctx.outdir / "resolved_vs_macro.png", plot);
+  }
+  std::ostringstream a;
+  a.precision(3);
+  a << "resolved against its macro twin (relative error of the twin):\n";
+  for (std::size_t k = 0; k < comparedKeys().size(); ++k) {
+    a << "  " << comparedKeys()[k] << ": " << resolved_value[k] << " resolved, " << macro_value[k] << " macro (";
+    if (std::isfinite(rel[k]))
+      a << 100.0 * rel[k] << " %)\n";
+    else
+      a << "n/a)\n";
+  }
+  a << "  outcome: " << r["outcome"].get<std::string>() << " resolved, " << macro["outcome"].get<std::string>()
+    << " macro\n  wall time: " << res_wall << " s resolved, " << twin_wall << " s macro (the macro twin "
+    << res_wall / twin_wall << " times faster)\n";
+  out.answer = a.str();
+  return out;
+}
+
+}  // namespace
+
+bridge::CaseKind resolvedKind() {
+  return {"macro.resolved",
+          "a structure run resolved at the fine scale and as its one-node-per-cell macro twin, compared "
+          "(docs/resolved.md)",
+          check, run, estimate};
+}
+
+}  // namespace gabion::app

@@ -1,0 +1,385 @@
+#include "micro/lab/structure_impact.hpp"
+
+#include <algorithm>
+#include <array>
+#include <cmath>
+#include <optional>
+#include <sstream>
+
+#include "bridge/errors.hpp"
+#include "bridge/output.hpp"
+#include "bridge/plot.hpp"
+#include "micro/cell/cell_file.hpp"
+#include "micro/lab/lab_setup.hpp"
+#include "micro/scene_run.hpp"
+
+namespace gabion::micro::lab {
+namespace {
+
+using bridge::Check;
+using bridge::JsonReader;
+
+constexpr double kPi = 3.14159265358979323846;
+constexpr int kBoulderGroup = 2;  // (rock 0, netting 1)
+/// The most cells a resolved structure may have (each a few thousand bodies).
+constexpr long long kMaxCells = 1000;
+
+struct StructureCase {
+  LabSetup setup;
+  int nx = 1, ny = 1, nz = 1;
+  bool fixed_back = true;
+  double diameter_m = 0.5, density_kg_m3 = 2600.0, velocity_m_s = 20.0;
+  MaterialChange boulder;                    // its contact material: the rock's, with these changes
+  std::optional<std::array<double, 2>> aim;  // [y, z] on the front face (m); default: the middle front cell's centre
+  std::optional<std::array<double, 2>> aim_fraction;  // or [y, z] as fractions of the face's width and height
+  double gap_m = 0.002;                               // between the boulder and the front face at the start
+  double settle_s = 0.05;                             // the stack settling under its weight before the boulder comes
+  double rebound_restitution = 0.05;                  // as macro.impact's run.rebound_restitution
+};
+
+StructureCase parseCase(const bridge::JsonDocument& doc) {
+  const JsonReader root = doc.root();
+  StructureCase c;
+  const JsonReader st = root.object("structure");
+  const std::vector<double> cells = st.numbers("cells", Check::Positive, 3);
+  if (cells.size() != 3 || std::any_of(cells.begin(), cells.end(), [](double n) { return n != std::floor(n); }))
+    st.fail("cells", "expected [x (depth), y (width), z (height)] whole cell counts");
+  if (cells[0] * cells[1] * cells[2] > static_cast<double>(kMaxCells))
+    st.fail("cells", "more than " + std::to_string(kMaxCells) +
+                         " cells resolved at the fine scale: resolve a smaller structure, or the part of it the "
+                         "boulder strikes");
+  c.nx = static_cast<int>(cells[0]), c.ny = static_cast<int>(cells[1]), c.nz = static_cast<int>(cells[2]);
+  if (const auto sup = st.optionalObject("support"))
+    c.fixed_back = sup->choice("back", {"fixed", "none"}, "fixed") == "fixed";
+  const JsonReader b = root.object("boulder");
+  c.diameter_m = b.number("diameter_m", c.diameter_m, Check::Positive);
+  c.density_kg_m3 = b.number("density_kg_m3", c.density_kg_m3, Check::Positive);
+  c.velocity_m_s = b.number("velocity_m_s", c.velocity_m_s, Check::Positive);
+  if (c.velocity_m_s > 100.0) b.fail("velocity_m_s", "an impact velocity above 100 m/s is no rockfall");
+  if (b.has("aim_point_m")) {
+    const std::vector<double> a = b.numbers("aim_point_m", Check::Finite, 2);
+    if (a.size() != 2) b.fail("aim_point_m", "expected [y, z] on the front face (m)");
+    c.aim = std::array<double, 2>{a[0], a[1]};
+  }
+  if (b.has("aim_face_fraction")) {
+    if (c.aim) b.fail("aim_face_fraction", "give aim_point_m or aim_face_fraction, not both");
+    const std::vector<double> a = b.numbers("aim_face_fraction", Check::Fraction, 2);
+    if (a.size() != 2) b.fail("aim_face_fraction", "expected [y, z] fractions of the front face's width and height");
+    c.aim_fraction = std::array<double, 2>{a[0], a[1]};
+  }
+  c.gap_m = b.number("initial_gap_m", c.gap_m, Check::NonNegative);
+  if (const auto m = b.optionalObject("contact")) c.boulder = parseMaterialChange("boulder", *m);
+  if (const auto s = root.optionalObject("settle"))
+    c.settle_s = s->number("duration_s", c.settle_s, Check::NonNegative);
+  c.rebound_restitution = root.number("rebound_restitution", c.rebound_restitution, Check::Fraction);
+  // An impact lasts tens of milliseconds; the series every 0.1 ms; no mass
+  // scaling (the test is dynamic).
+  c.setup = parseLabSetup(root, 1.0, 0.1, 1e-4);
+  return c;
+}
+
+/// The structure as it stands: the cells, their base and back support, and
+/// where each cell's blocks are.
+struct Layout {
+  Scene scene;
+  Vec3 pitch = Vec3::Zero();  ///< centre-to-centre distance of neighbouring cells (the cell's outer extent)
+  std::size_t blocks_per_cell = 0;
+  /// Cells of the front (i = 0) and back (i = nx - 1) layers, by index (i + nx (j + ny k)).
+  std::vector<std::size_t> front_cells, back_cells;
+};
+
+Layout buildLayout(const StructureCase& c, const Sample& sample) {
+  Layout out;
+  const Scene& cell = sample.scene;
+  out.pitch = sample.hi - sample.lo;
+  out.blocks_per_cell = cell.blocks.size();
+  Scene& s = out.scene;
+  s.gravity_m_s2 = cell.gravity_m_s2;
+  s.materials = cell.materials;
+  s.contact_pairs = cell.contact_pairs;
+  s.no_contact_groups = cell.no_contact_groups;
+  s.run = cell.run;
+  std::size_t index = 0;  // i + nx (j + ny k)
+  for (int k = 0; k < c.nz; ++k)
+    for (int j = 0; j < c.ny; ++j)
+      for (int i = 0; i < c.nx; ++i, ++index) {
+        // Cell (i, j, k) spans [i, i+1] x [j, j+1] x [k, k+1] pitches from the origin.
+        const Vec3 shift = Vec3(i * out.pitch.x(), j * out.pitch.y(), k * out.pitch.z()) - sample.lo;
+        const std::size_t first_sphere = s.spheres.size();
+        for (SphereSpec sp : cell.spheres) {
+          sp.center_m += shift;
+          s.spheres.push_back(sp);
+        }
+        for (BlockSpec b : cell.blocks) {
+          b.position_m += shift;
+          s.blocks.push_back(b);
+        }
+        for (LinkSpec l : cell.links) {
+          l.a += first_sphere, l.b += first_sphere;
+          s.links.push_back(l);
+        }
+        if (i == 0) out.front_cells.push_back(index);
+        if (i == c.nx - 1) out.back_cells.push_back(index);
+      }
+  s.walls.push_back(fixedWall("base", Vec3::Zero(), Vec3::UnitZ(), sample.plate_material));
+  if (c.fixed_back)
+    s.walls.push_back(fixedWall("back", Vec3(c.nx * out.pitch.x(), 0, 0), -Vec3::UnitX(), sample.plate_material));
+  return out;
+}
+
+/// Where the boulder's path meets the front face (y, z), as the case gives
+/// it or the middle front cell's centre (cell ny/2, nz/2: centred for odd counts).
+Vec3 aimPoint(const StructureCase& c, const Layout& l) {
+  if (c.aim) return Vec3(0.0, (*c.aim)[0], (*c.aim)[1]);
+  if (c.aim_fraction)
+    return Vec3(0.0, (*c.aim_fraction)[0] * c.ny * l.pitch.y(), (*c.aim_fraction)[1] * c.nz * l.pitch.z());
+  return Vec3(0.0, (c.ny / 2 + 0.5) * l.pitch.y(), (c.nz / 2 + 0.5) * l.pitch.z());
+}
+
+/// The boulder, `gap` in front of the face, moving along +x.
+SphereSpec boulderSphere(const StructureCase& c, Scene& s, const Sample& sample, const Vec3& aim) {
+  Material m = s.materials[static_cast<std::size_t>(sample.rock_material)];
+  m.name = "boulder";
+  m.density_kg_m3 = c.density_kg_m3;
+  m.local_damping = 0.0;  // (a body force on the boulder would take momentum no contact gave)
+  c.boulder.applyTo(m);
+  s.materials.push_back(m);
+  const double r = 0.5 * c.diameter_m;
+  SphereSpec b;
+  b.radius_m = r;
+  b.material = static_cast<int>(s.materials.size() - 1);
+  b.mass_kg = c.density_kg_m3 * 4.0 / 3.0 * kPi * r * r * r;
+  b.center_m = Vec3(-r - c.gap_m, aim.y(), aim.z());
+  b.velocity_m_s = Vec3(c.velocity_m_s, 0, 0);
+  b.group = kBoulderGroup;
+  return b;
+}
+
+void checkAim(const StructureCase& c, const Layout& l, const std::string& file) {
+  const Vec3 a = aimPoint(c, l);
+  if (a.y() < 0.0 || a.y() > c.ny * l.pitch.y() || a.z() < 0.0 || a.z() > c.nz * l.pitch.z()) {
+    std::ostringstream m;
+    m << "the aim point (" << a.y() << ", " << a.z() << ") m is off the front face, [0, " << c.ny * l.pitch.y()
+      << "] x [0, " << c.nz * l.pitch.z() << "] m (" << c.ny << " x " << c.nz << " cells of " << l.pitch.y() << " x "
+      << l.pitch.z() << " m)";
+    throw bridge::InputError(file, "/boulder/aim_point_m", m.str());
+  }
+}
+
+/// The impact scene: the settled structure (or the laid-out one) with the
+/// boulder; the step kept below a tenth of the smallest radius per step of
+/// the boulder's travel (as micro.uci).
+Scene impactScene(const StructureCase& c, Scene structure, const Sample& sample, const Vec3& aim,
+                  const std::string& file, std::size_t& boulder) {
+  boulder = structure.spheres.size();
+  structure.spheres.push_back(boulderSphere(c, structure, sample, aim));
+  double rmin = 1e300;
+  for (const SphereSpec& sp : structure.spheres) rmin = std::min(rmin, sp.radius_m);
+  for (const BlockSpec& b : structure.blocks)
+    for (const double r : b.member_radii_m) rmin = std::min(rmin, r);
+  const double dt = chooseDt(structure, criticalTimeStep(structure), file);
+  if (c.velocity_m_s * dt > 0.1 * rmin) structure.run.dt_s = 0.1 * rmin / c.velocity_m_s;
+  return structure;
+}
+
+double meanBlockX(const Engine& e, std::size_t spheres, std::size_t first, std::size_t count) {
+  double x = 0.0;
+  for (std::size_t b = first; b < first + count; ++b) x += e.body(spheres + b).position_m.x();
+  return count > 0 ? x / static_cast<double>(count) : 0.0;
+}
+
+bridge::RunOutcome runOne(const StructureCase& c, const Sample& sample, const bridge::RunContext& ctx,
+                          const std::string& file) {
+  Layout layout = buildLayout(c, sample);
+  checkAim(c, layout, file);
+  const Vec3 aim = aimPoint(c, layout);
+  nlohmann::json settle_results;
+
+  // 1. The stack settles under its weight (the cells were made standing alone).
+  Scene standing = layout.scene;
+  if (c.settle_s > 0.0) {
+    Scene s = layout.scene;
+    s.run.duration_s = c.settle_s;
+    s.run.output_interval_s = c.settle_s / 5.0;
+    s.run.series_interval_s = std::min(s.run.series_interval_s, c.settle_s / 10.0);
+    bridge::RunContext sub = ctx;
+    sub.outdir = ctx.outdir / "settle";
+    std::filesystem::create_directories(sub.outdir);
+    SceneRunHooks hooks;
+    hooks.label = "micro.structure settle";
+    hooks.end = [&](const Engine& e, const Scene& in) { standing = stateScene(in, e); };
+    bridge::RunOutcome settled = runScene(std::move(s), file, sub, hooks);
+    if (settled.status != bridge::RunOutcome::Status::Ok) {
+      settled.message = "settling the structure: " + settled.message;
+      return settled;
+    }
+    settle_results = settled.results;
+    standing.run = layout.scene.run;  // (the state keeps the settling's run)
+  }
+
+  // 2. The impact.
+  std::size_t boulder = 0;
+  Scene scene = impactScene(c, standing, sample, aim, file, boulder);
+  const std::size_t spheres = scene.spheres.size(), bpc = layout.blocks_per_cell;
+  const double mass = scene.spheres[boulder].mass_kg, v0 = c.velocity_m_s;
+  struct Series {
+    std::vector<double> time, force, penetration, velocity, front, back;
+  } sr;
+  double x_contact = NAN, t_contact = NAN, peak = 0.0, t_last_force = NAN;
+  std::vector<double> front0, back0;  // each front and back cell's mean block x at the start
+  SceneRunHooks hooks;
+  hooks.label = "micro.structure";
+  hooks.record = [&](const Engine& e, double) {
+    const Vec3 f = e.sphereForce(boulder);  // what the structure exerts on it
+    const BodyState b = e.body(boulder);
+    const double force = std::max(0.0, -f.x());
+    if (std::isnan(x_contact) && f.squaredNorm() > 0.0) x_contact = b.position_m.x(), t_contact = e.time();
+    if (front0.empty()) {
+      for (const std::size_t k : layout.front_cells) front0.push_back(meanBlockX(e, spheres, k * bpc, bpc));
+      for (const std::size_t k : layout.back_cells) back0.push_back(meanBlockX(e, spheres, k * bpc, bpc));
+    }
+    double front = 0.0, back = 0.0;
+    for (std::size_t q = 0; q < layout.front_cells.size(); ++q)
+      front = std::max(front, meanBlockX(e, spheres, layout.front_cells[q] * bpc, bpc) - front0[q]);
+    for (std::size_t q = 0; q < layout.back_cells.size(); ++q)
+      back = std::max(back, meanBlockX(e, spheres, layout.back_cells[q] * bpc, bpc) - back0[q]);
+    sr.time.push_back(e.time());
+    sr.force.push_back(force);
+    sr.penetration.push_back(std::isnan(x_contact) ? 0.0 : b.position_m.x() - x_contact);
+    sr.velocity.push_back(b.velocity_m_s.x());
+    sr.front.push_back(front), sr.back.push_back(back);
+    peak = std::max(peak, force);
+    if (force > 0.01 * peak) t_last_force = e.time();
+  };
+  // Over: the boulder has left the face (no force for 5 ms, moving back),
+  // come to rest in it (below 1 % of its speed), or passed the back face.
+  hooks.done = [&](const Engine& e) {
+    if (std::isnan(t_contact)) return false;
+    const double vx = sr.velocity.back();
+    if (vx < 0.0 && e.time() - t_last_force > 0.005) return true;
+    if (e.body(boulder).position_m.x() - 0.5 * c.diameter_m > c.nx * layout.pitch.x()) return true;
+    // (at rest in the face: under gravity the face keeps holding it up, so
+    // its speed, not the force, says it stopped)
+    return e.time() - t_contact > 0.01 && e.body(boulder).velocity_m_s.norm() < 0.01 * v0;
+  };
+  hooks.archive = [&](bridge::StateArchive& a) {
+    a("time_s", sr.time), a("force_N", sr.force), a("penetration_m", sr.penetration), a("velocity_m_s", sr.velocity);
+    a("front_m", sr.front), a("back_m", sr.back), a("front0", front0), a("back0", back0);
+    a("x_contact", x_contact), a("t_contact", t_contact), a("peak", peak), a("t_last_force", t_last_force);
+  };
+  hooks.write = [&](const Engine&, bridge::H5Writer& h5) {
+    h5.write("/curves/impact/time_s", sr.time, "s");
+    h5.write("/curves/impact/force_N", sr.force, "N");
+    h5.write("/curves/impact/penetration_m", sr.penetration, "m");
+    h5.write("/curves/impact/boulder_velocity_m_s", sr.velocity, "m/s");
+    h5.write("/curves/impact/front_face_displacement_m", sr.front, "m");
+    h5.write("/curves/impact/back_face_displacement_m", sr.back, "m");
+  };
+  bridge::RunOutcome out = runScene(std::move(scene), file, ctx, hooks);
+  nlohmann::json& r = out.results;
+  if (!settle_results.is_null()) r["settle"] = settle_results;
+  r["cells"] = {c.nx, c.ny, c.nz};
+  r["cell_pitch_m"] = {layout.pitch.x(), layout.pitch.y(), layout.pitch.z()};
+  r["aim_point_m"] = {aim.y(), aim.z()};
+  r["velocity_m_s"] = v0;
+  r["boulder_mass_kg"] = mass;
+  r["impact_energy_J"] = 0.5 * mass * v0 * v0;
+  r["cell_mass_kg"] = sample.mass_kg;
+  if (sr.time.empty()) return out;
+  const bool touched = !std::isnan(t_contact);
+  double max_pen = 0.0, t_peak = NAN, max_front = 0.0, max_back = 0.0, rebound = 0.0;
+  for (std::size_t k = 0; k < sr.time.size(); ++k) {
+    max_pen = std::max(max_pen, sr.penetration[k]);
+    max_front = std::max(max_front, sr.front[k]), max_back = std::max(max_back, sr.back[k]);
+    if (sr.force[k] == peak && std::isnan(t_peak)) t_peak = sr.time[k];
+    if (touched && sr.time[k] >= t_last_force) rebound = std::max(rebound, -sr.velocity[k]);
+  }
+  const bool over = r["ended_by"] == "test";
+  const bool through = sr.penetration.back() > 0.0 && touched &&
+                       x_contact + sr.penetration.back() - 0.5 * c.diameter_m > c.nx * layout.pitch.x();
+  r["peak_force_N"] = peak;
+  r["time_of_peak_s"] = touched ? t_peak - t_contact : NAN;
+  r["max_penetration_m"] = max_pen;
+  r["final_penetration_m"] = sr.penetration.back();
+  r["contact_duration_s"] = touched ? t_last_force - t_contact : 0.0;
+  r["rebound_velocity_m_s"] = rebound;
+  r["max_front_face_displacement_m"] = max_front;
+  r["max_back_face_displacement_m"] = max_back;
+  r["touched"] = touched;
+  r["outcome"] = through                                 ? "perforated"
+                 : !over                                 ? "unfinished"
+                 : rebound >= c.rebound_restitution * v0 ? "rebounded"
+                                                         : "stopped";
+  nlohmann::json warnings = nlohmann::json::array();
+  if (!touched)
+    warnings.push_back("the boulder never touched the structure within run.duration_s");
+  else if (!over)
+    warnings.push_back("the impact was not over at the end of run.duration_s: lengthen it");
+  r["warnings"] = warnings;
+
+  {
+    bridge::PlotSpec plot;
+    plot.title = "Resolved structure: " + std::to_string(c.nx) + " x " + std::to_string(c.ny) + " x " +
+                 std::to_string(c.nz) + " cells, boulder at " + std::to_string(v0).substr(0, 4) + " m/s";
+    plot.x_label = "time from first contact (ms)";
+    plot.y_label = "force on the boulder (kN)";
+    bridge::PlotSeries s{"resolved", {}, {}, bridge::PlotSeries::Style::Line};
+    const double t0 = touched ? t_contact : 0.0;
+    for (std::size_t k = 0; k < sr.time.size(); ++k)
+      if (sr.time[k] >= t0 - 0.002) s.x.push_back(1000.0 * (sr.time[k] - t0)), s.y.push_back(1e-3 * sr.force[k]);
+    plot.series = {s};
+    bridge::writePlotPng(ctx.outdir / "structure_force_time.png", plot);
+  }
+  std::ostringstream rep;
+  rep.precision(4);
+  rep << hooks.label << ": " << r["outcome"].get<std::string>() << "; peak force " << peak << " N, penetration "
+      << 1000.0 * max_pen << " mm, contact " << 1000.0 * r["contact_duration_s"].get<double>() << " ms, back face "
+      << 1000.0 * max_back << " mm\n";
+  out.answer = rep.str() + out.answer;
+  return out;
+}
+
+void check(const bridge::JsonDocument& doc) {
+  const StructureCase c = parseCase(doc);
+  checkCells(c.setup);
+  if (!c.setup.cells.front().generate.empty()) return;
+  const Sample sample = loadSample(c.setup.cells.front().file, c.setup);
+  const Layout l = buildLayout(c, sample);
+  checkAim(c, l, doc.file());
+  std::size_t boulder = 0;
+  const Scene s = impactScene(c, l.scene, sample, aimPoint(c, l), doc.file(), boulder);
+  validateScene(s, doc.file());
+  chooseDt(s, criticalTimeStep(s), doc.file());
+}
+
+std::optional<bridge::Estimate> estimate(const bridge::JsonDocument& doc) {
+  const StructureCase c = parseCase(doc);
+  return estimateReplicates(c.setup, 1, [&](const Sample& s, std::size_t) {
+    const Layout l = buildLayout(c, s);
+    std::size_t boulder = 0;
+    Scene scene = impactScene(c, l.scene, s, aimPoint(c, l), doc.file(), boulder);
+    scene.run.duration_s += c.settle_s;  // (the settling runs the same bodies, less one)
+    return scene;
+  });
+}
+
+}  // namespace
+
+bridge::CaseKind structureImpactKind() {
+  return {"micro.structure",
+          "a structure of generated cells resolved at the fine scale, struck by a boulder on its front face "
+          "(docs/resolved.md)",
+          check,
+          [](const bridge::JsonDocument& doc, const bridge::RunContext& ctx) {
+            const StructureCase c = parseCase(doc);
+            const std::string file = doc.file();
+            return runReplicates(
+                c.setup, ctx, "micro.structure", {"impact"},
+                [&](const Sample& s, std::size_t, const bridge::RunContext& rc) { return runOne(c, s, rc, file); },
+                {"peak_force_N", "max_penetration_m", "contact_duration_s", "max_back_face_displacement_m",
+                 "rebound_velocity_m_s"});
+          },
+          estimate};
+}
+
+}  // namespace gabion::micro::lab
