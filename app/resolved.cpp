@@ -200,15 +200,26 @@ bridge::RunOutcome run(const JsonDocument& doc, const bridge::RunContext& ctx) {
   r["same_outcome"] = r["outcome"] == macro["outcome"];
   r["wall_time_s_macro"] = twin_wall;
   r["speed_up"] = twin_wall > 0.0 ? res_wall / twin_wall : NAN;
-  // The twin stands for the resolved structure only if its cells are as large.
+  // The twin stands for the resolved structure only if its cells are as
+  // large: the cell's nominal edge (its file says it, for cells made since
+  // it records it) within 5 % of the laws', or else its extent (the edge,
+  // the nodes and the netting's bulge) within 20 %.
   json warnings = json::array();
   const json pitch = res.value("cell_pitch_m", json());
-  if (p.law_edge_m > 0.0 && pitch.is_array() && pitch.size() == 3) {
-    const double mean = (pitch[0].get<double>() + pitch[1].get<double>() + pitch[2].get<double>()) / 3.0;
-    if (std::fabs(mean - p.law_edge_m) > 0.1 * p.law_edge_m) {
+  if (p.law_edge_m > 0.0) {
+    double size = NAN, tolerance = 0.05;
+    std::string what = "nominal edge";
+    if (res.contains("cell_edge_m") && res["cell_edge_m"].is_number()) {
+      size = res["cell_edge_m"].get<double>();
+    } else if (pitch.is_array() && pitch.size() == 3) {
+      size = (pitch[0].get<double>() + pitch[1].get<double>() + pitch[2].get<double>()) / 3.0;
+      tolerance = 0.2, what = "extent";
+    }
+    if (std::isfinite(size) && std::fabs(size - p.law_edge_m) > tolerance * p.law_edge_m) {
       std::ostringstream m;
-      m << "the laws' cell edge (" << p.law_edge_m << " m) and the resolved cells' pitch (" << mean
-        << " m) differ by more than 10 %: the macro twin is not the same structure (laws fitted from another cell?)";
+      m << "the laws' cell edge (" << p.law_edge_m << " m) and the resolved cell's " << what << " (" << size
+        << " m) differ by more than " << 100.0 * tolerance
+        << " %: the macro twin is not the same structure (laws fitted from another cell?)";
       warnings.push_back(m.str());
     }
   }

@@ -577,6 +577,7 @@ bridge::RunOutcome run(const bridge::JsonDocument& doc, const bridge::RunContext
                     {"press_force_N", press_force},
                     {"levelled_blocks", levelled},
                     {"levelled_mass_kg", levelled_mass}};
+  res["edge_m"] = e;  // (the nominal edge: a structure of these cells is laid out at it, docs/resolved.md)
   res["height_m"] = height;
   res["bulge_m"] = bulge;
   res["settlement_m"] = settlement;

@@ -285,6 +285,8 @@ bridge::RunOutcome runOne(const StructureCase& c, const Sample& sample, const br
   r["boulder_mass_kg"] = mass;
   r["impact_energy_J"] = 0.5 * mass * v0 * v0;
   r["cell_mass_kg"] = sample.mass_kg;
+  // (the nominal edge the cell was made at, when its file says: the size its laws are for)
+  if (sample.cell_summary.contains("edge_m")) r["cell_edge_m"] = sample.cell_summary["edge_m"];
   if (sr.time.empty()) return out;
   const bool touched = !std::isnan(t_contact);
   double max_pen = 0.0, t_peak = NAN, max_front = 0.0, max_back = 0.0, rebound = 0.0;
