@@ -16,7 +16,6 @@ namespace {
 using bridge::Check;
 using bridge::JsonReader;
 
-constexpr double kPi = 3.14159265358979323846;
 constexpr int kBoulderGroup = 2;  // (rock 0, netting 1)
 
 struct ImpactCase {
@@ -67,19 +66,8 @@ Placement buildScene(const ImpactCase& c, const Sample& sample, double velocity)
   Placement p;
   Scene& s = p.scene;
   s = sample.scene;
-  Material m = s.materials[static_cast<std::size_t>(sample.rock_material)];
-  m.name = "boulder";
-  m.density_kg_m3 = c.density_kg_m3;
-  // No local damping: a body force on the boulder would take momentum that
-  // no contact gave (its contacts keep the rock's viscous damping).
-  m.local_damping = 0.0;
-  c.boulder.applyTo(m);
-  s.materials.push_back(m);
+  SphereSpec b = boulderSphere(s, sample.rock_material, c.diameter_m, c.density_kg_m3, c.boulder);
   const double r = 0.5 * c.diameter_m;
-  SphereSpec b;
-  b.radius_m = r;
-  b.material = static_cast<int>(s.materials.size() - 1);
-  b.mass_kg = c.density_kg_m3 * 4.0 / 3.0 * kPi * r * r * r;
   const Vec3 mid = 0.5 * (sample.lo + sample.hi);
   b.center_m = Vec3(mid.x() + c.aim_offset.x(), mid.y() + c.aim_offset.y(), sample.hi.z() + r + c.gap_m);
   b.velocity_m_s = Vec3(0, 0, -velocity);
@@ -96,13 +84,7 @@ Placement buildScene(const ImpactCase& c, const Sample& sample, double velocity)
 // smallest radius (run.dt_s set where that is below the chosen step).
 Placement planScene(const ImpactCase& c, const Sample& sample, double v0, const std::string& file) {
   Placement pl = buildScene(c, sample, v0);
-  double rmin = 1e300;
-  for (const SphereSpec& sp : pl.scene.spheres) rmin = std::min(rmin, sp.radius_m);
-  for (const BlockSpec& b : pl.scene.blocks)
-    for (const double r : b.member_radii_m) rmin = std::min(rmin, r);
-  const double dt = chooseDt(pl.scene, criticalTimeStep(pl.scene), file);
-  pl.dt_limited = v0 * dt > 0.1 * rmin;
-  if (pl.dt_limited) pl.scene.run.dt_s = 0.1 * rmin / v0;
+  pl.dt_limited = limitStepToSpeed(pl.scene, v0, file);
   return pl;
 }
 

@@ -224,6 +224,33 @@ Sample loadSample(const fs::path& cell_file, const LabSetup& setup) {
   return out;
 }
 
+SphereSpec boulderSphere(Scene& scene, int rock_material, double diameter_m, double density_kg_m3,
+                         const MaterialChange& change) {
+  Material m = scene.materials[static_cast<std::size_t>(rock_material)];
+  m.name = "boulder";
+  m.density_kg_m3 = density_kg_m3;
+  m.local_damping = 0.0;
+  change.applyTo(m);
+  scene.materials.push_back(m);
+  const double r = 0.5 * diameter_m;
+  SphereSpec b;
+  b.radius_m = r;
+  b.material = static_cast<int>(scene.materials.size() - 1);
+  b.mass_kg = density_kg_m3 * 4.0 / 3.0 * 3.14159265358979323846 * r * r * r;
+  return b;
+}
+
+bool limitStepToSpeed(Scene& scene, double speed_m_s, const std::string& file) {
+  double rmin = 1e300;
+  for (const SphereSpec& sp : scene.spheres) rmin = std::min(rmin, sp.radius_m);
+  for (const BlockSpec& b : scene.blocks)
+    for (const double r : b.member_radii_m) rmin = std::min(rmin, r);
+  const double dt = chooseDt(scene, criticalTimeStep(scene), file);
+  if (speed_m_s * dt <= 0.1 * rmin) return false;
+  scene.run.dt_s = 0.1 * rmin / speed_m_s;
+  return true;
+}
+
 double checkCells(const LabSetup& setup) {
   double edge = 0.0;
   for (std::size_t k = 0; k < setup.cells.size(); ++k) {

@@ -77,6 +77,19 @@ struct Sample {
 /// InputErrors naming the case file and field, or the cell file.
 Sample loadSample(const std::filesystem::path& cell_file, const LabSetup& setup);
 
+/// Adds a boulder's contact material to `scene` (the rock's, material
+/// `rock_material`, at `density_kg_m3`, with `change`; no local damping: a
+/// body force on the boulder would take momentum that no contact gave) and
+/// returns a sphere of it, `diameter_m` wide, at rest at the origin.
+SphereSpec boulderSphere(Scene& scene, int rock_material, double diameter_m, double density_kg_m3,
+                         const MaterialChange& change);
+
+/// Holds the step of `scene` below a tenth of its smallest radius per step
+/// of a body at `speed_m_s` (sets run.dt_s where the chosen step is longer:
+/// a boulder must not pass a netting node within a step). Returns whether
+/// it had to.
+bool limitStepToSpeed(Scene& scene, double speed_m_s, const std::string& file);
+
 /// Checks what can be checked before anything runs: every cell file loads,
 /// every cell case passes its own check. Returns the first cell's edge (m).
 double checkCells(const LabSetup& setup);

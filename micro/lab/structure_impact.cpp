@@ -19,7 +19,6 @@ namespace {
 using bridge::Check;
 using bridge::JsonReader;
 
-constexpr double kPi = 3.14159265358979323846;
 constexpr int kBoulderGroup = 2;  // (rock 0, netting 1)
 /// The most cells a resolved structure may have (each a few thousand bodies).
 constexpr long long kMaxCells = 1000;
@@ -137,19 +136,9 @@ Vec3 aimPoint(const StructureCase& c, const Layout& l) {
 }
 
 /// The boulder, `gap` in front of the face, moving along +x.
-SphereSpec boulderSphere(const StructureCase& c, Scene& s, const Sample& sample, const Vec3& aim) {
-  Material m = s.materials[static_cast<std::size_t>(sample.rock_material)];
-  m.name = "boulder";
-  m.density_kg_m3 = c.density_kg_m3;
-  m.local_damping = 0.0;  // (a body force on the boulder would take momentum no contact gave)
-  c.boulder.applyTo(m);
-  s.materials.push_back(m);
-  const double r = 0.5 * c.diameter_m;
-  SphereSpec b;
-  b.radius_m = r;
-  b.material = static_cast<int>(s.materials.size() - 1);
-  b.mass_kg = c.density_kg_m3 * 4.0 / 3.0 * kPi * r * r * r;
-  b.center_m = Vec3(-r - c.gap_m, aim.y(), aim.z());
+SphereSpec structureBoulder(const StructureCase& c, Scene& s, const Sample& sample, const Vec3& aim) {
+  SphereSpec b = boulderSphere(s, sample.rock_material, c.diameter_m, c.density_kg_m3, c.boulder);
+  b.center_m = Vec3(-b.radius_m - c.gap_m, aim.y(), aim.z());
   b.velocity_m_s = Vec3(c.velocity_m_s, 0, 0);
   b.group = kBoulderGroup;
   return b;
@@ -172,13 +161,8 @@ void checkAim(const StructureCase& c, const Layout& l, const std::string& file) 
 Scene impactScene(const StructureCase& c, Scene structure, const Sample& sample, const Vec3& aim,
                   const std::string& file, std::size_t& boulder) {
   boulder = structure.spheres.size();
-  structure.spheres.push_back(boulderSphere(c, structure, sample, aim));
-  double rmin = 1e300;
-  for (const SphereSpec& sp : structure.spheres) rmin = std::min(rmin, sp.radius_m);
-  for (const BlockSpec& b : structure.blocks)
-    for (const double r : b.member_radii_m) rmin = std::min(rmin, r);
-  const double dt = chooseDt(structure, criticalTimeStep(structure), file);
-  if (c.velocity_m_s * dt > 0.1 * rmin) structure.run.dt_s = 0.1 * rmin / c.velocity_m_s;
+  structure.spheres.push_back(structureBoulder(c, structure, sample, aim));
+  limitStepToSpeed(structure, c.velocity_m_s, file);
   return structure;
 }
 
