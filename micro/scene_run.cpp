@@ -227,10 +227,11 @@ bridge::RunOutcome runScene(Scene scene, const std::string& file, const bridge::
 
   long long first = 0;  // the step the loop starts from: 0, or a checkpoint's
   const Checkpoints::Found found = checkpoints.find();
+  const bool resumed = found == Checkpoints::Found::Ours;
   if (found == Checkpoints::Found::Other)
     std::cerr << hooks.label << ": the checkpoint in " << checkpoints.dir().string()
               << " is of another run (case, threads or version): starting from the beginning\n";
-  if (found == Checkpoints::Found::Ours) {
+  if (resumed) {
     checkpoints.load(engine, log, loop_state);
     first = engine.steps();
     std::cerr << hooks.label << ": continuing from the checkpoint of step " << first << " (t = " << engine.time()
@@ -333,7 +334,7 @@ bridge::RunOutcome runScene(Scene scene, const std::string& file, const bridge::
   out.results["broken_links"] = engine.linkEvents().size();
   out.results["size_classes"] = engine.sizeClassCount();
   out.results["step_status"] = statusName(status);
-  if (first > 0) out.results["resumed_from_step"] = first;
+  if (resumed) out.results["resumed_from_step"] = first;
   out.results["checkpoints"] = checkpoints.saved();
   for (const auto& [key, report] : scene.generated.items()) out.results[key] = report;
   if (scene.generated.contains("block_fills")) writeGradingFigures(ctx.outdir, scene.generated["block_fills"]);
