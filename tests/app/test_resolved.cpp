@@ -18,12 +18,8 @@ namespace {
 
 using gabion::testing::runGabion;
 using gabion::testing::scratchDir;
+using gabion::testing::summaryOf;
 using gabion::testing::writeFile;
-
-nlohmann::json summaryOf(const std::filesystem::path& dir) {
-  std::ifstream in(dir / "summary.json");
-  return nlohmann::json::parse(in);
-}
 
 const char* kStructure = R"({"format": "gabion.case/1", "kind": "micro.structure", "cell": "cell/cell.h5",
  "structure": {"cells": [2, 1, 1]}, "boulder": {"diameter_m": 0.25, "velocity_m_s": 8},

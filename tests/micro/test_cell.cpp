@@ -15,6 +15,7 @@ namespace {
 
 using gabion::testing::runGabion;
 using gabion::testing::scratchDir;
+using gabion::testing::summaryOf;
 using gabion::testing::writeFile;
 
 // A 0.3 m cell of 60-90 mm blocks (about 45 blocks) with short stages.
@@ -30,11 +31,6 @@ std::string smallCell(const std::string& extra = "") {
  "standing": {"max_duration_s": 0.1},
  "run": {"output_interval_s": 0.05, "series_interval_s": 0.005})" +
          extra + "}";
-}
-
-nlohmann::json summaryOf(const std::filesystem::path& dir) {
-  std::ifstream in(dir / "summary.json");
-  return nlohmann::json::parse(in);
 }
 
 TEST(MicroCell, SmallCellIsFilledVibratedClosedAndStoodWithItsLedgerClosed) {

@@ -27,6 +27,7 @@ using gabion::micro::StepStatus;
 using gabion::testing::runGabion;
 using gabion::testing::scratchDir;
 using gabion::testing::signalWhenThere;
+using gabion::testing::summaryOf;
 using gabion::testing::writeFile;
 
 std::uint64_t digest(Engine& e) {
@@ -113,11 +114,6 @@ void expectSameArrays(const std::filesystem::path& a, const std::filesystem::pat
     for (std::size_t k = 0; k < u.size(); ++k) differ += u[k] == v[k] || (u[k] != u[k] && v[k] != v[k]) ? 0 : 1;
     EXPECT_EQ(differ, 0u) << d << ": " << differ << " of " << u.size() << " values differ";
   }
-}
-
-nlohmann::json summaryOf(const std::filesystem::path& dir) {
-  std::ifstream in(dir / "summary.json");
-  return nlohmann::json::parse(in);
 }
 
 const std::vector<std::string> kSceneArrays = {"/bodies/time_s",

@@ -23,12 +23,8 @@ namespace {
 using gabion::micro::lab::forceDrops;
 using gabion::testing::runGabion;
 using gabion::testing::scratchDir;
+using gabion::testing::summaryOf;
 using gabion::testing::writeFile;
-
-nlohmann::json summaryOf(const std::filesystem::path& dir) {
-  std::ifstream in(dir / "summary.json");
-  return nlohmann::json::parse(in);
-}
 
 // A force rising at 10 kN/s with 1 % chatter, a sudden fall of 30 % within
 // 4 ms at t = 0.5 s, and a slow fall of 30 % over 0.2 s from t = 1 s.

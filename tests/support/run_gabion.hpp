@@ -8,6 +8,7 @@
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
+#include <nlohmann/json.hpp>
 #include <string>
 
 namespace gabion::testing {
@@ -51,6 +52,12 @@ inline std::filesystem::path scratchDir(const std::string& name) {
   std::filesystem::remove_all(dir);
   std::filesystem::create_directories(dir);
   return dir;
+}
+
+/// A run's summary.json, parsed.
+inline nlohmann::json summaryOf(const std::filesystem::path& outdir) {
+  std::ifstream in(outdir / "summary.json");
+  return nlohmann::json::parse(in);
 }
 
 inline void writeFile(const std::filesystem::path& path, const std::string& text) {
