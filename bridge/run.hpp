@@ -7,6 +7,7 @@
 #include <chrono>
 #include <filesystem>
 #include <functional>
+#include <memory>
 #include <nlohmann/json.hpp>
 #include <optional>
 #include <string>
@@ -15,6 +16,9 @@
 #include "bridge/json_reader.hpp"
 
 namespace gabion::bridge {
+
+class RowPlan;        // bridge/rows.hpp
+class RemoteWorkers;  // bridge/rows.hpp
 
 /// What a run gets from the command line.
 struct RunContext {
@@ -34,6 +38,9 @@ struct RunContext {
   /// estimates it, returns the job's own words (its stage, rank, ETA) that
   /// the line starts with. Called from the thread that shows the progress.
   std::function<std::string(double run_eta_s)> progress_context;
+  /// Other processes that run this case's tasks (MPI ranks, under `mpirun`);
+  /// null: the run uses its own threads.
+  RemoteWorkers* workers = nullptr;
 };
 
 /// Reports the progress of a long run as one line on a terminal
@@ -116,6 +123,18 @@ inline const char* statusName(RunOutcome::Status s) {
 /// ctx.outdir. Both must read every key they accept from the document; the
 /// app calls JsonDocument::finish() to reject the keys nobody read.
 struct CaseKind {
+  CaseKind(std::string kind_, std::string description_, std::function<void(const JsonDocument&)> check_,
+           std::function<RunOutcome(const JsonDocument&, const RunContext&)> run_,
+           std::function<std::optional<Estimate>(const JsonDocument&)> estimate_ = {},
+           std::function<std::shared_ptr<const RowPlan>(const JsonDocument&)> rows_ = {},
+           std::function<std::function<nlohmann::json(const nlohmann::json&)>(const JsonDocument&)> serve_ = {})
+      : kind(std::move(kind_)),
+        description(std::move(description_)),
+        check(std::move(check_)),
+        run(std::move(run_)),
+        estimate(std::move(estimate_)),
+        rows(std::move(rows_)),
+        serve(std::move(serve_)) {}
   std::string kind;
   std::string description;
   std::function<void(const JsonDocument&)> check;
@@ -123,6 +142,16 @@ struct CaseKind {
   /// Its cost before it runs (absent, or nullopt: not known, e.g. a cell
   /// that is not generated yet). Throws InputError as check does.
   std::function<std::optional<Estimate>(const JsonDocument&)> estimate;
+  /// Absent, or the case's independent rows (a sweep's points): the app can
+  /// then run a slice of them (`--rows`), collect them (`gabion collect`),
+  /// submit them as a Slurm job array and hand them to MPI ranks. Throws
+  /// InputError as check does.
+  std::function<std::shared_ptr<const RowPlan>(const JsonDocument&)> rows;
+  /// Absent, or (a kind whose run sends tasks of its own to ctx.workers: a
+  /// calibration's evaluations) the answerer of those tasks on an MPI worker
+  /// rank, made once from the same case. A kind of rows needs none: its
+  /// workers run rows. Throws InputError as check does.
+  std::function<std::function<nlohmann::json(const nlohmann::json&)>(const JsonDocument&)> serve;
 };
 
 }  // namespace gabion::bridge

@@ -9,6 +9,7 @@
 #include "bridge/errors.hpp"
 #include "bridge/manifest.hpp"
 #include "bridge/plot.hpp"
+#include "bridge/rows.hpp"
 #include "fitting/calibration.hpp"
 #include "fitting/case_input.hpp"
 #include "fitting/sha256.hpp"
@@ -286,22 +287,43 @@ std::string caseHash(const bridge::JsonDocument& doc, const fs::path& micro_case
   return sha256Hex(j.dump() + "\n" + sha256File(micro_case));
 }
 
+// On an MPI worker rank: evaluates the points rank 0 sends, {"evaluate":
+// values, "scratch": folder} -> {"misfit"} (the serial evaluation itself).
+std::function<json(const json&)> serveCase(const bridge::JsonDocument& doc) {
+  struct Served {
+    MicroCase c;
+    bridge::JsonDocument base;
+    MicroObjective objective;
+  };
+  auto s = std::make_shared<Served>(Served{readMicroCase(doc), bridge::JsonDocument(json::object(), ""), {}});
+  s->base = bridge::JsonDocument::load(s->c.micro_case);
+  s->objective = MicroObjective{&s->base, &microKind(s->base), &s->c, labGrids(s->c)};
+  return [s](const json& task) {
+    return json{{"misfit", s->objective(task.at("evaluate").get<std::vector<double>>(),
+                                        fs::path(task.at("scratch").get<std::string>()))}};
+  };
+}
+
 bridge::RunOutcome runCase(const bridge::JsonDocument& doc, const bridge::RunContext& ctx) {
   const MicroCase c = readMicroCase(doc);
   const bridge::JsonDocument base = bridge::JsonDocument::load(c.micro_case);
   const auto& kind = microKind(base);
   MicroObjective objective{&base, &kind, &c, labGrids(c)};
+  // Under mpirun the evaluations run on the worker ranks, each as it would here.
+  const Evaluator here = [&](const std::vector<double>& v, const fs::path& scratch) { return objective(v, scratch); };
+  const Evaluator on_workers = [&](const std::vector<double>& v, const fs::path& scratch) {
+    return ctx.workers->call({{"evaluate", v}, {"scratch", fs::absolute(scratch).string()}}).at("misfit").get<double>();
+  };
 
   std::vector<Parameter> params;
   std::vector<std::string> names;
   for (const auto& p : c.params) params.push_back(p.param), names.push_back(p.param.name);
   EvaluationLog log(ctx.outdir / "evaluations.jsonl", caseHash(doc, c.micro_case), names, c.resume);
   CalibrationSettings search = c.search;
-  search.threads = ctx.threads;
+  search.threads = ctx.workers != nullptr ? ctx.workers->size() : ctx.threads;
   bridge::Progress progress(ctx, "fit.micro");
-  const auto result = calibrate(
-      params, [&](const std::vector<double>& v, const fs::path& scratch) { return objective(v, scratch); }, search, log,
-      ctx.outdir / "evaluations", &progress);
+  const auto result =
+      calibrate(params, ctx.workers != nullptr ? on_workers : here, search, log, ctx.outdir / "evaluations", &progress);
   progress.finish();
   std::error_code ec;
   if (!c.search.keep_evaluation_folders) fs::remove(ctx.outdir / "evaluations", ec);
@@ -370,7 +392,11 @@ bridge::RunOutcome runCase(const bridge::JsonDocument& doc, const bridge::RunCon
 bridge::CaseKind fitMicroCaseKind() {
   return {"fit.micro",
           "identify micro contact parameters so that a micro case matches lab curves (DEM in the loop, resumable)",
-          checkCase, runCase, estimateCase};
+          checkCase,
+          runCase,
+          estimateCase,
+          nullptr,
+          serveCase};
 }
 
 }  // namespace gabion::fitting

@@ -9,7 +9,7 @@ std::vector<bridge::CaseKind> caseKinds() {
       {"macro.impact", "boulder impact(s) on a cellular structure, one node per cell (laws from a gabion.law/2 file)",
        checkImpactCase, runImpactCase, estimateImpactCase},
       {"macro.sweep", "a grid of macro impacts (velocity, mass, aim point, structure size) run in parallel",
-       checkSweepCase, runSweepCase, estimateSweepCase},
+       checkSweepCase, runSweepCase, estimateSweepCase, sweepRows},
       {"macro.capacity",
        "the largest impact energy a structure holds with the acceptance criteria met (bisection over velocity or mass)",
        checkCapacityCase, runCapacityCase, estimateCapacityCase},

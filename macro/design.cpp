@@ -15,10 +15,10 @@
 #include "bridge/curve.hpp"
 #include "bridge/errors.hpp"
 #include "bridge/output.hpp"
+#include "bridge/parallel.hpp"
 #include "bridge/plot.hpp"
 #include "macro/case_reader.hpp"
 #include "macro/criteria.hpp"
-#include "macro/parallel.hpp"
 #include "macro/runs.hpp"
 
 namespace gabion::macro {
@@ -367,14 +367,14 @@ bridge::RunOutcome runDesignCase(const JsonDocument& doc, const bridge::RunConte
         for (int t = s.t_lo; t <= s.t_hi; ++t) all.push_back({t, h, m});
     evaluated.resize(all.size());
     bridge::Progress progress(ctx, "macro.design (exhaustive)");
-    runParallel(all.size(), ctx.threads, progress, [&](std::size_t i) { evaluated[i] = evaluate(p, all[i]); });
+    bridge::runParallel(all.size(), ctx.threads, progress, [&](std::size_t i) { evaluated[i] = evaluate(p, all[i]); });
   } else {
     std::vector<std::pair<int, int>> combos;  // (material, height)
     for (int m = 0; m < nm; ++m)
       for (int h = s.h_lo; h <= s.h_hi; ++h) combos.emplace_back(m, h);
     std::vector<std::vector<SectionResult>> per(combos.size());
     bridge::Progress progress(ctx, "macro.design (bisection)");
-    runParallel(combos.size(), ctx.threads, progress, [&](std::size_t i) {
+    bridge::runParallel(combos.size(), ctx.threads, progress, [&](std::size_t i) {
       const auto [m, h] = combos[i];
       auto& out = per[i];
       out.push_back(evaluate(p, {s.t_hi, h, m}));
@@ -473,7 +473,7 @@ bridge::RunOutcome runDesignCase(const JsonDocument& doc, const bridge::RunConte
       for (int t = s.t_lo; t <= s.t_hi; ++t) secs.push_back({t, chart_section.h, m});
     std::vector<CapacitySearch> caps(secs.size());
     bridge::Progress progress(ctx, "macro.design: capacity against thickness");
-    runParallel(secs.size(), ctx.threads, progress, [&](std::size_t i) {
+    bridge::runParallel(secs.size(), ctx.threads, progress, [&](std::size_t i) {
       const Structure structure = buildStructure(sectionSpec(p, secs[i]), p.c.laws);
       const auto run = [&](double x) {
         CapacityEvaluation ev;

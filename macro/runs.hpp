@@ -5,6 +5,7 @@
 /// impacts run in parallel, a table and design charts) and `macro.capacity`
 /// (the largest impact energy that meets the acceptance criteria) and
 /// `macro.design` (the smallest section that meets them).
+#include <memory>
 #include <optional>
 
 #include "bridge/run.hpp"
@@ -25,6 +26,8 @@ void checkSweepCase(const bridge::JsonDocument& doc);
 std::optional<bridge::Estimate> estimateSweepCase(const bridge::JsonDocument& doc);
 /// Runs a macro.sweep case; writes sweep.csv, result.h5 and the design charts.
 bridge::RunOutcome runSweepCase(const bridge::JsonDocument& doc, const bridge::RunContext& ctx);
+/// A macro.sweep case's points as rows (bridge/rows.hpp): a row per point.
+std::shared_ptr<const bridge::RowPlan> sweepRows(const bridge::JsonDocument& doc);
 
 /// Validates a macro.capacity case.
 void checkCapacityCase(const bridge::JsonDocument& doc);

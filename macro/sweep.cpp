@@ -16,11 +16,10 @@
 #include "bridge/interrupt.hpp"
 #include "bridge/output.hpp"
 #include "bridge/plot.hpp"
+#include "bridge/rows.hpp"
 #include "bridge/units.hpp"
 #include "macro/case_reader.hpp"
-#include "macro/parallel.hpp"
 #include "macro/runs.hpp"
-#include "macro/sweep_rows.hpp"
 
 namespace gabion::macro {
 
@@ -142,6 +141,74 @@ std::vector<double> criticalSteps(const Plan& p) {
   return out;
 }
 
+// What a row keeps of an impact: what the sweep's table and summary show.
+json toRow(const ImpactResult& r) {
+  json j = {{"ok", r.ok}};
+  if (!r.ok) {
+    j["message"] = r.message;
+    return j;
+  }
+  j["outcome"] = static_cast<int>(r.outcome);
+  j["peak_force_N"] = r.peak_force_N;
+  j["max_penetration_m"] = r.max_penetration_m;
+  j["contact_duration_s"] = r.contact_duration_s;
+  j["rebound_velocity_m_s"] = r.rebound_velocity_m_s;
+  j["max_back_face_displacement_m"] = r.max_back_face_displacement_m;
+  j["plastic_J"] = r.plastic_J;
+  j["friction_J"] = r.friction_J;
+  j["balance_rel_error"] = r.balance_rel_error;
+  return j;
+}
+
+ImpactResult fromRow(const json& j) {
+  ImpactResult r;
+  r.ok = j.at("ok").get<bool>();
+  if (!r.ok) {
+    r.message = j.at("message").get<std::string>();
+    return r;
+  }
+  r.outcome = static_cast<Outcome>(j.at("outcome").get<int>());
+  r.peak_force_N = j.at("peak_force_N").get<double>();
+  r.max_penetration_m = j.at("max_penetration_m").get<double>();
+  r.contact_duration_s = j.at("contact_duration_s").get<double>();
+  r.rebound_velocity_m_s = j.at("rebound_velocity_m_s").get<double>();
+  r.max_back_face_displacement_m = j.at("max_back_face_displacement_m").get<double>();
+  r.plastic_J = j.at("plastic_J").get<double>();
+  r.friction_J = j.at("friction_J").get<double>();
+  r.balance_rel_error = j.at("balance_rel_error").get<double>();
+  return r;
+}
+
+// The sweep's points as rows (bridge/rows.hpp): each point on its own fresh
+// model, so a point's row depends on its index alone.
+class SweepPlan final : public bridge::RowPlan {
+ public:
+  explicit SweepPlan(const JsonDocument& doc) : p_(plan(doc)), critical_(criticalSteps(p_)) {}
+  std::size_t size() const override { return p_.points.size(); }
+  json describe(std::size_t i) const override {
+    const Point& pt = p_.points[i];
+    const auto& size = p_.sizes[static_cast<std::size_t>(pt.size)];
+    return {{"parameters",
+             {{"velocity_m_s", pt.velocity_m_s},
+              {"mass_kg", pt.mass_kg},
+              {"aim_y_m", pt.aim_y_m},
+              {"aim_z_m", pt.aim_z_m},
+              {"cells", {size[0], size[1], size[2]}}}},
+            {"seed", nullptr}};
+  }
+  json run(std::size_t i) const override { return toRow(runPoint(p_, p_.points[i])); }
+  double costS(std::size_t i) const override {
+    const auto s = static_cast<std::size_t>(p_.points[i].size);
+    return impactEstimate(p_.c.run, p_.structures[s], critical_[s]).wall_time_s;
+  }
+  bridge::RunOutcome assemble(const std::vector<std::optional<json>>& rows, const bridge::RowStats& stats,
+                              const bridge::RunContext& ctx) const override;
+
+ private:
+  Plan p_;
+  std::vector<double> critical_;
+};
+
 }  // namespace
 
 void checkSweepCase(const JsonDocument& doc) {
@@ -163,37 +230,35 @@ std::optional<bridge::Estimate> estimateSweepCase(const JsonDocument& doc) {
   return e;
 }
 
+std::shared_ptr<const bridge::RowPlan> sweepRows(const JsonDocument& doc) {
+  return std::make_shared<SweepPlan>(doc);
+}
+
 bridge::RunOutcome runSweepCase(const JsonDocument& doc, const bridge::RunContext& ctx) {
-  const Plan p = plan(doc);
+  // The rows an earlier run of this case finished are taken; the rest run,
+  // each logged as it ends (bridge/rows.hpp).
+  return bridge::runRows(SweepPlan(doc), doc, ctx);
+}
+
+namespace {
+
+bridge::RunOutcome SweepPlan::assemble(const std::vector<std::optional<json>>& rows, const bridge::RowStats& stats,
+                                       const bridge::RunContext& ctx) const {
+  const Plan& p = p_;
   const std::size_t np = p.points.size();
   std::vector<ImpactResult> results(np);
-  const auto t0 = std::chrono::steady_clock::now();
-  // The rows an earlier run of this case finished are taken; the rest run,
-  // each written to rows.jsonl as it ends (macro/sweep_rows.hpp).
-  SweepRows rows(ctx.outdir / "rows.jsonl", doc.json(), np);
-  std::vector<std::size_t> todo;
+  std::vector<char> missing(np, 0);
   for (std::size_t i = 0; i < np; ++i) {
-    const auto it = rows.done().find(i);
-    if (it == rows.done().end())
-      todo.push_back(i);
-    else
-      results[i] = it->second;
-  }
-  const std::size_t reused = np - todo.size();
-  const int nthreads = std::max(1, std::min<int>(ctx.threads, static_cast<int>(std::max<std::size_t>(1, todo.size()))));
-  bridge::Progress progress(ctx, "macro.sweep");
-  // (once SIGINT or SIGTERM came, the points not started are recorded as not run)
-  runParallel(todo.size(), nthreads, progress, [&](std::size_t k) {
-    const std::size_t i = todo[k];
-    if (bridge::interrupted()) {
+    if (rows[i]) {
+      results[i] = fromRow(*rows[i]);
+    } else {
       results[i].ok = false;
-      results[i].message = std::string("not run: interrupted by ") + bridge::signalName(bridge::interruptSignal());
-      return;
+      results[i].message = "missing: not run yet";
+      missing[i] = 1;
     }
-    results[i] = runPoint(p, p.points[i]);
-    rows.append(i, results[i]);
-  });
-  const double wall = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  }
+  const double wall = stats.wall_time_s;
+  const int nthreads = stats.workers;
 
   // Table: CSV and HDF5, one row per point in grid order.
   std::ostringstream csv;
@@ -213,7 +278,7 @@ bridge::RunOutcome runSweepCase(const JsonDocument& doc, const bridge::RunContex
     const Point& pt = p.points[i];
     const ImpactResult& r = results[i];
     const auto& size = p.sizes[static_cast<std::size_t>(pt.size)];
-    if (!r.ok) ++failed;
+    if (!r.ok && !missing[i]) ++failed;
     const double nan = std::nan("");
     auto val = [&](double v) { return r.ok ? v : nan; };
     BoulderSpec boulder = p.c.impacts.front();  // (its diameter at this mass)
@@ -228,7 +293,7 @@ bridge::RunOutcome runSweepCase(const JsonDocument& doc, const bridge::RunContex
                             static_cast<double>(size[1]),
                             static_cast<double>(size[2]),
                             pt.energy_J,
-                            r.ok ? 0.0 : 1.0,
+                            r.ok ? 0.0 : (missing[i] ? 2.0 : 1.0),
                             val(r.peak_force_N),
                             val(r.max_penetration_m),
                             val(r.contact_duration_s),
@@ -240,7 +305,10 @@ bridge::RunOutcome runSweepCase(const JsonDocument& doc, const bridge::RunContex
     for (std::size_t c = 0; c < 19; ++c) cols[c].push_back(row[c]);
     csv << i << ',' << pt.velocity_m_s << ',' << pt.mass_kg << ',' << boulder.diameter_m << ',' << pt.aim_y_m << ','
         << pt.aim_z_m << ',' << size[0] << ',' << size[1] << ',' << size[2] << ',' << pt.energy_J << ','
-        << (r.ok ? "ok" : "failed") << ',' << (r.ok ? outcomeName(r.outcome) : "");
+        << (r.ok         ? "ok"
+            : missing[i] ? "missing"
+                         : "failed")
+        << ',' << (r.ok ? outcomeName(r.outcome) : "");
     if (r.ok) {
       csv << ',' << r.peak_force_N << ',' << r.max_penetration_m << ',' << r.contact_duration_s << ','
           << r.rebound_velocity_m_s << ',' << r.max_back_face_displacement_m << ',' << r.plastic_J << ','
@@ -284,9 +352,12 @@ bridge::RunOutcome runSweepCase(const JsonDocument& doc, const bridge::RunContex
     h5.attribute("/", "format", "gabion.macro.sweep/1");
     for (std::size_t c = 0; c < 19; ++c) h5.write(std::string("/table/") + names[c], cols[c], units[c]);
     h5.attribute("/table/outcome", "values", "0 stopped, 1 rebounded, 2 perforated, 3 unfinished");
+    h5.attribute("/table/failed", "values",
+                 "0 ok, 1 failed, 2 missing (not run yet: a collect before every task ended)");
     h5.commit();
   }
-  json files = json::array({"sweep.csv", "result.h5", "rows.jsonl"});
+  json files = json::array({"sweep.csv", "result.h5"});
+  if (stats.where != "collected") files.push_back("rows.jsonl");
   if (p.sweep.chart && !ok_energy.empty()) {
     // Three design charts against impact energy: one series per boulder
     // mass (up to 8 masses; beyond, one series), perforated points marked
@@ -339,35 +410,36 @@ bridge::RunOutcome runSweepCase(const JsonDocument& doc, const bridge::RunContex
 
   bridge::RunOutcome out;
   out.results["points"] = np;
-  out.results["points_reused"] = reused;  // (finished by an earlier run of this case into this folder: rows.jsonl)
+  out.results["points_reused"] = stats.reused;  // (found finished in this folder: rows.jsonl, rows/<i>/row.json)
   out.results["failed_points"] = failed;
+  out.results["missing_points"] = stats.missing;
   out.results["outcomes"] = outcomes;
   out.results["balance_rel_error"] = worst_balance;
   out.results["sweep_wall_time_s"] = wall;
-  out.results["points_per_second"] = wall > 0.0 ? static_cast<double>(todo.size()) / wall : 0.0;
+  out.results["points_per_second"] = wall > 0.0 ? static_cast<double>(stats.run) / wall : 0.0;
   out.results["threads_used"] = nthreads;
   out.results["files"] = files;
   {
     std::ostringstream answer;
     answer << "macro.sweep: " << np << " impacts:";
     for (const auto& [name, count] : outcomes) answer << " " << count << " " << name << ",";
-    answer << " " << failed << " failed; worst energy balance error " << bridge::showNumber(worst_balance, 2) << "\n";
+    answer << " " << failed << " failed";
+    if (stats.missing > 0) answer << ", " << stats.missing << " missing";
+    answer << "; worst energy balance error " << bridge::showNumber(worst_balance, 2) << "\n";
     out.answer = answer.str();
-    out.report = "macro.sweep: " + bridge::showNumber(wall) + " s on " + std::to_string(nthreads) + " threads\n";
+    if (stats.where != "collected")
+      out.report = "macro.sweep: " + bridge::showNumber(wall) + " s on " + std::to_string(nthreads) + " " +
+                   (stats.where == "mpi" ? "MPI workers" : "threads") + "\n";
   }
   out.results["laws_source"] = p.c.law_source;
-  if (bridge::interrupted()) {
-    out.status = bridge::RunOutcome::Status::Interrupted;
-    out.message = "interrupted by " + std::string(bridge::signalName(bridge::interruptSignal())) + " after " +
-                  std::to_string(np - failed) + " of " + std::to_string(np) + " points; the table lists every point";
-    return out;
-  }
   // A sweep in which every point failed has produced nothing usable.
-  if (np > 0 && failed == np) {
+  if (np > 0 && failed == np && !bridge::interrupted()) {
     out.status = bridge::RunOutcome::Status::NumericalFailure;
     out.message = "all " + std::to_string(np) + " points failed; first: " + results.front().message;
   }
   return out;
 }
+
+}  // namespace
 
 }  // namespace gabion::macro

@@ -350,17 +350,20 @@ bridge::RunOutcome runOne(const CompressionCase& c, const Sample& sample, const 
   return out;
 }
 
-bridge::RunOutcome run(const bridge::JsonDocument& doc, const bridge::RunContext& ctx, bool confined) {
-  const CompressionCase c = parseCase(doc, confined);
+std::shared_ptr<const Replicates> replicates(const bridge::JsonDocument& doc, bool confined) {
+  const auto c = std::make_shared<const CompressionCase>(parseCase(doc, confined));
   const std::string file = doc.file();
-  const std::vector<std::string> keys =
+  std::vector<std::string> keys =
       confined
           ? std::vector<std::string>{"peak_force_N", "final_force_N", "secant_stiffness_N_m",
                                      "lateral_reaction_coefficient", "kinetic_to_work_ratio"}
           : std::vector<std::string>{"peak_force_N", "displacement_at_peak_m", "drop_count", "kinetic_to_work_ratio"};
-  return runReplicates(
-      c.setup, ctx, confined ? "micro.cc" : "micro.uc", {"test"},
-      [&](const Sample& s, std::size_t, const bridge::RunContext& rc) { return runOne(c, s, rc, file); }, keys);
+  return std::make_shared<const Replicates>(Replicates{
+      c->setup,
+      confined ? "micro.cc" : "micro.uc",
+      {"test"},
+      [c, file](const Sample& s, std::size_t, const bridge::RunContext& rc) { return runOne(*c, s, rc, file); },
+      std::move(keys)});
 }
 
 std::optional<bridge::Estimate> estimate(const bridge::JsonDocument& doc, bool confined) {
@@ -371,17 +374,27 @@ std::optional<bridge::Estimate> estimate(const bridge::JsonDocument& doc, bool c
 }  // namespace
 
 bridge::CaseKind confinedCompressionKind() {
-  return {"micro.cc", "confined compression of a cell between six rigid walls, the lid driven down (docs/lab.md)",
+  return {"micro.cc",
+          "confined compression of a cell between six rigid walls, the lid driven down (docs/lab.md)",
           [](const bridge::JsonDocument& d) { check(d, true); },
-          [](const bridge::JsonDocument& d, const bridge::RunContext& ctx) { return run(d, ctx, true); },
-          [](const bridge::JsonDocument& d) { return estimate(d, true); }};
+          [](const bridge::JsonDocument& d, const bridge::RunContext& ctx) {
+            return runReplicates(*replicates(d, true), ctx);
+          },
+          [](const bridge::JsonDocument& d) { return estimate(d, true); },
+          nullptr,
+          [](const bridge::JsonDocument& d) { return serveReplicates(replicates(d, true)); }};
 }
 
 bridge::CaseKind unconfinedCompressionKind() {
-  return {"micro.uc", "unconfined compression of a cell between two plates, the netting alone confining (docs/lab.md)",
+  return {"micro.uc",
+          "unconfined compression of a cell between two plates, the netting alone confining (docs/lab.md)",
           [](const bridge::JsonDocument& d) { check(d, false); },
-          [](const bridge::JsonDocument& d, const bridge::RunContext& ctx) { return run(d, ctx, false); },
-          [](const bridge::JsonDocument& d) { return estimate(d, false); }};
+          [](const bridge::JsonDocument& d, const bridge::RunContext& ctx) {
+            return runReplicates(*replicates(d, false), ctx);
+          },
+          [](const bridge::JsonDocument& d) { return estimate(d, false); },
+          nullptr,
+          [](const bridge::JsonDocument& d) { return serveReplicates(replicates(d, false)); }};
 }
 
 }  // namespace gabion::micro::lab

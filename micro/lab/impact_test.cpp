@@ -252,6 +252,22 @@ std::optional<bridge::Estimate> estimate(const bridge::JsonDocument& doc) {
   });
 }
 
+std::shared_ptr<const Replicates> replicates(const bridge::JsonDocument& doc) {
+  const auto c = std::make_shared<const ImpactCase>(parseCase(doc));
+  const std::string file = doc.file();
+  std::vector<std::string> names;
+  for (const double v : c->velocities_m_s) names.push_back(variantName(v));
+  return std::make_shared<const Replicates>(
+      Replicates{c->setup,
+                 "micro.uci",
+                 names,
+                 [c, file](const Sample& s, std::size_t v, const bridge::RunContext& rc) {
+                   return runOne(*c, s, c->velocities_m_s[v], rc, file);
+                 },
+                 {"peak_force_N", "peak_base_force_N", "max_penetration_m", "contact_duration_s",
+                  "rebound_velocity_m_s", "broken_links"}});
+}
+
 }  // namespace
 
 bridge::CaseKind unconfinedImpactKind() {
@@ -259,18 +275,11 @@ bridge::CaseKind unconfinedImpactKind() {
           "unconfined impact: a boulder dropped at a set velocity on a cell standing on a rigid base (docs/lab.md)",
           check,
           [](const bridge::JsonDocument& doc, const bridge::RunContext& ctx) {
-            const ImpactCase c = parseCase(doc);
-            const std::string file = doc.file();
-            std::vector<std::string> names;
-            for (const double v : c.velocities_m_s) names.push_back(variantName(v));
-            return runReplicates(c.setup, ctx, "micro.uci", names,
-                                 [&](const Sample& s, std::size_t v, const bridge::RunContext& rc) {
-                                   return runOne(c, s, c.velocities_m_s[v], rc, file);
-                                 },
-                                 {"peak_force_N", "peak_base_force_N", "max_penetration_m", "contact_duration_s",
-                                  "rebound_velocity_m_s", "broken_links"});
+            return runReplicates(*replicates(doc), ctx);
           },
-          estimate};
+          estimate,
+          nullptr,
+          [](const bridge::JsonDocument& doc) { return serveReplicates(replicates(doc)); }};
 }
 
 }  // namespace gabion::micro::lab

@@ -13,6 +13,7 @@
 #include "bridge/interrupt.hpp"
 #include "bridge/manifest.hpp"
 #include "bridge/output.hpp"
+#include "bridge/rows.hpp"
 #include "micro/cell/cell_assembly.hpp"
 #include "micro/cell/cell_file.hpp"
 #include "micro/rigid_body.hpp"
@@ -357,77 +358,175 @@ std::optional<bridge::Estimate> estimateReplicates(const LabSetup& setup, std::s
   return bridge::times(e, static_cast<double>(setup.cells.size()));
 }
 
-bridge::RunOutcome runReplicates(const LabSetup& setup, const bridge::RunContext& ctx, const std::string& label,
-                                 const std::vector<std::string>& variants, const TestRun& test,
-                                 const std::vector<std::string>& scatter_keys) {
+namespace {
+
+// The folder of run j (variant j % nv on replicate j / nv) when there are several.
+std::string runFolder(const Replicates& r, std::size_t j) {
+  const std::size_t nv = r.variants.size();
+  std::string f = nv > 1 ? r.variants[j % nv] : "";
+  if (r.setup.cells.size() > 1) f += (f.empty() ? "" : "_") + std::string("replicate_") + std::to_string(j / nv);
+  return f;
+}
+
+// Generates replicate k's cell (on one thread when there are several).
+fs::path generateReplicateCell(const Replicates& r, std::size_t k, const bridge::RunContext& ctx, bool first) {
+  const std::size_t nr = r.setup.cells.size();
+  const CellSource& c = r.setup.cells[k];
+  bridge::RunContext rc = ctx;
+  rc.threads = nr > 1 ? 1 : ctx.threads;
+  rc.progress = first && ctx.progress;
+  rc.workers = nullptr;
+  const std::string name = nr > 1 ? "cell_seed" + std::to_string(*c.seed) : "cell";
+  return generateCell(c, ctx.outdir / name, rc);
+}
+
+// Runs run j on `cell` into rc.outdir: its outcome, with the cell's file and seed.
+bridge::RunOutcome runReplicate(const Replicates& r, std::size_t j, const fs::path& cell,
+                                const bridge::RunContext& rc) {
+  const std::size_t nv = r.variants.size(), k = j / nv;
+  bridge::RunOutcome out;
+  fs::create_directories(rc.outdir);
+  const Sample sample = loadSample(cell, r.setup);
+  try {
+    out = r.test(sample, j % nv, rc);
+  } catch (const bridge::NumericalError& e) {
+    out.status = bridge::RunOutcome::Status::NumericalFailure;
+    out.message = e.what();
+  }
+  out.results["cell_file"] = cell.string();
+  if (r.setup.cells[k].seed) out.results["cell_seed"] = *r.setup.cells[k].seed;
+  return out;
+}
+
+// One of several runs, in its own folder on one thread, with its summary.json.
+bridge::RunOutcome runReplicateInFolder(const Replicates& r, std::size_t j, const fs::path& cell,
+                                        const bridge::RunContext& ctx, bool first) {
+  bridge::RunContext rc = ctx;
+  rc.threads = 1;
+  rc.progress = first && ctx.progress;
+  rc.outdir = ctx.outdir / runFolder(r, j);
+  rc.workers = nullptr;
+  bridge::RunOutcome out = runReplicate(r, j, cell, rc);
+  nlohmann::json summary = out.results;
+  summary["format"] = "gabion.summary/1";
+  summary["kind"] = r.label;
+  summary["status"] = bridge::statusName(out.status);
+  if (!out.message.empty()) summary["message"] = out.message;
+  bridge::writeJsonAtomic(rc.outdir / "summary.json", summary);
+  return out;
+}
+
+// A task's answer carries the files the worker wrote; rank 0 notes them
+// for its manifest (bridge/manifest.hpp).
+nlohmann::json writtenUnder(const fs::path& dir) {
+  nlohmann::json files = nlohmann::json::array();
+  for (const fs::path& f : bridge::writtenFiles(dir)) files.push_back((dir / f).string());
+  return files;
+}
+
+void noteAll(const nlohmann::json& files) {
+  for (const auto& f : files) bridge::noteWritten(f.get<std::string>());
+}
+
+}  // namespace
+
+std::function<nlohmann::json(const nlohmann::json&)> serveReplicates(std::shared_ptr<const Replicates> r) {
+  return [r](const nlohmann::json& task) {
+    bridge::RunContext ctx;
+    ctx.outdir = task.at("outdir").get<std::string>();
+    ctx.case_digest = task.at("case_digest").get<std::string>();
+    ctx.threads = 1;
+    if (task.contains("cell")) {
+      const fs::path file = generateReplicateCell(*r, task.at("cell").get<std::size_t>(), ctx, false);
+      return nlohmann::json{{"file", file.string()}, {"files", writtenUnder(file.parent_path())}};
+    }
+    const auto j = task.at("run").get<std::size_t>();
+    nlohmann::json answer;
+    try {
+      const bridge::RunOutcome out = runReplicateInFolder(*r, j, task.at("cell_file").get<std::string>(), ctx, false);
+      answer = {{"status", static_cast<int>(out.status)}, {"message", out.message}, {"results", out.results}};
+    } catch (const bridge::WriteError&) {
+      throw;
+    } catch (const std::exception& e) {
+      answer = {{"error", e.what()}};
+    }
+    answer["files"] = writtenUnder(ctx.outdir / runFolder(*r, j));
+    return answer;
+  };
+}
+
+bridge::RunOutcome runReplicates(const Replicates& reps, const bridge::RunContext& ctx) {
+  const LabSetup& setup = reps.setup;
+  const std::string& label = reps.label;
+  const std::vector<std::string>& variants = reps.variants;
+  const std::vector<std::string>& scatter_keys = reps.scatter_keys;
   const std::size_t nr = setup.cells.size(), nv = variants.size(), n = nr * nv;
+  // Several runs go to the MPI workers, when there are some.
+  bridge::RemoteWorkers* workers = n > 1 ? ctx.workers : nullptr;
+  const auto task = [&](nlohmann::json t) {
+    t["outdir"] = fs::absolute(ctx.outdir).string();
+    t["case_digest"] = ctx.case_digest;
+    nlohmann::json answer = workers->call(t);
+    noteAll(answer.at("files"));
+    return answer;
+  };
   // The cells: generated first where they come from a case (in parallel),
   // each once whatever the number of variants.
   std::vector<fs::path> files(nr);
   std::vector<std::string> errors(n);
   std::vector<std::string> cell_errors(nr);
-  parallelFor(nr, nr > 1 ? ctx.threads : 1, [&](std::size_t k, bool first) {
+  const int cell_threads = nr > 1 ? (workers != nullptr ? workers->size() : ctx.threads) : 1;
+  parallelFor(nr, cell_threads, [&](std::size_t k, bool first) {
     const CellSource& c = setup.cells[k];
     if (c.generate.empty()) {
       files[k] = c.file;
       return;
     }
-    bridge::RunContext rc = ctx;
-    rc.threads = nr > 1 ? 1 : ctx.threads;
-    rc.progress = first && ctx.progress;
-    const std::string name = nr > 1 ? "cell_seed" + std::to_string(*c.seed) : "cell";
     try {
-      files[k] = generateCell(c, ctx.outdir / name, rc);
+      if (workers != nullptr && nr > 1)
+        files[k] = task({{"cell", k}}).at("file").get<std::string>();
+      else
+        files[k] = generateReplicateCell(reps, k, ctx, first);
     } catch (const std::exception& e) {  // (a thread must not throw; the case was checked before)
       cell_errors[k] = e.what();
     }
   });
   std::vector<bridge::RunOutcome> outs(n);
-  const auto folder = [&](std::size_t j) {
-    std::string f = nv > 1 ? variants[j % nv] : "";
-    if (nr > 1) f += (f.empty() ? "" : "_") + std::string("replicate_") + std::to_string(j / nv);
-    return f;
-  };
-  const auto one = [&](std::size_t j, const bridge::RunContext& rc) {
-    const std::size_t k = j / nv;
-    if (!cell_errors[k].empty()) {
-      outs[j].status = bridge::RunOutcome::Status::NumericalFailure;
-      outs[j].message = cell_errors[k];
-      return;
-    }
-    fs::create_directories(rc.outdir);
-    const Sample sample = loadSample(files[k], setup);
-    try {
-      outs[j] = test(sample, j % nv, rc);
-    } catch (const bridge::NumericalError& e) {
-      outs[j].status = bridge::RunOutcome::Status::NumericalFailure;
-      outs[j].message = e.what();
-    }
-    outs[j].results["cell_file"] = files[k].string();
-    if (setup.cells[k].seed) outs[j].results["cell_seed"] = *setup.cells[k].seed;
+  const auto folder = [&](std::size_t j) { return runFolder(reps, j); };
+  const auto cellFailed = [&](std::size_t j) {
+    outs[j].status = bridge::RunOutcome::Status::NumericalFailure;
+    outs[j].message = cell_errors[j / nv];
   };
   if (n == 1) {
-    one(0, ctx);
-    return outs[0];
+    if (!cell_errors[0].empty()) {
+      cellFailed(0);
+      return outs[0];
+    }
+    return runReplicate(reps, 0, files[0], ctx);
   }
-  // Several runs in parallel, one engine thread each; every one writes its own folder.
-  parallelFor(n, ctx.threads, [&](std::size_t j, bool first) {
-    bridge::RunContext rc = ctx;
-    rc.threads = 1;
-    rc.progress = first && ctx.progress;
-    rc.outdir = ctx.outdir / folder(j);
-    try {
-      one(j, rc);
-    } catch (const std::exception& e) {
-      errors[j] = e.what();
+  // Several runs in parallel, one engine thread each (or one worker rank
+  // each); every one writes its own folder.
+  parallelFor(n, workers != nullptr ? workers->size() : ctx.threads, [&](std::size_t j, bool first) {
+    if (!cell_errors[j / nv].empty()) {
+      cellFailed(j);
       return;
     }
-    nlohmann::json summary = outs[j].results;
-    summary["format"] = "gabion.summary/1";
-    summary["kind"] = label;
-    summary["status"] = bridge::statusName(outs[j].status);
-    if (!outs[j].message.empty()) summary["message"] = outs[j].message;
-    bridge::writeJsonAtomic(rc.outdir / "summary.json", summary);
+    try {
+      if (workers != nullptr) {
+        const nlohmann::json a = task({{"run", j}, {"cell_file", files[j / nv].string()}});
+        if (a.contains("error")) {
+          errors[j] = a.at("error").get<std::string>();
+          return;
+        }
+        outs[j].status = static_cast<bridge::RunOutcome::Status>(a.at("status").get<int>());
+        outs[j].message = a.at("message").get<std::string>();
+        outs[j].results = a.at("results");
+      } else {
+        outs[j] = runReplicateInFolder(reps, j, files[j / nv], ctx, first);
+      }
+    } catch (const std::exception& e) {
+      errors[j] = e.what();
+    }
   });
 
   bridge::RunOutcome out;

@@ -9,6 +9,7 @@
 #include <cstdint>
 #include <filesystem>
 #include <functional>
+#include <memory>
 #include <nlohmann/json.hpp>
 #include <optional>
 #include <string>
@@ -126,14 +127,27 @@ std::optional<bridge::Estimate> estimateReplicates(const LabSetup& setup, std::s
 /// one impact velocity of several) and runs it into ctx.outdir.
 using TestRun = std::function<bridge::RunOutcome(const Sample&, std::size_t variant, const bridge::RunContext&)>;
 
-/// Runs a test for every variant (names, e.g. "v20") on every replicate's
-/// cell (cells from a case are generated first, in parallel). One run goes
-/// into ctx.outdir; several into ctx.outdir/<variant>[_replicate_<k>], in
-/// parallel (a thread each, up to ctx.threads), each with its summary.json,
-/// and the summary lists them with the mean, standard deviation and range
-/// of each of `scatter_keys` over the replicates of each variant.
-bridge::RunOutcome runReplicates(const LabSetup& setup, const bridge::RunContext& ctx, const std::string& label,
-                                 const std::vector<std::string>& variants, const TestRun& test,
-                                 const std::vector<std::string>& scatter_keys);
+/// A test's runs, made from its case once: every variant (names, e.g.
+/// "v20") on every replicate's cell. `test` owns the parsed case.
+struct Replicates {
+  LabSetup setup;
+  std::string label;  ///< the case kind, e.g. "micro.uci"
+  std::vector<std::string> variants;
+  TestRun test;
+  std::vector<std::string> scatter_keys;  ///< summary values whose scatter over the replicates is reported
+};
+
+/// Runs a test for every variant on every replicate's cell (cells from a
+/// case are generated first, in parallel). One run goes into ctx.outdir;
+/// several into ctx.outdir/<variant>[_replicate_<k>], in parallel (a thread
+/// each, up to ctx.threads, or on ctx.workers: MPI ranks), each with its
+/// summary.json, and the summary lists them with the mean, standard
+/// deviation and range of each of `scatter_keys` over the replicates of
+/// each variant.
+bridge::RunOutcome runReplicates(const Replicates& r, const bridge::RunContext& ctx);
+
+/// On an MPI worker rank: generates a replicate's cell, or runs one of the
+/// runs, as runReplicates does on a thread of its own (CaseKind::serve).
+std::function<nlohmann::json(const nlohmann::json&)> serveReplicates(std::shared_ptr<const Replicates> r);
 
 }  // namespace gabion::micro::lab

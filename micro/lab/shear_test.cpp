@@ -292,23 +292,30 @@ std::optional<bridge::Estimate> estimate(const bridge::JsonDocument& doc) {
   return estimateReplicates(c.setup, 1, [&](const Sample& s, std::size_t) { return planRig(c, s).scene; });
 }
 
+std::shared_ptr<const Replicates> replicates(const bridge::JsonDocument& doc) {
+  const auto c = std::make_shared<const ShearCase>(parseCase(doc));
+  const std::string file = doc.file();
+  return std::make_shared<const Replicates>(Replicates{
+      c->setup,
+      "micro.shear",
+      {"test"},
+      [c, file](const Sample& s, std::size_t, const bridge::RunContext& rc) { return runOne(*c, s, rc, file); },
+      {"friction_coefficient", "peak_friction_coefficient", "tangential_stiffness_N_m", "kinetic_to_work_ratio"}});
+}
+
 }  // namespace
 
 bridge::CaseKind interfaceShearKind() {
-  return {
-      "micro.shear",
-      "interface shear: a cell on another under a normal load held by a servo, the upper one pushed sideways "
-      "(docs/lab.md)",
-      check,
-      [](const bridge::JsonDocument& doc, const bridge::RunContext& ctx) {
-        const ShearCase c = parseCase(doc);
-        const std::string file = doc.file();
-        return runReplicates(
-            c.setup, ctx, "micro.shear", {"test"},
-            [&](const Sample& s, std::size_t, const bridge::RunContext& rc) { return runOne(c, s, rc, file); },
-            {"friction_coefficient", "peak_friction_coefficient", "tangential_stiffness_N_m", "kinetic_to_work_ratio"});
-      },
-      estimate};
+  return {"micro.shear",
+          "interface shear: a cell on another under a normal load held by a servo, the upper one pushed sideways "
+          "(docs/lab.md)",
+          check,
+          [](const bridge::JsonDocument& doc, const bridge::RunContext& ctx) {
+            return runReplicates(*replicates(doc), ctx);
+          },
+          estimate,
+          nullptr,
+          [](const bridge::JsonDocument& doc) { return serveReplicates(replicates(doc)); }};
 }
 
 }  // namespace gabion::micro::lab

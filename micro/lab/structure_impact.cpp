@@ -349,6 +349,18 @@ std::optional<bridge::Estimate> estimate(const bridge::JsonDocument& doc) {
   });
 }
 
+std::shared_ptr<const Replicates> replicates(const bridge::JsonDocument& doc) {
+  const auto c = std::make_shared<const StructureCase>(parseCase(doc));
+  const std::string file = doc.file();
+  return std::make_shared<const Replicates>(Replicates{
+      c->setup,
+      "micro.structure",
+      {"impact"},
+      [c, file](const Sample& s, std::size_t, const bridge::RunContext& rc) { return runOne(*c, s, rc, file); },
+      {"peak_force_N", "max_penetration_m", "contact_duration_s", "max_back_face_displacement_m",
+       "rebound_velocity_m_s"}});
+}
+
 }  // namespace
 
 bridge::CaseKind structureImpactKind() {
@@ -357,15 +369,11 @@ bridge::CaseKind structureImpactKind() {
           "(docs/resolved.md)",
           check,
           [](const bridge::JsonDocument& doc, const bridge::RunContext& ctx) {
-            const StructureCase c = parseCase(doc);
-            const std::string file = doc.file();
-            return runReplicates(
-                c.setup, ctx, "micro.structure", {"impact"},
-                [&](const Sample& s, std::size_t, const bridge::RunContext& rc) { return runOne(c, s, rc, file); },
-                {"peak_force_N", "max_penetration_m", "contact_duration_s", "max_back_face_displacement_m",
-                 "rebound_velocity_m_s"});
+            return runReplicates(*replicates(doc), ctx);
           },
-          estimate};
+          estimate,
+          nullptr,
+          [](const bridge::JsonDocument& doc) { return serveReplicates(replicates(doc)); }};
 }
 
 }  // namespace gabion::micro::lab

@@ -9,6 +9,7 @@
 #include <algorithm>
 #include <cmath>
 #include <fstream>
+#include <iterator>
 #include <nlohmann/json.hpp>
 #include <string>
 
@@ -323,6 +324,40 @@ TEST(MicroLab, ReplicatesOnCellsOfDifferentSeedsGiveAScatter) {
   EXPECT_EQ(summaryOf(dir / "one")["cell_seed"], 4);
   // The same seed as replicate 1: the same cell, the same curve.
   EXPECT_EQ(gabion::bridge::H5Reader(dir / "one" / "result.h5").read("/curves/uc/force_N"), first);
+}
+
+// mpirun on three ranks: the cells of two replicates are generated and
+// their tests run on the two worker ranks; rank 0 gathers the summary. The
+// cells, curves and scatter are those of a run on two threads, and rank 0's
+// manifest lists the workers' files.
+TEST(MicroLab, ReplicatesOnMpiRanksAreTheThreadedRuns) {
+#ifndef GABION_MPIEXEC
+  GTEST_SKIP() << "this build has no MPI (scripts/deps.sh installs libopenmpi-dev; build again)";
+#else
+  const auto dir = scratchDir("lab_replicates_mpi");
+  writeFile(dir / "cell.json", smallCell());
+  writeFile(dir / "uc.json", R"({"format": "gabion.case/1", "kind": "micro.uc", "cell": {"case": "cell.json"},
+ "replicates": 2, "loading": {"velocity_m_s": 0.2, "strain": 0.05}})");
+  ASSERT_EQ(
+      runGabion("run -q --threads 2 " + (dir / "uc.json").string() + " -o " + (dir / "threads").string()).exit_code, 0);
+  const auto r = gabion::testing::runCommand(std::string(GABION_MPIEXEC) +
+                                             " --allow-run-as-root --oversubscribe -np 3 " + GABION_BINARY +
+                                             " run -q " + (dir / "uc.json").string() + " -o " + (dir / "mpi").string());
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  const nlohmann::json a = summaryOf(dir / "threads"), b = summaryOf(dir / "mpi");
+  EXPECT_EQ(a["runs"], b["runs"]);
+  EXPECT_EQ(a["scatter"], b["scatter"]);
+  for (const char* run : {"replicate_0", "replicate_1"})
+    EXPECT_EQ(gabion::bridge::H5Reader(dir / "threads" / run / "result.h5").read("/curves/uc/force_N"),
+              gabion::bridge::H5Reader(dir / "mpi" / run / "result.h5").read("/curves/uc/force_N"))
+        << run;
+  EXPECT_EQ(gabion::bridge::H5Reader(dir / "threads" / "cell_seed4" / "cell.h5").read("/blocks/position_m"),
+            gabion::bridge::H5Reader(dir / "mpi" / "cell_seed4" / "cell.h5").read("/blocks/position_m"));
+  std::ifstream manifest(dir / "mpi" / "manifest.json");
+  const std::string listed((std::istreambuf_iterator<char>(manifest)), std::istreambuf_iterator<char>());
+  for (const char* file : {"replicate_1/result.h5", "replicate_0/summary.json", "cell_seed3/cell.h5"})
+    EXPECT_NE(listed.find(file), std::string::npos) << file;
+#endif
 }
 
 TEST(MicroLab, BadInputIsNamedBeforeAnythingRuns) {

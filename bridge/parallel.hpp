@@ -1,6 +1,6 @@
 #pragma once
 /// \file
-/// Independent tasks (impacts of a sweep, sections of a design search) on
+/// Independent tasks (the rows of a sweep, sections of a design search) on
 /// worker threads: each task writes only its own slot, so the results do not
 /// depend on the thread count. The calling thread works too and reports the
 /// progress. An exception in a task is rethrown on the calling thread once
@@ -15,10 +15,10 @@
 
 #include "bridge/run.hpp"
 
-namespace gabion::macro {
+namespace gabion::bridge {
 
 template <class Task>
-void runParallel(std::size_t n, int threads, bridge::Progress& progress, const Task& task) {
+void runParallel(std::size_t n, int threads, Progress& progress, const Task& task) {
   std::atomic<std::size_t> next{0}, done{0};
   std::exception_ptr error;
   std::mutex error_mutex;
@@ -45,4 +45,4 @@ void runParallel(std::size_t n, int threads, bridge::Progress& progress, const T
   if (error) std::rethrow_exception(error);
 }
 
-}  // namespace gabion::macro
+}  // namespace gabion::bridge

@@ -1,0 +1,366 @@
+#include "bridge/rows.hpp"
+
+#include <unistd.h>
+
+#include <algorithm>
+#include <chrono>
+#include <fstream>
+#include <iterator>
+#include <set>
+
+#include "bridge/errors.hpp"
+#include "bridge/interrupt.hpp"
+#include "bridge/manifest.hpp"
+#include "bridge/output.hpp"
+#include "bridge/parallel.hpp"
+#include "bridge/state_archive.hpp"
+
+namespace gabion::bridge {
+
+namespace fs = std::filesystem;
+using nlohmann::json;
+
+namespace {
+
+constexpr const char* kLogFormat = "gabion.rows/1";
+constexpr const char* kRowFormat = "gabion.row/1";
+
+std::string readText(const fs::path& file) {
+  std::ifstream in(file, std::ios::binary);
+  return std::string((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+}
+
+// A result as the runner keeps it: an object with a boolean "ok", and a
+// "message" when it failed.
+json checkedResult(json r) {
+  if (!r.is_object() || !r.contains("ok") || !r.at("ok").is_boolean())
+    return {{"ok", false}, {"message", "the row gave no result"}};
+  if (!r.at("ok").get<bool>() && !r.contains("message")) r["message"] = "failed";
+  return r;
+}
+
+bool failedResult(const std::optional<json>& r) {
+  return r && !r->at("ok").get<bool>();
+}
+
+// rows.jsonl, opened for the case of `digest`: the rows finished by earlier
+// runs, and appended to as rows end. A log of another case (or another
+// number of rows) is started afresh; a torn last line is cut off.
+class RowLog {
+ public:
+  RowLog(fs::path file, const std::string& digest, std::size_t rows)
+      : file_(std::move(file)), header_({{"format", kLogFormat}, {"case_digest", digest}, {"rows", rows}}) {}
+
+  // The results the log holds (nullopt where none); truncates a torn tail.
+  std::vector<std::optional<json>> read(bool repair) {
+    std::vector<std::optional<json>> out(header_.at("rows").get<std::size_t>());
+    std::error_code ec;
+    if (!fs::exists(file_, ec)) return out;
+    const std::string text = readText(file_);
+    std::size_t pos = 0, kept = 0;
+    bool same = false;
+    for (std::size_t line = 0; pos < text.size(); ++line) {
+      const std::size_t end = text.find('\n', pos);
+      if (end == std::string::npos) break;
+      try {
+        const json j = json::parse(text.substr(pos, end - pos));
+        if (line == 0) {
+          same = j == header_;
+          if (!same) break;
+        } else {
+          const auto index = j.at("index").get<std::size_t>();
+          if (index < out.size()) out[index] = checkedResult(j.at("result"));
+        }
+      } catch (const std::exception&) {
+        break;  // (a damaged line: the rows after it are run again)
+      }
+      pos = end + 1;
+      kept = pos;
+    }
+    if (!same) return std::vector<std::optional<json>>(out.size());
+    same_ = true;
+    if (repair && kept < text.size()) fs::resize_file(file_, kept);
+    noteWritten(file_);
+    return out;
+  }
+
+  // Starts the log unless read() found it to be this case's.
+  void open() {
+    if (same_) return;
+    std::ofstream out(file_, std::ios::trunc);
+    out << header_.dump() << "\n";
+    out.close();
+    if (!out) throw WriteError(file_.string(), "the row log could not be started");
+    noteWritten(file_);
+    same_ = true;
+  }
+
+  void append(std::size_t index, double wall_time_s, const json& result) {
+    const std::string line = json{{"index", index}, {"wall_time_s", wall_time_s}, {"result", result}}.dump() + "\n";
+    const std::lock_guard<std::mutex> lock(mutex_);
+    // Appended and closed at once: a killed run loses at most the row being written.
+    std::ofstream out(file_, std::ios::app);
+    out << line;
+    out.close();
+    if (!out) throw WriteError(file_.string(), "the row " + std::to_string(index) + " could not be written");
+  }
+
+ private:
+  fs::path file_;
+  json header_;
+  bool same_ = false;
+  std::mutex mutex_;
+};
+
+fs::path rowFolder(const fs::path& outdir, std::size_t i) {
+  return outdir / "rows" / std::to_string(i);
+}
+
+std::string hostName() {
+  char name[256] = {0};
+  if (gethostname(name, sizeof name - 1) != 0) return "";
+  return name;
+}
+
+// Runs row i here or on a worker; a row that throws is a failed row.
+json runOne(const RowPlan& plan, std::size_t i, RemoteWorkers* workers) {
+  try {
+    return checkedResult(workers != nullptr ? workers->call({{"row", i}}) : plan.run(i));
+  } catch (const WriteError&) {
+    throw;
+  } catch (const std::exception& e) {
+    return {{"ok", false}, {"message", e.what()}};
+  }
+}
+
+json interruptedResult() {
+  return {{"ok", false}, {"message", std::string("not run: interrupted by ") + signalName(interruptSignal())}};
+}
+
+// Adds the rows' account to an assembled outcome.
+RunOutcome finish(RunOutcome out, const RowStats& stats, std::size_t size) {
+  out.results["rows"] = {{"total", size},
+                         {"run", stats.run},
+                         {"reused", stats.reused},
+                         {"failed", stats.failed},
+                         {"missing", stats.missing},
+                         {"workers", stats.workers},
+                         {"where", stats.where},
+                         {"wall_time_s", stats.wall_time_s}};
+  return out;
+}
+
+std::size_t countFailed(const std::vector<std::optional<json>>& results) {
+  return static_cast<std::size_t>(std::count_if(results.begin(), results.end(), failedResult));
+}
+
+}  // namespace
+
+std::string rowsDigest(const json& case_value) {
+  json c = case_value;
+  c.erase("description");
+  return hexDigest(fnv1a(c.dump()));
+}
+
+std::vector<std::optional<json>> findRowResults(const fs::path& outdir, const std::string& digest, std::size_t rows) {
+  RowLog log(outdir / "rows.jsonl", digest, rows);
+  std::vector<std::optional<json>> out = log.read(false);
+  std::error_code ec;
+  if (!fs::is_directory(outdir / "rows", ec)) return out;
+  for (const auto& entry : fs::directory_iterator(outdir / "rows", ec)) {
+    const fs::path file = entry.path() / "row.json";
+    if (!fs::is_regular_file(file, ec)) continue;  // (a task that has not ended)
+    json j;
+    try {
+      j = json::parse(readText(file));
+    } catch (const std::exception&) {
+      continue;  // (written atomically: cannot be torn; a user's edit is not a result)
+    }
+    if (j.value("format", "") != kRowFormat) continue;
+    if (j.value("case_digest", "") != digest)
+      throw InputError(file.string(), "/case_digest",
+                       "this row was run for another case than the folder's run.json; rows of two cases do not mix "
+                       "in one folder (remove " +
+                           (outdir / "rows").string() + ", or collect into another folder)");
+    const auto index = j.at("index").get<std::size_t>();
+    if (index >= rows) continue;
+    out[index] = checkedResult(j.at("result"));
+    noteWritten(file);
+  }
+  return out;
+}
+
+std::vector<std::size_t> selectRows(const std::string& spec, const std::vector<std::optional<json>>& known,
+                                    const std::string& source) {
+  std::set<std::size_t> out;
+  const std::size_t n = known.size();
+  auto number = [&](const std::string& s) -> std::size_t {
+    if (s.empty() || s.find_first_not_of("0123456789") != std::string::npos || s.size() > 12)
+      throw InputError(source, "",
+                       "'" + spec +
+                           "': expected rows as A:B (A to B-1), i, lists of them (0:10,12), 'missing' or "
+                           "'failed'");
+    return static_cast<std::size_t>(std::stoull(s));
+  };
+  std::size_t pos = 0;
+  while (pos <= spec.size()) {
+    const std::size_t comma = std::min(spec.find(',', pos), spec.size());
+    const std::string part = spec.substr(pos, comma - pos);
+    if (part == "missing" || part == "failed") {
+      for (std::size_t i = 0; i < n; ++i)
+        if (part == "missing" ? !known[i].has_value() : failedResult(known[i])) out.insert(i);
+    } else if (const auto colon = part.find(':'); colon != std::string::npos) {
+      const std::size_t a = number(part.substr(0, colon)), b = number(part.substr(colon + 1));
+      if (a >= b || b > n)
+        throw InputError(source, "",
+                         "'" + part + "': rows A:B need A < B <= " + std::to_string(n) + " (the case has " +
+                             std::to_string(n) + " rows, 0 to " + std::to_string(n - 1) + ")");
+      for (std::size_t i = a; i < b; ++i) out.insert(i);
+    } else {
+      const std::size_t i = number(part);
+      if (i >= n)
+        throw InputError(source, "",
+                         "row " + part + " does not exist: the case has " + std::to_string(n) + " rows, 0 to " +
+                             std::to_string(n - 1));
+      out.insert(i);
+    }
+    pos = comma + 1;
+  }
+  return {out.begin(), out.end()};
+}
+
+std::string rowSpec(const std::vector<std::size_t>& rows) {
+  std::string out;
+  for (std::size_t k = 0; k < rows.size();) {
+    std::size_t e = k;
+    while (e + 1 < rows.size() && rows[e + 1] == rows[e] + 1) ++e;
+    if (!out.empty()) out += ",";
+    out += e == k ? std::to_string(rows[k]) : std::to_string(rows[k]) + ":" + std::to_string(rows[e] + 1);
+    k = e + 1;
+  }
+  return out;
+}
+
+RunOutcome runRows(const RowPlan& plan, const JsonDocument& doc, const RunContext& ctx) {
+  const std::size_t n = plan.size();
+  const std::string digest = rowsDigest(doc.json());
+  std::vector<std::optional<json>> results = findRowResults(ctx.outdir, digest, n);
+  RowLog log(ctx.outdir / "rows.jsonl", digest, n);
+  log.read(true);  // (repairs a torn tail; its rows are already in `results`)
+  log.open();
+  std::vector<std::size_t> todo;
+  for (std::size_t i = 0; i < n; ++i)
+    if (!results[i]) todo.push_back(i);
+
+  RowStats stats;
+  stats.reused = n - todo.size();
+  stats.where = ctx.workers != nullptr ? "mpi" : "threads";
+  stats.workers =
+      ctx.workers != nullptr
+          ? ctx.workers->size()
+          : std::max(1, std::min<int>(ctx.threads, static_cast<int>(std::max<std::size_t>(1, todo.size()))));
+  Progress progress(ctx, "rows");
+  const auto t0 = std::chrono::steady_clock::now();
+  runParallel(todo.size(), stats.workers, progress, [&](std::size_t k) {
+    const std::size_t i = todo[k];
+    if (interrupted()) {
+      results[i] = interruptedResult();  // (not logged: a rerun runs it)
+      return;
+    }
+    const auto r0 = std::chrono::steady_clock::now();
+    results[i] = runOne(plan, i, ctx.workers);
+    log.append(i, std::chrono::duration<double>(std::chrono::steady_clock::now() - r0).count(), *results[i]);
+  });
+  stats.wall_time_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  std::size_t not_run = 0;
+  for (std::size_t i : todo) not_run += results[i]->value("message", "").rfind("not run:", 0) == 0 ? 1 : 0;
+  stats.run = todo.size() - not_run;
+  stats.failed = countFailed(results) - not_run;
+  RunOutcome out = finish(plan.assemble(results, stats, ctx), stats, n);
+  if (interrupted()) {
+    out.status = RunOutcome::Status::Interrupted;
+    out.message = std::string("interrupted by ") + signalName(interruptSignal()) + " after " +
+                  std::to_string(n - not_run) + " of " + std::to_string(n) +
+                  " rows; the table lists every row, and a rerun into the folder runs the rest";
+  }
+  return out;
+}
+
+RunOutcome runRowSlice(const RowPlan& plan, const JsonDocument& doc, const std::vector<std::size_t>& which,
+                       const RunContext& ctx) {
+  const std::string digest = rowsDigest(doc.json());
+  const std::string host = hostName();
+  RowStats stats;
+  stats.where = ctx.workers != nullptr ? "mpi" : "threads";
+  stats.workers =
+      ctx.workers != nullptr
+          ? ctx.workers->size()
+          : std::max(1, std::min<int>(ctx.threads, static_cast<int>(std::max<std::size_t>(1, which.size()))));
+  Progress progress(ctx, "rows");
+  const auto t0 = std::chrono::steady_clock::now();
+  std::vector<char> failed(which.size(), 0), skipped(which.size(), 0);
+  runParallel(which.size(), stats.workers, progress, [&](std::size_t k) {
+    const std::size_t i = which[k];
+    if (interrupted()) {
+      skipped[k] = 1;
+      return;
+    }
+    const auto r0 = std::chrono::steady_clock::now();
+    const json result = runOne(plan, i, ctx.workers);
+    const double wall = std::chrono::duration<double>(std::chrono::steady_clock::now() - r0).count();
+    failed[k] = result.at("ok").get<bool>() ? 0 : 1;
+    const fs::path folder = rowFolder(ctx.outdir, i);
+    std::error_code ec;
+    fs::create_directories(folder, ec);
+    if (ec) throw WriteError(folder.string(), "cannot make the row's folder: " + ec.message());
+    writeJsonAtomic(folder / "row.json", {{"format", kRowFormat},
+                                          {"case_digest", digest},
+                                          {"index", i},
+                                          {"row", plan.describe(i)},
+                                          {"wall_time_s", wall},
+                                          {"host", host},
+                                          {"result", result}});
+  });
+  stats.wall_time_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  const auto not_run = static_cast<std::size_t>(std::count(skipped.begin(), skipped.end(), 1));
+  stats.run = which.size() - not_run;
+  stats.failed = static_cast<std::size_t>(std::count(failed.begin(), failed.end(), 1));
+  RunOutcome out;
+  out.answer = "rows " + rowSpec(which) + ": " + std::to_string(stats.run) + " run, " + std::to_string(stats.failed) +
+               " failed, into " + (ctx.outdir / "rows").string() + "/<row>/row.json\n";
+  out = finish(out, stats, plan.size());
+  if (interrupted()) {
+    out.status = RunOutcome::Status::Interrupted;
+    out.message = std::string("interrupted by ") + signalName(interruptSignal()) + " after " +
+                  std::to_string(stats.run) + " of " + std::to_string(which.size()) + " rows";
+  }
+  return out;
+}
+
+RunOutcome collectRows(const RowPlan& plan, const JsonDocument& doc, const RunContext& ctx) {
+  const std::size_t n = plan.size();
+  const std::vector<std::optional<json>> results = findRowResults(ctx.outdir, rowsDigest(doc.json()), n);
+  RowStats stats;
+  stats.where = "collected";
+  stats.reused = static_cast<std::size_t>(
+      std::count_if(results.begin(), results.end(), [](const auto& r) { return r.has_value(); }));
+  stats.missing = n - stats.reused;
+  stats.failed = countFailed(results);
+  return finish(plan.assemble(results, stats, ctx), stats, n);
+}
+
+std::string rowTable(const RowPlan& plan, const JsonDocument& doc) {
+  const std::string digest = rowsDigest(doc.json());
+  std::string out;
+  for (std::size_t i = 0; i < plan.size(); ++i) {
+    json row = plan.describe(i);
+    json line = {{"index", i}};
+    line["parameters"] = row.value("parameters", json::object());
+    line["seed"] = row.value("seed", json());
+    line["case_digest"] = digest;
+    out += line.dump() + "\n";
+  }
+  return out;
+}
+
+}  // namespace gabion::bridge
