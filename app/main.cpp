@@ -248,6 +248,18 @@ int finishRun(const Options& o, const gabion::bridge::CaseKind& kind, gabion::br
   return kExitOk;
 }
 
+// What a rank runs of a case's tasks: its rows, or what its kind serves
+// (fit.micro's evaluations, a lab test's replicates); empty for a case of
+// one run.
+gabion::app::TaskHandler taskHandler(const gabion::bridge::CaseKind& kind, const JsonDocument& doc) {
+  if (kind.rows) {
+    std::shared_ptr<const gabion::bridge::RowPlan> plan = kind.rows(doc);
+    return [plan](const nlohmann::json& task) { return gabion::bridge::runRowBundle(*plan, task); };
+  }
+  if (kind.serve) return kind.serve(doc);
+  return {};
+}
+
 // --rows: runs a slice of the case's rows into their per-row folders; no
 // table, summary or manifest (other processes may be writing rows beside).
 int runSlice(const Options& o, const gabion::bridge::CaseKind& kind, const JsonDocument& doc, const fs::path& outdir,
@@ -272,10 +284,13 @@ int runSlice(const Options& o, const gabion::bridge::CaseKind& kind, const JsonD
   return kExitOk;
 }
 
-int commandRun(Options& o, gabion::bridge::RemoteWorkers* workers) {
+int commandRun(Options& o, gabion::app::RankPool* workers) {
   auto [doc, kind] = loadAndCheck(o);
   const fs::path outdir = o.outdir.empty() ? fs::path("results") / fs::path(o.case_file).stem() : fs::path(o.outdir);
-  if (!o.rows.empty()) return runSlice(o, *kind, doc, outdir, workers);
+  if (!o.rows.empty()) {
+    if (workers != nullptr) workers->workHere(taskHandler(*kind, doc));
+    return runSlice(o, *kind, doc, outdir, workers);
+  }
   // Costed before anything is written: past the limits it is refused unless
   // --force; a long or large run says so before it starts.
   const auto estimate = estimateOf(*kind, doc);
@@ -297,7 +312,10 @@ int commandRun(Options& o, gabion::bridge::RemoteWorkers* workers) {
   ctx.threads = o.threads;
   ctx.case_file = o.case_file;
   ctx.progress = !o.quiet && isatty(STDOUT_FILENO) != 0;
-  ctx.workers = kind->rows || kind->serve ? workers : nullptr;
+  if (workers != nullptr && (kind->rows || kind->serve)) {
+    workers->workHere(taskHandler(*kind, doc));  // (rank 0 takes tasks too)
+    ctx.workers = workers;
+  }
   if (workers != nullptr && ctx.workers == nullptr)
     std::cerr << "gabion: a " << kind->kind << " case is one run, not a set of tasks: it runs on rank 0 alone\n";
   // The effective case for summary.json, kept as text so that the kind may
@@ -408,20 +426,15 @@ int commandSubmitSlurm(Options& o) {
   return kExitOk;
 }
 
-// On an MPI worker rank: answers rank 0's tasks (the case's rows) until it
-// says stop. A worker whose case cannot be read answers every task with why.
+// On an MPI worker rank: answers rank 0's tasks until it says stop. A worker
+// whose case cannot be read answers every task with why.
 int serveAsWorker(Options& o, bool run_command, const gabion::app::MpiSession& mpi) {
   gabion::app::TaskHandler handler;
   std::string why = "this command gives MPI workers no tasks";
   if (run_command) {
     try {
       auto [doc, kind] = loadAndCheck(o);
-      if (kind->rows) {
-        std::shared_ptr<const gabion::bridge::RowPlan> plan = kind->rows(doc);
-        handler = [plan](const nlohmann::json& task) { return plan->run(task.at("row").get<std::size_t>()); };
-      } else if (kind->serve) {
-        handler = kind->serve(doc);
-      }
+      handler = taskHandler(*kind, doc);
     } catch (const std::exception& e) {
       why = e.what();
     }
@@ -540,7 +553,7 @@ int runCommandLine(int argc, char** argv, const gabion::app::MpiSession& mpi) {
   o.threads_given = run->count("--threads") > 0 || slurm->count("--threads") > 0;
   // Under mpirun, ranks other than 0 serve rank 0's tasks and write nothing.
   if (mpi.worker()) return serveAsWorker(o, run->parsed(), mpi);
-  std::unique_ptr<gabion::bridge::RemoteWorkers> workers;
+  std::unique_ptr<gabion::app::RankPool> workers;
   if (mpi.size() > 1) workers = gabion::app::workerRanks(mpi);  // (its end stops the workers, however this ends)
   try {
     if (kinds->parsed()) {

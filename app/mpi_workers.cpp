@@ -1,5 +1,6 @@
 #include "app/mpi_workers.hpp"
 
+#include <atomic>
 #include <chrono>
 #include <condition_variable>
 #include <cstdlib>
@@ -44,7 +45,7 @@ void sendText(const std::string& text, int to, int tag) {
   MPI_Send(text.data(), static_cast<int>(text.size()), MPI_CHAR, to, tag, MPI_COMM_WORLD);
 }
 
-class WorkerRanks final : public bridge::RemoteWorkers {
+class WorkerRanks final : public RankPool {
  public:
   explicit WorkerRanks(int size) {
     for (int r = size - 1; r >= 1; --r) free_.push_back(r);
@@ -54,9 +55,17 @@ class WorkerRanks final : public bridge::RemoteWorkers {
     const std::lock_guard<std::mutex> lock(mpiLock());
     for (int r = 1; r <= size_; ++r) MPI_Send(nullptr, 0, MPI_CHAR, r, kTagStop, MPI_COMM_WORLD);
   }
-  int size() const override { return size_; }
+  int size() const override { return size_ + (here_ ? 1 : 0); }
+  void workHere(TaskHandler handler) override { here_ = std::move(handler); }
 
   json call(const json& task) override {
+    if (here_ && !here_busy_.exchange(true)) {
+      struct Free {  // (rank 0 is free again however the task ends)
+        std::atomic<bool>& busy;
+        ~Free() { busy = false; }
+      } free{here_busy_};
+      return here_(task);
+    }
     const int w = take();
     struct Give {  // (the worker is free again however this call ends)
       WorkerRanks& self;
@@ -68,7 +77,7 @@ class WorkerRanks final : public bridge::RemoteWorkers {
       sendText(task.dump(), w, kTagTask);
     }
     std::string reply;
-    for (auto wait = std::chrono::microseconds(20);; wait = std::min(2 * wait, std::chrono::microseconds(1000))) {
+    for (auto wait = std::chrono::microseconds(20);; wait = std::min(2 * wait, std::chrono::microseconds(100))) {
       {
         const std::lock_guard<std::mutex> lock(mpiLock());
         int flag = 0;
@@ -107,6 +116,8 @@ class WorkerRanks final : public bridge::RemoteWorkers {
     freed_.notify_one();
   }
   int size_ = 0;
+  TaskHandler here_;
+  std::atomic<bool> here_busy_{false};
   std::mutex mutex_;
   std::condition_variable freed_;
   std::vector<int> free_;
@@ -155,7 +166,7 @@ void serveTasks(const MpiSession& session, const TaskHandler& handler) {
   }
 }
 
-std::unique_ptr<bridge::RemoteWorkers> workerRanks(const MpiSession& session) {
+std::unique_ptr<RankPool> workerRanks(const MpiSession& session) {
   return std::make_unique<WorkerRanks>(session.size());
 }
 
@@ -173,7 +184,7 @@ void serveTasks(const MpiSession& /*session*/, const TaskHandler& /*handler*/) {
   throw std::logic_error("serveTasks: this build has no MPI");
 }
 
-std::unique_ptr<bridge::RemoteWorkers> workerRanks(const MpiSession& /*session*/) {
+std::unique_ptr<RankPool> workerRanks(const MpiSession& /*session*/) {
   throw std::logic_error("workerRanks: this build has no MPI");
 }
 

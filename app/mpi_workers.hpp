@@ -1,10 +1,10 @@
 #pragma once
 /// \file
 /// Running one case on several MPI ranks (`mpirun -np N gabion run CASE`):
-/// rank 0 runs the case and hands its tasks (a sweep's rows) to the other
-/// ranks as each comes free: master–worker, so a slow row holds up only its
-/// own worker. A worker runs each task as the serial run would and sends its
-/// result back; it writes nothing. The results are the serial run's.
+/// rank 0 runs the case and hands its tasks (a sweep's rows) to whichever
+/// rank comes free, itself included: master–worker, so a slow row holds up
+/// only its own rank. A worker rank runs each task as the serial run would
+/// and sends its result back. The results are the serial run's.
 ///
 /// Without MPI support in the build (GABION_HAVE_MPI off), a run started by
 /// mpirun on more than one rank is refused: every rank would run the whole
@@ -48,8 +48,14 @@ using TaskHandler = std::function<nlohmann::json(const nlohmann::json& task)>;
 /// A handler that throws answers with its message (the task fails on rank 0).
 void serveTasks(const MpiSession& session, const TaskHandler& handler);
 
-/// On rank 0: the other ranks, as bridge::RemoteWorkers. Destroying it tells
-/// every worker to stop, however rank 0's run ended.
-std::unique_ptr<bridge::RemoteWorkers> workerRanks(const MpiSession& session);
+/// On rank 0: the ranks that run tasks, as bridge::RemoteWorkers. Destroying
+/// it tells every worker rank to stop, however rank 0's run ended.
+class RankPool : public bridge::RemoteWorkers {
+ public:
+  /// Rank 0 works too: a task goes to `handler` on the calling thread when
+  /// rank 0 is not running one already (size() then counts rank 0).
+  virtual void workHere(TaskHandler handler) = 0;
+};
+std::unique_ptr<RankPool> workerRanks(const MpiSession& session);
 
 }  // namespace gabion::app

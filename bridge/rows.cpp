@@ -3,6 +3,7 @@
 #include <unistd.h>
 
 #include <algorithm>
+#include <atomic>
 #include <chrono>
 #include <fstream>
 #include <iterator>
@@ -95,14 +96,18 @@ class RowLog {
     same_ = true;
   }
 
-  void append(std::size_t index, double wall_time_s, const json& result) {
-    const std::string line = json{{"index", index}, {"wall_time_s", wall_time_s}, {"result", result}}.dump() + "\n";
+  // Appends rows (index, wall time, result) at once.
+  template <class Rows>
+  void append(const Rows& rows) {
+    std::string lines;
+    for (const auto& r : rows)
+      lines += json{{"index", r.index}, {"wall_time_s", r.wall_time_s}, {"result", r.result}}.dump() + "\n";
     const std::lock_guard<std::mutex> lock(mutex_);
-    // Appended and closed at once: a killed run loses at most the row being written.
+    // Appended and closed at once: a killed run loses at most the rows being written.
     std::ofstream out(file_, std::ios::app);
-    out << line;
+    out << lines;
     out.close();
-    if (!out) throw WriteError(file_.string(), "the row " + std::to_string(index) + " could not be written");
+    if (!out) throw WriteError(file_.string(), "rows could not be logged");
   }
 
  private:
@@ -122,10 +127,14 @@ std::string hostName() {
   return name;
 }
 
-// Runs row i here or on a worker; a row that throws is a failed row.
-json runOne(const RowPlan& plan, std::size_t i, RemoteWorkers* workers) {
+json interruptedResult() {
+  return {{"ok", false}, {"message", std::string("not run: interrupted by ") + signalName(interruptSignal())}};
+}
+
+// Runs row i here; a row that throws is a failed row.
+json runOne(const RowPlan& plan, std::size_t i) {
   try {
-    return checkedResult(workers != nullptr ? workers->call({{"row", i}}) : plan.run(i));
+    return checkedResult(plan.run(i));
   } catch (const WriteError&) {
     throw;
   } catch (const std::exception& e) {
@@ -133,8 +142,88 @@ json runOne(const RowPlan& plan, std::size_t i, RemoteWorkers* workers) {
   }
 }
 
-json interruptedResult() {
-  return {{"ok", false}, {"message", std::string("not run: interrupted by ") + signalName(interruptSignal())}};
+// A finished row: its index, wall time and result.
+struct Done {
+  std::size_t index;
+  double wall_time_s;
+  json result;
+};
+
+double secondsSince(std::chrono::steady_clock::time_point t0) {
+  return std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+}
+
+// Runs the rows `todo` on ctx.threads threads, or in bundles on ctx.workers,
+// and gives each batch of finished rows to `done` (from several threads at
+// once). A bundle is sized from the rows' measured time, about 0.1 s of work,
+// and small enough that every worker gets several: a message per row would
+// make rank 0 the bottleneck of rows of milliseconds. After SIGINT or SIGTERM
+// the rows not started are given as not run.
+template <class OnDone>
+void runAll(const RowPlan& plan, const std::vector<std::size_t>& todo, const RunContext& ctx, int workers,
+            Progress& progress, const OnDone& done) {
+  if (ctx.workers == nullptr) {
+    runParallel(todo.size(), workers, progress, [&](std::size_t k) {
+      const std::size_t i = todo[k];
+      if (interrupted()) return done(std::vector<Done>{{i, 0.0, interruptedResult()}});
+      const auto r0 = std::chrono::steady_clock::now();
+      json r = runOne(plan, i);
+      done(std::vector<Done>{{i, secondsSince(r0), std::move(r)}});
+    });
+    return;
+  }
+  std::mutex mutex;
+  std::size_t next = 0, measured = 0;
+  double measured_s = 0.0;
+  const auto take = [&](std::size_t& first) -> std::size_t {
+    const std::lock_guard<std::mutex> lock(mutex);
+    const std::size_t left = todo.size() - next;
+    std::size_t k = 1;
+    if (measured > 0) {
+      const double per_row = std::max(measured_s / static_cast<double>(measured), 1e-6);
+      const auto share = std::max<std::size_t>(1, left / (4 * static_cast<std::size_t>(workers)));
+      k = std::min<std::size_t>(share, static_cast<std::size_t>(std::max(1.0, 0.1 / per_row)));
+    }
+    k = std::min(k, left);
+    first = next;
+    next += k;
+    return k;
+  };
+  runParallel(static_cast<std::size_t>(workers), workers, progress, [&](std::size_t) {
+    for (std::size_t first = 0, k = take(first); k > 0; k = take(first)) {
+      std::vector<Done> batch;
+      if (interrupted()) {
+        for (std::size_t j = first; j < first + k; ++j) batch.push_back({todo[j], 0.0, interruptedResult()});
+        done(batch);
+        continue;
+      }
+      json rows = json::array();
+      for (std::size_t j = first; j < first + k; ++j) rows.push_back(todo[j]);
+      json answer;
+      try {
+        answer = ctx.workers->call({{"rows", rows}});
+      } catch (const WriteError&) {
+        throw;
+      } catch (const std::exception& e) {  // (the rank could not run them: each is failed with why)
+        for (std::size_t j = first; j < first + k; ++j)
+          batch.push_back({todo[j], 0.0, {{"ok", false}, {"message", e.what()}}});
+        done(batch);
+        continue;
+      }
+      double wall = 0.0;
+      for (std::size_t j = 0; j < k; ++j) {
+        const double w = answer.at("wall_time_s").at(j).get<double>();
+        wall += w;
+        batch.push_back({todo[first + j], w, checkedResult(answer.at("results").at(j))});
+      }
+      {
+        const std::lock_guard<std::mutex> lock(mutex);
+        measured += k;
+        measured_s += wall;
+      }
+      done(batch);
+    }
+  });
 }
 
 // Adds the rows' account to an assembled outcome.
@@ -261,15 +350,13 @@ RunOutcome runRows(const RowPlan& plan, const JsonDocument& doc, const RunContex
           : std::max(1, std::min<int>(ctx.threads, static_cast<int>(std::max<std::size_t>(1, todo.size()))));
   Progress progress(ctx, "rows");
   const auto t0 = std::chrono::steady_clock::now();
-  runParallel(todo.size(), stats.workers, progress, [&](std::size_t k) {
-    const std::size_t i = todo[k];
-    if (interrupted()) {
-      results[i] = interruptedResult();  // (not logged: a rerun runs it)
-      return;
+  runAll(plan, todo, ctx, stats.workers, progress, [&](std::vector<Done> batch) {
+    std::vector<Done> ran;  // (a row not run is not logged: a rerun runs it)
+    for (Done& d : batch) {
+      if (d.result.value("message", "").rfind("not run:", 0) != 0) ran.push_back(d);
+      results[d.index] = std::move(d.result);
     }
-    const auto r0 = std::chrono::steady_clock::now();
-    results[i] = runOne(plan, i, ctx.workers);
-    log.append(i, std::chrono::duration<double>(std::chrono::steady_clock::now() - r0).count(), *results[i]);
+    if (!ran.empty()) log.append(ran);
   });
   stats.wall_time_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   std::size_t not_run = 0;
@@ -298,33 +385,30 @@ RunOutcome runRowSlice(const RowPlan& plan, const JsonDocument& doc, const std::
           : std::max(1, std::min<int>(ctx.threads, static_cast<int>(std::max<std::size_t>(1, which.size()))));
   Progress progress(ctx, "rows");
   const auto t0 = std::chrono::steady_clock::now();
-  std::vector<char> failed(which.size(), 0), skipped(which.size(), 0);
-  runParallel(which.size(), stats.workers, progress, [&](std::size_t k) {
-    const std::size_t i = which[k];
-    if (interrupted()) {
-      skipped[k] = 1;
-      return;
+  std::atomic<std::size_t> failed{0}, skipped{0};
+  runAll(plan, which, ctx, stats.workers, progress, [&](const std::vector<Done>& batch) {
+    for (const Done& d : batch) {
+      if (d.result.value("message", "").rfind("not run:", 0) == 0) {
+        ++skipped;
+        continue;
+      }
+      if (!d.result.at("ok").get<bool>()) ++failed;
+      const fs::path folder = rowFolder(ctx.outdir, d.index);
+      std::error_code ec;
+      fs::create_directories(folder, ec);
+      if (ec) throw WriteError(folder.string(), "cannot make the row's folder: " + ec.message());
+      writeJsonAtomic(folder / "row.json", {{"format", kRowFormat},
+                                            {"case_digest", digest},
+                                            {"index", d.index},
+                                            {"row", plan.describe(d.index)},
+                                            {"wall_time_s", d.wall_time_s},
+                                            {"host", host},
+                                            {"result", d.result}});
     }
-    const auto r0 = std::chrono::steady_clock::now();
-    const json result = runOne(plan, i, ctx.workers);
-    const double wall = std::chrono::duration<double>(std::chrono::steady_clock::now() - r0).count();
-    failed[k] = result.at("ok").get<bool>() ? 0 : 1;
-    const fs::path folder = rowFolder(ctx.outdir, i);
-    std::error_code ec;
-    fs::create_directories(folder, ec);
-    if (ec) throw WriteError(folder.string(), "cannot make the row's folder: " + ec.message());
-    writeJsonAtomic(folder / "row.json", {{"format", kRowFormat},
-                                          {"case_digest", digest},
-                                          {"index", i},
-                                          {"row", plan.describe(i)},
-                                          {"wall_time_s", wall},
-                                          {"host", host},
-                                          {"result", result}});
   });
   stats.wall_time_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
-  const auto not_run = static_cast<std::size_t>(std::count(skipped.begin(), skipped.end(), 1));
-  stats.run = which.size() - not_run;
-  stats.failed = static_cast<std::size_t>(std::count(failed.begin(), failed.end(), 1));
+  stats.run = which.size() - skipped;
+  stats.failed = failed;
   RunOutcome out;
   out.answer = "rows " + rowSpec(which) + ": " + std::to_string(stats.run) + " run, " + std::to_string(stats.failed) +
                " failed, into " + (ctx.outdir / "rows").string() + "/<row>/row.json\n";
@@ -347,6 +431,16 @@ RunOutcome collectRows(const RowPlan& plan, const JsonDocument& doc, const RunCo
   stats.missing = n - stats.reused;
   stats.failed = countFailed(results);
   return finish(plan.assemble(results, stats, ctx), stats, n);
+}
+
+json runRowBundle(const RowPlan& plan, const json& task) {
+  json results = json::array(), walls = json::array();
+  for (const auto& i : task.at("rows")) {
+    const auto r0 = std::chrono::steady_clock::now();
+    results.push_back(runOne(plan, i.get<std::size_t>()));
+    walls.push_back(secondsSince(r0));
+  }
+  return {{"results", results}, {"wall_time_s", walls}};
 }
 
 std::string rowTable(const RowPlan& plan, const JsonDocument& doc) {

@@ -117,6 +117,10 @@ RunOutcome runRowSlice(const RowPlan& plan, const JsonDocument& doc, const std::
 /// are marked missing (`gabion collect`).
 RunOutcome collectRows(const RowPlan& plan, const JsonDocument& doc, const RunContext& ctx);
 
+/// Runs a bundle of rows for a worker: task {"rows": [i, ...]} -> {"results":
+/// [...], "wall_time_s": [...]}, each row as runRows runs it here.
+nlohmann::json runRowBundle(const RowPlan& plan, const nlohmann::json& task);
+
 /// The row table of a case: one JSON line per row {"index", "parameters",
 /// "seed", "case_digest"} (`gabion rows CASE`).
 std::string rowTable(const RowPlan& plan, const JsonDocument& doc);

@@ -327,9 +327,9 @@ TEST(MicroLab, ReplicatesOnCellsOfDifferentSeedsGiveAScatter) {
 }
 
 // mpirun on three ranks: the cells of two replicates are generated and
-// their tests run on the two worker ranks; rank 0 gathers the summary. The
-// cells, curves and scatter are those of a run on two threads, and rank 0's
-// manifest lists the workers' files.
+// their tests run on the ranks (rank 0 takes one, a worker rank the other);
+// rank 0 gathers the summary. The cells, curves and scatter are those of a
+// run on two threads, and rank 0's manifest lists the worker's files.
 TEST(MicroLab, ReplicatesOnMpiRanksAreTheThreadedRuns) {
 #ifndef GABION_MPIEXEC
   GTEST_SKIP() << "this build has no MPI (scripts/deps.sh installs libopenmpi-dev; build again)";
