@@ -252,12 +252,16 @@ int finishRun(const Options& o, const gabion::bridge::CaseKind& kind, gabion::br
 // (fit.micro's evaluations, a lab test's replicates); empty for a case of
 // one run.
 gabion::app::TaskHandler taskHandler(const gabion::bridge::CaseKind& kind, const JsonDocument& doc) {
-  if (kind.rows) {
-    std::shared_ptr<const gabion::bridge::RowPlan> plan = kind.rows(doc);
-    return [plan](const nlohmann::json& task) { return gabion::bridge::runRowBundle(*plan, task); };
-  }
-  if (kind.serve) return kind.serve(doc);
-  return {};
+  std::shared_ptr<const gabion::bridge::RowPlan> plan;
+  gabion::app::TaskHandler served;
+  if (kind.rows) plan = kind.rows(doc);
+  if (kind.serve) served = kind.serve(doc);
+  if (!plan && !served) return {};
+  return [plan, served](const nlohmann::json& task) {
+    if (task.contains("rows") && plan) return gabion::bridge::runRowBundle(*plan, task);  // (a slice's, a sweep's)
+    if (!served) throw std::runtime_error("this case's kind takes no such task: " + task.dump());
+    return served(task);  // (the kind's own: a calibration's evaluations, a replicate)
+  };
 }
 
 // --rows: runs a slice of the case's rows into their per-row folders; no
@@ -275,6 +279,7 @@ int runSlice(const Options& o, const gabion::bridge::CaseKind& kind, const JsonD
   ctx.case_file = o.case_file;
   ctx.progress = !o.quiet && isatty(STDOUT_FILENO) != 0;
   ctx.workers = workers;
+  ctx.case_digest = gabion::bridge::hexDigest(gabion::bridge::fnv1a(doc.json().dump()));
   const auto outcome = gabion::bridge::runRowSlice(*plan, doc, which, ctx);
   if (outcome.status == gabion::bridge::RunOutcome::Status::Interrupted) {
     std::cerr << "gabion: " << outcome.message << "\n";
@@ -543,6 +548,10 @@ int runCommandLine(int argc, char** argv, const gabion::app::MpiSession& mpi) {
   plot->add_option("result", o.result_file, "a run's result.h5")->required();
   plot->add_option("-o,--output", o.figure, "figure file, .png or .svg (default: beside the result, .png)");
 
+  // Under mpirun, ranks other than 0 serve rank 0's tasks and write nothing;
+  // rank 0's pool of ranks stops them when it goes, however this ends.
+  std::unique_ptr<gabion::app::RankPool> workers;
+  if (mpi.size() > 1 && !mpi.worker()) workers = gabion::app::workerRanks(mpi);
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {  // (--help and --version too: exit 0)
@@ -551,10 +560,7 @@ int runCommandLine(int argc, char** argv, const gabion::app::MpiSession& mpi) {
     return code == 0 ? kExitOk : kExitBadInput;
   }
   o.threads_given = run->count("--threads") > 0 || slurm->count("--threads") > 0;
-  // Under mpirun, ranks other than 0 serve rank 0's tasks and write nothing.
   if (mpi.worker()) return serveAsWorker(o, run->parsed(), mpi);
-  std::unique_ptr<gabion::app::RankPool> workers;
-  if (mpi.size() > 1) workers = gabion::app::workerRanks(mpi);  // (its end stops the workers, however this ends)
   try {
     if (kinds->parsed()) {
       for (const auto& k : gabion::app::allKinds())

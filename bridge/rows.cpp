@@ -131,10 +131,20 @@ json interruptedResult() {
   return {{"ok", false}, {"message", std::string("not run: interrupted by ") + signalName(interruptSignal())}};
 }
 
+// What a row runs with: the case's folder, one thread.
+RunContext rowContext(const RunContext& ctx) {
+  RunContext rc;
+  rc.outdir = ctx.outdir;
+  rc.case_file = ctx.case_file;
+  rc.case_digest = ctx.case_digest;
+  rc.threads = 1;
+  return rc;
+}
+
 // Runs row i here; a row that throws is a failed row.
-json runOne(const RowPlan& plan, std::size_t i) {
+json runOne(const RowPlan& plan, std::size_t i, const RunContext& ctx) {
   try {
-    return checkedResult(plan.run(i));
+    return checkedResult(plan.run(i, rowContext(ctx)));
   } catch (const WriteError&) {
     throw;
   } catch (const std::exception& e) {
@@ -167,7 +177,7 @@ void runAll(const RowPlan& plan, const std::vector<std::size_t>& todo, const Run
       const std::size_t i = todo[k];
       if (interrupted()) return done(std::vector<Done>{{i, 0.0, interruptedResult()}});
       const auto r0 = std::chrono::steady_clock::now();
-      json r = runOne(plan, i);
+      json r = runOne(plan, i, ctx);
       done(std::vector<Done>{{i, secondsSince(r0), std::move(r)}});
     });
     return;
@@ -201,7 +211,8 @@ void runAll(const RowPlan& plan, const std::vector<std::size_t>& todo, const Run
       for (std::size_t j = first; j < first + k; ++j) rows.push_back(todo[j]);
       json answer;
       try {
-        answer = ctx.workers->call({{"rows", rows}});
+        answer = ctx.workers->call(
+            {{"rows", rows}, {"outdir", fs::absolute(ctx.outdir).string()}, {"case_digest", ctx.case_digest}});
       } catch (const WriteError&) {
         throw;
       } catch (const std::exception& e) {  // (the rank could not run them: each is failed with why)
@@ -434,10 +445,13 @@ RunOutcome collectRows(const RowPlan& plan, const JsonDocument& doc, const RunCo
 }
 
 json runRowBundle(const RowPlan& plan, const json& task) {
+  RunContext ctx;
+  ctx.outdir = task.at("outdir").get<std::string>();
+  ctx.case_digest = task.at("case_digest").get<std::string>();
   json results = json::array(), walls = json::array();
   for (const auto& i : task.at("rows")) {
     const auto r0 = std::chrono::steady_clock::now();
-    results.push_back(runOne(plan, i.get<std::size_t>()));
+    results.push_back(runOne(plan, i.get<std::size_t>(), ctx));
     walls.push_back(secondsSince(r0));
   }
   return {{"results", results}, {"wall_time_s", walls}};

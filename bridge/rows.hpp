@@ -54,10 +54,12 @@ class RowPlan {
   /// Row `i` as a row table shows it: {"parameters": {...}, "seed": n or null}.
   virtual nlohmann::json describe(std::size_t i) const = 0;
   /// Runs row `i` (thread-safe): its result, {"ok": true, ...} or {"ok":
-  /// false, "message"}. It depends on `i` alone. May throw for a row that
-  /// cannot run (the runner records it as failed); WriteError is the host's
-  /// trouble and stops the run.
-  virtual nlohmann::json run(std::size_t i) const = 0;
+  /// false, "message"}. It depends on `i` alone. ctx.outdir is the case's
+  /// output folder, where a row may write folders of its own (a lab test's
+  /// replicate); ctx.threads is 1. May throw for a row that cannot run (the
+  /// runner records it as failed); WriteError is the host's trouble and
+  /// stops the run.
+  virtual nlohmann::json run(std::size_t i, const RunContext& ctx) const = 0;
   /// Estimated wall time of row `i` on one thread (s): bundles rows into tasks.
   virtual double costS(std::size_t i) const = 0;
   /// Writes the case's tables and charts into ctx.outdir from every row's
@@ -117,8 +119,9 @@ RunOutcome runRowSlice(const RowPlan& plan, const JsonDocument& doc, const std::
 /// are marked missing (`gabion collect`).
 RunOutcome collectRows(const RowPlan& plan, const JsonDocument& doc, const RunContext& ctx);
 
-/// Runs a bundle of rows for a worker: task {"rows": [i, ...]} -> {"results":
-/// [...], "wall_time_s": [...]}, each row as runRows runs it here.
+/// Runs a bundle of rows for a worker: task {"rows": [i, ...], "outdir",
+/// "case_digest"} -> {"results": [...], "wall_time_s": [...]}, each row as
+/// runRows runs it here.
 nlohmann::json runRowBundle(const RowPlan& plan, const nlohmann::json& task);
 
 /// The row table of a case: one JSON line per row {"index", "parameters",

@@ -268,6 +268,17 @@ double nloptCallback(unsigned n, const double* u, double* /*grad*/, void* data) 
 
 }  // namespace
 
+std::vector<std::vector<double>> initialPopulation(const std::vector<Parameter>& params,
+                                                   const CalibrationSettings& settings) {
+  std::vector<std::vector<double>> out;
+  for (const auto& u : latinHypercube(settings.initial_samples, params.size(), settings.seed)) {
+    std::vector<double> x;
+    for (std::size_t i = 0; i < u.size(); ++i) x.push_back(fromUnit(params[i], u[i]));  // (as Loop converts it)
+    out.push_back(std::move(x));
+  }
+  return out;
+}
+
 CalibrationResult calibrate(const std::vector<Parameter>& params, const Evaluator& evaluate,
                             const CalibrationSettings& settings, EvaluationLog& log, const fs::path& scratch_root,
                             bridge::Progress* progress) {

@@ -90,6 +90,13 @@ struct CalibrationResult {
   double wall_time_s = 0.0;
 };
 
+/// The population the loop starts from: the seeded Latin-hypercube samples
+/// in physical units, in the order the loop evaluates them. Evaluated
+/// elsewhere (a fit.micro case's rows) and logged, they are taken from the
+/// log as the loop's own.
+std::vector<std::vector<double>> initialPopulation(const std::vector<Parameter>& params,
+                                                   const CalibrationSettings& settings);
+
 /// Runs the loop. Evaluation folders are made under `scratch_root`.
 CalibrationResult calibrate(const std::vector<Parameter>& params, const Evaluator& evaluate,
                             const CalibrationSettings& settings, EvaluationLog& log,

@@ -1,6 +1,10 @@
 #include "fitting/micro_case.hpp"
 
+#include <unistd.h>
+
 #include <algorithm>
+#include <atomic>
+#include <chrono>
 #include <cmath>
 #include <iomanip>
 #include <sstream>
@@ -10,6 +14,7 @@
 #include "bridge/manifest.hpp"
 #include "bridge/plot.hpp"
 #include "bridge/rows.hpp"
+#include "bridge/units.hpp"
 #include "fitting/calibration.hpp"
 #include "fitting/case_input.hpp"
 #include "fitting/sha256.hpp"
@@ -304,6 +309,107 @@ std::function<json(const json&)> serveCase(const bridge::JsonDocument& doc) {
   };
 }
 
+// The calibration's population as rows (bridge/rows.hpp): a row per
+// Latin-hypercube sample, evaluated anywhere (a Slurm task, a slice), then
+// collected into evaluations.jsonl, where `gabion run --resume OUTDIR` finds
+// them and goes on with the local searches.
+class PopulationRows final : public bridge::RowPlan {
+ public:
+  explicit PopulationRows(const bridge::JsonDocument& doc)
+      : c_(readMicroCase(doc)), base_(bridge::JsonDocument::load(c_.micro_case)), hash_(caseHash(doc, c_.micro_case)) {
+    objective_ = MicroObjective{&base_, &microKind(base_), &c_, labGrids(c_)};
+    for (const auto& p : c_.params) params_.push_back(p.param), names_.push_back(p.param.name);
+    points_ = initialPopulation(params_, c_.search);
+    const auto& kind = microKind(base_);
+    const auto one = kind.estimate ? kind.estimate(substituted(base_, c_, midpoint(c_))) : std::nullopt;
+    one_s_ = one ? one->wall_time_s : 600.0;
+  }
+  std::size_t size() const override { return points_.size(); }
+  json describe(std::size_t i) const override {
+    json p = json::object();
+    for (std::size_t k = 0; k < names_.size(); ++k) p[names_[k]] = points_[i][k];
+    return {{"parameters", p}, {"seed", c_.search.seed}};
+  }
+  json run(std::size_t i, const bridge::RunContext&) const override {
+    // (in a folder of its own, removed after, as the loop's evaluations)
+    const fs::path scratch = fs::temp_directory_path() / ("gabion-fit-row-" + std::to_string(::getpid()) + "-" +
+                                                          std::to_string(i) + "-" + std::to_string(nextScratch()));
+    std::error_code ec;
+    fs::remove_all(scratch, ec);
+    fs::create_directories(scratch);
+    const auto t0 = std::chrono::steady_clock::now();
+    json r;
+    try {
+      const double error = objective_(points_[i], scratch);
+      r = std::isfinite(error) ? json{{"ok", true}, {"error", error}}
+                               : json{{"ok", false}, {"message", "objective is not finite"}};
+    } catch (const bridge::WriteError&) {
+      fs::remove_all(scratch, ec);
+      throw;
+    } catch (const std::exception& e) {
+      r = {{"ok", false}, {"message", e.what()}};
+    }
+    fs::remove_all(scratch, ec);
+    r["time_s"] = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+    return r;
+  }
+  double costS(std::size_t) const override { return one_s_; }
+  bridge::RunOutcome assemble(const std::vector<std::optional<json>>& rows, const bridge::RowStats& stats,
+                              const bridge::RunContext& ctx) const override {
+    EvaluationLog log(ctx.outdir / "evaluations.jsonl", hash_, names_, true);
+    std::size_t added = 0, failed = 0;
+    std::optional<std::size_t> best;
+    for (std::size_t i = 0; i < rows.size(); ++i) {
+      if (!rows[i]) continue;
+      const json& row = *rows[i];
+      const bool ok = row.at("ok").get<bool>();
+      if (!ok) ++failed;
+      if (ok && (!best || row.at("error").get<double>() < rows[*best]->at("error").get<double>())) best = i;
+      EvaluationRecord r;
+      if (log.find(points_[i], r)) continue;
+      r.id = log.nextId();
+      r.parameters = points_[i];
+      r.ok = ok;
+      r.error = ok ? row.at("error").get<double>() : c_.search.penalty;
+      r.message = ok ? "" : row.at("message").get<std::string>();
+      r.time_s = row.value("time_s", 0.0);
+      log.append(r);
+      ++added;
+    }
+    bridge::RunOutcome out;
+    json pop = {{"samples", rows.size()}, {"evaluated", rows.size() - stats.missing},
+                {"failed", failed},       {"missing", stats.missing},
+                {"added_to_log", added},  {"evaluation_log", "evaluations.jsonl"}};
+    std::ostringstream answer;
+    answer << "fit.micro population: " << rows.size() - stats.missing << " of " << rows.size() << " samples evaluated ("
+           << failed << " failed), logged in evaluations.jsonl";
+    if (best) {
+      pop["best_misfit"] = rows[*best]->at("error");
+      pop["best_parameters"] = describe(*best).at("parameters");
+      answer << "; best misfit " << bridge::showNumber(rows[*best]->at("error").get<double>()) << " at "
+             << pop["best_parameters"].dump();
+    }
+    answer << "\nthe search goes on from them: gabion run --resume " << fs::absolute(ctx.outdir).string() << "\n";
+    out.answer = answer.str();
+    out.results["population"] = pop;
+    return out;
+  }
+
+ private:
+  static std::size_t nextScratch() {
+    static std::atomic<std::size_t> n{0};
+    return n++;
+  }
+  MicroCase c_;
+  bridge::JsonDocument base_;
+  std::string hash_;
+  MicroObjective objective_{};
+  std::vector<Parameter> params_;
+  std::vector<std::string> names_;
+  std::vector<std::vector<double>> points_;
+  double one_s_ = 600.0;
+};
+
 bridge::RunOutcome runCase(const bridge::JsonDocument& doc, const bridge::RunContext& ctx) {
   const MicroCase c = readMicroCase(doc);
   const bridge::JsonDocument base = bridge::JsonDocument::load(c.micro_case);
@@ -395,7 +501,7 @@ bridge::CaseKind fitMicroCaseKind() {
           checkCase,
           runCase,
           estimateCase,
-          nullptr,
+          [](const bridge::JsonDocument& doc) { return std::make_shared<const PopulationRows>(doc); },
           serveCase};
 }
 

@@ -196,7 +196,7 @@ class SweepPlan final : public bridge::RowPlan {
               {"cells", {size[0], size[1], size[2]}}}},
             {"seed", nullptr}};
   }
-  json run(std::size_t i) const override { return toRow(runPoint(p_, p_.points[i])); }
+  json run(std::size_t i, const bridge::RunContext&) const override { return toRow(runPoint(p_, p_.points[i])); }
   double costS(std::size_t i) const override {
     const auto s = static_cast<std::size_t>(p_.points[i].size);
     return impactEstimate(p_.c.run, p_.structures[s], critical_[s]).wall_time_s;

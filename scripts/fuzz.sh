@@ -30,7 +30,9 @@ fi
 dir=build-fuzz
 # (-Wno-pass-failed: clang cannot vectorise some `omp simd` loops once instrumented; not a fault)
 flags="-fsanitize=fuzzer-no-link,address,undefined -fno-sanitize-recover=undefined -fno-omit-frame-pointer -Wno-pass-failed"
+# (line tables are all a sanitizer's report needs, and compile sooner than -g)
 cmake -S . -B "$dir" -DCMAKE_BUILD_TYPE=RelWithDebInfo -DCMAKE_CXX_COMPILER=clang++ -DCMAKE_C_COMPILER=clang \
+  -DCMAKE_CXX_FLAGS_RELWITHDEBINFO="-O2 -gline-tables-only -DNDEBUG" \
   -DCMAKE_CXX_FLAGS="$flags" -DGABION_FUZZ=ON -DGABION_BUILD_BENCH=OFF -DGABION_NATIVE=OFF >/dev/null
 cmake --build "$dir" -j "$(nproc)" --target fuzz_case_json fuzz_law_file fuzz_curve_csv fuzz_curve_h5 test_bridge \
   test_macro test_micro test_fitting >/dev/null

@@ -381,7 +381,9 @@ bridge::CaseKind confinedCompressionKind() {
             return runReplicates(*replicates(d, true), ctx);
           },
           [](const bridge::JsonDocument& d) { return estimate(d, true); },
-          nullptr,
+          [](const bridge::JsonDocument& d) {
+            return replicateRows(replicates(d, true), [&] { return estimate(d, true); });
+          },
           [](const bridge::JsonDocument& d) { return serveReplicates(replicates(d, true)); }};
 }
 
@@ -393,7 +395,9 @@ bridge::CaseKind unconfinedCompressionKind() {
             return runReplicates(*replicates(d, false), ctx);
           },
           [](const bridge::JsonDocument& d) { return estimate(d, false); },
-          nullptr,
+          [](const bridge::JsonDocument& d) {
+            return replicateRows(replicates(d, false), [&] { return estimate(d, false); });
+          },
           [](const bridge::JsonDocument& d) { return serveReplicates(replicates(d, false)); }};
 }
 

@@ -428,107 +428,16 @@ void noteAll(const nlohmann::json& files) {
   for (const auto& f : files) bridge::noteWritten(f.get<std::string>());
 }
 
-}  // namespace
-
-std::function<nlohmann::json(const nlohmann::json&)> serveReplicates(std::shared_ptr<const Replicates> r) {
-  return [r](const nlohmann::json& task) {
-    bridge::RunContext ctx;
-    ctx.outdir = task.at("outdir").get<std::string>();
-    ctx.case_digest = task.at("case_digest").get<std::string>();
-    ctx.threads = 1;
-    if (task.contains("cell")) {
-      const fs::path file = generateReplicateCell(*r, task.at("cell").get<std::size_t>(), ctx, false);
-      return nlohmann::json{{"file", file.string()}, {"files", writtenUnder(file.parent_path())}};
-    }
-    const auto j = task.at("run").get<std::size_t>();
-    nlohmann::json answer;
-    try {
-      const bridge::RunOutcome out = runReplicateInFolder(*r, j, task.at("cell_file").get<std::string>(), ctx, false);
-      answer = {{"status", static_cast<int>(out.status)}, {"message", out.message}, {"results", out.results}};
-    } catch (const bridge::WriteError&) {
-      throw;
-    } catch (const std::exception& e) {
-      answer = {{"error", e.what()}};
-    }
-    answer["files"] = writtenUnder(ctx.outdir / runFolder(*r, j));
-    return answer;
-  };
-}
-
-bridge::RunOutcome runReplicates(const Replicates& reps, const bridge::RunContext& ctx) {
-  const LabSetup& setup = reps.setup;
+// The case's summary from every run's outcome (or the error that kept it
+// from ending): the runs, and the scatter of the headline values over each
+// variant's replicates.
+bridge::RunOutcome summarizeReplicates(const Replicates& reps, const std::vector<bridge::RunOutcome>& outs,
+                                       const std::vector<std::string>& errors) {
   const std::string& label = reps.label;
   const std::vector<std::string>& variants = reps.variants;
   const std::vector<std::string>& scatter_keys = reps.scatter_keys;
-  const std::size_t nr = setup.cells.size(), nv = variants.size(), n = nr * nv;
-  // Several runs go to the MPI workers, when there are some.
-  bridge::RemoteWorkers* workers = n > 1 ? ctx.workers : nullptr;
-  const auto task = [&](nlohmann::json t) {
-    t["outdir"] = fs::absolute(ctx.outdir).string();
-    t["case_digest"] = ctx.case_digest;
-    nlohmann::json answer = workers->call(t);
-    noteAll(answer.at("files"));
-    return answer;
-  };
-  // The cells: generated first where they come from a case (in parallel),
-  // each once whatever the number of variants.
-  std::vector<fs::path> files(nr);
-  std::vector<std::string> errors(n);
-  std::vector<std::string> cell_errors(nr);
-  const int cell_threads = nr > 1 ? (workers != nullptr ? workers->size() : ctx.threads) : 1;
-  parallelFor(nr, cell_threads, [&](std::size_t k, bool first) {
-    const CellSource& c = setup.cells[k];
-    if (c.generate.empty()) {
-      files[k] = c.file;
-      return;
-    }
-    try {
-      if (workers != nullptr && nr > 1)
-        files[k] = task({{"cell", k}}).at("file").get<std::string>();
-      else
-        files[k] = generateReplicateCell(reps, k, ctx, first);
-    } catch (const std::exception& e) {  // (a thread must not throw; the case was checked before)
-      cell_errors[k] = e.what();
-    }
-  });
-  std::vector<bridge::RunOutcome> outs(n);
+  const std::size_t nr = reps.setup.cells.size(), nv = variants.size(), n = nr * nv;
   const auto folder = [&](std::size_t j) { return runFolder(reps, j); };
-  const auto cellFailed = [&](std::size_t j) {
-    outs[j].status = bridge::RunOutcome::Status::NumericalFailure;
-    outs[j].message = cell_errors[j / nv];
-  };
-  if (n == 1) {
-    if (!cell_errors[0].empty()) {
-      cellFailed(0);
-      return outs[0];
-    }
-    return runReplicate(reps, 0, files[0], ctx);
-  }
-  // Several runs in parallel, one engine thread each (or one worker rank
-  // each); every one writes its own folder.
-  parallelFor(n, workers != nullptr ? workers->size() : ctx.threads, [&](std::size_t j, bool first) {
-    if (!cell_errors[j / nv].empty()) {
-      cellFailed(j);
-      return;
-    }
-    try {
-      if (workers != nullptr) {
-        const nlohmann::json a = task({{"run", j}, {"cell_file", files[j / nv].string()}});
-        if (a.contains("error")) {
-          errors[j] = a.at("error").get<std::string>();
-          return;
-        }
-        outs[j].status = static_cast<bridge::RunOutcome::Status>(a.at("status").get<int>());
-        outs[j].message = a.at("message").get<std::string>();
-        outs[j].results = a.at("results");
-      } else {
-        outs[j] = runReplicateInFolder(reps, j, files[j / nv], ctx, first);
-      }
-    } catch (const std::exception& e) {
-      errors[j] = e.what();
-    }
-  });
-
   bridge::RunOutcome out;
   nlohmann::json list = nlohmann::json::array();
   std::string failures;
@@ -578,6 +487,231 @@ bridge::RunOutcome runReplicates(const Replicates& reps, const bridge::RunContex
     out.message = failures;
   }
   return out;
+}
+
+}  // namespace
+
+std::function<nlohmann::json(const nlohmann::json&)> serveReplicates(std::shared_ptr<const Replicates> r) {
+  return [r](const nlohmann::json& task) {
+    bridge::RunContext ctx;
+    ctx.outdir = task.at("outdir").get<std::string>();
+    ctx.case_digest = task.at("case_digest").get<std::string>();
+    ctx.threads = 1;
+    if (task.contains("cell")) {
+      const fs::path file = generateReplicateCell(*r, task.at("cell").get<std::size_t>(), ctx, false);
+      return nlohmann::json{{"file", file.string()}, {"files", writtenUnder(file.parent_path())}};
+    }
+    const auto j = task.at("run").get<std::size_t>();
+    nlohmann::json answer;
+    try {
+      const bridge::RunOutcome out = runReplicateInFolder(*r, j, task.at("cell_file").get<std::string>(), ctx, false);
+      answer = {{"status", static_cast<int>(out.status)}, {"message", out.message}, {"results", out.results}};
+    } catch (const bridge::WriteError&) {
+      throw;
+    } catch (const std::exception& e) {
+      answer = {{"error", e.what()}};
+    }
+    answer["files"] = writtenUnder(ctx.outdir / runFolder(*r, j));
+    return answer;
+  };
+}
+
+bridge::RunOutcome runReplicates(const Replicates& reps, const bridge::RunContext& ctx) {
+  const LabSetup& setup = reps.setup;
+  const std::vector<std::string>& variants = reps.variants;
+  const std::size_t nr = setup.cells.size(), nv = variants.size(), n = nr * nv;
+  // Several runs go to the MPI workers, when there are some.
+  bridge::RemoteWorkers* workers = n > 1 ? ctx.workers : nullptr;
+  const auto task = [&](nlohmann::json t) {
+    t["outdir"] = fs::absolute(ctx.outdir).string();
+    t["case_digest"] = ctx.case_digest;
+    nlohmann::json answer = workers->call(t);
+    noteAll(answer.at("files"));
+    return answer;
+  };
+  // The cells: generated first where they come from a case (in parallel),
+  // each once whatever the number of variants.
+  std::vector<fs::path> files(nr);
+  std::vector<std::string> errors(n);
+  std::vector<std::string> cell_errors(nr);
+  const int cell_threads = nr > 1 ? (workers != nullptr ? workers->size() : ctx.threads) : 1;
+  parallelFor(nr, cell_threads, [&](std::size_t k, bool first) {
+    const CellSource& c = setup.cells[k];
+    if (c.generate.empty()) {
+      files[k] = c.file;
+      return;
+    }
+    try {
+      if (workers != nullptr && nr > 1)
+        files[k] = task({{"cell", k}}).at("file").get<std::string>();
+      else
+        files[k] = generateReplicateCell(reps, k, ctx, first);
+    } catch (const std::exception& e) {  // (a thread must not throw; the case was checked before)
+      cell_errors[k] = e.what();
+    }
+  });
+  std::vector<bridge::RunOutcome> outs(n);
+  const auto cellFailed = [&](std::size_t j) {
+    outs[j].status = bridge::RunOutcome::Status::NumericalFailure;
+    outs[j].message = cell_errors[j / nv];
+  };
+  if (n == 1) {
+    if (!cell_errors[0].empty()) {
+      cellFailed(0);
+      return outs[0];
+    }
+    return runReplicate(reps, 0, files[0], ctx);
+  }
+  // Several runs in parallel, one engine thread each (or one worker rank
+  // each); every one writes its own folder.
+  parallelFor(n, workers != nullptr ? workers->size() : ctx.threads, [&](std::size_t j, bool first) {
+    if (!cell_errors[j / nv].empty()) {
+      cellFailed(j);
+      return;
+    }
+    try {
+      if (workers != nullptr) {
+        const nlohmann::json a = task({{"run", j}, {"cell_file", files[j / nv].string()}});
+        if (a.contains("error")) {
+          errors[j] = a.at("error").get<std::string>();
+          return;
+        }
+        outs[j].status = static_cast<bridge::RunOutcome::Status>(a.at("status").get<int>());
+        outs[j].message = a.at("message").get<std::string>();
+        outs[j].results = a.at("results");
+      } else {
+        outs[j] = runReplicateInFolder(reps, j, files[j / nv], ctx, first);
+      }
+    } catch (const std::exception& e) {
+      errors[j] = e.what();
+    }
+  });
+
+  return summarizeReplicates(reps, outs, errors);
+}
+
+namespace {
+
+// An outcome as it crosses between processes (a row's result, a worker's answer).
+nlohmann::json outcomeJson(const bridge::RunOutcome& out) {
+  return {{"status", static_cast<int>(out.status)},
+          {"message", out.message},
+          {"results", out.results},
+          {"answer", out.answer},
+          {"report", out.report}};
+}
+
+bridge::RunOutcome outcomeOf(const nlohmann::json& j) {
+  bridge::RunOutcome out;
+  out.status = static_cast<bridge::RunOutcome::Status>(j.at("status").get<int>());
+  out.message = j.at("message").get<std::string>();
+  out.results = j.at("results");
+  out.answer = j.value("answer", "");
+  out.report = j.value("report", "");
+  return out;
+}
+
+// The replicates as rows: row k generates replicate k's cell and runs every
+// variant on it, into the folders a local run uses; collected, the rows
+// give the local run's summary.
+class ReplicateRows final : public bridge::RowPlan {
+ public:
+  ReplicateRows(std::shared_ptr<const Replicates> reps, double cost_s) : reps_(std::move(reps)), cost_s_(cost_s) {}
+  std::size_t size() const override { return reps_->setup.cells.size(); }
+  nlohmann::json describe(std::size_t k) const override {
+    const CellSource& c = reps_->setup.cells[k];
+    nlohmann::json p = {
+        {"replicate", k}, {"cell", (c.generate.empty() ? c.file : c.generate).string()}, {"variants", reps_->variants}};
+    return {{"parameters", p}, {"seed", c.seed ? nlohmann::json(*c.seed) : nlohmann::json()}};
+  }
+  nlohmann::json run(std::size_t k, const bridge::RunContext& ctx) const override {
+    const Replicates& r = *reps_;
+    const std::size_t nv = r.variants.size(), n = r.setup.cells.size() * nv;
+    fs::path cell = r.setup.cells[k].file;
+    if (!r.setup.cells[k].generate.empty()) cell = generateReplicateCell(r, k, ctx, false);  // (throws: a failed row)
+    nlohmann::json runs = nlohmann::json::array();
+    std::string failures;
+    for (std::size_t v = 0; v < nv; ++v) {
+      const std::size_t j = k * nv + v;
+      try {
+        const bridge::RunOutcome out =
+            n == 1 ? runReplicate(r, j, cell, ctx) : runReplicateInFolder(r, j, cell, ctx, false);
+        if (out.status != bridge::RunOutcome::Status::Ok) failures += runFolder(r, j) + ": " + out.message + "; ";
+        runs.push_back(outcomeJson(out));
+      } catch (const bridge::WriteError&) {
+        throw;
+      } catch (const std::exception& e) {
+        failures += runFolder(r, j) + ": " + e.what() + "; ";
+        runs.push_back({{"error", e.what()}});
+      }
+    }
+    nlohmann::json result = {{"ok", failures.empty()}, {"runs", runs}};
+    if (!failures.empty()) result["message"] = failures;
+    return result;
+  }
+  double costS(std::size_t) const override { return cost_s_; }
+  bridge::RunOutcome assemble(const std::vector<std::optional<nlohmann::json>>& rows, const bridge::RowStats&,
+                              const bridge::RunContext& ctx) const override {
+    const Replicates& r = *reps_;
+    const std::size_t nr = r.setup.cells.size(), nv = r.variants.size(), n = nr * nv;
+    std::vector<bridge::RunOutcome> outs(n);
+    std::vector<std::string> errors(n);
+    for (std::size_t k = 0; k < nr; ++k) {
+      // (the files its process wrote, listed in this folder's manifest)
+      adoptFiles(ctx.outdir / (nr > 1 ? "cell_seed" + std::to_string(*r.setup.cells[k].seed) : "cell"));
+      for (std::size_t v = 0; v < nv; ++v) {
+        const std::size_t j = k * nv + v;
+        if (n > 1) adoptFiles(ctx.outdir / runFolder(r, j));
+        if (!rows[k]) {
+          errors[j] = "missing: not run yet";
+        } else if (!rows[k]->contains("runs")) {
+          errors[j] = rows[k]->at("message").get<std::string>();
+        } else if (rows[k]->at("runs").at(v).contains("error")) {
+          errors[j] = rows[k]->at("runs").at(v).at("error").get<std::string>();
+        } else {
+          outs[j] = outcomeOf(rows[k]->at("runs").at(v));
+        }
+      }
+    }
+    if (n == 1) {
+      if (!errors[0].empty()) {
+        outs[0].status = bridge::RunOutcome::Status::NumericalFailure;
+        outs[0].message = errors[0];
+      }
+      for (const auto& entry : fs::directory_iterator(ctx.outdir))
+        if (entry.is_regular_file()) bridge::noteWritten(entry.path());
+      return outs[0];
+    }
+    return summarizeReplicates(r, outs, errors);
+  }
+
+ private:
+  // Notes every file under `dir` (written by another process) for this
+  // process's manifest.
+  static void adoptFiles(const fs::path& dir) {
+    std::error_code ec;
+    if (!fs::is_directory(dir, ec)) return;
+    for (const auto& entry : fs::recursive_directory_iterator(dir, ec))
+      if (entry.is_regular_file() && entry.path().filename().string().find(".part") == std::string::npos)
+        bridge::noteWritten(entry.path());
+  }
+  std::shared_ptr<const Replicates> reps_;
+  double cost_s_;
+};
+
+}  // namespace
+
+std::shared_ptr<const bridge::RowPlan> replicateRows(std::shared_ptr<const Replicates> reps,
+                                                     const std::function<std::optional<bridge::Estimate>()>& estimate) {
+  const double n = static_cast<double>(std::max<std::size_t>(1, reps->setup.cells.size()));
+  std::optional<bridge::Estimate> e;
+  try {
+    e = estimate();
+  } catch (const std::exception&) {
+  }
+  // (cells not generated yet cannot be costed: an hour each, one replicate a task)
+  const double cost_s = e ? e->wall_time_s / n : 3600.0;
+  return std::make_shared<const ReplicateRows>(std::move(reps), cost_s);
 }
 
 }  // namespace gabion::micro::lab

@@ -314,7 +314,7 @@ bridge::CaseKind interfaceShearKind() {
             return runReplicates(*replicates(doc), ctx);
           },
           estimate,
-          nullptr,
+          [](const bridge::JsonDocument& doc) { return replicateRows(replicates(doc), [&] { return estimate(doc); }); },
           [](const bridge::JsonDocument& doc) { return serveReplicates(replicates(doc)); }};
 }
 

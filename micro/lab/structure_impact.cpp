@@ -372,7 +372,7 @@ bridge::CaseKind structureImpactKind() {
             return runReplicates(*replicates(doc), ctx);
           },
           estimate,
-          nullptr,
+          [](const bridge::JsonDocument& doc) { return replicateRows(replicates(doc), [&] { return estimate(doc); }); },
           [](const bridge::JsonDocument& doc) { return serveReplicates(replicates(doc)); }};
 }
 

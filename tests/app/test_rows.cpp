@@ -140,6 +140,37 @@ TEST(Rows, AFailedRowIsRecordedAndTheOthersComplete) {
   EXPECT_NE(r.output.find("rows 2:4: 2 run, 2 failed"), std::string::npos) << r.output;
 }
 
+// A calibration's population (its Latin-hypercube samples) as rows: run in
+// slices, collected into the evaluation log, where the resumed calibration
+// takes them as its own and ends where a local calibration ends.
+TEST(Rows, ACalibrationPopulationAsRowsIsTheLoopsOwn) {
+  const auto dir = scratchDir("rows_fit");
+  const std::string fit = std::string(GABION_SOURCE_DIR) + "/cases/fit_micro_wall.json";
+  ASSERT_EQ(runGabion("run " + fit + " -q -o " + (dir / "local").string()).exit_code, 0);
+  const auto listed = runGabion("rows " + fit);
+  ASSERT_EQ(listed.exit_code, 0) << listed.output;
+  EXPECT_EQ(lines(listed.output), 6) << listed.output;  // (search.initial_samples)
+
+  const fs::path pop = dir / "population";
+  ASSERT_EQ(runGabion("run " + fit + " -q --rows 0:4 -o " + pop.string()).exit_code, 0);
+  auto r = runGabion("collect " + pop.string());
+  EXPECT_EQ(r.exit_code, 4) << r.output;
+  EXPECT_NE(r.output.find("fit.micro population: 4 of 6 samples evaluated (0 failed)"), std::string::npos) << r.output;
+  ASSERT_EQ(runGabion("run --resume " + pop.string() + " -q --rows missing").exit_code, 0);
+  r = runGabion("collect " + pop.string());
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  EXPECT_NE(r.output.find("the search goes on from them: gabion run --resume"), std::string::npos) << r.output;
+  EXPECT_EQ(summaryOf(pop).at("population").at("added_to_log"), 2);  // (the first four were logged before)
+
+  r = runGabion("run --resume " + pop.string() + " -q");
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  const auto a = summaryOf(dir / "local").at("fit_micro"), b = summaryOf(pop).at("fit_micro");
+  EXPECT_EQ(b.at("resumed_from_log"), 6);
+  EXPECT_EQ(a.at("parameters"), b.at("parameters"));
+  EXPECT_EQ(a.at("misfit"), b.at("misfit"));
+  EXPECT_EQ(a.at("new_evaluations").get<int>() - 6, b.at("new_evaluations").get<int>());
+}
+
 TEST(Rows, BadSelectionsAndFoldersAreRefused) {
   const auto dir = scratchDir("rows_bad");
   struct Case {
@@ -151,7 +182,7 @@ TEST(Rows, BadSelectionsAndFoldersAreRefused) {
            {"run " + kSweep + " --rows 24 -o " + out.string(), "row 24 does not exist: the case has 24 rows, 0 to 23"},
            {"run " + kSweep + " --rows 1-3 -o " + out.string(), "expected rows as A:B"},
            {"run " + std::string(GABION_SOURCE_DIR) + "/cases/wall_impact.json --rows 0:1 -o " + out.string(),
-            "--rows: a macro.impact case is one run, not a set of rows (cases of rows: macro.sweep)"},
+            "--rows: a macro.impact case is one run, not a set of rows (cases of rows: micro.cc, "},
            {"collect " + (dir / "nothing").string(), "no such file: the folder holds no run"},
            {"submit slurm " + kSweep, "submit slurm: give the output folder (-o) the tasks share"},
            {"submit slurm --resume " + out.string() + " " + kSweep, "give no case file with it"},
@@ -199,6 +230,13 @@ TEST(Rows, ASweepOnMpiRanksGivesTheSerialTable) {
   ASSERT_EQ(r.exit_code, 0) << r.output;
   ASSERT_EQ(runGabion("collect " + (dir / "slices").string()).exit_code, 0);
   expectSameTable(dir / "serial", dir / "slices");
+
+  // Bad input under mpirun ends every rank with exit 2 (the worker ranks are
+  // told to stop; none waits for tasks that will not come).
+  for (const std::string& args : {std::string("run nowhere.json"), std::string("run --no-such-option")}) {
+    r = runCommand("timeout 60 " + mpirun + GABION_BINARY + " " + args);
+    EXPECT_EQ(r.exit_code, 2) << args << "\n" << r.output;
+  }
 
   // A calibration's evaluations on the workers: the same evaluations, the
   // same log entries and the same fitted parameters as on one thread.

@@ -326,37 +326,52 @@ TEST(MicroLab, ReplicatesOnCellsOfDifferentSeedsGiveAScatter) {
   EXPECT_EQ(gabion::bridge::H5Reader(dir / "one" / "result.h5").read("/curves/uc/force_N"), first);
 }
 
-// mpirun on three ranks: the cells of two replicates are generated and
-// their tests run on the ranks (rank 0 takes one, a worker rank the other);
-// rank 0 gathers the summary. The cells, curves and scatter are those of a
-// run on two threads, and rank 0's manifest lists the worker's files.
-TEST(MicroLab, ReplicatesOnMpiRanksAreTheThreadedRuns) {
-#ifndef GABION_MPIEXEC
-  GTEST_SKIP() << "this build has no MPI (scripts/deps.sh installs libopenmpi-dev; build again)";
-#else
-  const auto dir = scratchDir("lab_replicates_mpi");
+// Two replicates run three other ways than on two threads, each giving the
+// threaded run's cells, curves, runs and scatter:
+// - mpirun on three ranks: the cells generated and the tests run on the
+//   ranks (rank 0 takes one, a worker rank the other); rank 0's manifest
+//   lists the worker's files;
+// - as rows (a replicate each: its cell, then its test) run in two slices,
+//   as two Slurm tasks would, then collected.
+TEST(MicroLab, ReplicatesOnMpiRanksAndAsRowsAreTheThreadedRuns) {
+  const auto dir = scratchDir("lab_replicates_ways");
   writeFile(dir / "cell.json", smallCell());
   writeFile(dir / "uc.json", R"({"format": "gabion.case/1", "kind": "micro.uc", "cell": {"case": "cell.json"},
  "replicates": 2, "loading": {"velocity_m_s": 0.2, "strain": 0.05}})");
-  ASSERT_EQ(
-      runGabion("run -q --threads 2 " + (dir / "uc.json").string() + " -o " + (dir / "threads").string()).exit_code, 0);
-  const auto r = gabion::testing::runCommand(std::string(GABION_MPIEXEC) +
-                                             " --allow-run-as-root --oversubscribe -np 3 " + GABION_BINARY +
-                                             " run -q " + (dir / "uc.json").string() + " -o " + (dir / "mpi").string());
+  const std::string uc = (dir / "uc.json").string();
+  ASSERT_EQ(runGabion("run -q --threads 2 " + uc + " -o " + (dir / "threads").string()).exit_code, 0);
+  const auto same = [&](const std::string& way) {
+    const nlohmann::json a = summaryOf(dir / "threads"), b = summaryOf(dir / way);
+    EXPECT_EQ(a["runs"], b["runs"]) << way;
+    EXPECT_EQ(a["scatter"], b["scatter"]) << way;
+    for (const char* run : {"replicate_0", "replicate_1"})
+      EXPECT_EQ(gabion::bridge::H5Reader(dir / "threads" / run / "result.h5").read("/curves/uc/force_N"),
+                gabion::bridge::H5Reader(dir / way / run / "result.h5").read("/curves/uc/force_N"))
+          << way << " " << run;
+    EXPECT_EQ(gabion::bridge::H5Reader(dir / "threads" / "cell_seed4" / "cell.h5").read("/blocks/position_m"),
+              gabion::bridge::H5Reader(dir / way / "cell_seed4" / "cell.h5").read("/blocks/position_m"))
+        << way;
+    std::ifstream manifest(dir / way / "manifest.json");
+    const std::string listed((std::istreambuf_iterator<char>(manifest)), std::istreambuf_iterator<char>());
+    for (const char* file : {"replicate_1/result.h5", "replicate_0/summary.json", "cell_seed3/cell.h5"})
+      EXPECT_NE(listed.find(file), std::string::npos) << way << " " << file;
+  };
+
+  const auto rows = dir / "rows";
+  ASSERT_EQ(runGabion("run -q " + uc + " --rows 0 -o " + rows.string()).exit_code, 0);
+  ASSERT_EQ(runGabion("run -q --resume " + rows.string() + " --rows 1").exit_code, 0);
+  const auto collected = runGabion("collect " + rows.string());
+  ASSERT_EQ(collected.exit_code, 0) << collected.output;
+  same("rows");
+
+#ifndef GABION_MPIEXEC
+  GTEST_SKIP() << "this build has no MPI (scripts/deps.sh installs libopenmpi-dev; build again)";
+#else
+  const auto r =
+      gabion::testing::runCommand(std::string(GABION_MPIEXEC) + " --allow-run-as-root --oversubscribe -np 3 " +
+                                  GABION_BINARY + " run -q " + uc + " -o " + (dir / "mpi").string());
   ASSERT_EQ(r.exit_code, 0) << r.output;
-  const nlohmann::json a = summaryOf(dir / "threads"), b = summaryOf(dir / "mpi");
-  EXPECT_EQ(a["runs"], b["runs"]);
-  EXPECT_EQ(a["scatter"], b["scatter"]);
-  for (const char* run : {"replicate_0", "replicate_1"})
-    EXPECT_EQ(gabion::bridge::H5Reader(dir / "threads" / run / "result.h5").read("/curves/uc/force_N"),
-              gabion::bridge::H5Reader(dir / "mpi" / run / "result.h5").read("/curves/uc/force_N"))
-        << run;
-  EXPECT_EQ(gabion::bridge::H5Reader(dir / "threads" / "cell_seed4" / "cell.h5").read("/blocks/position_m"),
-            gabion::bridge::H5Reader(dir / "mpi" / "cell_seed4" / "cell.h5").read("/blocks/position_m"));
-  std::ifstream manifest(dir / "mpi" / "manifest.json");
-  const std::string listed((std::istreambuf_iterator<char>(manifest)), std::istreambuf_iterator<char>());
-  for (const char* file : {"replicate_1/result.h5", "replicate_0/summary.json", "cell_seed3/cell.h5"})
-    EXPECT_NE(listed.find(file), std::string::npos) << file;
+  same("mpi");
 #endif
 }
 
