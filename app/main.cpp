@@ -359,7 +359,13 @@ int commandCollect(Options& o) {
   const std::string case_text = doc.json().dump();
   const auto t0 = std::chrono::steady_clock::now();
   gabion::bridge::beginManifest(outdir);
-  gabion::bridge::RunOutcome outcome = gabion::bridge::collectRows(*plan, doc, ctx);
+  gabion::bridge::RunOutcome outcome;
+  try {
+    outcome = gabion::bridge::collectRows(*plan, doc, ctx);
+  } catch (const gabion::bridge::NumericalError& e) {  // (a failed row the kind cannot go on from)
+    outcome.status = gabion::bridge::RunOutcome::Status::NumericalFailure;
+    outcome.message = e.what();
+  }
   const double wall = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   const int code = finishRun(o, *kind, outcome, wall, std::nullopt, case_text, outdir);
   if (code != kExitOk) return code;

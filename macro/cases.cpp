@@ -15,7 +15,7 @@ std::vector<bridge::CaseKind> caseKinds() {
        checkCapacityCase, runCapacityCase, estimateCapacityCase},
       {"macro.design",
        "the smallest structure (thickness, height, front material) that holds the design impacts with the criteria met",
-       checkDesignCase, runDesignCase, estimateDesignCase},
+       checkDesignCase, runDesignCase, estimateDesignCase, designRows},
   };
 }
 

@@ -17,6 +17,7 @@
 #include "bridge/output.hpp"
 #include "bridge/parallel.hpp"
 #include "bridge/plot.hpp"
+#include "bridge/rows.hpp"
 #include "macro/case_reader.hpp"
 #include "macro/criteria.hpp"
 #include "macro/runs.hpp"
@@ -349,49 +350,164 @@ void checkDesignCase(const JsonDocument& doc) {
   plan(doc);
 }
 
+namespace {
+
+// The search's independent pieces: every section (exhaustive), or per front
+// material and height the thinnest section that holds, by bisection over
+// the thickness (a thicker section of the same height and material holding
+// at least as well).
+struct Piece {
+  int m = 0, h = 0, t = 0;  // t: the section's thickness (exhaustive only)
+};
+
+std::vector<Piece> pieces(const Plan& p) {
+  const DesignSpec& s = p.spec;
+  std::vector<Piece> out;
+  for (int m = 0; m < static_cast<int>(s.materials.size()); ++m)
+    for (int h = s.h_lo; h <= s.h_hi; ++h) {
+      if (!s.exhaustive) {
+        out.push_back({m, h, 0});
+        continue;
+      }
+      for (int t = s.t_lo; t <= s.t_hi; ++t) out.push_back({m, h, t});
+    }
+  return out;
+}
+
+// The sections a piece evaluates, in the order it evaluates them.
+std::vector<SectionResult> searchPiece(const Plan& p, const Piece& piece) {
+  const DesignSpec& s = p.spec;
+  if (s.exhaustive) return {evaluate(p, {piece.t, piece.h, piece.m})};
+  std::vector<SectionResult> out;
+  out.push_back(evaluate(p, {s.t_hi, piece.h, piece.m}));
+  if (!out.back().met || s.t_lo == s.t_hi) return out;
+  out.push_back(evaluate(p, {s.t_lo, piece.h, piece.m}));
+  if (out.back().met) return out;
+  int bad = s.t_lo, good = s.t_hi;
+  while (good - bad > 1) {
+    const int mid = (bad + good) / 2;
+    out.push_back(evaluate(p, {mid, piece.h, piece.m}));
+    (out.back().met ? good : bad) = mid;
+  }
+  return out;
+}
+
+json sectionJson(const SectionResult& r) {
+  return {{"t", r.section.t},
+          {"h", r.section.h},
+          {"m", r.section.m},
+          {"met", r.met},
+          {"probability_met", r.probability_met},
+          {"failed", r.failed},
+          {"back_face_ratio", r.back_face_ratio},
+          {"penetration_ratio", r.penetration_ratio},
+          {"impacts_run", r.impacts_run},
+          {"balance_rel_error", r.balance_rel_error}};
+}
+
+SectionResult sectionOf(const json& j) {
+  SectionResult r;
+  r.section = {j.at("t").get<int>(), j.at("h").get<int>(), j.at("m").get<int>()};
+  r.met = j.at("met").get<bool>();
+  r.probability_met = j.at("probability_met").get<double>();
+  r.failed = j.at("failed").get<std::string>();
+  r.back_face_ratio = j.at("back_face_ratio").get<double>();
+  r.penetration_ratio = j.at("penetration_ratio").get<double>();
+  r.impacts_run = j.at("impacts_run").get<int>();
+  r.balance_rel_error = j.at("balance_rel_error").get<double>();
+  return r;
+}
+
+bridge::RunOutcome finishDesign(const Plan& p, const std::vector<SectionResult>& evaluated, double search_s,
+                                const bridge::RunContext& ctx);
+
+// The search's pieces as rows (bridge/rows.hpp): run anywhere, collected,
+// the rest of the case (the choice, margins, residual capacity, the
+// capacity chart and report) is made from them as a local run makes it.
+class DesignRows final : public bridge::RowPlan {
+ public:
+  explicit DesignRows(const JsonDocument& doc) : p_(plan(doc)), pieces_(pieces(p_)) {
+    const auto e = estimateDesignCase(doc);
+    cost_s_ = e ? e->wall_time_s / static_cast<double>(std::max<std::size_t>(1, pieces_.size())) : 1.0;
+  }
+  std::size_t size() const override { return pieces_.size(); }
+  json describe(std::size_t i) const override {
+    const Piece& c = pieces_[i];
+    json par = {{"front_material", p_.spec.materials[static_cast<std::size_t>(c.m)]}, {"height_cells", c.h}};
+    if (p_.spec.exhaustive) par["thickness_cells"] = c.t;
+    return {{"parameters", par}, {"seed", nullptr}};
+  }
+  json run(std::size_t i, const bridge::RunContext&) const override {
+    json sections = json::array();
+    for (const auto& r : searchPiece(p_, pieces_[i])) sections.push_back(sectionJson(r));
+    return {{"ok", true}, {"sections", sections}};
+  }
+  double costS(std::size_t) const override { return cost_s_; }
+  bridge::RunOutcome assemble(const std::vector<std::optional<json>>& rows, const bridge::RowStats& stats,
+                              const bridge::RunContext& ctx) const override {
+    std::vector<SectionResult> evaluated;
+    for (std::size_t i = 0; i < rows.size(); ++i) {
+      if (!rows[i]) continue;
+      if (!rows[i]->at("ok").get<bool>())  // (as the local search, which stops there)
+        throw bridge::NumericalError(0, 0.0, rows[i]->at("message").get<std::string>());
+      for (const auto& j : rows[i]->at("sections")) evaluated.push_back(sectionOf(j));
+    }
+    if (stats.missing > 0) {  // (no design is chosen from part of the search)
+      bridge::RunOutcome out;
+      out.results["design"] = nullptr;
+      out.results["sections_evaluated"] = evaluated.size();
+      out.answer = "macro.design: the search is not complete (" + std::to_string(stats.missing) + " of " +
+                   std::to_string(rows.size()) + " rows missing): no section chosen\n";
+      return out;
+    }
+    return finishDesign(p_, evaluated, stats.wall_time_s, ctx);
+  }
+
+ private:
+  Plan p_;
+  std::vector<Piece> pieces_;
+  double cost_s_ = 1.0;
+};
+
+}  // namespace
+
+std::shared_ptr<const bridge::RowPlan> designRows(const JsonDocument& doc) {
+  return std::make_shared<const DesignRows>(doc);
+}
+
 bridge::RunOutcome runDesignCase(const JsonDocument& doc, const bridge::RunContext& ctx) {
   const Plan p = plan(doc);
-  const DesignSpec& s = p.spec;
   const auto t0 = std::chrono::steady_clock::now();
-  const int nm = static_cast<int>(s.materials.size());
-
-  // The search. Exhaustive: every section. Bisection: per front material and
-  // height, the thinnest section that holds, by bisection over the thickness
-  // (a thicker section of the same height and material holding at least as
-  // well); the combinations run in parallel.
+  // The search: its pieces in parallel, each writing only its own slot.
+  const std::vector<Piece> all = pieces(p);
+  std::vector<std::vector<SectionResult>> per(all.size());
+  bridge::Progress progress(ctx, p.spec.exhaustive ? "macro.design (exhaustive)" : "macro.design (bisection)");
+  // (under mpirun each piece runs on whichever rank is free, as a row)
+  const int workers = ctx.workers != nullptr ? ctx.workers->size() : ctx.threads;
+  bridge::runParallel(all.size(), workers, progress, [&](std::size_t i) {
+    if (ctx.workers == nullptr) {
+      per[i] = searchPiece(p, all[i]);
+      return;
+    }
+    const json a = ctx.workers->call({{"rows", json::array({i})},
+                                      {"outdir", std::filesystem::absolute(ctx.outdir).string()},
+                                      {"case_digest", ctx.case_digest}});
+    const json& row = a.at("results").at(0);
+    if (!row.at("ok").get<bool>()) throw bridge::NumericalError(0, 0.0, row.at("message").get<std::string>());
+    for (const auto& j : row.at("sections")) per[i].push_back(sectionOf(j));
+  });
   std::vector<SectionResult> evaluated;
-  if (s.exhaustive) {
-    std::vector<Section> all;
-    for (int m = 0; m < nm; ++m)
-      for (int h = s.h_lo; h <= s.h_hi; ++h)
-        for (int t = s.t_lo; t <= s.t_hi; ++t) all.push_back({t, h, m});
-    evaluated.resize(all.size());
-    bridge::Progress progress(ctx, "macro.design (exhaustive)");
-    bridge::runParallel(all.size(), ctx.threads, progress, [&](std::size_t i) { evaluated[i] = evaluate(p, all[i]); });
-  } else {
-    std::vector<std::pair<int, int>> combos;  // (material, height)
-    for (int m = 0; m < nm; ++m)
-      for (int h = s.h_lo; h <= s.h_hi; ++h) combos.emplace_back(m, h);
-    std::vector<std::vector<SectionResult>> per(combos.size());
-    bridge::Progress progress(ctx, "macro.design (bisection)");
-    bridge::runParallel(combos.size(), ctx.threads, progress, [&](std::size_t i) {
-      const auto [m, h] = combos[i];
-      auto& out = per[i];
-      out.push_back(evaluate(p, {s.t_hi, h, m}));
-      if (!out.back().met || s.t_lo == s.t_hi) return;
-      out.push_back(evaluate(p, {s.t_lo, h, m}));
-      if (out.back().met) return;
-      int bad = s.t_lo, good = s.t_hi;
-      while (good - bad > 1) {
-        const int mid = (bad + good) / 2;
-        out.push_back(evaluate(p, {mid, h, m}));
-        (out.back().met ? good : bad) = mid;
-      }
-    });
-    for (auto& v : per) evaluated.insert(evaluated.end(), v.begin(), v.end());
-  }
+  for (auto& v : per) evaluated.insert(evaluated.end(), v.begin(), v.end());
   const double search_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  return finishDesign(p, evaluated, search_s, ctx);
+}
 
+namespace {
+
+bridge::RunOutcome finishDesign(const Plan& p, const std::vector<SectionResult>& evaluated, double search_s,
+                                const bridge::RunContext& ctx) {
+  const DesignSpec& s = p.spec;
+  const int nm = static_cast<int>(s.materials.size());
   const SectionResult* best = nullptr;
   for (const auto& r : evaluated)
     if (r.met && (best == nullptr || cheaper(p, r.section, best->section))) best = &r;
@@ -541,5 +657,7 @@ bridge::RunOutcome runDesignCase(const JsonDocument& doc, const bridge::RunConte
   out.answer = "macro.design: " + answer.str() + "\n";
   return out;
 }
+
+}  // namespace
 
 }  // namespace gabion::macro

@@ -40,6 +40,9 @@ bridge::RunOutcome runCapacityCase(const bridge::JsonDocument& doc, const bridge
 void checkDesignCase(const bridge::JsonDocument& doc);
 /// What a macro.design case costs at most (bridge/cost.hpp).
 std::optional<bridge::Estimate> estimateDesignCase(const bridge::JsonDocument& doc);
+/// A macro.design case's search as rows (bridge/rows.hpp): a row per front
+/// material and height (bisection), or per section (exhaustive).
+std::shared_ptr<const bridge::RowPlan> designRows(const bridge::JsonDocument& doc);
 /// Runs a macro.design case: the smallest section that meets the criteria.
 bridge::RunOutcome runDesignCase(const bridge::JsonDocument& doc, const bridge::RunContext& ctx);
 

@@ -171,6 +171,32 @@ TEST(Rows, ACalibrationPopulationAsRowsIsTheLoopsOwn) {
   EXPECT_EQ(a.at("new_evaluations").get<int>() - 6, b.at("new_evaluations").get<int>());
 }
 
+// A design search's pieces (per front material and height, the bisection
+// over the thickness) as rows: collected, the design, its sections, margins,
+// residual capacity and capacity chart are the local run's.
+TEST(Rows, ADesignSearchAsRowsGivesTheLocalDesign) {
+  const auto dir = scratchDir("rows_design");
+  const std::string design = std::string(GABION_SOURCE_DIR) + "/cases/macro_design.json";
+  ASSERT_EQ(runGabion("run " + design + " -q --threads 2 -o " + (dir / "local").string()).exit_code, 0);
+  const auto listed = runGabion("rows " + design);
+  ASSERT_EQ(lines(listed.output), 14) << listed.output;  // (2 front materials x heights 2 to 8)
+  const fs::path rows = dir / "rows";
+  ASSERT_EQ(runGabion("run " + design + " -q --rows 0:7 -o " + rows.string()).exit_code, 0);
+  auto r = runGabion("collect " + rows.string());
+  EXPECT_EQ(r.exit_code, 4) << r.output;
+  EXPECT_NE(r.output.find("the search is not complete (7 of 14 rows missing): no section chosen"), std::string::npos)
+      << r.output;
+  EXPECT_TRUE(summaryOf(rows).at("design").is_null());
+  ASSERT_EQ(runGabion("run --resume " + rows.string() + " -q --rows missing").exit_code, 0);
+  r = runGabion("collect " + rows.string());
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  const auto a = summaryOf(dir / "local"), b = summaryOf(rows);
+  ASSERT_FALSE(a.at("design").is_null());
+  for (const char* key : {"design", "sections", "governing_criterion", "residual_capacity_impacts",
+                          "capacity_vs_thickness", "impacts_run", "answer"})
+    EXPECT_EQ(a.value(key, nlohmann::json()), b.value(key, nlohmann::json())) << key;
+}
+
 TEST(Rows, BadSelectionsAndFoldersAreRefused) {
   const auto dir = scratchDir("rows_bad");
   struct Case {
@@ -262,6 +288,15 @@ TEST(Rows, ASweepOnMpiRanksGivesTheSerialTable) {
   const auto serial = evaluations(dir / "fit_serial" / "evaluations.jsonl");
   EXPECT_GT(serial.size(), 20u);
   EXPECT_EQ(serial, evaluations(dir / "fit_mpi" / "evaluations.jsonl"));
+
+  // A design search's pieces on the ranks: the design and every section of
+  // a run on one thread.
+  const std::string design = std::string(GABION_SOURCE_DIR) + "/cases/macro_design.json -q -o ";
+  ASSERT_EQ(runGabion("run " + design + (dir / "design_serial").string()).exit_code, 0);
+  r = runCommand(mpirun + GABION_BINARY + " run " + design + (dir / "design_mpi").string());
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  for (const char* key : {"design", "sections", "residual_capacity_impacts", "capacity_vs_thickness"})
+    EXPECT_EQ(summaryOf(dir / "design_serial").at(key), summaryOf(dir / "design_mpi").at(key)) << key;
 #endif
 }
 
