@@ -1,7 +1,8 @@
 #!/usr/bin/env bash
 # Rows of a sweep run every way Gabion runs them, on this machine, with the
 # README's build (docs/cluster.md, "Scaling on one machine"):
-#   local threads (1 and 2), MPI ranks (1 and 2 workers), a Slurm job array
+#   local threads (1 and 2), MPI ranks (1 and 2; on one rank gabion does not
+#   start MPI: the cost of mpirun alone), a Slurm job array
 #   on a one-node cluster on localhost (scripts/slurm_local.sh; needs root),
 #   and single-row slices (the start-up cost of one `gabion run --rows`).
 # Each run's table is checked against the 1-thread run's (sweep.csv, byte for
@@ -47,10 +48,12 @@ for n in "$small" "$large"; do
     same "threads$t-$n" "$n"
   done
   if command -v mpirun >/dev/null; then
-    t0=$(now)
-    mpirun --allow-run-as-root --oversubscribe -np 2 "$gabion" run $(args "$n") -q -o "$out/mpi-$n" >/dev/null
-    record "MPI ranks (mpirun -np 2)" 2 "$nrows" "$(since "$t0")"
-    same "mpi-$n" "$n"
+    for np in 1 2; do
+      t0=$(now)
+      mpirun --allow-run-as-root --oversubscribe -np "$np" "$gabion" run $(args "$n") -q -o "$out/mpi$np-$n" >/dev/null
+      record "MPI ranks (mpirun -np $np)" "$np" "$nrows" "$(since "$t0")"
+      same "mpi$np-$n" "$n"
+    done
   fi
 done
 case_args=($(args "$small"))
