@@ -149,8 +149,16 @@ MpiSession::~MpiSession() {
 void serveTasks(const MpiSession& session, const TaskHandler& handler) {
   (void)session;
   for (;;) {
+    // (waiting by probing with growing pauses, not in MPI_Probe, which spins
+    // a core while rank 0 has nothing to send: on a shared or
+    // oversubscribed node that core is someone's work)
     MPI_Status status;
-    MPI_Probe(0, MPI_ANY_TAG, MPI_COMM_WORLD, &status);
+    int flag = 0;
+    for (auto wait = std::chrono::microseconds(20);; wait = std::min(2 * wait, std::chrono::microseconds(500))) {
+      MPI_Iprobe(0, MPI_ANY_TAG, MPI_COMM_WORLD, &flag, &status);
+      if (flag != 0) break;
+      std::this_thread::sleep_for(wait);
+    }
     int count = 0;
     MPI_Get_count(&status, MPI_CHAR, &count);
     std::string text(static_cast<std::size_t>(count), '\0');

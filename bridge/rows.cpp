@@ -141,6 +141,21 @@ RunContext rowContext(const RunContext& ctx) {
   return rc;
 }
 
+// A row left out after SIGINT or SIGTERM (interruptedResult).
+bool notRun(const json& result) {
+  return result.value("message", "").rfind("not run:", 0) == 0;
+}
+
+// How rows are about to run here: on MPI ranks, or on up to ctx.threads threads.
+RowStats runningStats(const RunContext& ctx, std::size_t rows) {
+  RowStats stats;
+  stats.where = ctx.workers != nullptr ? "mpi" : "threads";
+  stats.workers = ctx.workers != nullptr
+                      ? ctx.workers->size()
+                      : std::max(1, std::min<int>(ctx.threads, static_cast<int>(std::max<std::size_t>(1, rows))));
+  return stats;
+}
+
 // Runs row i here; a row that throws is a failed row.
 json runOne(const RowPlan& plan, std::size_t i, const RunContext& ctx) {
   try {
@@ -352,26 +367,21 @@ RunOutcome runRows(const RowPlan& plan, const JsonDocument& doc, const RunContex
   for (std::size_t i = 0; i < n; ++i)
     if (!results[i]) todo.push_back(i);
 
-  RowStats stats;
+  RowStats stats = runningStats(ctx, todo.size());
   stats.reused = n - todo.size();
-  stats.where = ctx.workers != nullptr ? "mpi" : "threads";
-  stats.workers =
-      ctx.workers != nullptr
-          ? ctx.workers->size()
-          : std::max(1, std::min<int>(ctx.threads, static_cast<int>(std::max<std::size_t>(1, todo.size()))));
   Progress progress(ctx, "rows");
   const auto t0 = std::chrono::steady_clock::now();
   runAll(plan, todo, ctx, stats.workers, progress, [&](std::vector<Done> batch) {
     std::vector<Done> ran;  // (a row not run is not logged: a rerun runs it)
     for (Done& d : batch) {
-      if (d.result.value("message", "").rfind("not run:", 0) != 0) ran.push_back(d);
+      if (!notRun(d.result)) ran.push_back(d);
       results[d.index] = std::move(d.result);
     }
     if (!ran.empty()) log.append(ran);
   });
   stats.wall_time_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   std::size_t not_run = 0;
-  for (std::size_t i : todo) not_run += results[i]->value("message", "").rfind("not run:", 0) == 0 ? 1 : 0;
+  for (std::size_t i : todo) not_run += notRun(*results[i]) ? 1 : 0;
   stats.run = todo.size() - not_run;
   stats.failed = countFailed(results) - not_run;
   RunOutcome out = finish(plan.assemble(results, stats, ctx), stats, n);
@@ -388,18 +398,13 @@ RunOutcome runRowSlice(const RowPlan& plan, const JsonDocument& doc, const std::
                        const RunContext& ctx) {
   const std::string digest = rowsDigest(doc.json());
   const std::string host = hostName();
-  RowStats stats;
-  stats.where = ctx.workers != nullptr ? "mpi" : "threads";
-  stats.workers =
-      ctx.workers != nullptr
-          ? ctx.workers->size()
-          : std::max(1, std::min<int>(ctx.threads, static_cast<int>(std::max<std::size_t>(1, which.size()))));
+  RowStats stats = runningStats(ctx, which.size());
   Progress progress(ctx, "rows");
   const auto t0 = std::chrono::steady_clock::now();
   std::atomic<std::size_t> failed{0}, skipped{0};
   runAll(plan, which, ctx, stats.workers, progress, [&](const std::vector<Done>& batch) {
     for (const Done& d : batch) {
-      if (d.result.value("message", "").rfind("not run:", 0) == 0) {
+      if (notRun(d.result)) {
         ++skipped;
         continue;
       }

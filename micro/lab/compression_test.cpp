@@ -374,31 +374,19 @@ std::optional<bridge::Estimate> estimate(const bridge::JsonDocument& doc, bool c
 }  // namespace
 
 bridge::CaseKind confinedCompressionKind() {
-  return {"micro.cc",
-          "confined compression of a cell between six rigid walls, the lid driven down (docs/lab.md)",
-          [](const bridge::JsonDocument& d) { check(d, true); },
-          [](const bridge::JsonDocument& d, const bridge::RunContext& ctx) {
-            return runReplicates(*replicates(d, true), ctx);
-          },
-          [](const bridge::JsonDocument& d) { return estimate(d, true); },
-          [](const bridge::JsonDocument& d) {
-            return replicateRows(replicates(d, true), [&] { return estimate(d, true); });
-          },
-          [](const bridge::JsonDocument& d) { return serveReplicates(replicates(d, true)); }};
+  return replicateKind(
+      "micro.cc", "confined compression of a cell between six rigid walls, the lid driven down (docs/lab.md)",
+      [](const bridge::JsonDocument& d) { check(d, true); },
+      [](const bridge::JsonDocument& d) { return replicates(d, true); },
+      [](const bridge::JsonDocument& d) { return estimate(d, true); });
 }
 
 bridge::CaseKind unconfinedCompressionKind() {
-  return {"micro.uc",
-          "unconfined compression of a cell between two plates, the netting alone confining (docs/lab.md)",
-          [](const bridge::JsonDocument& d) { check(d, false); },
-          [](const bridge::JsonDocument& d, const bridge::RunContext& ctx) {
-            return runReplicates(*replicates(d, false), ctx);
-          },
-          [](const bridge::JsonDocument& d) { return estimate(d, false); },
-          [](const bridge::JsonDocument& d) {
-            return replicateRows(replicates(d, false), [&] { return estimate(d, false); });
-          },
-          [](const bridge::JsonDocument& d) { return serveReplicates(replicates(d, false)); }};
+  return replicateKind(
+      "micro.uc", "unconfined compression of a cell between two plates, the netting alone confining (docs/lab.md)",
+      [](const bridge::JsonDocument& d) { check(d, false); },
+      [](const bridge::JsonDocument& d) { return replicates(d, false); },
+      [](const bridge::JsonDocument& d) { return estimate(d, false); });
 }
 
 }  // namespace gabion::micro::lab

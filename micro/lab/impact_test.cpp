@@ -271,15 +271,10 @@ std::shared_ptr<const Replicates> replicates(const bridge::JsonDocument& doc) {
 }  // namespace
 
 bridge::CaseKind unconfinedImpactKind() {
-  return {"micro.uci",
-          "unconfined impact: a boulder dropped at a set velocity on a cell standing on a rigid base (docs/lab.md)",
-          check,
-          [](const bridge::JsonDocument& doc, const bridge::RunContext& ctx) {
-            return runReplicates(*replicates(doc), ctx);
-          },
-          estimate,
-          [](const bridge::JsonDocument& doc) { return replicateRows(replicates(doc), [&] { return estimate(doc); }); },
-          [](const bridge::JsonDocument& doc) { return serveReplicates(replicates(doc)); }};
+  return replicateKind(
+      "micro.uci",
+      "unconfined impact: a boulder dropped at a set velocity on a cell standing on a rigid base (docs/lab.md)", check,
+      replicates, estimate);
 }
 
 }  // namespace gabion::micro::lab

@@ -714,4 +714,21 @@ std::shared_ptr<const bridge::RowPlan> replicateRows(std::shared_ptr<const Repli
   return std::make_shared<const ReplicateRows>(std::move(reps), cost_s);
 }
 
+bridge::CaseKind replicateKind(std::string kind, std::string description,
+                               std::function<void(const bridge::JsonDocument&)> check,
+                               std::function<std::shared_ptr<const Replicates>(const bridge::JsonDocument&)> replicates,
+                               std::function<std::optional<bridge::Estimate>(const bridge::JsonDocument&)> estimate) {
+  return {std::move(kind),
+          std::move(description),
+          std::move(check),
+          [replicates](const bridge::JsonDocument& doc, const bridge::RunContext& ctx) {
+            return runReplicates(*replicates(doc), ctx);
+          },
+          estimate,
+          [replicates, estimate](const bridge::JsonDocument& doc) {
+            return replicateRows(replicates(doc), [&] { return estimate(doc); });
+          },
+          [replicates](const bridge::JsonDocument& doc) { return serveReplicates(replicates(doc)); }};
+}
+
 }  // namespace gabion::micro::lab

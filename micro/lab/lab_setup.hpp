@@ -158,4 +158,12 @@ std::shared_ptr<const bridge::RowPlan> replicateRows(std::shared_ptr<const Repli
 /// runs, as runReplicates does on a thread of its own (CaseKind::serve).
 std::function<nlohmann::json(const nlohmann::json&)> serveReplicates(std::shared_ptr<const Replicates> r);
 
+/// A lab test's case kind from its parts: its runs, made from the case by
+/// `replicates`, run here (runReplicates), on MPI ranks (serveReplicates)
+/// or as rows (replicateRows).
+bridge::CaseKind replicateKind(std::string kind, std::string description,
+                               std::function<void(const bridge::JsonDocument&)> check,
+                               std::function<std::shared_ptr<const Replicates>(const bridge::JsonDocument&)> replicates,
+                               std::function<std::optional<bridge::Estimate>(const bridge::JsonDocument&)> estimate);
+
 }  // namespace gabion::micro::lab

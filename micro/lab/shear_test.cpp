@@ -306,16 +306,10 @@ std::shared_ptr<const Replicates> replicates(const bridge::JsonDocument& doc) {
 }  // namespace
 
 bridge::CaseKind interfaceShearKind() {
-  return {"micro.shear",
-          "interface shear: a cell on another under a normal load held by a servo, the upper one pushed sideways "
-          "(docs/lab.md)",
-          check,
-          [](const bridge::JsonDocument& doc, const bridge::RunContext& ctx) {
-            return runReplicates(*replicates(doc), ctx);
-          },
-          estimate,
-          [](const bridge::JsonDocument& doc) { return replicateRows(replicates(doc), [&] { return estimate(doc); }); },
-          [](const bridge::JsonDocument& doc) { return serveReplicates(replicates(doc)); }};
+  return replicateKind("micro.shear",
+                       "interface shear: a cell on another under a normal load held by a servo, the upper one pushed "
+                       "sideways (docs/lab.md)",
+                       check, replicates, estimate);
 }
 
 }  // namespace gabion::micro::lab

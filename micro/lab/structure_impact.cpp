@@ -364,16 +364,10 @@ std::shared_ptr<const Replicates> replicates(const bridge::JsonDocument& doc) {
 }  // namespace
 
 bridge::CaseKind structureImpactKind() {
-  return {"micro.structure",
-          "a structure of generated cells resolved at the fine scale, struck by a boulder on its front face "
-          "(docs/resolved.md)",
-          check,
-          [](const bridge::JsonDocument& doc, const bridge::RunContext& ctx) {
-            return runReplicates(*replicates(doc), ctx);
-          },
-          estimate,
-          [](const bridge::JsonDocument& doc) { return replicateRows(replicates(doc), [&] { return estimate(doc); }); },
-          [](const bridge::JsonDocument& doc) { return serveReplicates(replicates(doc)); }};
+  return replicateKind("micro.structure",
+                       "a structure of generated cells resolved at the fine scale, struck by a boulder on its front "
+                       "face (docs/resolved.md)",
+                       check, replicates, estimate);
 }
 
 }  // namespace gabion::micro::lab

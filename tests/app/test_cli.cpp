@@ -116,10 +116,15 @@ TEST(Cli, PlotDrawsTheStandardFigureOfAResult) {
 TEST(Cli, InterruptStopsTheRunAndKeepsWhatItWrote) {
   const auto dir = scratchDir("cli_interrupt");
   const std::string source = GABION_SOURCE_DIR;
-  // (a fill of blocks that runs for tens of seconds; stopped after one)
+  // (a fill of blocks that runs for tens of seconds; stopped half a second
+  // after its stepping began, when its result file was opened: a loaded
+  // machine may take longer than that to set it up)
+  const std::string part = (dir / "fill" / "result.h5.part").string();
   const auto r = gabion::testing::runCommand("sh -c '" + std::string(GABION_BINARY) + " run " + source +
                                              "/cases/micro_block_fill.json -q -o " + (dir / "fill").string() +
-                                             " & p=$!; sleep 1; kill -INT $p; wait $p; echo exit=$?'");
+                                             " & p=$!; while [ ! -e " + part +
+                                             " ] && kill -0 $p 2>/dev/null; do sleep 0.01; done; sleep 0.5; "
+                                             "kill -INT $p; wait $p; echo exit=$?'");
   EXPECT_NE(r.output.find("exit=130"), std::string::npos) << r.output;
   EXPECT_NE(r.output.find("interrupted by SIGINT at step"), std::string::npos) << r.output;
   std::ifstream in(dir / "fill" / "summary.json");
@@ -136,11 +141,14 @@ TEST(Cli, InterruptStopsTheRunAndKeepsWhatItWrote) {
   EXPECT_NEAR(time.back(), stopped_at, 0.0051);
   EXPECT_FALSE(h5.read("/bodies/position_m").empty());
 
-  // A sweep of 60,000 points (minutes), stopped after one second: SIGTERM.
+  // A sweep of 60,000 points (minutes), stopped by SIGTERM once it has
+  // logged some rows.
+  const std::string rows = (dir / "sweep" / "rows.jsonl").string();
   const auto w = gabion::testing::runCommand(
       "sh -c '" + std::string(GABION_BINARY) + " run " + source + "/cases/macro_sweep.json -q -o " +
-      (dir / "sweep").string() +
-      " --set sweep.velocity_m_s.count=10000 & p=$!; sleep 1; kill -TERM $p; wait $p; echo exit=$?'");
+      (dir / "sweep").string() + " --set sweep.velocity_m_s.count=10000 & p=$!; while [ $(cat " + rows +
+      " 2>/dev/null | wc -l) -lt 10 ] && kill -0 $p 2>/dev/null; do sleep 0.02; done; kill -TERM $p; wait $p; echo "
+      "exit=$?'");
   EXPECT_NE(w.output.find("exit=143"), std::string::npos) << w.output;
   std::ifstream sin(dir / "sweep" / "summary.json");
   const auto sweep = nlohmann::json::parse(sin);
