@@ -347,8 +347,9 @@ std::string jobIdOf(const std::string& output) {
 }  // namespace
 
 // A sweep submitted to Slurm as a job array of bundles of rows, one task
-// cancelled on purpose: collect names the missing rows, one command
-// resubmits exactly those, and the collected table is the local run's.
+// cancelled on purpose before it starts, then one killed while it runs:
+// collect names the missing rows, one command resubmits exactly those, and
+// the collected table is the local run's.
 TEST(Rows, ASweepAsASlurmArrayGivesTheLocalTable) {
   const auto dir = scratchDir("rows_slurm");
   LocalSlurm slurm(dir / "cluster");
@@ -382,4 +383,33 @@ TEST(Rows, ASweepAsASlurmArrayGivesTheLocalTable) {
   expectSameTable(dir / "local", out);
   const auto row = nlohmann::json::parse(std::ifstream(out / "rows" / "0" / "row.json"));
   EXPECT_FALSE(row.at("host").get<std::string>().empty());
+
+  // A running task killed (scancel: SIGTERM) keeps the rows it finished; the
+  // rest of its bundle is missing, and resubmitted alone.
+  const std::string big = std::string(GABION_SOURCE_DIR) + "/cases/macro_sweep.json --set sweep.velocity_m_s.count=200";
+  ASSERT_EQ(runGabion("run " + big + " -q --threads 2 -o " + (dir / "local_big").string()).exit_code, 0);
+  const fs::path killed = dir / "killed";
+  r = runGabion("submit slurm " + big + " -o " + killed.string() + " --rows-per-task 600 --max-parallel 1");
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  const std::string big_job = jobIdOf(r.output);
+  const auto rowsDone = [&] {
+    std::error_code ec;
+    if (!fs::is_directory(killed / "rows", ec)) return 0;
+    return static_cast<int>(std::distance(fs::directory_iterator(killed / "rows", ec), fs::directory_iterator()));
+  };
+  for (int i = 0; i < 1200 && rowsDone() < 50; ++i) usleep(50000);
+  ASSERT_GE(rowsDone(), 50) << "the first task did not start";
+  ASSERT_EQ(runCommand("scancel " + big_job + "_0").exit_code, 0);
+  ASSERT_TRUE(LocalSlurm::waitFor(big_job)) << runCommand("squeue").output;
+  r = runGabion("collect " + killed.string());
+  ASSERT_EQ(r.exit_code, 4) << "the task ended before it was killed: " << r.output;
+  const int kept = rowsDone();
+  EXPECT_GE(kept, 650) << "the second task ran whole, and the first kept its rows";
+  EXPECT_LT(kept, 1200);
+  r = runGabion("submit slurm --resume " + killed.string() + " --rows missing");
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  ASSERT_TRUE(LocalSlurm::waitFor(jobIdOf(r.output))) << runCommand("squeue").output;
+  r = runGabion("collect " + killed.string());
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  expectSameTable(dir / "local_big", killed);
 }
