@@ -382,10 +382,11 @@ int commandCollect(Options& o) {
   std::cout << "rows: " << plan->size() - missing.size() << " of " << plan->size() << " done";
   if (!failed.empty()) std::cout << ", " << failed.size() << " failed (rows " << gabion::bridge::rowSpec(failed) << ")";
   std::cout << "\n";
+  const std::string failed_spec = gabion::bridge::rowSpec(failed);
   if (missing.empty()) {
     if (!failed.empty())
-      std::cout << "to run the failed rows again: gabion run --resume " << dir << " --rows failed; then gabion collect "
-                << dir << "\n";
+      std::cout << "to run the failed rows again: gabion run --resume " << dir << " --rows " << failed_spec
+                << "; then gabion collect " << dir << "\n";
     return kExitOk;
   }
   const std::string spec = gabion::bridge::rowSpec(missing);
@@ -393,6 +394,8 @@ int commandCollect(Options& o) {
             << "gabion: run exactly those here:  gabion run --resume " << dir << " --rows " << spec << "\n"
             << "gabion: or as a Slurm array:     gabion submit slurm --resume " << dir << " --rows " << spec << "\n"
             << "gabion: then collect again:      gabion collect " << dir << "\n";
+  if (!failed.empty())
+    std::cerr << "gabion: (the failed rows too:      --rows " << spec << "," << failed_spec << " in either command)\n";
   return kExitIncomplete;
 }
 

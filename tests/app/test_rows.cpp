@@ -135,9 +135,20 @@ TEST(Rows, AFailedRowIsRecordedAndTheOthersComplete) {
   const auto summary = summaryOf(dir);
   EXPECT_EQ(summary.at("failed_points"), 2);
   EXPECT_EQ(summary.at("rows").at("failed"), 2);
+  EXPECT_NE(r.output.find("to run the failed rows again: gabion run --resume " + fs::absolute(dir).string() +
+                          " --rows 2:4; then gabion collect"),
+            std::string::npos)
+      << r.output;
   r = runGabion("run --resume " + dir.string() + " -q --rows failed");
   ASSERT_EQ(r.exit_code, 0) << r.output;
   EXPECT_NE(r.output.find("rows 2:4: 2 run, 2 failed"), std::string::npos) << r.output;
+
+  // With rows missing too, collect names both, and the command for both.
+  fs::remove_all(dir / "rows" / "0");
+  r = runGabion("collect " + dir.string());
+  EXPECT_EQ(r.exit_code, 4) << r.output;
+  EXPECT_NE(r.output.find("gabion: 1 row missing: 0"), std::string::npos) << r.output;
+  EXPECT_NE(r.output.find("(the failed rows too:      --rows 0,2:4 in either command)"), std::string::npos) << r.output;
 }
 
 // A calibration's population (its Latin-hypercube samples) as rows: run in
