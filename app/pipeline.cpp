@@ -10,6 +10,7 @@
 #include <sstream>
 
 #include "app/registry.hpp"
+#include "app/sub_case.hpp"
 #include "bridge/cost.hpp"
 #include "bridge/errors.hpp"
 #include "bridge/interrupt.hpp"
@@ -254,7 +255,6 @@ StageResult runStage(const std::string& name, const std::string& kind, json case
   StagedCase staged = stageCase(std::move(case_value), inputs, settings, dir, law);
   case_value = std::move(staged.value);
   const std::string& key = staged.key;
-  const auto t0 = std::chrono::steady_clock::now();
   clock.begin(name);
   if (auto done = reusable(dir, key)) {
     out.summary = std::move(done->first);
@@ -267,32 +267,18 @@ StageResult runStage(const std::string& name, const std::string& kind, json case
   }
   bridge::beginManifest(dir);
   fs::remove(dir / "stage.json");
-  bridge::writeJsonAtomic(dir / "case.json", case_value);
-  JsonDocument doc = JsonDocument::load(dir / "case.json");
-  const bridge::CaseKind& k = checkCase(doc, kind);
-  bridge::RunContext ctx = parent;
-  ctx.outdir = dir;
-  ctx.case_file = doc.file();
-  ctx.progress_context = [&clock](double run_eta_s) { return clock.prefix(run_eta_s); };
   if (parent.progress) std::printf("%s %s (%s) ...\n", clock.prefix().c_str(), name.c_str(), kind.c_str());
   std::fflush(stdout);
-  bridge::RunOutcome ran = k.run(doc, ctx);
-  out.wall_time_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
-  json summary = ran.results;
-  summary["format"] = "gabion.summary/1";
-  summary["kind"] = kind;
-  summary["status"] = bridge::statusName(ran.status);
-  if (!ran.message.empty()) summary["message"] = ran.message;
-  summary["wall_time_s"] = out.wall_time_s;
-  summary["case"] = doc.json();
-  bridge::writeJsonAtomic(dir / "summary.json", summary);
+  SubCase ran =
+      runSubCase(case_value, kind, parent, dir, [&clock](double run_eta_s) { return clock.prefix(run_eta_s); });
+  out.wall_time_s = ran.wall_time_s;
   if (ran.status != bridge::RunOutcome::Status::Ok) {
     bridge::writeManifest(dir, bridge::statusName(ran.status));
     throw StageFailure("pipeline stage '" + name + "' (" + dir.string() + "): " + ran.message);
   }
   bridge::writeJsonAtomic(dir / "stage.json", {{"key", key}, {"wall_time_s", out.wall_time_s}});
   bridge::writeManifest(dir, "ok");
-  out.summary = std::move(summary);
+  out.summary = std::move(ran.summary);
   if (parent.progress) std::printf("%s %s done in %.1f s\n", clock.prefix().c_str(), name.c_str(), out.wall_time_s);
   clock.end(name, true, out.wall_time_s);
   return out;

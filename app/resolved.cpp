@@ -1,11 +1,11 @@
 #include "app/resolved.hpp"
 
-#include <chrono>
 #include <cmath>
 #include <filesystem>
 #include <sstream>
 
 #include "app/registry.hpp"
+#include "app/sub_case.hpp"
 #include "bridge/cost.hpp"
 #include "bridge/errors.hpp"
 #include "bridge/law_file.hpp"
@@ -123,36 +123,14 @@ std::optional<bridge::Estimate> estimate(const JsonDocument& doc) {
 }
 
 /// A part's run: its summary, wall time, and how it ended.
-struct Part {
-  json summary;
-  double wall_s = 0.0;
-  bridge::RunOutcome::Status status = bridge::RunOutcome::Status::Ok;
-  std::string message;
-};
-
 /// Runs a sub-case into `dir` (its case.json, summary.json and manifest).
-Part runPart(const std::string& name, const json& value, const bridge::RunContext& parent, const fs::path& dir) {
+SubCase runPart(const std::string& name, const json& value, const bridge::RunContext& parent, const fs::path& dir) {
   fs::create_directories(dir);
   bridge::beginManifest(dir);
-  bridge::writeJsonAtomic(dir / "case.json", value);
-  const JsonDocument doc = JsonDocument::load(dir / "case.json");
-  const bridge::CaseKind& k = checkCase(doc);
-  bridge::RunContext ctx = parent;
-  ctx.outdir = dir;
-  ctx.case_file = doc.file();
-  const auto t0 = std::chrono::steady_clock::now();
-  const bridge::RunOutcome ran = k.run(doc, ctx);
-  const double wall = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
-  json summary = ran.results;
-  summary["format"] = "gabion.summary/1";
-  summary["kind"] = k.kind;
-  summary["status"] = bridge::statusName(ran.status);
-  if (!ran.message.empty()) summary["message"] = ran.message;
-  summary["wall_time_s"] = wall;
-  bridge::writeJsonAtomic(dir / "summary.json", summary);
-  bridge::writeManifest(dir, bridge::statusName(ran.status));
-  return {summary, wall, ran.status,
-          ran.status == bridge::RunOutcome::Status::Ok ? "" : name + " (" + dir.string() + "): " + ran.message};
+  SubCase part = runSubCase(value, "", parent, dir);
+  bridge::writeManifest(dir, bridge::statusName(part.status));
+  if (part.status != bridge::RunOutcome::Status::Ok) part.message = name + " (" + dir.string() + "): " + part.message;
+  return part;
 }
 
 /// A force history from first contact (ms, kN).
@@ -168,12 +146,12 @@ bridge::PlotSeries history(const std::string& label, const std::vector<double>& 
 
 bridge::RunOutcome run(const JsonDocument& doc, const bridge::RunContext& ctx) {
   const Plan p = plan(doc);
-  const Part tp = runPart("the macro twin", p.twin, ctx, ctx.outdir / "macro_twin");
+  const SubCase tp = runPart("the macro twin", p.twin, ctx, ctx.outdir / "macro_twin");
   if (tp.status != bridge::RunOutcome::Status::Ok) return {tp.status, tp.message, "", "", {{"macro_twin", tp.summary}}};
-  const Part rp = runPart("the resolved structure", p.resolved, ctx, ctx.outdir / "resolved");
+  const SubCase rp = runPart("the resolved structure", p.resolved, ctx, ctx.outdir / "resolved");
   if (rp.status != bridge::RunOutcome::Status::Ok) return {rp.status, rp.message, "", "", {{"resolved", rp.summary}}};
   const json &twin = tp.summary, &res = rp.summary;
-  const double twin_wall = tp.wall_s, res_wall = rp.wall_s;
+  const double twin_wall = tp.wall_time_s, res_wall = rp.wall_time_s;
 
   bridge::RunOutcome out;
   json& r = out.results;
