@@ -277,11 +277,14 @@ std::string rowsDigest(const json& case_value) {
   return hexDigest(fnv1a(c.dump()));
 }
 
-std::vector<std::optional<json>> findRowResults(const fs::path& outdir, const std::string& digest, std::size_t rows) {
-  RowLog log(outdir / "rows.jsonl", digest, rows);
-  std::vector<std::optional<json>> out = log.read(false);
+namespace {
+
+// Takes the results of the per-row folders in `outdir` into `out` (over the
+// log's: a folder's comes from an explicit rerun).
+void addRowFolders(const fs::path& outdir, const std::string& digest, std::vector<std::optional<json>>& out) {
+  const std::size_t rows = out.size();
   std::error_code ec;
-  if (!fs::is_directory(outdir / "rows", ec)) return out;
+  if (!fs::is_directory(outdir / "rows", ec)) return;
   for (const auto& entry : fs::directory_iterator(outdir / "rows", ec)) {
     const fs::path file = entry.path() / "row.json";
     if (!fs::is_regular_file(file, ec)) continue;  // (a task that has not ended)
@@ -302,6 +305,13 @@ std::vector<std::optional<json>> findRowResults(const fs::path& outdir, const st
     out[index] = checkedResult(j.at("result"));
     noteWritten(file);
   }
+}
+
+}  // namespace
+
+std::vector<std::optional<json>> findRowResults(const fs::path& outdir, const std::string& digest, std::size_t rows) {
+  std::vector<std::optional<json>> out = RowLog(outdir / "rows.jsonl", digest, rows).read(false);
+  addRowFolders(outdir, digest, out);
   return out;
 }
 
@@ -359,9 +369,9 @@ std::string rowSpec(const std::vector<std::size_t>& rows) {
 RunOutcome runRows(const RowPlan& plan, const JsonDocument& doc, const RunContext& ctx) {
   const std::size_t n = plan.size();
   const std::string digest = rowsDigest(doc.json());
-  std::vector<std::optional<json>> results = findRowResults(ctx.outdir, digest, n);
   RowLog log(ctx.outdir / "rows.jsonl", digest, n);
-  log.read(true);  // (repairs a torn tail; its rows are already in `results`)
+  std::vector<std::optional<json>> results = log.read(true);  // (a torn tail cut off)
+  addRowFolders(ctx.outdir, digest, results);
   log.open();
   std::vector<std::size_t> todo;
   for (std::size_t i = 0; i < n; ++i)

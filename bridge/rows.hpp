@@ -21,6 +21,7 @@
 /// the table with its message, and the other rows go on.
 #include <cstddef>
 #include <filesystem>
+#include <functional>
 #include <memory>
 #include <mutex>
 #include <nlohmann/json.hpp>
@@ -42,6 +43,24 @@ struct RowStats {
   double wall_time_s = 0.0;  ///< spent running rows here
   int workers = 1;           ///< threads, or MPI worker ranks
   std::string where;         ///< "threads", "mpi" or "collected"
+};
+
+/// A value computed the first time it is asked for, once, whatever the
+/// thread: what a RowPlan needs only for costS (only `gabion submit` asks),
+/// so that a plan made to run rows does not pay for costing them.
+template <class T>
+class Lazy {
+ public:
+  explicit Lazy(std::function<T()> make) : make_(std::move(make)) {}
+  const T& operator()() const {
+    std::call_once(once_, [this] { value_ = make_(); });
+    return value_;
+  }
+
+ private:
+  std::function<T()> make_;
+  mutable std::once_flag once_;
+  mutable T value_{};
 };
 
 /// The independent rows of one case, prepared once (a sweep's structures

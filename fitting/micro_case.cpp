@@ -320,9 +320,6 @@ class PopulationRows final : public bridge::RowPlan {
     objective_ = MicroObjective{&base_, &microKind(base_), &c_, labGrids(c_)};
     for (const auto& p : c_.params) params_.push_back(p.param), names_.push_back(p.param.name);
     points_ = initialPopulation(params_, c_.search);
-    const auto& kind = microKind(base_);
-    const auto one = kind.estimate ? kind.estimate(substituted(base_, c_, midpoint(c_))) : std::nullopt;
-    one_s_ = one ? one->wall_time_s : 600.0;
   }
   std::size_t size() const override { return points_.size(); }
   json describe(std::size_t i) const override {
@@ -353,7 +350,7 @@ class PopulationRows final : public bridge::RowPlan {
     r["time_s"] = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
     return r;
   }
-  double costS(std::size_t) const override { return one_s_; }
+  double costS(std::size_t) const override { return one_s_(); }
   bridge::RunOutcome assemble(const std::vector<std::optional<json>>& rows, const bridge::RowStats& stats,
                               const bridge::RunContext& ctx) const override {
     EvaluationLog log(ctx.outdir / "evaluations.jsonl", hash_, names_, true);
@@ -407,7 +404,12 @@ class PopulationRows final : public bridge::RowPlan {
   std::vector<Parameter> params_;
   std::vector<std::string> names_;
   std::vector<std::vector<double>> points_;
-  double one_s_ = 600.0;
+  // (the micro case at the middle of the parameter box, once)
+  bridge::Lazy<double> one_s_{[this] {
+    const auto& kind = microKind(base_);
+    const auto one = kind.estimate ? kind.estimate(substituted(base_, c_, midpoint(c_))) : std::nullopt;
+    return one ? one->wall_time_s : 600.0;
+  }};
 };
 
 bridge::RunOutcome runCase(const bridge::JsonDocument& doc, const bridge::RunContext& ctx) {

@@ -426,10 +426,13 @@ bridge::RunOutcome finishDesign(const Plan& p, const std::vector<SectionResult>&
 // capacity chart and report) is made from them as a local run makes it.
 class DesignRows final : public bridge::RowPlan {
  public:
-  explicit DesignRows(const JsonDocument& doc) : p_(plan(doc)), pieces_(pieces(p_)) {
-    const auto e = estimateDesignCase(doc);
-    cost_s_ = e ? e->wall_time_s / static_cast<double>(std::max<std::size_t>(1, pieces_.size())) : 1.0;
-  }
+  explicit DesignRows(const JsonDocument& doc)
+      : p_(plan(doc)),
+        pieces_(pieces(p_)),
+        cost_s_([this, copy = std::make_shared<JsonDocument>(doc.json(), doc.file())] {
+          const auto e = estimateDesignCase(*copy);
+          return e ? e->wall_time_s / static_cast<double>(std::max<std::size_t>(1, pieces_.size())) : 1.0;
+        }) {}
   std::size_t size() const override { return pieces_.size(); }
   json describe(std::size_t i) const override {
     const Piece& c = pieces_[i];
@@ -442,7 +445,7 @@ class DesignRows final : public bridge::RowPlan {
     for (const auto& r : searchPiece(p_, pieces_[i])) sections.push_back(sectionJson(r));
     return {{"ok", true}, {"sections", sections}};
   }
-  double costS(std::size_t) const override { return cost_s_; }
+  double costS(std::size_t) const override { return cost_s_(); }
   bridge::RunOutcome assemble(const std::vector<std::optional<json>>& rows, const bridge::RowStats& stats,
                               const bridge::RunContext& ctx) const override {
     std::vector<SectionResult> evaluated;
@@ -466,7 +469,7 @@ class DesignRows final : public bridge::RowPlan {
  private:
   Plan p_;
   std::vector<Piece> pieces_;
-  double cost_s_ = 1.0;
+  bridge::Lazy<double> cost_s_;
 };
 
 }  // namespace

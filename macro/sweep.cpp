@@ -183,7 +183,7 @@ ImpactResult fromRow(const json& j) {
 // model, so a point's row depends on its index alone.
 class SweepPlan final : public bridge::RowPlan {
  public:
-  explicit SweepPlan(const JsonDocument& doc) : p_(plan(doc)), critical_(criticalSteps(p_)) {}
+  explicit SweepPlan(const JsonDocument& doc) : p_(plan(doc)), critical_([this] { return criticalSteps(p_); }) {}
   std::size_t size() const override { return p_.points.size(); }
   json describe(std::size_t i) const override {
     const Point& pt = p_.points[i];
@@ -199,14 +199,14 @@ class SweepPlan final : public bridge::RowPlan {
   json run(std::size_t i, const bridge::RunContext&) const override { return toRow(runPoint(p_, p_.points[i])); }
   double costS(std::size_t i) const override {
     const auto s = static_cast<std::size_t>(p_.points[i].size);
-    return impactEstimate(p_.c.run, p_.structures[s], critical_[s]).wall_time_s;
+    return impactEstimate(p_.c.run, p_.structures[s], critical_()[s]).wall_time_s;
   }
   bridge::RunOutcome assemble(const std::vector<std::optional<json>>& rows, const bridge::RowStats& stats,
                               const bridge::RunContext& ctx) const override;
 
  private:
   Plan p_;
-  std::vector<double> critical_;
+  bridge::Lazy<std::vector<double>> critical_;
 };
 
 }  // namespace

@@ -360,6 +360,25 @@ std::optional<bridge::Estimate> estimateReplicates(const LabSetup& setup, std::s
 
 namespace {
 
+// An outcome as it crosses between processes (a row's result, a worker's answer).
+nlohmann::json outcomeJson(const bridge::RunOutcome& out) {
+  return {{"status", static_cast<int>(out.status)},
+          {"message", out.message},
+          {"results", out.results},
+          {"answer", out.answer},
+          {"report", out.report}};
+}
+
+bridge::RunOutcome outcomeOf(const nlohmann::json& j) {
+  bridge::RunOutcome out;
+  out.status = static_cast<bridge::RunOutcome::Status>(j.at("status").get<int>());
+  out.message = j.at("message").get<std::string>();
+  out.results = j.at("results");
+  out.answer = j.value("answer", "");
+  out.report = j.value("report", "");
+  return out;
+}
+
 // The folder of run j (variant j % nv on replicate j / nv) when there are several.
 std::string runFolder(const Replicates& r, std::size_t j) {
   const std::size_t nv = r.variants.size();
@@ -505,7 +524,7 @@ std::function<nlohmann::json(const nlohmann::json&)> serveReplicates(std::shared
     nlohmann::json answer;
     try {
       const bridge::RunOutcome out = runReplicateInFolder(*r, j, task.at("cell_file").get<std::string>(), ctx, false);
-      answer = {{"status", static_cast<int>(out.status)}, {"message", out.message}, {"results", out.results}};
+      answer = outcomeJson(out);
     } catch (const bridge::WriteError&) {
       throw;
     } catch (const std::exception& e) {
@@ -576,9 +595,7 @@ bridge::RunOutcome runReplicates(const Replicates& reps, const bridge::RunContex
           errors[j] = a.at("error").get<std::string>();
           return;
         }
-        outs[j].status = static_cast<bridge::RunOutcome::Status>(a.at("status").get<int>());
-        outs[j].message = a.at("message").get<std::string>();
-        outs[j].results = a.at("results");
+        outs[j] = outcomeOf(a);
       } else {
         outs[j] = runReplicateInFolder(reps, j, files[j / nv], ctx, first);
       }
@@ -592,31 +609,22 @@ bridge::RunOutcome runReplicates(const Replicates& reps, const bridge::RunContex
 
 namespace {
 
-// An outcome as it crosses between processes (a row's result, a worker's answer).
-nlohmann::json outcomeJson(const bridge::RunOutcome& out) {
-  return {{"status", static_cast<int>(out.status)},
-          {"message", out.message},
-          {"results", out.results},
-          {"answer", out.answer},
-          {"report", out.report}};
-}
-
-bridge::RunOutcome outcomeOf(const nlohmann::json& j) {
-  bridge::RunOutcome out;
-  out.status = static_cast<bridge::RunOutcome::Status>(j.at("status").get<int>());
-  out.message = j.at("message").get<std::string>();
-  out.results = j.at("results");
-  out.answer = j.value("answer", "");
-  out.report = j.value("report", "");
-  return out;
-}
-
 // The replicates as rows: row k generates replicate k's cell and runs every
 // variant on it, into the folders a local run uses; collected, the rows
 // give the local run's summary.
 class ReplicateRows final : public bridge::RowPlan {
  public:
-  ReplicateRows(std::shared_ptr<const Replicates> reps, double cost_s) : reps_(std::move(reps)), cost_s_(cost_s) {}
+  ReplicateRows(std::shared_ptr<const Replicates> reps, std::function<std::optional<bridge::Estimate>()> estimate)
+      : reps_(std::move(reps)), cost_s_([this, estimate = std::move(estimate)] {
+          const double n = static_cast<double>(std::max<std::size_t>(1, reps_->setup.cells.size()));
+          std::optional<bridge::Estimate> e;
+          try {
+            e = estimate();
+          } catch (const std::exception&) {
+          }
+          // (cells not generated yet cannot be costed: an hour each, one replicate a task)
+          return e ? e->wall_time_s / n : 3600.0;
+        }) {}
   std::size_t size() const override { return reps_->setup.cells.size(); }
   nlohmann::json describe(std::size_t k) const override {
     const CellSource& c = reps_->setup.cells[k];
@@ -649,7 +657,7 @@ class ReplicateRows final : public bridge::RowPlan {
     if (!failures.empty()) result["message"] = failures;
     return result;
   }
-  double costS(std::size_t) const override { return cost_s_; }
+  double costS(std::size_t) const override { return cost_s_(); }
   bridge::RunOutcome assemble(const std::vector<std::optional<nlohmann::json>>& rows, const bridge::RowStats&,
                               const bridge::RunContext& ctx) const override {
     const Replicates& r = *reps_;
@@ -696,22 +704,14 @@ class ReplicateRows final : public bridge::RowPlan {
         bridge::noteWritten(entry.path());
   }
   std::shared_ptr<const Replicates> reps_;
-  double cost_s_;
+  bridge::Lazy<double> cost_s_;
 };
 
 }  // namespace
 
 std::shared_ptr<const bridge::RowPlan> replicateRows(std::shared_ptr<const Replicates> reps,
-                                                     const std::function<std::optional<bridge::Estimate>()>& estimate) {
-  const double n = static_cast<double>(std::max<std::size_t>(1, reps->setup.cells.size()));
-  std::optional<bridge::Estimate> e;
-  try {
-    e = estimate();
-  } catch (const std::exception&) {
-  }
-  // (cells not generated yet cannot be costed: an hour each, one replicate a task)
-  const double cost_s = e ? e->wall_time_s / n : 3600.0;
-  return std::make_shared<const ReplicateRows>(std::move(reps), cost_s);
+                                                     std::function<std::optional<bridge::Estimate>()> estimate) {
+  return std::make_shared<const ReplicateRows>(std::move(reps), std::move(estimate));
 }
 
 bridge::CaseKind replicateKind(std::string kind, std::string description,
@@ -726,7 +726,9 @@ bridge::CaseKind replicateKind(std::string kind, std::string description,
           },
           estimate,
           [replicates, estimate](const bridge::JsonDocument& doc) {
-            return replicateRows(replicates(doc), [&] { return estimate(doc); });
+            // (costed later, if at all: on a copy of the case)
+            const auto copy = std::make_shared<bridge::JsonDocument>(doc.json(), doc.file());
+            return replicateRows(replicates(doc), [estimate, copy] { return estimate(*copy); });
           },
           [replicates](const bridge::JsonDocument& doc) { return serveReplicates(replicates(doc)); }};
 }

@@ -150,9 +150,9 @@ bridge::RunOutcome runReplicates(const Replicates& r, const bridge::RunContext& 
 /// replicate k's cell and runs every variant on it, into the folders a local
 /// run uses, so that the rows, run anywhere and collected, give the local
 /// run's summary. `estimate` (the test's; nullopt, or throwing, where its
-/// cells are not made yet) costs a row.
+/// cells are not made yet) costs a row, when a row's cost is first asked for.
 std::shared_ptr<const bridge::RowPlan> replicateRows(std::shared_ptr<const Replicates> reps,
-                                                     const std::function<std::optional<bridge::Estimate>()>& estimate);
+                                                     std::function<std::optional<bridge::Estimate>()> estimate);
 
 /// On an MPI worker rank: generates a replicate's cell, or runs one of the
 /// runs, as runReplicates does on a thread of its own (CaseKind::serve).
