@@ -1,5 +1,6 @@
 #include "app/registry.hpp"
 
+#include "app/hybrid.hpp"
 #include "app/pipeline.hpp"
 #include "app/resolved.hpp"
 #include "fitting/cases.hpp"
@@ -13,6 +14,9 @@ const std::vector<bridge::CaseKind>& allKinds() {
     std::vector<bridge::CaseKind> all;
     for (auto&& list : {micro::caseKinds(), macro::caseKinds(), fitting::caseKinds()})
       all.insert(all.end(), list.begin(), list.end());
+    // (macro.impact with "resolve" runs the hybrid structure, which needs both scales)
+    for (bridge::CaseKind& k : all)
+      if (k.kind == "macro.impact") k = withHybrid(k);
     all.push_back(pipelineKind());
     all.push_back(resolvedKind());
     return all;

@@ -4,6 +4,7 @@
 #include <filesystem>
 #include <sstream>
 
+#include "app/hybrid.hpp"
 #include "app/registry.hpp"
 #include "app/sub_case.hpp"
 #include "bridge/cost.hpp"
@@ -32,6 +33,8 @@ const std::vector<std::string>& comparedKeys() {
 /// The two sub-cases of a macro.resolved case, as JSON.
 struct Plan {
   json twin, resolved;
+  std::vector<json> hybrids;  ///< macro.impact cases with "resolve", one per `hybrid/within_m`
+  std::vector<double> within_m;
   double law_edge_m = 0.0;  ///< the laws' cell edge (0: not known)
 };
 
@@ -89,6 +92,20 @@ Plan plan(const JsonDocument& doc) {
     if (!extra.is_object()) root.fail("resolved", "expected an object of micro.structure keys");
     for (const auto& [key, value] : extra.items()) p.resolved[key] = value;
   }
+  // The hybrids: the twin with the cells near the aim resolved as the
+  // resolved structure's are (the same cell, the same micro keys).
+  if (const auto h = root.optionalObject("hybrid")) {
+    p.within_m = h->numbers("within_m", Check::NonNegative, 1);
+    for (const double w : p.within_m) {
+      json c = p.twin;
+      json resolve = {{"cell", cell.string()}, {"within_m", w}};
+      for (const auto& [key, value] : p.resolved.items())
+        if (key != "format" && key != "kind" && key != "cell" && key != "structure" && key != "boulder")
+          resolve[key] = value;
+      c["resolve"] = resolve;
+      p.hybrids.push_back(c);
+    }
+  }
   return p;
 }
 
@@ -98,11 +115,17 @@ JsonDocument subDocument(const JsonDocument& doc, const json& value, const std::
   return JsonDocument(value, doc.file() + " (" + part + ")");
 }
 
+/// Every part of the case with its name: the twin, the resolved structure, the hybrids.
+std::vector<std::pair<const json*, std::string>> parts(const Plan& p) {
+  std::vector<std::pair<const json*, std::string>> out = {{&p.twin, "macro_twin"}, {&p.resolved, "resolved"}};
+  for (std::size_t k = 0; k < p.hybrids.size(); ++k) out.emplace_back(&p.hybrids[k], "hybrid_" + std::to_string(k));
+  return out;
+}
+
 void check(const JsonDocument& doc) {
   const Plan p = plan(doc);
-  for (const auto& [value, part] :
-       {std::pair<const json&, const char*>{p.twin, "macro_twin"}, {p.resolved, "resolved"}}) {
-    const JsonDocument sub = subDocument(doc, value, part);
+  for (const auto& [value, part] : parts(p)) {
+    const JsonDocument sub = subDocument(doc, *value, part);
     checkCase(sub).check(sub);
     sub.finish();
   }
@@ -111,8 +134,8 @@ void check(const JsonDocument& doc) {
 std::optional<bridge::Estimate> estimate(const JsonDocument& doc) {
   const Plan p = plan(doc);
   bridge::Estimate total;
-  for (const json* value : {&p.twin, &p.resolved}) {
-    const JsonDocument sub = subDocument(doc, *value, "part");
+  for (const auto& [value, part] : parts(p)) {
+    const JsonDocument sub = subDocument(doc, *value, part);
     const bridge::CaseKind& k = checkCase(sub);
     if (!k.estimate) continue;
     const auto e = k.estimate(sub);
@@ -152,6 +175,10 @@ bridge::RunOutcome run(const JsonDocument& doc, const bridge::RunContext& ctx) {
   if (rp.status != bridge::RunOutcome::Status::Ok) return {rp.status, rp.message, "", "", {{"resolved", rp.summary}}};
   const json &twin = tp.summary, &res = rp.summary;
   const double twin_wall = tp.wall_time_s, res_wall = rp.wall_time_s;
+  std::vector<SubCase> hp;  // (a failed hybrid is reported, and the others still run)
+  for (std::size_t k = 0; k < p.hybrids.size(); ++k)
+    hp.push_back(
+        runPart("hybrid " + std::to_string(k), p.hybrids[k], ctx, ctx.outdir / ("hybrid_" + std::to_string(k))));
 
   bridge::RunOutcome out;
   json& r = out.results;
@@ -178,29 +205,37 @@ bridge::RunOutcome run(const JsonDocument& doc, const bridge::RunContext& ctx) {
   r["same_outcome"] = r["outcome"] == macro["outcome"];
   r["wall_time_s_macro"] = twin_wall;
   r["speed_up"] = twin_wall > 0.0 ? res_wall / twin_wall : NAN;
-  // The twin stands for the resolved structure only if its cells are as
-  // large: the cell's nominal edge (its file says it, for cells made since
-  // it records it) within 5 % of the laws', or else its extent (the edge,
-  // the nodes and the netting's bulge) within 20 %.
-  json warnings = json::array();
-  const json pitch = res.value("cell_pitch_m", json());
-  if (p.law_edge_m > 0.0) {
-    double size = NAN, tolerance = 0.05;
-    std::string what = "nominal edge";
-    if (res.contains("cell_edge_m") && res["cell_edge_m"].is_number()) {
-      size = res["cell_edge_m"].get<double>();
-    } else if (pitch.is_array() && pitch.size() == 3) {
-      size = (pitch[0].get<double>() + pitch[1].get<double>() + pitch[2].get<double>()) / 3.0;
-      tolerance = 0.2, what = "extent";
+  json hybrids = json::array();
+  for (std::size_t k = 0; k < hp.size(); ++k) {
+    const json& h = hp[k].summary;
+    json row = {{"within_m", p.within_m[k]}, {"folder", "hybrid_" + std::to_string(k)}};
+    if (hp[k].status != bridge::RunOutcome::Status::Ok) {
+      row["status"] = "failed";
+      row["message"] = hp[k].message;
+      hybrids.push_back(row);
+      continue;
     }
-    if (std::isfinite(size) && std::fabs(size - p.law_edge_m) > tolerance * p.law_edge_m) {
-      std::ostringstream m;
-      m << "the laws' cell edge (" << p.law_edge_m << " m) and the resolved cell's " << what << " (" << size
-        << " m) differ by more than " << 100.0 * tolerance
-        << " %: the macro twin is not the same structure (laws fitted from another cell?)";
-      warnings.push_back(m.str());
+    json herr = json::object();
+    for (const std::string& key : comparedKeys()) {
+      const double a = number(res, key), m = number(h, key);
+      row[key] = m;
+      herr[key] = std::isfinite(a) && std::isfinite(m) && a != 0.0 ? (m - a) / std::fabs(a) : NAN;
     }
+    const json info = h.value("hybrid", json::object());
+    row["status"] = "ok";
+    row["outcome"] = h.value("outcome", "unknown");
+    row["relative_error"] = herr;
+    row["resolved_cells"] = info.value("resolved_cells", json::array()).size();
+    row["interfaces"] = info.value("interfaces", json::array()).size();
+    row["balance_rel_error"] = info.value("balance_rel_error", NAN);
+    row["interface_mismatch_J"] = info.value("interface_mismatch_J", NAN);
+    row["wall_time_s"] = hp[k].wall_time_s;
+    row["speed_up"] = hp[k].wall_time_s > 0.0 ? res_wall / hp[k].wall_time_s : NAN;
+    hybrids.push_back(row);
   }
+  if (!hp.empty()) r["hybrids"] = hybrids;
+  json warnings = json::array();
+  if (const auto w = cellSizeMismatch(p.law_edge_m, res, "the macro twin")) warnings.push_back(*w);
   r["warnings"] = warnings;
   r["resolved"] = {
       {"cells", res.value("cells", json())},
@@ -220,6 +255,14 @@ bridge::RunOutcome run(const JsonDocument& doc, const bridge::RunContext& ctx) {
     plot.series = {
         history("resolved (micro.structure)", a.read("/curves/impact/time_s"), a.read("/curves/impact/force_N")),
         history("macro twin (macro.impact)", m.read("/series/time_s"), m.read("/series/boulder_force_N"))};
+    for (std::size_t k = 0; k < hp.size(); ++k) {
+      if (hp[k].status != bridge::RunOutcome::Status::Ok) continue;
+      const bridge::H5Reader h(ctx.outdir / ("hybrid_" + std::to_string(k)) / "result.h5");
+      std::ostringstream label;
+      label << "hybrid, within " << p.within_m[k] << " m (" << hybrids[k]["resolved_cells"].get<std::size_t>()
+            << " cells resolved)";
+      plot.series.push_back(history(label.str(), h.read("/curves/impact/time_s"), h.read("/curves/impact/force_N")));
+    }
     bridge::writePlotPng(ctx.outdir / "resolved_vs_macro.png", plot);
   }
   std::ostringstream a;
@@ -235,6 +278,24 @@ bridge::RunOutcome run(const JsonDocument& doc, const bridge::RunContext& ctx) {
   a << "  outcome: " << r["outcome"].get<std::string>() << " resolved, " << macro["outcome"].get<std::string>()
     << " macro\n  wall time: " << res_wall << " s resolved, " << twin_wall << " s macro (the macro twin "
     << res_wall / twin_wall << " times faster)\n";
+  for (const json& h : hybrids) {
+    a << "  hybrid within " << h["within_m"].get<double>() << " m: ";
+    if (h["status"] != "ok") {
+      a << "failed: " << h["message"].get<std::string>() << "\n";
+      continue;
+    }
+    a << h["resolved_cells"].get<std::size_t>() << " cells resolved, " << h["wall_time_s"].get<double>() << " s ("
+      << h["speed_up"].get<double>() << " times faster than resolved); error";
+    for (const std::string& key : comparedKeys()) {
+      const json& e = h["relative_error"][key];
+      a << " " << key << " ";
+      if (e.is_number())
+        a << 100.0 * e.get<double>() << " %";
+      else
+        a << "n/a";
+    }
+    a << "; outcome " << h["outcome"].get<std::string>() << "\n";
+  }
   out.answer = a.str();
   return out;
 }

@@ -177,12 +177,73 @@ StepStatus Model::step(double dt, double damping_rate_1_s) {
   return checkState();
 }
 
+void Model::setExternalForce(std::size_t node, const Vec3& force_N) {
+  if (ext_x_.empty())
+    for (auto* v : {&ext_x_, &ext_y_, &ext_z_}) v->assign(s_.nodeCount(), 0.0);
+  ext_x_.at(node) = force_N.x(), ext_y_[node] = force_N.y(), ext_z_[node] = force_N.z();
+}
+
+void Model::clearExternalForces() {
+  for (auto* v : {&ext_x_, &ext_y_, &ext_z_}) v->clear();
+}
+
+void Model::archive(bridge::StateArchive& a) {
+  for (auto [name, v] : {std::pair<const char*, std::vector<double>*>{"ux", &ux_},
+                         {"uy", &uy_},
+                         {"uz", &uz_},
+                         {"vx", &vx_},
+                         {"vy", &vy_},
+                         {"vz", &vz_},
+                         {"cell_axial", &cell_axial_},
+                         {"ext_x", &ext_x_},
+                         {"ext_y", &ext_y_},
+                         {"ext_z", &ext_z_},
+                         {"axial_plastic", &axial_plastic_},
+                         {"axial_force", &axial_force_},
+                         {"axial_ft1", &axial_ft1_},
+                         {"axial_ft2", &axial_ft2_},
+                         {"lat_ftx", &lat_ftx_},
+                         {"lat_fto", &lat_fto_},
+                         {"lat_plastic", &lat_plastic_},
+                         {"lat_force", &lat_force_},
+                         {"gnd_ftx", &gnd_ftx_},
+                         {"gnd_fty", &gnd_fty_},
+                         {"gnd_plastic", &gnd_plastic_},
+                         {"gnd_force", &gnd_force_},
+                         {"front_plastic", &front_plastic_},
+                         {"front_kt", &front_kt_}})
+    a(name, *v);
+  a("front_ft", front_ft_);
+  bridge::StateArchive b = a.group("boulder");
+  b("present", boulder_.present), b("radius_m", boulder_.radius_m), b("mass_kg", boulder_.mass_kg);
+  b("inertia_kg_m2", boulder_.inertia_kg_m2), b("friction", boulder_.friction);
+  b("gravity_m_s2", boulder_.gravity_m_s2), b("z0_m", boulder_.z0_m);
+  b("position", bpos_), b("position_at_forces", bpos_force_), b("velocity", bvel_), b("velocity_full", bvel_full_);
+  b("force", bforce_), b("spin", bspin_), b("spin_full", bspin_full_), b("torque", btorque_);
+  a("max_indent", max_indent_), a("contacts", n_contacts_), a("centre_inside", centre_inside_);
+  a("crushed_link", crushed_link_), a("crushed_front", crushed_front_);
+  a("time_s", time_), a("steps", steps_);
+  bridge::StateArchive e = a.group("energy");
+  e("kinetic_J", energy_.kinetic_J), e("elastic_J", energy_.elastic_J), e("plastic_J", energy_.plastic_J);
+  e("friction_J", energy_.friction_J), e("potential_J", energy_.potential_J);
+  e("external_work_J", energy_.external_work_J);
+  a("failure", failure_);
+}
+
 void Model::clearForces() {
-  std::fill(fx_.begin(), fx_.end(), 0.0);
+  const bool ext = !ext_x_.empty();
+  if (ext)
+    fx_ = ext_x_;
+  else
+    std::fill(fx_.begin(), fx_.end(), 0.0);
   std::fill(cell_axial_.begin(), cell_axial_.end(), 0.0);
   if (three_d_) {
-    std::fill(fy_.begin(), fy_.end(), 0.0);
-    std::fill(fz_.begin(), fz_.end(), 0.0);
+    if (ext) {
+      fy_ = ext_y_, fz_ = ext_z_;
+    } else {
+      std::fill(fy_.begin(), fy_.end(), 0.0);
+      std::fill(fz_.begin(), fz_.end(), 0.0);
+    }
   }
   bforce_.setZero();
   btorque_.setZero();
@@ -412,10 +473,18 @@ void Model::integrate(double dt, double damping_rate_1_s) {
       u[i] += dt * vnew;
     }
   };
+  // Work of the external forces over the step, F(n) . (u(n+1) - u(n)).
+  auto external = [&](const std::vector<double>& f, const std::vector<double>& v) {
+    double w = 0.0;
+    for (std::size_t i = 0; i < n; ++i) w += f[i] * dt * v[i];
+    return w;
+  };
   advance(vx_, ux_, fx_);
+  if (!ext_x_.empty()) energy_.external_work_J += external(ext_x_, vx_);
   if (three_d_) {
     advance(vy_, uy_, fy_);
     advance(vz_, uz_, fz_);
+    if (!ext_x_.empty()) energy_.external_work_J += external(ext_y_, vy_) + external(ext_z_, vz_);
   }
   if (boulder_.present) {
     const Vec3 weight(0.0, 0.0, -boulder_.mass_kg * boulder_.gravity_m_s2);

@@ -18,6 +18,7 @@
 #include <string>
 #include <vector>
 
+#include "bridge/state_archive.hpp"
 #include "macro/structure.hpp"
 
 namespace gabion::macro {
@@ -56,6 +57,10 @@ struct Energy {
   double plastic_J = 0.0;
   double friction_J = 0.0;
   double potential_J = 0.0;  ///< the boulder's weight: M g (z - z at placement) (J)
+  /// Work of the external node forces (setExternalForce) since the model was
+  /// built, sum of F(n) . (u(n+1) - u(n)) (J): energy that came in, so
+  /// total() - external_work_J stays at the initial energy. Not in total().
+  double external_work_J = 0.0;
   double total() const { return kinetic_J + elastic_J + plastic_J + friction_J + potential_J; }
 };
 
@@ -80,6 +85,19 @@ class Model {
   /// Sets every node's velocity to zero (kinetic damping while relaxing).
   void stopNodes();
   bool hasBoulder() const { return boulder_.present; }
+
+  /// Applies a force (N) to node `node` at every step from the next one on,
+  /// until changed: what a part of the structure resolved at the fine scale
+  /// exerts on its macro neighbours (the hybrid structure). x-only
+  /// kinematics takes its x component (the others go to the constraint).
+  void setExternalForce(std::size_t node, const Vec3& force_N);
+  void clearExternalForces();
+
+  /// The state that changes during a run (nodes, links' history, boulder,
+  /// energy, time), into or out of a checkpoint (bridge/state_archive.hpp):
+  /// a model built from the same structure, then loaded, steps on exactly as
+  /// the one saved would have.
+  void archive(bridge::StateArchive& a);
 
   /// Advances by dt (s). `damping_rate_1_s` > 0 adds mass-proportional viscous
   /// damping (used only to bring the structure to rest between impacts; the
@@ -142,6 +160,8 @@ class Model {
 
   // Nodes.
   std::vector<double> ux_, uy_, uz_, vx_, vy_, vz_, fx_, fy_, fz_, cell_axial_;
+  // External node forces (empty: none).
+  std::vector<double> ext_x_, ext_y_, ext_z_;
   // Axial links: plastic shortening, force, tangential face forces (3-D).
   std::vector<double> axial_plastic_, axial_force_, axial_ft1_, axial_ft2_;
   // Lateral links: tangential force along x and along the other lateral axis

@@ -28,15 +28,19 @@ AxialLawParams seriesAxialLaw(const AxialLawParams& a, const AxialLawParams& b) 
   return p;
 }
 
-AxialLawParams halfCellLaw(const AxialLawParams& a) {
+AxialLawParams cellLengthLaw(const AxialLawParams& a, double factor) {
   AxialLawParams p = a;
-  p.stiffness_N_m *= 2.0;
-  p.hardening_stiffness_N_m *= 2.0;
-  p.densification_onset_m *= 0.5;
-  p.densification_stiffness_N_m *= 2.0;
-  p.lockup_shortening_m *= 0.5;
-  p.lockup_stiffness_N_m *= 2.0;
+  p.stiffness_N_m /= factor;
+  p.hardening_stiffness_N_m /= factor;
+  p.densification_onset_m *= factor;
+  p.densification_stiffness_N_m /= factor;
+  p.lockup_shortening_m *= factor;
+  p.lockup_stiffness_N_m /= factor;
   return p;
+}
+
+AxialLawParams halfCellLaw(const AxialLawParams& a) {
+  return cellLengthLaw(a, 0.5);
 }
 
 double crushShortening(const AxialLawParams& p, double length_m) {
@@ -124,6 +128,16 @@ Structure buildStructure(const StructureSpec& spec, const bridge::LawFile& laws)
 
   // Nodes.
   s.node_of.assign(static_cast<std::size_t>(s.nx) * s.ny * s.nz, -1);
+  std::vector<char> resolved(s.node_of.size(), 0);
+  for (const int c : spec.resolved_cells) {
+    if (c < 0 || static_cast<std::size_t>(c) >= resolved.size())
+      throw std::invalid_argument("resolved cell index " + std::to_string(c) + " is outside the grid");
+    resolved[static_cast<std::size_t>(c)] = 1;
+  }
+  const auto isResolved = [&](int i, int j, int k) {
+    return i >= 0 && j >= 0 && k >= 0 && i < s.nx && j < s.ny && k < s.nz &&
+           resolved[static_cast<std::size_t>(i + s.nx * (j + s.ny * k))] != 0;
+  };
   std::size_t explicit_next = 0;
   for (int k = 0; k < s.nz; ++k)
     for (int j = 0; j < s.ny; ++j)
@@ -136,6 +150,12 @@ Structure buildStructure(const StructureSpec& spec, const bridge::LawFile& laws)
         } else {
           const int depth = i - s.front_offset_cells[static_cast<std::size_t>(k)];
           name = depth < spec.material.front_depth_cells ? spec.material.front : spec.material.core;
+        }
+        if (isResolved(i, j, k)) {
+          if (i > s.front_offset_cells[static_cast<std::size_t>(k)] && !isResolved(i - 1, j, k))
+            throw std::invalid_argument("resolved cell (" + std::to_string(i) + ", " + std::to_string(j) + ", " +
+                                        std::to_string(k) + ") is behind a macro cell: resolve the cells in front too");
+          continue;
         }
         const int node = static_cast<int>(s.gi.size());
         s.node_of[static_cast<std::size_t>(i + s.nx * (j + s.ny * k))] = node;
@@ -171,18 +191,22 @@ Structure buildStructure(const StructureSpec& spec, const bridge::LawFile& laws)
     const int i = s.gi[q], j = s.gj[q], k = s.gk[q];
     const auto& ma = s.materials[static_cast<std::size_t>(s.material[q])];
     const int a = static_cast<int>(q);
+    // (a node behind a resolved cell meets it at its front face: its rear
+    // link spans the whole of its cell)
+    const bool whole = isResolved(i - 1, j, k);
+    const AxialLawParams rear = whole ? cellLengthLaw(ma.axial, 2.0) : ma.axial;
     if (const int b = s.nodeAt(i + 1, j, k); b >= 0) {
       const auto& mb = s.materials[static_cast<std::size_t>(s.material[static_cast<std::size_t>(b)])];
       s.axial.a.push_back(a);
       s.axial.b.push_back(b);
-      s.axial.law.push_back(internAxial(s, seriesAxialLaw(ma.axial, mb.axial), e));
+      s.axial.law.push_back(internAxial(s, seriesAxialLaw(rear, mb.axial), whole ? 1.5 * e : e));
       s.axial.friction.push_back(internFriction(s, pairFriction(ma, mb)));
     } else {
       s.back_nodes.push_back(a);
       if (spec.support.fixed_back) {
         s.axial.a.push_back(a);
         s.axial.b.push_back(kWall);
-        s.axial.law.push_back(internAxial(s, halfCellLaw(ma.axial), 0.5 * e));
+        s.axial.law.push_back(internAxial(s, halfCellLaw(rear), whole ? e : 0.5 * e));
         s.axial.friction.push_back(internFriction(s, {ma.interface.friction, ma.interface.tangential_stiffness_N_m}));
       }
     }
@@ -215,6 +239,7 @@ Structure buildStructure(const StructureSpec& spec, const bridge::LawFile& laws)
     for (int j = 0; j < s.ny; ++j) {
       const int i = s.front_offset_cells[static_cast<std::size_t>(k)];
       const int node = s.nodeAt(i, j, k);
+      if (node < 0) continue;  // (a resolved cell: the fine scale takes the boulder there)
       s.front.node.push_back(node);
       s.front.law.push_back(
           internAxial(s, s.materials[static_cast<std::size_t>(s.material[static_cast<std::size_t>(node)])].impact, e));

@@ -45,6 +45,12 @@ struct StructureSpec {
   std::vector<int> front_offset_cells;  ///< per z layer: cells removed at the front (stepped face); empty = 0
   MaterialRule material;                ///< material per cell (empty names: the law file's only material)
   SupportSpec support;
+  /// Cells resolved at the fine scale instead (the hybrid structure), by grid
+  /// index i + nx (j + ny k): they get no node. A node whose front neighbour
+  /// is one meets it at its own front face, so its rear link spans its whole
+  /// cell (wholeFrontCellLaw). They must not be in front of a node (the
+  /// resolved part is closed towards the front).
+  std::vector<int> resolved_cells;
 };
 
 /// A node's axial (x) interaction partner that is not a node.
@@ -122,6 +128,11 @@ bridge::AxialLawParams seriesAxialLaw(const bridge::AxialLawParams& a, const bri
 /// Half a cell against a rigid wall: stiffnesses doubled, lock-up shortening
 /// halved, the same yield force.
 bridge::AxialLawParams halfCellLaw(const bridge::AxialLawParams& a);
+/// A cell `factor` times as long as the law's (stiffnesses divided by it,
+/// shortenings multiplied): halfCellLaw is factor 0.5. A node whose front
+/// face meets a resolved cell takes seriesAxialLaw(cellLengthLaw(a, 2), b)
+/// behind it: the whole of its cell and half of the next in series.
+bridge::AxialLawParams cellLengthLaw(const bridge::AxialLawParams& a, double factor);
 
 /// A cell is crushed once shortened past its lock-up by this fraction of what
 /// remains of it at lock-up: the dense fill itself then gives way, and the

@@ -628,6 +628,27 @@ void Engine::applyWallsAndLoads(bool measure) {
       fail(StepStatus::Overlap, m.str());
     }
   }
+  driveWalls();
+}
+
+void Engine::driveWalls() {
+  if (!driver_ || status_ != StepStatus::Ok) return;
+  driven_force_.clear();
+  for (const Wall& w : walls_)
+    if (w.program.kind == WallProgram::Kind::Driven) driven_force_.push_back(w.force_N);
+  if (driven_force_.empty()) return;
+  driven_move_.assign(driven_force_.size(), Vec3::Zero());
+  driver_(time_, dt_, driven_force_, driven_move_);
+  std::size_t k = 0;
+  for (Wall& w : walls_) {
+    if (w.program.kind != WallProgram::Kind::Driven) continue;
+    const Vec3& d = driven_move_[k++];
+    // The contacts counted the work at the last step's velocity; the wall
+    // moves by d: its work on the bodies is -F . d.
+    energy_.wall_work -= w.force_N.dot(d - w.velocity * dt_);
+    w.step_displacement = d;
+    w.velocity = d / dt_;
+  }
 }
 
 // ---------------------------------------------------------------------------

@@ -15,6 +15,7 @@
 #include <array>
 #include <chrono>
 #include <cstdint>
+#include <functional>
 #include <memory>
 #include <string>
 #include <vector>
@@ -123,6 +124,16 @@ class Engine {
   /// Gives wall w a new program from the next step on; it moves on from
   /// where it is (a test that reverses its plate, or stops it).
   void setWallProgram(std::size_t w, const WallProgram& program);
+  /// Moves the walls whose program is Driven: called once a step, after the
+  /// forces and before the bodies move, with the force the bodies exert on
+  /// each driven wall at this step (walls in index order); it fills each one's
+  /// displacement over the step (m). The walls' work in the energy ledger is
+  /// then -force . displacement, exactly what a coupled model receives.
+  using WallDriver =
+      std::function<void(double t, double dt, const std::vector<Vec3>& forces_N, std::vector<Vec3>& displacements_m)>;
+  /// Installs (or, with an empty function, removes: the walls stand still)
+  /// the driver of the Driven walls.
+  void setWallDriver(WallDriver driver) { driver_ = std::move(driver); }
 
   std::size_t linkCount() const { return links_.size(); }
   bool linkBroken(std::size_t l) const { return links_.broken(l); }
@@ -155,6 +166,7 @@ class Engine {
   void updateNeighbours();
   void computeContactForces(bool measure);
   void applyWallsAndLoads(bool measure);
+  void driveWalls();
   void integrate(bool measure);
   void advanceLinkedNodes(bool measure);
   void checkStep(bool measure);
@@ -190,6 +202,8 @@ class Engine {
   void lap(StageProfile::Stage stage);
 
   Particles p_;  // every sphere in contact detection, in cell order
+  WallDriver driver_;
+  std::vector<Vec3> driven_force_, driven_move_;  // the driver's arguments (kept: no allocation per step)
   std::size_t sphere_count_ = 0;
   std::vector<std::uint32_t> driven_;  // ids of the fixed spheres that move
   // ids of the spheres the free-sphere pass moves (not block members, not

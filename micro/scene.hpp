@@ -128,8 +128,11 @@ struct WallProgram {
     VelocityTable,  ///< velocity piecewise linear in time through (table_time_s, table_velocity_m_s); the last value
                     ///< holds after the table
     Sinusoid,       ///< displacement amplitude_m sin(2 pi f t + phase) - sin(phase), along `direction`
-    Servo           ///< along the wall normal, speed gain x (target - measured normal force), at most max_speed;
+    Servo,          ///< along the wall normal, speed gain x (target - measured normal force), at most max_speed;
                     ///< at max_speed towards the bodies once it has touched nothing for approach_after_s
+    Driven          ///< moved at each step by the engine's wall driver (Engine::setWallDriver) from the force
+                    ///< of that step: the face of a coupled model (the hybrid structure). Set in code only;
+                    ///< without a driver it stands still
   };
   Kind kind = Kind::Fixed;
   Vec3 velocity_m_s = Vec3::Zero();

@@ -124,6 +124,7 @@ bridge::RunOutcome runScene(Scene scene, const std::string& file, const bridge::
   }
   const double dt = chooseDt(scene, engine.criticalDt(), file);
   engine.setDt(dt);
+  if (hooks.start) hooks.start(engine);
   const auto steps = static_cast<long long>(std::ceil(scene.run.duration_s / dt - 1e-9));
   const long long series_every = std::max(1LL, std::llround(scene.run.series_interval_s / dt));
   const long long output_every = std::max(1LL, std::llround(scene.run.output_interval_s / dt));

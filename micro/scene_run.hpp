@@ -19,6 +19,9 @@ namespace gabion::micro {
 /// What a case kind adds to the scene run (micro.scene adds nothing).
 struct SceneRunHooks {
   std::string label = "micro.scene";  ///< shown on the progress line
+  /// Once the engine is built, before the first step (also of a resumed
+  /// run, before its checkpoint loads): e.g. the driver of its Driven walls.
+  std::function<void(Engine&)> start;
   /// After each series sample (engine state after the step that started at t).
   std::function<void(const Engine&, double t)> record;
   /// After each series sample, before `done`: the test steers its walls

@@ -34,6 +34,7 @@ Vec3 programDisplacement(const WallProgram& p, double t0, double t1) {
   switch (p.kind) {
     case K::Fixed:
     case K::Servo:
+    case K::Driven:
       return Vec3::Zero();
     case K::Velocity:
       return p.velocity_m_s * (t1 - t0);
@@ -84,6 +85,13 @@ void Wall::plan(double t, double dt) {
                                           program.max_speed_m_s);
     velocity = speed * n;
     step_displacement = velocity * dt;
+    return;
+  }
+  if (program.kind == WallProgram::Kind::Driven) {
+    // (the driver sets the step's displacement once the forces are known;
+    // until then the contacts see the last step's velocity, as the bodies'
+    // own velocities are those of the last half step)
+    step_displacement.setZero();
     return;
   }
   step_displacement = programDisplacement(program, t, t + dt);

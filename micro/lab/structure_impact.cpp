@@ -87,7 +87,29 @@ struct Layout {
   std::vector<std::size_t> front_cells, back_cells;
 };
 
-Layout buildLayout(const StructureCase& c, const Sample& sample) {
+/// The plate on a face of a resolved cell (StructurePart::Face), driven by
+/// the coupled model: the cell's extent there, its normal into the cell, of
+/// the netting's material (it stands for the next cell's netting).
+WallSpec facePlate(const StructurePart::Face& f, const StructureCase& c, const Layout& l, const Sample& sample) {
+  const int idx[3] = {f.cell % c.nx, (f.cell / c.nx) % c.ny, f.cell / (c.nx * c.ny)};
+  const int a = f.axis, b = (a + 1) % 3, d = (a + 2) % 3;
+  Vec3 centre;
+  for (int q = 0; q < 3; ++q) centre[q] = (idx[q] + (q == a ? (f.side > 0 ? 1.0 : 0.0) : 0.5)) * l.pitch[q];
+  WallSpec w;
+  w.name = "interface_" + std::to_string(f.cell) + "_" + "xyz"[a] + (f.side > 0 ? "_plus" : "_minus");
+  w.point_m = centre;
+  w.normal = -static_cast<double>(f.side) * Vec3::Unit(a);
+  w.material = sample.netting_material >= 0 ? sample.netting_material : sample.plate_material;
+  w.program.kind = WallProgram::Kind::Driven;
+  w.bounded = true;
+  w.axis_u = Vec3::Unit(b);
+  // (v = normal x u lies along the third axis, either way)
+  w.half_u_m = 0.5 * l.pitch[b];
+  w.half_v_m = 0.5 * l.pitch[d];
+  return w;
+}
+
+Layout buildLayout(const StructureCase& c, const Sample& sample, const StructurePart* part = nullptr) {
   Layout out;
   const Scene& cell = sample.scene;
   out.pitch = sample.hi - sample.lo;
@@ -99,9 +121,12 @@ Layout buildLayout(const StructureCase& c, const Sample& sample) {
   s.no_contact_groups = cell.no_contact_groups;
   s.run = cell.run;
   std::size_t index = 0;  // i + nx (j + ny k)
+  std::size_t slot = 0;   // the cell's place among those laid out
   for (int k = 0; k < c.nz; ++k)
     for (int j = 0; j < c.ny; ++j)
       for (int i = 0; i < c.nx; ++i, ++index) {
+        if (part && std::find(part->cells.begin(), part->cells.end(), static_cast<int>(index)) == part->cells.end())
+          continue;
         // Cell (i, j, k) spans [i, i+1] x [j, j+1] x [k, k+1] pitches from the origin.
         const Vec3 shift = Vec3(i * out.pitch.x(), j * out.pitch.y(), k * out.pitch.z()) - sample.lo;
         const std::size_t first_sphere = s.spheres.size();
@@ -117,12 +142,15 @@ Layout buildLayout(const StructureCase& c, const Sample& sample) {
           l.a += first_sphere, l.b += first_sphere;
           s.links.push_back(l);
         }
-        if (i == 0) out.front_cells.push_back(index);
-        if (i == c.nx - 1) out.back_cells.push_back(index);
+        if (i == 0) out.front_cells.push_back(slot);
+        if (i == c.nx - 1) out.back_cells.push_back(slot);
+        ++slot;
       }
   s.walls.push_back(fixedWall("base", Vec3::Zero(), Vec3::UnitZ(), sample.plate_material));
   if (c.fixed_back)
     s.walls.push_back(fixedWall("back", Vec3(c.nx * out.pitch.x(), 0, 0), -Vec3::UnitX(), sample.plate_material));
+  if (part)
+    for (const StructurePart::Face& f : part->faces) s.walls.push_back(facePlate(f, c, out, sample));
   return out;
 }
 
@@ -173,8 +201,8 @@ double meanBlockX(const Engine& e, std::size_t spheres, std::size_t first, std::
 }
 
 bridge::RunOutcome runOne(const StructureCase& c, const Sample& sample, const bridge::RunContext& ctx,
-                          const std::string& file) {
-  Layout layout = buildLayout(c, sample);
+                          const std::string& file, const StructurePart* part = nullptr) {
+  Layout layout = buildLayout(c, sample, part);
   checkAim(c, layout, file);
   const Vec3 aim = aimPoint(c, layout);
   nlohmann::json settle_results;
@@ -227,6 +255,11 @@ bridge::RunOutcome runOne(const StructureCase& c, const Sample& sample, const br
       front = std::max(front, meanBlockX(e, spheres, layout.front_cells[q] * bpc, bpc) - front0[q]);
     for (std::size_t q = 0; q < layout.back_cells.size(); ++q)
       back = std::max(back, meanBlockX(e, spheres, layout.back_cells[q] * bpc, bpc) - back0[q]);
+    if (part && part->faces_moved) {
+      const auto [macro_front, macro_back] = part->faces_moved();
+      front = std::max(front, macro_front), back = std::max(back, macro_back);
+    }
+    if (part && part->record) part->record(e);
     sr.time.push_back(e.time());
     sr.force.push_back(force);
     sr.penetration.push_back(std::isnan(x_contact) ? 0.0 : b.position_m.x() - x_contact);
@@ -237,7 +270,10 @@ bridge::RunOutcome runOne(const StructureCase& c, const Sample& sample, const br
   };
   // Over: the boulder has left the face (no force for 5 ms, moving back),
   // come to rest in it (below 1 % of its speed), or passed the back face.
+  std::string coupled_failure;
   hooks.done = [&](const Engine& e) {
+    if (part && part->failure && coupled_failure.empty()) coupled_failure = part->failure();
+    if (!coupled_failure.empty()) return true;
     if (std::isnan(t_contact)) return false;
     const double vx = sr.velocity.back();
     if (vx < 0.0 && e.time() - t_last_force > 0.005) return true;
@@ -250,7 +286,12 @@ bridge::RunOutcome runOne(const StructureCase& c, const Sample& sample, const br
     a("time_s", sr.time), a("force_N", sr.force), a("penetration_m", sr.penetration), a("velocity_m_s", sr.velocity);
     a("front_m", sr.front), a("back_m", sr.back), a("front0", front0), a("back0", back0);
     a("x_contact", x_contact), a("t_contact", t_contact), a("peak", peak), a("t_last_force", t_last_force);
+    if (part && part->archive) {
+      bridge::StateArchive pa = a.group("coupled");
+      part->archive(pa);
+    }
   };
+  if (part && part->drive) hooks.start = [part](Engine& e) { e.setWallDriver(part->drive); };
   hooks.write = [&](const Engine&, bridge::H5Writer& h5) {
     h5.write("/curves/impact/time_s", sr.time, "s");
     h5.write("/curves/impact/force_N", sr.force, "N");
@@ -292,10 +333,11 @@ bridge::RunOutcome runOne(const StructureCase& c, const Sample& sample, const br
   r["max_front_face_displacement_m"] = max_front;
   r["max_back_face_displacement_m"] = max_back;
   r["touched"] = touched;
-  r["outcome"] = through                                 ? "perforated"
+  r["outcome"] = through || !coupled_failure.empty()     ? "perforated"
                  : !over                                 ? "unfinished"
                  : rebound >= c.rebound_restitution * v0 ? "rebounded"
                                                          : "stopped";
+  if (!coupled_failure.empty()) r["perforation"] = coupled_failure;
   nlohmann::json warnings = nlohmann::json::array();
   if (!touched)
     warnings.push_back("the boulder never touched the structure within run.duration_s");
@@ -323,6 +365,23 @@ bridge::RunOutcome runOne(const StructureCase& c, const Sample& sample, const br
       << 1000.0 * max_back << " mm\n";
   out.answer = rep.str() + out.answer;
   return out;
+}
+
+/// The cell file of a part's document (a part runs one given cell).
+Sample partSample(const StructureCase& c, const bridge::JsonDocument& doc) {
+  checkCells(c.setup);
+  if (!c.setup.cells.front().generate.empty() || c.setup.cells.size() != 1)
+    throw bridge::InputError(doc.file(), "/cell", "a resolved part runs one cell file, not a cell case or replicates");
+  return loadSample(c.setup.cells.front().file, c.setup);
+}
+
+void checkPart(const StructureCase& c, const StructurePart& part, const std::string& file) {
+  const int n = c.nx * c.ny * c.nz;
+  for (const int cell : part.cells)
+    if (cell < 0 || cell >= n) throw bridge::InputError(file, "/structure/cells", "a resolved cell is off the grid");
+  for (const StructurePart::Face& f : part.faces)
+    if (f.cell < 0 || f.cell >= n || f.axis < 0 || f.axis > 2 || (f.side != 1 && f.side != -1))
+      throw bridge::InputError(file, "/structure/cells", "an interface face is off the grid");
 }
 
 void check(const bridge::JsonDocument& doc) {
@@ -362,6 +421,44 @@ std::shared_ptr<const Replicates> replicates(const bridge::JsonDocument& doc) {
 }
 
 }  // namespace
+
+StructureGrid structureGrid(const bridge::JsonDocument& doc) {
+  const StructureCase c = parseCase(doc);
+  const Sample sample = partSample(c, doc);
+  const Layout l = buildLayout(c, sample, nullptr);
+  const Vec3 aim = aimPoint(c, l);
+  return {{c.nx, c.ny, c.nz}, {l.pitch.x(), l.pitch.y(), l.pitch.z()}, {aim.y(), aim.z()}};
+}
+
+void checkStructurePart(const bridge::JsonDocument& doc, const StructurePart& part) {
+  const StructureCase c = parseCase(doc);
+  checkPart(c, part, doc.file());
+  const Sample sample = partSample(c, doc);
+  const Layout l = buildLayout(c, sample, &part);
+  checkAim(c, l, doc.file());
+  std::size_t boulder = 0;
+  const Scene s = impactScene(c, l.scene, sample, aimPoint(c, l), doc.file(), boulder);
+  validateScene(s, doc.file());
+  chooseDt(s, criticalTimeStep(s), doc.file());
+}
+
+bridge::RunOutcome runStructurePart(const bridge::JsonDocument& doc, const StructurePart& part,
+                                    const bridge::RunContext& ctx) {
+  const StructureCase c = parseCase(doc);
+  checkPart(c, part, doc.file());
+  return runOne(c, partSample(c, doc), ctx, doc.file(), &part);
+}
+
+std::optional<bridge::Estimate> estimateStructurePart(const bridge::JsonDocument& doc, const StructurePart& part) {
+  const StructureCase c = parseCase(doc);
+  return estimateReplicates(c.setup, 1, [&](const Sample& s, std::size_t) {
+    const Layout l = buildLayout(c, s, &part);
+    std::size_t boulder = 0;
+    Scene scene = impactScene(c, l.scene, s, aimPoint(c, l), doc.file(), boulder);
+    scene.run.duration_s += c.settle_s;
+    return scene;
+  });
+}
 
 bridge::CaseKind structureImpactKind() {
   return replicateKind("micro.structure",

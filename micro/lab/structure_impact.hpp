@@ -10,10 +10,72 @@
 /// strikes the front face along +x. Its force, penetration and contact
 /// time, the front and back cells' displacements and the outcome are
 /// those of macro.impact, measured on the resolved cells.
+#include <array>
+#include <functional>
+#include <nlohmann/json.hpp>
+#include <utility>
+#include <vector>
+
+#include "bridge/json_reader.hpp"
 #include "bridge/run.hpp"
+#include "bridge/state_archive.hpp"
+#include "micro/engine.hpp"
 
 namespace gabion::micro::lab {
 
 bridge::CaseKind structureImpactKind();
+
+/// A part of a micro.structure resolved at the fine scale, the rest modelled
+/// by someone else (the hybrid structure, app/hybrid.cpp): only `cells` are
+/// laid out, and every face they share with a cell that is not resolved is
+/// a plate (a bounded wall, program Driven) that `drive` moves.
+struct StructurePart {
+  std::vector<int> cells;  ///< resolved cells, by grid index i + nx (j + ny k); the struck cell among them
+  /// A face of a resolved cell that meets a cell not resolved.
+  struct Face {
+    int cell = 0;   ///< the resolved cell's grid index
+    int axis = 0;   ///< 0: x, 1: y, 2: z
+    int side = 1;   ///< +1: its face at the upper end along the axis; -1: the lower
+    int other = 0;  ///< the grid index of the cell across the face
+  };
+  std::vector<Face> faces;
+  /// The faces' plates in this order are the engine's Driven walls: each
+  /// step, the forces the bodies exert on them (N) in, their displacements
+  /// over the step (m) out (Engine::WallDriver). Called in the impact only
+  /// (the plates stand still while the part settles).
+  Engine::WallDriver drive;
+  /// The largest front and back face displacements (m) of the cells not
+  /// resolved, read at each series sample (the summary's face keys take the
+  /// larger of both parts).
+  std::function<std::pair<double, double>()> faces_moved;
+  /// The coupled model's state, into or out of the impact's checkpoints.
+  std::function<void(bridge::StateArchive&)> archive;
+  /// At each series sample of the impact, with the fine engine after its step.
+  std::function<void(const Engine&)> record;
+  /// Read at each series sample: not empty when the coupled model has
+  /// failed past its range (a cell crushed beyond its lock-up); the impact
+  /// then ends `perforated`, with this message.
+  std::function<std::string()> failure;
+};
+
+/// The layout the part's faces refer to: the cell counts and the pitch of
+/// the cell file a micro.structure document `doc` names.
+struct StructureGrid {
+  std::array<int, 3> cells{1, 1, 1};
+  std::array<double, 3> pitch_m{0, 0, 0};
+  std::array<double, 2> aim_m{0, 0};  ///< [y, z] on the front face (m)
+};
+StructureGrid structureGrid(const bridge::JsonDocument& doc);
+
+/// Checks a micro.structure document run as `part` (the cell file, the
+/// scene with the part's plates), as `gabion check` would.
+void checkStructurePart(const bridge::JsonDocument& doc, const StructurePart& part);
+/// Runs a micro.structure document (a cell file, not a cell case) as
+/// `part`: the resolved cells settle between their plates, then the boulder
+/// strikes with `part.drive` moving the plates.
+bridge::RunOutcome runStructurePart(const bridge::JsonDocument& doc, const StructurePart& part,
+                                    const bridge::RunContext& ctx);
+/// What running it costs (bridge/cost.hpp).
+std::optional<bridge::Estimate> estimateStructurePart(const bridge::JsonDocument& doc, const StructurePart& part);
 
 }  // namespace gabion::micro::lab

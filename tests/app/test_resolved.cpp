@@ -81,7 +81,8 @@ TEST(ResolvedStructure, TwoCellsStruckBeforeTheirMacroTwin) {
                                        R"(/cases/laws/illustrative.json", "cell": "cell/cell.h5",
  "structure": {"cells": [2, 1, 1], "material": {"front": "front", "core": "core", "front_depth_cells": 1}},
  "boulder": {"diameter_m": 0.25, "velocity_m_s": 8},
- "resolved": {"settle": {"duration_s": 0.01}, "run": {"duration_s": 0.03}}})");
+ "resolved": {"settle": {"duration_s": 0.01}, "run": {"duration_s": 0.03}},
+ "hybrid": {"within_m": [0]}})");
   const auto both = runGabion("run " + (dir / "resolved.json").string() + " -o " + (dir / "both").string());
   ASSERT_EQ(both.exit_code, 0) << both.output;
   EXPECT_NE(both.output.find("resolved against its macro twin"), std::string::npos) << both.output;
@@ -98,6 +99,92 @@ TEST(ResolvedStructure, TwoCellsStruckBeforeTheirMacroTwin) {
   ASSERT_EQ(b["warnings"].size(), 1u);
   EXPECT_NE(b["warnings"][0].get<std::string>().find("not the same structure"), std::string::npos);
   EXPECT_TRUE(std::filesystem::exists(dir / "both" / "resolved_vs_macro.png"));
+  // And the hybrid with the struck cell resolved, on the same keys.
+  ASSERT_EQ(b["hybrids"].size(), 1u);
+  const nlohmann::json& h = b["hybrids"][0];
+  ASSERT_EQ(h["status"], "ok") << h.dump();
+  EXPECT_EQ(h["resolved_cells"], 1);
+  const nlohmann::json hs = summaryOf(dir / "both" / "hybrid_0");
+  for (const char* key : {"peak_force_N", "max_penetration_m"}) {
+    const double a = b[key].get<double>(), m = hs[key].get<double>();
+    EXPECT_DOUBLE_EQ(h["relative_error"][key].get<double>(), (m - a) / a) << key;
+  }
+  EXPECT_GT(h["speed_up"].get<double>(), 0.0);
+  EXPECT_NE(both.output.find("hybrid within 0 m"), std::string::npos) << both.output;
+}
+
+// The hybrid: a macro.impact case with "resolve". The struck front cell is
+// resolved; the cell behind it is a macro node whose front face is a plate
+// in the fine scene. The work the plate does on the bodies and the work its
+// force does on the node cancel to round-off; both parts together keep
+// their energy; the boulder's momentum is the impulse of the force on it.
+TEST(HybridStructure, StruckCellResolvedTheCellBehindAMacroNode) {
+  const auto dir = scratchDir("hybrid");
+  writeFile(dir / "cell.json", gabion::testing::smallCellCase());
+  ASSERT_EQ(runGabion("run -q " + (dir / "cell.json").string() + " -o " + (dir / "cell").string()).exit_code, 0);
+  // Laws for the 0.3 m cell: the illustrative ones, scaled (the hybrid's
+  // macro part only needs plausible ones).
+  nlohmann::json laws =
+      nlohmann::json::parse(std::ifstream(std::string(GABION_SOURCE_DIR) + "/cases/laws/illustrative.json"));
+  for (auto& [name, m] : laws["materials"].items())
+    m["edge_m"] = 0.3, m["mass_kg"] = m["mass_kg"].get<double>() * 0.216;
+  writeFile(dir / "laws.json", laws.dump());
+  nlohmann::json c = {{"format", "gabion.case/1"},
+                      {"kind", "macro.impact"},
+                      {"law_file", "laws.json"},
+                      {"structure", {{"cells", {2, 1, 1}}, {"material", {{"front", "front"}, {"core", "core"}}}}},
+                      {"boulder", {{"diameter_m", 0.25}, {"density_kg_m3", 2600}, {"velocity_m_s", 8}}},
+                      {"resolve",
+                       {{"cell", "cell/cell.h5"},
+                        {"within_m", 0.0},
+                        {"settle", {{"duration_s", 0.01}}},
+                        {"run", {{"duration_s", 0.03}}}}}};
+  writeFile(dir / "hybrid.json", c.dump());
+  const auto r = runGabion("run " + (dir / "hybrid.json").string() + " -o " + (dir / "out").string());
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  EXPECT_NE(r.output.find("1 of 2 cells resolved"), std::string::npos) << r.output;
+  const nlohmann::json s = summaryOf(dir / "out");
+  const nlohmann::json& h = s["hybrid"];
+  EXPECT_EQ(h["resolved_cells"], nlohmann::json::parse("[[0, 0, 0]]"));
+  ASSERT_EQ(h["interfaces"].size(), 1u);
+  EXPECT_EQ(h["interfaces"][0]["axis"], "x");
+  EXPECT_EQ(h["interfaces"][0]["side"], 1);
+  EXPECT_EQ(h["macro_nodes"], 1);
+  const double to_macro = h["work_on_macro_part_J"].get<double>();
+  EXPECT_GT(to_macro, 0.0) << "the struck cell pushed the node behind it";
+  EXPECT_NEAR(h["work_on_fine_part_J"].get<double>(), -to_macro, 1e-9 * to_macro);
+  EXPECT_LT(std::fabs(h["balance_rel_error"].get<double>()), 0.02);
+  EXPECT_GT(s["max_back_face_displacement_m"].get<double>(), 0.0) << "the macro node moved";
+  EXPECT_TRUE(s["touched"].get<bool>());
+  {
+    const gabion::bridge::H5Reader f(dir / "out" / "result.h5");
+    const auto t = f.read("/curves/impact/time_s"), force = f.read("/curves/impact/force_N"),
+               v = f.read("/curves/impact/boulder_velocity_m_s");
+    ASSERT_GT(t.size(), 10u);
+    const double m = s["boulder_mass_kg"].get<double>();
+    double impulse = 0.0;
+    for (std::size_t k = 1; k < t.size(); ++k) impulse += 0.5 * (force[k] + force[k - 1]) * (t[k] - t[k - 1]);
+    EXPECT_NEAR(m * (v.front() - v.back()), impulse, 0.03 * m * 8.0);
+  }
+  // Bad input, named before anything runs.
+  const auto refused = [&](const nlohmann::json& bad, const std::string& pointer) {
+    writeFile(dir / "bad.json", bad.dump());
+    const auto out = runGabion("check " + (dir / "bad.json").string());
+    EXPECT_EQ(out.exit_code, 2) << out.output;
+    EXPECT_NE(out.output.find(pointer), std::string::npos) << out.output;
+  };
+  nlohmann::json bad = c;
+  bad["resolve"]["within_m"] = 5.0;
+  refused(bad, "/resolve/within_m");  // (the whole structure: larger than it)
+  bad = c;
+  bad["run"] = {{"kinematics", "3d"}};
+  refused(bad, "/run");
+  bad = c;
+  bad["boulder"]["velocity_m_s"] = {8, 1, 0};
+  refused(bad, "/boulder");
+  bad = c;
+  bad["resolve"]["boulder"] = {{"velocity_m_s", 3}};
+  refused(bad, "/resolve/boulder");
 }
 
 }  // namespace

@@ -477,3 +477,45 @@ TEST(MacroLockup, DenseFillPushesTheBoulderBackPastTheDent) {
   EXPECT_NEAR(0.5 * M * r.rebound_velocity_m_s * r.rebound_velocity_m_s, 0.5 * kL * over * over,
               0.02 * 0.5 * kL * over * over);
 }
+
+// The hybrid structure's macro part (app/hybrid.cpp): a resolved cell gets
+// no node; the node behind it meets it at its own front face, so its rear
+// link spans its whole cell and half of the next (compliance 1/k + 1/(2k)),
+// and against the back support its whole cell (1/k). An external force on
+// the front node, as a resolved cell's plate exerts: the static shortening
+// of the chain is F (3/(2k) + 1/(2k)) = 2F/k, about which the undamped chain
+// oscillates; the external work balances the energy (the leapfrog counts the
+// work of the step it has just taken: an error of F v dt).
+TEST(MacroHybrid, AResolvedCellLeavesItsNeighbourTheWholeOfItsCell) {
+  const double k = 1e7, mass = 200.0, F = 1e4;
+  const auto laws = oneMaterial(epp(k, 1e9), epp(k, 1e9), mass);
+  StructureSpec spec = grid(3, 1, 1);
+  spec.resolved_cells = {0};
+  const Structure s = buildStructure(spec, laws);
+  ASSERT_EQ(s.nodeCount(), 2u);
+  EXPECT_EQ(s.gi[0], 1);
+  EXPECT_EQ(s.nodeAt(0, 0, 0), -1);
+  EXPECT_TRUE(s.front.node.empty()) << "the boulder strikes the resolved cell, not a node";
+  ASSERT_EQ(s.axial.a.size(), 2u);
+  EXPECT_NEAR(s.axial_laws[static_cast<std::size_t>(s.axial.law[0])].stiffness_N_m, 2.0 * k / 3.0, 1e-6);
+  EXPECT_NEAR(s.axial_laws[static_cast<std::size_t>(s.axial.law[1])].stiffness_N_m, 2.0 * k, 1e-6);
+
+  Model m(s, Kinematics::XOnly);
+  m.setExternalForce(0, Vec3(F, 123.0, 0.0));  // (x-only: the y component goes to the constraint)
+  const double dt = 0.02 * m.criticalTimeStep();
+  double umax = 0.0, worst = 0.0, lead = 0.0;
+  for (int n = 0; n < 20000; ++n) {
+    ASSERT_EQ(m.step(dt), StepStatus::Ok) << m.failure();
+    umax = std::max(umax, m.ux()[0]);
+    worst = std::max(worst, std::fabs(m.energy().total() - m.energy().external_work_J));
+    lead = std::max(lead, std::fabs(F * m.vx()[0] * dt));  // the work of the step just taken
+  }
+  EXPECT_NEAR(umax, 2.0 * (2.0 * F / k), 0.02 * (2.0 * F / k)) << "twice the static shortening, from rest";
+  EXPECT_GT(m.energy().external_work_J, 0.0);
+  EXPECT_LT(worst, 1.01 * lead);
+  EXPECT_LT(lead, 0.02 * F * 2.0 * F / k);
+  // A resolved cell behind a macro cell is refused.
+  StructureSpec behind = grid(2, 1, 1);
+  behind.resolved_cells = {1};
+  EXPECT_THROW(buildStructure(behind, laws), std::invalid_argument);
+}

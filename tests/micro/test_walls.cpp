@@ -161,3 +161,61 @@ TEST(MicroWalls, WallsAreFoundByName) {
 }
 
 }  // namespace
+
+// A driven plate (program Driven) is the face of a model the engine does
+// not know: here a 1-degree-of-freedom mass on a spring under the floor
+// plate, stepped by the wall driver with the force the sphere exerts. A
+// sphere falls on it, bounces, and the plate oscillates. The engine books
+// the plate's work as -F . d with the driver's own displacements: its
+// ledger's wall work equals the sum the driver makes of the same products
+// (to round-off), the plate stands where the driver put it, and the
+// energy of both (sphere, contact spring, oscillator) is conserved to the
+// leapfrog's error at the contact's kinks (elastic contact, no damping).
+TEST(MicroWalls, DrivenPlateAndItsModelExchangeTheWorkTheyDo) {
+  Scene s;
+  s.materials = {rock()};
+  s.materials[0].friction = 0.0;
+  s.gravity_m_s2.setZero();
+  SphereSpec ball = sphere(Vec3(0, 0, 0.0105));
+  ball.velocity_m_s = Vec3(0, 0, -0.2);
+  s.spheres = {ball};
+  WallProgram driven;
+  driven.kind = WallProgram::Kind::Driven;
+  s.walls = {floorWall("plate", driven)};
+  Engine e(s, 1);
+  const double dt = 0.02 * e.criticalDt();
+  e.setDt(dt);
+  const double M = 0.05, K = 2e4;  // the oscillator: 0.05 kg on 2e4 N/m
+  double z = 0.0, v = 0.0, work_fine = 0.0, z_at_force = 0.0, osc_kinetic = 0.0;
+  e.setWallDriver([&](double, double h, const std::vector<Vec3>& f, std::vector<Vec3>& d) {
+    ASSERT_EQ(f.size(), 1u);
+    const double vnew = v + h * (f[0].z() - K * z) / M;
+    osc_kinetic = 0.5 * M * v * vnew;  // (the leapfrog's conserved kinetic energy)
+    v = vnew;
+    d[0] = Vec3(0, 0, h * v);
+    work_fine -= f[0].dot(d[0]);
+    z_at_force = z;
+    z += d[0].z();
+  });
+  ASSERT_EQ(e.step(true), StepStatus::Ok);
+  const double e0 = e.energy().total_J;  // (the plate has not moved yet)
+  double worst = 0.0, touched = 0.0;
+  for (int n = 0; n < 20000; ++n) {
+    ASSERT_EQ(e.step(true), StepStatus::Ok) << e.failure();
+    touched = std::max(touched, std::fabs(e.wallForce(0).z()));
+    // both parts: the engine's own terms (its wall work taken back out) and the oscillator's
+    const double both = e.energy().total_J + e.energy().wall_work_J + osc_kinetic + 0.5 * K * z_at_force * z_at_force;
+    worst = std::max(worst, std::fabs(both - e0));
+  }
+  EXPECT_GT(touched, 1.0) << "the sphere struck the plate";
+  EXPECT_GT(e.body(0).velocity_m_s.z(), 0.0) << "and bounced off it";
+  EXPECT_NEAR(e.energy().wall_work_J, work_fine, 1e-12 * std::fabs(work_fine) + 1e-18);
+  EXPECT_GT(std::fabs(work_fine), 1e-3 * e0) << "energy went into the oscillator";
+  EXPECT_NEAR(e.wallPosition(0).z(), z_at_force, 1e-15);
+  EXPECT_LT(worst, 2e-3 * e0);
+  // Without a driver the plate stands still.
+  e.setWallDriver({});
+  ASSERT_EQ(e.step(false), StepStatus::Ok);
+  ASSERT_EQ(e.step(false), StepStatus::Ok);
+  EXPECT_EQ(e.wallPosition(0).z(), z);  // (where the last driven step left it)
+}

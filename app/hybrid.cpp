@@ -1,0 +1,320 @@
+#include "app/hybrid.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <filesystem>
+#include <memory>
+#include <sstream>
+
+#include "bridge/errors.hpp"
+#include "bridge/output.hpp"
+#include "macro/case_reader.hpp"
+#include "macro/model.hpp"
+#include "micro/lab/structure_impact.hpp"
+
+namespace gabion::app {
+namespace {
+
+namespace fs = std::filesystem;
+using bridge::Check;
+using bridge::InputError;
+using bridge::JsonDocument;
+using bridge::JsonReader;
+using micro::lab::StructurePart;
+using nlohmann::json;
+using Vec3 = Eigen::Vector3d;
+
+/// A hybrid case, read: the macro case, the cells resolved, their faces on
+/// macro cells, and the fine part as a micro.structure document.
+struct Plan {
+  macro::ImpactCase c;
+  macro::Structure structure;  ///< the macro part: no node for a resolved cell
+  double within_m = 0.0;
+  std::vector<int> resolved;
+  std::vector<StructurePart::Face> faces;
+  json micro_case;
+  std::string micro_file;  ///< names the fine part in messages
+};
+
+fs::path absoluteFrom(const JsonDocument& doc, const std::string& path) {
+  const fs::path p(path);
+  return p.is_absolute() ? p : fs::absolute(fs::path(doc.file()).parent_path() / p);
+}
+
+/// Distance (m) from the aim point (0, y, z) on the front plane to the box of cell (i, j, k).
+double distanceToCell(int i, int j, int k, double edge, double y, double z) {
+  const auto gap = [edge](double p, int n) { return std::max({0.0, n * edge - p, p - (n + 1) * edge}); };
+  const double dx = gap(0.0, i), dy = gap(y, j), dz = gap(z, k);
+  return std::sqrt(dx * dx + dy * dy + dz * dz);
+}
+
+Plan plan(const JsonDocument& doc) {
+  const JsonReader root = doc.root();
+  Plan p;
+  p.c = macro::readImpactCase(doc, false);
+  const JsonReader rs = root.object("resolve");
+  p.within_m = rs.number("within_m", 0.0, Check::NonNegative);
+  const fs::path cell_file = absoluteFrom(doc, rs.string("cell"));
+  if (p.c.impacts.size() != 1)
+    root.fail("impacts", "a hybrid run takes one impact (the fine part is struck once): give `boulder`");
+  macro::BoulderSpec& b = p.c.impacts.front();
+  if (b.velocity_m_s.y() != 0.0 || b.velocity_m_s.z() != 0.0)
+    root.fail("boulder", "a hybrid run's boulder moves along +x (velocity_m_s a number, or [v, 0, 0])");
+  if (p.c.run.kinematics != macro::Kinematics::XOnly)
+    root.fail("run",
+              "a hybrid run couples x-only macro nodes (run.kinematics \"x-only\"): in 3-D the resolved "
+              "cells' weight on their macro neighbours has no counterpart in the macro model");
+  for (const int off : p.c.structure.front_offset_cells)
+    if (off != 0) root.fail("structure", "a hybrid structure has a plane front face (no front_offset_cells)");
+
+  // The aim, on the whole structure; then which cells are within reach.
+  const macro::Structure whole = macro::buildCaseStructure(doc, p.c);
+  macro::resolveAims(doc, p.c, whole);
+  const int nx = whole.nx, ny = whole.ny, nz = whole.nz;
+  const double e = whole.edge_m;
+  for (int k = 0; k < nz; ++k)
+    for (int j = 0; j < ny; ++j)
+      for (int i = 0; i < nx; ++i)
+        if (distanceToCell(i, j, k, e, b.aim_y_m, b.aim_z_m) <= p.within_m) p.resolved.push_back(i + nx * (j + ny * k));
+  if (p.resolved.empty()) {  // (an aim on the face's edge is within 0 of a cell: never empty)
+    rs.fail("within_m", "no cell is within reach of the aim point");
+  }
+  if (static_cast<int>(p.resolved.size()) == nx * ny * nz) {
+    std::ostringstream m;
+    m << "within " << p.within_m << " m of the aim point lies the whole structure (" << nx << " x " << ny << " x " << nz
+      << " cells): the resolved region is larger than the structure; run it resolved (macro.resolved, "
+         "micro.structure), or resolve less";
+    rs.fail("within_m", m.str());
+  }
+  const auto isResolved = [&](int i, int j, int k) {
+    return std::find(p.resolved.begin(), p.resolved.end(), i + nx * (j + ny * k)) != p.resolved.end();
+  };
+  for (const int cell : p.resolved) {
+    const int ijk[3] = {cell % nx, (cell / nx) % ny, cell / (nx * ny)}, n[3] = {nx, ny, nz};
+    for (int axis = 0; axis < 3; ++axis)
+      for (const int side : {-1, 1}) {
+        int o[3] = {ijk[0], ijk[1], ijk[2]};
+        o[axis] += side;
+        if (o[axis] < 0 || o[axis] >= n[axis] || isResolved(o[0], o[1], o[2])) continue;
+        p.faces.push_back({cell, axis, side, o[0] + nx * (o[1] + ny * o[2])});
+      }
+  }
+  p.c.structure.resolved_cells = p.resolved;
+  p.structure = macro::buildCaseStructure(doc, p.c);
+
+  // The fine part: micro.structure's keys, the structure's size, back
+  // support and boulder, and the aim as the same fraction of the face.
+  json boulder = {{"diameter_m", b.diameter_m},
+                  {"density_kg_m3", b.density_kg_m3},
+                  {"velocity_m_s", b.velocity_m_s.x()},
+                  {"aim_face_fraction", {b.aim_y_m / (ny * e), b.aim_z_m / (nz * e)}}};
+  p.micro_case = {
+      {"cell", cell_file.string()},
+      {"structure",
+       {{"cells", {nx, ny, nz}}, {"support", {{"back", p.c.structure.support.fixed_back ? "fixed" : "none"}}}}},
+      {"boulder", boulder},
+      {"rebound_restitution", p.c.run.rebound_restitution}};
+  for (const auto& [key, value] : root.raw("resolve").items()) {
+    if (key == "cell" || key == "within_m") continue;
+    if (key == "structure" || key == "boulder")
+      rs.fail(key, "the hybrid's structure and boulder are the macro case's: give them there");
+    p.micro_case[key] = value;
+  }
+  p.micro_file = doc.file() + " (resolve)";
+  return p;
+}
+
+/// The macro part in motion, stepped by the fine engine's wall driver.
+class Coupler {
+ public:
+  explicit Coupler(const Plan& p) : model_(p.structure, p.c.run.kinematics) {
+    for (const StructurePart::Face& f : p.faces) {
+      const int node = p.structure.node_of[static_cast<std::size_t>(f.other)];
+      face_node_.push_back(static_cast<std::size_t>(node));
+    }
+    for (std::size_t q = 0; q < p.structure.nodeCount(); ++q) {
+      if (p.structure.gi[q] == 0) front_.push_back(q);
+      if (p.structure.gi[q] == p.structure.nx - 1) back_.push_back(q);
+    }
+    node_force_.assign(p.structure.nodeCount(), Vec3::Zero());
+  }
+
+  /// Engine::WallDriver: the plates' forces onto their nodes, one macro
+  /// step, the nodes' displacements back to the plates.
+  void drive(double, double dt, const std::vector<Vec3>& forces, std::vector<Vec3>& moves) {
+    if (critical_s_ < 0.0) {
+      critical_s_ = model_.criticalTimeStep();
+      if (dt > critical_s_) {
+        std::ostringstream m;
+        m << "the fine step " << dt << " s is above the macro part's critical step " << critical_s_ << " s";
+        throw bridge::NumericalError(model_.steps(), model_.time_s(), m.str());
+      }
+    }
+    for (const std::size_t n : face_node_) node_force_[n].setZero();
+    for (std::size_t k = 0; k < forces.size(); ++k) node_force_[face_node_[k]] += forces[k];
+    for (const std::size_t n : face_node_) model_.setExternalForce(n, node_force_[n]);
+    const macro::StepStatus st = model_.step(dt);
+    if (st == macro::StepStatus::NonFinite)
+      throw bridge::NumericalError(model_.steps(), model_.time_s(), "the macro part: " + model_.failure());
+    if (st == macro::StepStatus::Perforation && failure_.empty()) failure_ = "the macro part: " + model_.failure();
+    const std::vector<double>& vx = model_.vx();
+    for (std::size_t k = 0; k < forces.size(); ++k) {
+      // (x-only: the node moves along x; the plate with it)
+      moves[k] = Vec3(dt * vx[face_node_[k]], 0.0, 0.0);
+      work_on_fine_J_ -= forces[k].dot(moves[k]);
+    }
+  }
+
+  std::pair<double, double> facesMoved() const {
+    double front = 0.0, back = 0.0;
+    for (const std::size_t q : front_) front = std::max(front, model_.ux()[q]);
+    for (const std::size_t q : back_) back = std::max(back, model_.ux()[q]);
+    return {front, back};
+  }
+
+  /// At each series sample: the balance of both parts together, from the
+  /// impact's start (the fine part's terms as its ledger has them).
+  void record(const micro::Engine& e) {
+    const double fine = e.energy().total_J + work_on_fine_J_;  // (its interface work taken back out)
+    if (!started_) fine0_ = fine, started_ = true;
+    const macro::Energy& m = model_.energy();
+    residual_J_ = (fine - fine0_) + m.total();
+  }
+
+  void archive(bridge::StateArchive& a) {
+    model_.archive(a);
+    a("work_on_fine_J", work_on_fine_J_), a("fine0", fine0_), a("started", started_), a("residual_J", residual_J_);
+    a("failure", failure_);
+  }
+
+  const std::string& failure() const { return failure_; }
+
+  json report(double impact_energy_J) const {
+    const macro::Energy& m = model_.energy();
+    const double mismatch = work_on_fine_J_ + m.external_work_J;
+    return {
+        {"work_on_fine_part_J", work_on_fine_J_},
+        {"work_on_macro_part_J", m.external_work_J},
+        {"interface_mismatch_J", mismatch},
+        {"macro_energy_J",
+         {{"kinetic", m.kinetic_J}, {"elastic", m.elastic_J}, {"plastic", m.plastic_J}, {"friction", m.friction_J}}},
+        {"macro_balance_rel_error", impact_energy_J > 0.0 ? (m.total() - m.external_work_J) / impact_energy_J : 0.0},
+        {"balance_rel_error", impact_energy_J > 0.0 ? residual_J_ / impact_energy_J : 0.0},
+        {"macro_steps", model_.steps()},
+        {"macro_critical_time_step_s", critical_s_}};
+  }
+
+ private:
+  macro::Model model_;
+  std::vector<std::size_t> face_node_, front_, back_;
+  std::vector<Vec3> node_force_;
+  double critical_s_ = -1.0;
+  double work_on_fine_J_ = 0.0;  // the plates' work on the bodies, -sum F . d
+  double fine0_ = 0.0, residual_J_ = 0.0;
+  bool started_ = false;
+  std::string failure_;
+};
+
+StructurePart partOf(const Plan& p, Coupler* coupler) {
+  StructurePart part;
+  part.cells = p.resolved;
+  part.faces = p.faces;
+  if (coupler) {
+    part.drive = [coupler](double t, double dt, const std::vector<Vec3>& f, std::vector<Vec3>& d) {
+      coupler->drive(t, dt, f, d);
+    };
+    part.faces_moved = [coupler] { return coupler->facesMoved(); };
+    part.archive = [coupler](bridge::StateArchive& a) { coupler->archive(a); };
+    part.record = [coupler](const micro::Engine& e) { coupler->record(e); };
+    part.failure = [coupler] { return coupler->failure(); };
+  }
+  return part;
+}
+
+void check(const JsonDocument& doc, const bridge::CaseKind&) {
+  const Plan p = plan(doc);
+  const JsonDocument micro(p.micro_case, p.micro_file);
+  micro::lab::checkStructurePart(micro, partOf(p, nullptr));
+  micro.finish();
+}
+
+std::optional<bridge::Estimate> estimate(const JsonDocument& doc) {
+  const Plan p = plan(doc);
+  const JsonDocument micro(p.micro_case, p.micro_file);
+  return micro::lab::estimateStructurePart(micro, partOf(p, nullptr));
+}
+
+bridge::RunOutcome run(const JsonDocument& doc, const bridge::RunContext& ctx) {
+  const Plan p = plan(doc);
+  const JsonDocument micro(p.micro_case, p.micro_file);
+  auto coupler = std::make_unique<Coupler>(p);
+  bridge::RunOutcome out = micro::lab::runStructurePart(micro, partOf(p, coupler.get()), ctx);
+  json& r = out.results;
+  const double energy = r.value("impact_energy_J", 0.0);
+  json h = coupler->report(energy);
+  h["within_m"] = p.within_m;
+  json cells = json::array(), faces = json::array();
+  const int nx = p.structure.nx, ny = p.structure.ny;
+  for (const int c : p.resolved) cells.push_back({c % nx, (c / nx) % ny, c / (nx * ny)});
+  for (const StructurePart::Face& f : p.faces)
+    faces.push_back({{"cell", {f.cell % nx, (f.cell / nx) % ny, f.cell / (nx * ny)}},
+                     {"axis", std::string(1, "xyz"[f.axis])},
+                     {"side", f.side},
+                     {"macro_node", p.structure.node_of[static_cast<std::size_t>(f.other)]}});
+  h["resolved_cells"] = cells;
+  h["interfaces"] = faces;
+  h["macro_nodes"] = p.structure.nodeCount();
+  r["hybrid"] = h;
+  if (const auto w = cellSizeMismatch(p.structure.edge_m, r, "the macro part")) r["warnings"].push_back(*w);
+  std::ostringstream a;
+  a.precision(3);
+  a << "hybrid: " << p.resolved.size() << " of " << p.structure.nx * p.structure.ny * p.structure.nz
+    << " cells resolved (within " << p.within_m << " m of the aim), " << p.faces.size()
+    << " interface plates; energy balance of both parts " << h["balance_rel_error"].get<double>()
+    << ", interface mismatch " << h["interface_mismatch_J"].get<double>() << " J\n";
+  out.answer = a.str() + out.answer;
+  return out;
+}
+
+}  // namespace
+
+std::optional<std::string> cellSizeMismatch(double law_edge_m, const json& res, const std::string& who) {
+  if (!(law_edge_m > 0.0)) return std::nullopt;
+  double size = NAN, tolerance = 0.05;
+  std::string what = "nominal edge";
+  const json pitch = res.value("cell_pitch_m", json());
+  if (res.contains("cell_edge_m") && res["cell_edge_m"].is_number()) {
+    size = res["cell_edge_m"].get<double>();
+  } else if (pitch.is_array() && pitch.size() == 3) {
+    size = (pitch[0].get<double>() + pitch[1].get<double>() + pitch[2].get<double>()) / 3.0;
+    tolerance = 0.2, what = "extent";
+  }
+  if (!std::isfinite(size) || std::fabs(size - law_edge_m) <= tolerance * law_edge_m) return std::nullopt;
+  std::ostringstream m;
+  m << "the laws' cell edge (" << law_edge_m << " m) and the resolved cell's " << what << " (" << size
+    << " m) differ by more than " << 100.0 * tolerance << " %: " << who
+    << " is not the same structure (laws fitted from another cell?)";
+  return m.str();
+}
+
+bridge::CaseKind withHybrid(const bridge::CaseKind& impact) {
+  bridge::CaseKind k = impact;
+  const auto hybrid = [](const JsonDocument& doc) { return doc.root().has("resolve"); };
+  k.description += "; with \"resolve\", the cells near the aim point resolved at the fine scale (hybrid)";
+  k.check = [impact, hybrid](const JsonDocument& doc) {
+    if (hybrid(doc))
+      check(doc, impact);
+    else
+      impact.check(doc);
+  };
+  k.run = [impact, hybrid](const JsonDocument& doc, const bridge::RunContext& ctx) {
+    return hybrid(doc) ? run(doc, ctx) : impact.run(doc, ctx);
+  };
+  k.estimate = [impact, hybrid](const JsonDocument& doc) -> std::optional<bridge::Estimate> {
+    if (hybrid(doc)) return estimate(doc);
+    return impact.estimate ? impact.estimate(doc) : std::nullopt;
+  };
+  return k;
+}
+
+}  // namespace gabion::app
