@@ -259,8 +259,8 @@ bridge::RunOutcome run(const JsonDocument& doc, const bridge::RunContext& ctx) {
       if (hp[k].status != bridge::RunOutcome::Status::Ok) continue;
       const bridge::H5Reader h(ctx.outdir / ("hybrid_" + std::to_string(k)) / "result.h5");
       std::ostringstream label;
-      label << "hybrid, within " << p.within_m[k] << " m (" << hybrids[k]["resolved_cells"].get<std::size_t>()
-            << " cells resolved)";
+      const std::size_t n = hybrids[k]["resolved_cells"].get<std::size_t>();
+      label << "hybrid, within " << p.within_m[k] << " m (" << n << (n == 1 ? " cell" : " cells") << " resolved)";
       plot.series.push_back(history(label.str(), h.read("/curves/impact/time_s"), h.read("/curves/impact/force_N")));
     }
     bridge::writePlotPng(ctx.outdir / "resolved_vs_macro.png", plot);
@@ -284,7 +284,8 @@ bridge::RunOutcome run(const JsonDocument& doc, const bridge::RunContext& ctx) {
       a << "failed: " << h["message"].get<std::string>() << "\n";
       continue;
     }
-    a << h["resolved_cells"].get<std::size_t>() << " cells resolved, " << h["wall_time_s"].get<double>() << " s ("
+    const std::size_t n = h["resolved_cells"].get<std::size_t>();
+    a << n << (n == 1 ? " cell" : " cells") << " resolved, " << h["wall_time_s"].get<double>() << " s ("
       << h["speed_up"].get<double>() << " times faster than resolved); error";
     for (const std::string& key : comparedKeys()) {
       const json& e = h["relative_error"][key];

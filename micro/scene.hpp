@@ -167,6 +167,13 @@ struct WallSpec {
   /// Contact groups the wall does not touch (bit g: group g), as a plate
   /// over a cell passes over its netting.
   std::uint32_t skip_groups = 0;
+  /// A bounded wall that is a thin rigid rectangle (set in code: the
+  /// hybrid's interface plates): a particle meets the nearest point of it,
+  /// on either face or at its rim, so that its force changes continuously
+  /// wherever it goes, where a plain plate's force would jump to the overlap
+  /// it finds on sliding over an edge (two plates side by side that moved
+  /// apart make a step).
+  bool rounded_edges = false;
 };
 
 /// A box in which the porosity of the final packing is measured (`porosity`

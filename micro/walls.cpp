@@ -62,6 +62,7 @@ Wall::Wall(const WallSpec& spec)
       force_position(spec.point_m),
       at_rebuild(spec.point_m) {
   if (bounded) {
+    rounded = spec.rounded_edges;
     u = spec.axis_u;
     v = n.cross(u);
     half_u = spec.half_u_m;
@@ -143,7 +144,13 @@ void wallCandidates(const Particles& p, std::vector<Wall>& walls, double skin, s
         const Vec3 d(p.x[i] - q.x(), p.y[i] - q.y(), p.z[i] - q.z());
         const double dist = d.dot(w.n);
         if (dist >= p.r[i] + skin) continue;
-        if (w.bounded && (dist < -skin || std::fabs(d.dot(w.u)) > lim_u || std::fabs(d.dot(w.v)) > lim_v)) continue;
+        // (a rounded plate also meets a particle beyond its rectangle, at its
+        // rim, and one behind it)
+        const double edge = w.rounded ? p.r[i] : 0.0;
+        if (w.rounded && dist <= -p.r[i] - skin) continue;
+        if (w.bounded && ((!w.rounded && dist < -skin) || std::fabs(d.dot(w.u)) > lim_u + edge ||
+                          std::fabs(d.dot(w.v)) > lim_v + edge))
+          continue;
         out.push_back(static_cast<std::uint32_t>(i));
       }
     }
@@ -173,7 +180,9 @@ struct WallSums {
   double fx = 0.0, fy = 0.0, fz = 0.0, work = 0.0;  // force on the wall (N), work of its motion (J)
   double friction = 0.0, plastic = 0.0, viscous = 0.0, elastic = 0.0, contacts = 0.0, bad = 0.0;
 };
-template <bool kMeasure, bool kViscous, bool kPlastic, bool kBounded>
+/// The shape a wall's contacts see.
+enum Shape { kInfinite, kBounded, kRounded };
+template <bool kMeasure, bool kViscous, bool kPlastic, int kShape>
 WallSums wallLanes(const WallLanes& a, const Wall& w, std::size_t k0, std::size_t k1, std::int64_t step,
                    StampedHistory& h) {
   const std::uint32_t* __restrict cand = w.cand.data();
@@ -200,19 +209,34 @@ WallSums wallLanes(const WallLanes& a, const Wall& w, std::size_t k0, std::size_
   const MaterialLaws& laws = a.laws;
   const double px = point.x(), py = point.y(), pz = point.z();
   const double wnx = normal.x(), wny = normal.y(), wnz = normal.z();
-  const double nx = -wnx, ny = -wny, nz = -wnz;  // from the particle to the wall
+  const double nx0 = -wnx, ny0 = -wny, nz0 = -wnz;  // from the particle to the wall
   const double wvx = velocity.x(), wvy = velocity.y(), wvz = velocity.z();
   const double dt = a.dt, ratio = a.ratio;
   double sfx = 0.0, sfy = 0.0, sfz = 0.0, work = 0.0, fr = 0.0, pw = 0.0, vw = 0.0, el = 0.0, on_n = 0.0, bad = 0.0;
 #pragma omp simd reduction(+ : sfx, sfy, sfz, work, fr, pw, vw, el, on_n, bad)
   for (std::size_t k = k0; k < k1; ++k) {
     const std::uint32_t i = cand[k];
-    const double dist = (X[i] - px) * wnx + (Y[i] - py) * wny + (Z[i] - pz) * wnz;
+    const double ex = X[i] - px, ey = Y[i] - py, ez = Z[i] - pz;
+    double dist = ex * wnx + ey * wny + ez * wnz;
+    // the normal, from the particle to the wall (for a rounded plate's edge, to its nearest point)
+    double nx = nx0, ny = ny0, nz = nz0;
+    bool act;
+    if constexpr (kShape == kRounded) {
+      const double du = ex * ux_ + ey * uy_ + ez * uz_, dv = ex * vx_ + ey * vy_ + ez * vz_;
+      const double cu = std::clamp(du, -lim_u, lim_u), cv = std::clamp(dv, -lim_v, lim_v);
+      const double rx = ex - cu * ux_ - cv * vx_, ry = ey - cu * uy_ - cv * vy_, rz = ez - cu * uz_ - cv * vz_;
+      // (a thin rigid rectangle, met on either face and at its rim: the
+      // force is continuous wherever a particle goes)
+      dist = std::sqrt(rx * rx + ry * ry + rz * rz);
+      const double inv = dist > 0.0 ? 1.0 / dist : 0.0;
+      nx = -rx * inv, ny = -ry * inv, nz = -rz * inv;
+      act = R[i] - dist > 0.0;
+    } else {
+      act = R[i] - dist > 0.0;
+    }
     const double overlap = R[i] - dist;
-    bool act = overlap > 0.0;
-    if constexpr (kBounded) {
-      const double du = (X[i] - px) * ux_ + (Y[i] - py) * uy_ + (Z[i] - pz) * uz_;
-      const double dv = (X[i] - px) * vx_ + (Y[i] - py) * vy_ + (Z[i] - pz) * vz_;
+    if constexpr (kShape == kBounded) {
+      const double du = ex * ux_ + ey * uy_ + ez * uz_, dv = ex * vx_ + ey * vy_ + ez * vz_;
       act = act && dist > min_dist && std::fabs(du) <= lim_u && std::fabs(dv) <= lim_v;
     }
     bad += act && overlap > ratio * R[i] ? 1.0 : 0.0;
@@ -247,13 +271,12 @@ WallSums wallLanes(const WallLanes& a, const Wall& w, std::size_t k0, std::size_
 }
 using WallLanesFn = WallSums (*)(const WallLanes&, const Wall&, std::size_t, std::size_t, std::int64_t,
                                  StampedHistory&);
-template <bool kBounded>
+template <int kShape>
 WallLanesFn wallLanesFor(bool measure, bool viscous, bool plastic) {
-  static constexpr WallLanesFn fns[8] = {
-      wallLanes<false, false, false, kBounded>, wallLanes<false, false, true, kBounded>,
-      wallLanes<false, true, false, kBounded>,  wallLanes<false, true, true, kBounded>,
-      wallLanes<true, false, false, kBounded>,  wallLanes<true, false, true, kBounded>,
-      wallLanes<true, true, false, kBounded>,   wallLanes<true, true, true, kBounded>};
+  static constexpr WallLanesFn fns[8] = {wallLanes<false, false, false, kShape>, wallLanes<false, false, true, kShape>,
+                                         wallLanes<false, true, false, kShape>,  wallLanes<false, true, true, kShape>,
+                                         wallLanes<true, false, false, kShape>,  wallLanes<true, false, true, kShape>,
+                                         wallLanes<true, true, false, kShape>,   wallLanes<true, true, true, kShape>};
   return fns[(measure ? 4 : 0) + (viscous ? 2 : 0) + (plastic ? 1 : 0)];
 }
 }  // namespace
@@ -267,8 +290,9 @@ void wallPartition(Particles& p, std::vector<Wall>& walls, const MaterialLaws& l
   s.wall_contacts = 0;
   s.wall_failed = false;
   // (an infinite wall skips the rectangle test: a compile-time switch)
-  const WallLanesFn infinite = wallLanesFor<false>(measure, laws.any_viscous, laws.any_plastic);
-  const WallLanesFn bounded = wallLanesFor<true>(measure, laws.any_viscous, laws.any_plastic);
+  const WallLanesFn infinite = wallLanesFor<kInfinite>(measure, laws.any_viscous, laws.any_plastic);
+  const WallLanesFn bounded = wallLanesFor<kBounded>(measure, laws.any_viscous, laws.any_plastic);
+  const WallLanesFn rounded = wallLanesFor<kRounded>(measure, laws.any_viscous, laws.any_plastic);
   WallLanes in{p, laws, 0, dt, max_overlap_ratio};
   for (std::size_t wi = 0; wi < walls.size(); ++wi) {
     Wall& w = walls[wi];
@@ -276,7 +300,7 @@ void wallPartition(Particles& p, std::vector<Wall>& walls, const MaterialLaws& l
     // candidates are in particle order
     const auto k0 = static_cast<std::size_t>(std::lower_bound(w.cand.begin(), w.cand.end(), b) - w.cand.begin());
     const auto k1 = static_cast<std::size_t>(std::lower_bound(w.cand.begin(), w.cand.end(), e) - w.cand.begin());
-    const WallSums sum = (w.bounded ? bounded : infinite)(in, w, k0, k1, step, w.hist);
+    const WallSums sum = (w.rounded ? rounded : w.bounded ? bounded : infinite)(in, w, k0, k1, step, w.hist);
     s.wall_force[wi] = Vec3(sum.fx, sum.fy, sum.fz);
     s.wall_work += sum.work;
     s.wall_energy.friction_J += sum.friction;

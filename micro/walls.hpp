@@ -48,6 +48,7 @@ struct Wall {
   int mat = 0;
   WallProgram program;
   bool bounded = false;
+  bool rounded = false;                       ///< a bounded wall with rounded edges (WallSpec::rounded_edges)
   Vec3 u = Vec3::UnitX(), v = Vec3::UnitY();  ///< in-plane axes of a bounded wall
   double half_u = 0.0, half_v = 0.0;          ///< half-lengths (m)
   std::uint32_t skip_groups = 0;              ///< contact groups it does not touch (bits)

@@ -102,6 +102,7 @@ WallSpec facePlate(const StructurePart::Face& f, const StructureCase& c, const L
   w.material = sample.netting_material >= 0 ? sample.netting_material : sample.plate_material;
   w.program.kind = WallProgram::Kind::Driven;
   w.bounded = true;
+  w.rounded_edges = true;  // (plates of neighbours that moved apart make a step; a node meets its edge)
   w.axis_u = Vec3::Unit(b);
   // (v = normal x u lies along the third axis, either way)
   w.half_u_m = 0.5 * l.pitch[b];
