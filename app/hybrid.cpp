@@ -79,6 +79,9 @@ Plan plan(const JsonDocument& doc) {
   if (p.resolved.empty()) {  // (an aim on the face's edge is within 0 of a cell: never empty)
     rs.fail("within_m", "no cell is within reach of the aim point");
   }
+  if (static_cast<long long>(p.resolved.size()) > micro::lab::kMaxResolvedCells)
+    rs.fail("within_m", std::to_string(p.resolved.size()) + " cells within reach: more than " +
+                            std::to_string(micro::lab::kMaxResolvedCells) + " resolved at the fine scale");
   if (static_cast<int>(p.resolved.size()) == nx * ny * nz) {
     std::ostringstream m;
     m << "within " << p.within_m << " m of the aim point lies the whole structure (" << nx << " x " << ny << " x " << nz
@@ -127,7 +130,7 @@ Plan plan(const JsonDocument& doc) {
 /// The macro part in motion, stepped by the fine engine's wall driver.
 class Coupler {
  public:
-  explicit Coupler(const Plan& p) : model_(p.structure, p.c.run.kinematics) {
+  explicit Coupler(const Plan& p) : model_(p.structure, p.c.run.kinematics), faces_(p.faces) {
     for (const StructurePart::Face& f : p.faces) {
       const int node = p.structure.node_of[static_cast<std::size_t>(f.other)];
       face_node_.push_back(static_cast<std::size_t>(node));
@@ -157,6 +160,7 @@ class Coupler {
     if (st == macro::StepStatus::NonFinite)
       throw bridge::NumericalError(model_.steps(), model_.time_s(), "the macro part: " + model_.failure());
     if (st == macro::StepStatus::Perforation && failure_.empty()) failure_ = "the macro part: " + model_.failure();
+    last_force_ = forces;
     const std::vector<double>& vx = model_.vx();
     for (std::size_t k = 0; k < forces.size(); ++k) {
       // (x-only: the node moves along x; the plate with it)
@@ -176,7 +180,14 @@ class Coupler {
   /// impact's start (the fine part's terms as its ledger has them).
   void record(const micro::Engine& e) {
     const double fine = e.energy().total_J + work_on_fine_J_;  // (its interface work taken back out)
-    if (!started_) fine0_ = fine, started_ = true;
+    if (!started_) fine0_ = fine, settled_ = last_force_, started_ = true;
+    // The plates' forces when the x faces carry most (from the settled state).
+    if (last_force_.size() == settled_.size()) {
+      double axial = 0.0;
+      for (std::size_t k = 0; k < faces_.size(); ++k)
+        if (faces_[k].axis == 0) axial += last_force_[k].x() - settled_[k].x();
+      if (axial > peak_axial_N_) peak_axial_N_ = axial, at_peak_ = last_force_;
+    }
     const macro::Energy& m = model_.energy();
     residual_J_ = (fine - fine0_) + m.total();
   }
@@ -184,10 +195,34 @@ class Coupler {
   void archive(bridge::StateArchive& a) {
     model_.archive(a);
     a("work_on_fine_J", work_on_fine_J_), a("fine0", fine0_), a("started", started_), a("residual_J", residual_J_);
+    a("last_force", last_force_), a("settled", settled_), a("at_peak", at_peak_), a("peak_axial_N", peak_axial_N_);
     a("failure", failure_);
   }
 
   const std::string& failure() const { return failure_; }
+
+  /// Each plate's force settled and when the x faces carried most, and
+  /// for a lateral face of a cell with an x face behind it, its normal
+  /// force over that x face's (both from the settled state): the lateral
+  /// reaction the macro laws take as reaction_coefficient x axial force.
+  json interfaceForces() const {
+    json out = json::array();
+    for (std::size_t k = 0; k < faces_.size(); ++k) {
+      const Vec3 settled = k < settled_.size() ? settled_[k] : Vec3::Zero();
+      const Vec3 peak = k < at_peak_.size() ? at_peak_[k] : Vec3::Zero();
+      json f = {{"force_settled_N", {settled.x(), settled.y(), settled.z()}},
+                {"force_at_peak_axial_N", {peak.x(), peak.y(), peak.z()}}};
+      const int a = faces_[k].axis;
+      for (std::size_t q = 0; q < faces_.size() && a != 0; ++q) {
+        if (faces_[q].axis != 0 || faces_[q].side != 1 || faces_[q].cell != faces_[k].cell) continue;
+        const double axial =
+            (q < at_peak_.size() ? at_peak_[q].x() : 0.0) - (q < settled_.size() ? settled_[q].x() : 0.0);
+        if (axial > 0.0) f["reaction_to_axial_at_peak"] = std::fabs(peak[a] - settled[a]) / axial;
+      }
+      out.push_back(f);
+    }
+    return out;
+  }
 
   json report(double impact_energy_J) const {
     const macro::Energy& m = model_.energy();
@@ -208,6 +243,9 @@ class Coupler {
   macro::Model model_;
   std::vector<std::size_t> face_node_, front_, back_;
   std::vector<Vec3> node_force_;
+  std::vector<StructurePart::Face> faces_;
+  std::vector<Vec3> last_force_, settled_, at_peak_;  // the plates' forces: last step, settled, at the axial peak
+  double peak_axial_N_ = 0.0;
   double critical_s_ = -1.0;
   double work_on_fine_J_ = 0.0;  // the plates' work on the bodies, -sum F . d
   double fine0_ = 0.0, residual_J_ = 0.0;
@@ -256,11 +294,16 @@ bridge::RunOutcome run(const JsonDocument& doc, const bridge::RunContext& ctx) {
   json cells = json::array(), faces = json::array();
   const int nx = p.structure.nx, ny = p.structure.ny;
   for (const int c : p.resolved) cells.push_back({c % nx, (c / nx) % ny, c / (nx * ny)});
-  for (const StructurePart::Face& f : p.faces)
-    faces.push_back({{"cell", {f.cell % nx, (f.cell / nx) % ny, f.cell / (nx * ny)}},
-                     {"axis", std::string(1, "xyz"[f.axis])},
-                     {"side", f.side},
-                     {"macro_node", p.structure.node_of[static_cast<std::size_t>(f.other)]}});
+  const json forces = coupler->interfaceForces();
+  for (std::size_t k = 0; k < p.faces.size(); ++k) {
+    const StructurePart::Face& f = p.faces[k];
+    json face = {{"cell", {f.cell % nx, (f.cell / nx) % ny, f.cell / (nx * ny)}},
+                 {"axis", std::string(1, "xyz"[f.axis])},
+                 {"side", f.side},
+                 {"macro_node", p.structure.node_of[static_cast<std::size_t>(f.other)]}};
+    face.update(forces[k]);
+    faces.push_back(face);
+  }
   h["resolved_cells"] = cells;
   h["interfaces"] = faces;
   h["macro_nodes"] = p.structure.nodeCount();

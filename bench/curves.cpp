@@ -3,6 +3,9 @@
 //   bench_curves plot OUT.png TITLE XLABEL YLABEL LABEL=FILE.h5:XDS:YDS[:XSCALE:YSCALE] ...
 //     draws each run's curve (dataset YDS against XDS, each times its scale)
 //     on one chart;
+//   bench_curves points OUT.png TITLE XLABEL YLABEL LABEL=X:Y,X:Y,... ...
+//     draws each labelled list of points, joined, with markers (a table
+//     drawn as a chart: bench/resolved/table.py);
 //   bench_curves error REF.h5 RUN.h5 XDS YDS [WINDOW [XMAX]]
 //     prints, as JSON, how far RUN's curve is from REF's: both taken on their
 //     first loading (x while it increases), each averaged over a moving
@@ -112,11 +115,35 @@ int error(int argc, char** argv) {
 
 }  // namespace
 
+int points(int argc, char** argv) {
+  if (argc < 7) return 2;
+  gabion::bridge::PlotSpec spec;
+  spec.title = argv[3];
+  spec.x_label = argv[4];
+  spec.y_label = argv[5];
+  for (int a = 6; a < argc; ++a) {
+    const std::string arg = argv[a];
+    const auto eq = arg.find('=');
+    if (eq == std::string::npos) return 2;
+    gabion::bridge::PlotSeries s{arg.substr(0, eq), {}, {}, gabion::bridge::PlotSeries::Style::LineMarkers};
+    for (const std::string& xy : split(arg.substr(eq + 1), ',')) {
+      const auto parts = split(xy, ':');
+      if (parts.size() != 2) return 2;
+      s.x.push_back(std::stod(parts[0]));
+      s.y.push_back(std::stod(parts[1]));
+    }
+    spec.series.push_back(s);
+  }
+  gabion::bridge::writePlotPng(argv[2], spec);
+  return 0;
+}
+
 int main(int argc, char** argv) {
   const std::string verb = argc > 1 ? argv[1] : "";
   int rc = 2;
   try {
     if (verb == "plot") rc = plot(argc, argv);
+    if (verb == "points") rc = points(argc, argv);
     if (verb == "error" && argc >= 6 && argc <= 8) rc = error(argc, argv);
   } catch (const std::exception& e) {
     std::fprintf(stderr, "bench_curves: %s\n", e.what());
@@ -125,6 +152,7 @@ int main(int argc, char** argv) {
   if (rc == 2)
     std::fprintf(stderr,
                  "usage: bench_curves plot OUT.png TITLE XLABEL YLABEL LABEL=FILE.h5:XDS:YDS[:XSCALE:YSCALE] ...\n"
+                 "       bench_curves points OUT.png TITLE XLABEL YLABEL LABEL=X:Y,X:Y,... ...\n"
                  "       bench_curves error REF.h5 RUN.h5 XDS YDS [WINDOW [XMAX]]\n");
   return rc;
 }

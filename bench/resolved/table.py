@@ -1,9 +1,13 @@
 #!/usr/bin/env python3
 """The table of bench/resolved/run.sh: for each scenario, the resolved wall,
 its macro twin and its hybrids on the compared keys, with the relative errors
-against the resolved wall and the wall times (Python standard library)."""
+against the resolved wall and the wall times (Python standard library); and,
+with bench_curves (argument 2), a chart per scenario of each model's error
+against its wall time, OUT/figures/<scenario>_error_vs_time.png."""
 import json
+import math
 import os
+import subprocess
 import sys
 
 KEYS = [("peak_force_N", "peak force kN", 1e-3), ("max_penetration_m", "penetration mm", 1e3),
@@ -18,11 +22,26 @@ def err(e):
     return "-" if e is None else f"{100 * e:+.0f} %"
 
 
-def main(out):
+def chart(curves, out, name, label, points):
+    """points: (model, wall_s, {key: relative error}) per model."""
+    os.makedirs(os.path.join(out, "figures"), exist_ok=True)
+    series = []
+    for key, title, _ in KEYS:
+        xy = [(math.log10(w), 100 * abs(e[key])) for _, w, e in points
+              if w and e.get(key) is not None]
+        if xy:
+            series.append(title.rsplit(" ", 1)[0] + "=" + ",".join(f"{x:.4f}:{y:.3f}" for x, y in sorted(xy)))
+    png = os.path.join(out, "figures", f"{name}_error_vs_time.png")
+    subprocess.run([curves, "points", png, f"Error against wall time: {label}",
+                    "wall time, log10 of seconds (from the left: macro twin, hybrids within 0, 0.25, 0.5 m, resolved)",
+                    "|error| against the resolved wall (%)"] + series, check=True)
+
+
+def main(out, curves=None):
     rows = []
     for name in sorted(os.listdir(out)):
         path = os.path.join(out, name, "summary.json")
-        if not os.path.isfile(path):
+        if not os.path.isfile(path) or name.startswith("floor_"):
             continue
         s = json.load(open(path))
         r = s.get("results", s)
@@ -36,6 +55,29 @@ def main(out):
         rows.append((label, "macro twin", [t.get(k) for k, _, _ in KEYS],
                      [r.get("relative_error", {}).get(k) for k, _, _ in KEYS], t.get("outcome"), t.get("wall_time_s"),
                      r.get("speed_up"), None))
+        floor = os.path.join(out, "floor_" + name.split("_", 1)[1], "summary.json")
+        if name.startswith("centre_") and os.path.isfile(floor):
+            f = json.load(open(floor))
+            f = f.get("results", f)
+            rel = [None if r.get(k) in (None, 0) or f.get(k) is None else (f[k] - r[k]) / abs(r[k])
+                   for k, _, _ in KEYS]
+            rows.append((label, "resolved again, step 5 % shorter", [f.get(k) for k, _, _ in KEYS], rel,
+                         f.get("outcome"), f.get("wall_time_s"), None, f.get("energy", {}).get("balance_rel_error")))
+        twin2 = os.path.join(out, "in_place", "twin", "summary.json")
+        if name == "centre_10_m_s" and os.path.isfile(twin2):
+            f = json.load(open(twin2))
+            f = f.get("results", f)
+            rel = [None if r.get(k) in (None, 0) or f.get(k) is None else (f[k] - r[k]) / abs(r[k])
+                   for k, _, _ in KEYS]
+            rows.append((label, "macro twin, impact law fitted in the wall (in_place.sh)", [f.get(k) for k, _, _ in KEYS],
+                         rel, f.get("outcome"), f.get("wall_time_s"), None, f.get("balance_rel_error")))
+        points = [("resolved", r.get("wall_time_s_resolved"), {k: 0.0 for k, _, _ in KEYS}),
+                  ("macro twin", t.get("wall_time_s"), r.get("relative_error", {}))]
+        for h in r.get("hybrids", []):
+            if h.get("status") == "ok":
+                points.append((f"hybrid {h['within_m']}", h.get("wall_time_s"), h.get("relative_error", {})))
+        if curves:
+            chart(curves, out, name, label, points)
         for h in r.get("hybrids", []):
             what = f"hybrid within {h['within_m']} m"
             if h.get("status") != "ok":
@@ -59,4 +101,4 @@ def main(out):
 
 
 if __name__ == "__main__":
-    main(sys.argv[1] if len(sys.argv) > 1 else "results/speed_error")
+    main(sys.argv[1] if len(sys.argv) > 1 else "results/speed_error", sys.argv[2] if len(sys.argv) > 2 else None)

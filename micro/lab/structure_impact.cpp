@@ -20,8 +20,7 @@ using bridge::Check;
 using bridge::JsonReader;
 
 constexpr int kBoulderGroup = 2;  // (rock 0, netting 1)
-/// The most cells a resolved structure may have (each a few thousand bodies).
-constexpr long long kMaxCells = 1000;
+constexpr long long kMaxCells = kMaxResolvedCells;
 
 struct StructureCase {
   LabSetup setup;
@@ -36,14 +35,15 @@ struct StructureCase {
   double rebound_restitution = 0.05;                  // as macro.impact's run.rebound_restitution
 };
 
-StructureCase parseCase(const bridge::JsonDocument& doc) {
+/// `whole`: the structure is resolved whole (a part checks its own cell count).
+StructureCase parseCase(const bridge::JsonDocument& doc, bool whole = true) {
   const JsonReader root = doc.root();
   StructureCase c;
   const JsonReader st = root.object("structure");
   const std::vector<double> cells = st.numbers("cells", Check::Positive, 3);
   if (cells.size() != 3 || std::any_of(cells.begin(), cells.end(), [](double n) { return n != std::floor(n); }))
     st.fail("cells", "expected [x (depth), y (width), z (height)] whole cell counts");
-  if (cells[0] * cells[1] * cells[2] > static_cast<double>(kMaxCells))
+  if (whole && cells[0] * cells[1] * cells[2] > static_cast<double>(kMaxCells))
     st.fail("cells", "more than " + std::to_string(kMaxCells) +
                          " cells resolved at the fine scale: resolve a smaller structure, or the part of it the "
                          "boulder strikes");
@@ -85,6 +85,7 @@ struct Layout {
   std::size_t blocks_per_cell = 0;
   /// Cells of the front (i = 0) and back (i = nx - 1) layers, by index (i + nx (j + ny k)).
   std::vector<std::size_t> front_cells, back_cells;
+  std::vector<int> slot_of;  ///< grid index -> place among the cells laid out (-1: not laid out)
 };
 
 /// The plate on a face of a resolved cell (StructurePart::Face), driven by
@@ -123,6 +124,7 @@ Layout buildLayout(const StructureCase& c, const Sample& sample, const Structure
   s.run = cell.run;
   std::size_t index = 0;  // i + nx (j + ny k)
   std::size_t slot = 0;   // the cell's place among those laid out
+  out.slot_of.assign(static_cast<std::size_t>(c.nx) * c.ny * c.nz, -1);
   for (int k = 0; k < c.nz; ++k)
     for (int j = 0; j < c.ny; ++j)
       for (int i = 0; i < c.nx; ++i, ++index) {
@@ -143,6 +145,7 @@ Layout buildLayout(const StructureCase& c, const Sample& sample, const Structure
           l.a += first_sphere, l.b += first_sphere;
           s.links.push_back(l);
         }
+        out.slot_of[index] = static_cast<int>(slot);
         if (i == 0) out.front_cells.push_back(slot);
         if (i == c.nx - 1) out.back_cells.push_back(slot);
         ++slot;
@@ -201,6 +204,12 @@ double meanBlockX(const Engine& e, std::size_t spheres, std::size_t first, std::
   return count > 0 ? x / static_cast<double>(count) : 0.0;
 }
 
+Vec3 meanBlockPosition(const Engine& e, std::size_t spheres, std::size_t first, std::size_t count) {
+  Vec3 x = Vec3::Zero();
+  for (std::size_t b = first; b < first + count; ++b) x += e.body(spheres + b).position_m;
+  return count > 0 ? Vec3(x / static_cast<double>(count)) : x;
+}
+
 bridge::RunOutcome runOne(const StructureCase& c, const Sample& sample, const bridge::RunContext& ctx,
                           const std::string& file, const StructurePart* part = nullptr) {
   Layout layout = buildLayout(c, sample, part);
@@ -236,10 +245,23 @@ bridge::RunOutcome runOne(const StructureCase& c, const Sample& sample, const br
   const std::size_t spheres = scene.spheres.size(), bpc = layout.blocks_per_cell;
   const double mass = scene.spheres[boulder].mass_kg, v0 = c.velocity_m_s;
   struct Series {
-    std::vector<double> time, force, penetration, velocity, front, back;
+    std::vector<double> time, force, penetration, indentation, velocity, front, back;
   } sr;
+  // The struck cell (the front cell the aim point is on): the boulder's
+  // penetration less that cell's own move is its indentation.
+  const int struck = [&] {
+    const auto at = [](double p, double pitch, int n) { return std::clamp(static_cast<int>(p / pitch), 0, n - 1); };
+    const int j = at(aim.y(), layout.pitch.y(), c.ny), k = at(aim.z(), layout.pitch.z(), c.nz);
+    return layout.slot_of[static_cast<std::size_t>(c.nx * (j + c.ny * k))];
+  }();
+  double struck0 = NAN;
   double x_contact = NAN, t_contact = NAN, peak = 0.0, t_last_force = NAN;
   std::vector<double> front0, back0;  // each front and back cell's mean block x at the start
+  // Every cell's mean block position at the start, and the largest moves
+  // of one along x and across it (the macro model's x-only assumption).
+  std::vector<Vec3> cell0;
+  double max_cell_x = 0.0, max_cell_across = 0.0;
+  const std::size_t laid_out = bpc > 0 ? layout.scene.blocks.size() / bpc : 0;
   SceneRunHooks hooks;
   hooks.label = "micro.structure";
   hooks.record = [&](const Engine& e, double) {
@@ -250,6 +272,12 @@ bridge::RunOutcome runOne(const StructureCase& c, const Sample& sample, const br
     if (front0.empty()) {
       for (const std::size_t k : layout.front_cells) front0.push_back(meanBlockX(e, spheres, k * bpc, bpc));
       for (const std::size_t k : layout.back_cells) back0.push_back(meanBlockX(e, spheres, k * bpc, bpc));
+      for (std::size_t k = 0; k < laid_out; ++k) cell0.push_back(meanBlockPosition(e, spheres, k * bpc, bpc));
+    }
+    for (std::size_t k = 0; k < laid_out; ++k) {
+      const Vec3 d = meanBlockPosition(e, spheres, k * bpc, bpc) - cell0[k];
+      max_cell_x = std::max(max_cell_x, std::fabs(d.x()));
+      max_cell_across = std::max(max_cell_across, std::hypot(d.y(), d.z()));
     }
     double front = 0.0, back = 0.0;
     for (std::size_t q = 0; q < layout.front_cells.size(); ++q)
@@ -264,6 +292,11 @@ bridge::RunOutcome runOne(const StructureCase& c, const Sample& sample, const br
     sr.time.push_back(e.time());
     sr.force.push_back(force);
     sr.penetration.push_back(std::isnan(x_contact) ? 0.0 : b.position_m.x() - x_contact);
+    if (struck >= 0) {
+      const double x = meanBlockX(e, spheres, static_cast<std::size_t>(struck) * bpc, bpc);
+      if (std::isnan(x_contact) || std::isnan(struck0)) struck0 = x;  // (its place at first contact)
+      sr.indentation.push_back(sr.penetration.back() - (x - struck0));
+    }
     sr.velocity.push_back(b.velocity_m_s.x());
     sr.front.push_back(front), sr.back.push_back(back);
     peak = std::max(peak, force);
@@ -287,6 +320,8 @@ bridge::RunOutcome runOne(const StructureCase& c, const Sample& sample, const br
     a("time_s", sr.time), a("force_N", sr.force), a("penetration_m", sr.penetration), a("velocity_m_s", sr.velocity);
     a("front_m", sr.front), a("back_m", sr.back), a("front0", front0), a("back0", back0);
     a("x_contact", x_contact), a("t_contact", t_contact), a("peak", peak), a("t_last_force", t_last_force);
+    a("cell0", cell0), a("max_cell_x", max_cell_x), a("max_cell_across", max_cell_across);
+    a("indentation_m", sr.indentation), a("struck0", struck0);
     if (part && part->archive) {
       bridge::StateArchive pa = a.group("coupled");
       part->archive(pa);
@@ -297,6 +332,7 @@ bridge::RunOutcome runOne(const StructureCase& c, const Sample& sample, const br
     h5.write("/curves/impact/time_s", sr.time, "s");
     h5.write("/curves/impact/force_N", sr.force, "N");
     h5.write("/curves/impact/penetration_m", sr.penetration, "m");
+    if (!sr.indentation.empty()) h5.write("/curves/impact/indentation_m", sr.indentation, "m");
     h5.write("/curves/impact/boulder_velocity_m_s", sr.velocity, "m/s");
     h5.write("/curves/impact/front_face_displacement_m", sr.front, "m");
     h5.write("/curves/impact/back_face_displacement_m", sr.back, "m");
@@ -333,6 +369,9 @@ bridge::RunOutcome runOne(const StructureCase& c, const Sample& sample, const br
   r["rebound_velocity_m_s"] = rebound;
   r["max_front_face_displacement_m"] = max_front;
   r["max_back_face_displacement_m"] = max_back;
+  if (!sr.indentation.empty()) r["max_indentation_m"] = *std::max_element(sr.indentation.begin(), sr.indentation.end());
+  r["max_cell_displacement_x_m"] = max_cell_x;
+  r["max_cell_displacement_across_m"] = max_cell_across;
   r["touched"] = touched;
   r["outcome"] = through || !coupled_failure.empty()     ? "perforated"
                  : !over                                 ? "unfinished"
@@ -378,6 +417,9 @@ Sample partSample(const StructureCase& c, const bridge::JsonDocument& doc) {
 
 void checkPart(const StructureCase& c, const StructurePart& part, const std::string& file) {
   const int n = c.nx * c.ny * c.nz;
+  if (static_cast<long long>(part.cells.size()) > kMaxCells)
+    throw bridge::InputError(file, "/structure/cells",
+                             "more than " + std::to_string(kMaxCells) + " cells resolved at the fine scale");
   for (const int cell : part.cells)
     if (cell < 0 || cell >= n) throw bridge::InputError(file, "/structure/cells", "a resolved cell is off the grid");
   for (const StructurePart::Face& f : part.faces)
@@ -423,16 +465,8 @@ std::shared_ptr<const Replicates> replicates(const bridge::JsonDocument& doc) {
 
 }  // namespace
 
-StructureGrid structureGrid(const bridge::JsonDocument& doc) {
-  const StructureCase c = parseCase(doc);
-  const Sample sample = partSample(c, doc);
-  const Layout l = buildLayout(c, sample, nullptr);
-  const Vec3 aim = aimPoint(c, l);
-  return {{c.nx, c.ny, c.nz}, {l.pitch.x(), l.pitch.y(), l.pitch.z()}, {aim.y(), aim.z()}};
-}
-
 void checkStructurePart(const bridge::JsonDocument& doc, const StructurePart& part) {
-  const StructureCase c = parseCase(doc);
+  const StructureCase c = parseCase(doc, false);
   checkPart(c, part, doc.file());
   const Sample sample = partSample(c, doc);
   const Layout l = buildLayout(c, sample, &part);
@@ -445,13 +479,13 @@ void checkStructurePart(const bridge::JsonDocument& doc, const StructurePart& pa
 
 bridge::RunOutcome runStructurePart(const bridge::JsonDocument& doc, const StructurePart& part,
                                     const bridge::RunContext& ctx) {
-  const StructureCase c = parseCase(doc);
+  const StructureCase c = parseCase(doc, false);
   checkPart(c, part, doc.file());
   return runOne(c, partSample(c, doc), ctx, doc.file(), &part);
 }
 
 std::optional<bridge::Estimate> estimateStructurePart(const bridge::JsonDocument& doc, const StructurePart& part) {
-  const StructureCase c = parseCase(doc);
+  const StructureCase c = parseCase(doc, false);
   return estimateReplicates(c.setup, 1, [&](const Sample& s, std::size_t) {
     const Layout l = buildLayout(c, s, &part);
     std::size_t boulder = 0;

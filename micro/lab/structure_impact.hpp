@@ -25,6 +25,9 @@ namespace gabion::micro::lab {
 
 bridge::CaseKind structureImpactKind();
 
+/// The most cells resolved at the fine scale in one run (each a few thousand bodies).
+constexpr long long kMaxResolvedCells = 1000;
+
 /// A part of a micro.structure resolved at the fine scale, the rest modelled
 /// by someone else (the hybrid structure, app/hybrid.cpp): only `cells` are
 /// laid out, and every face they share with a cell that is not resolved is
@@ -57,15 +60,6 @@ struct StructurePart {
   /// then ends `perforated`, with this message.
   std::function<std::string()> failure;
 };
-
-/// The layout the part's faces refer to: the cell counts and the pitch of
-/// the cell file a micro.structure document `doc` names.
-struct StructureGrid {
-  std::array<int, 3> cells{1, 1, 1};
-  std::array<double, 3> pitch_m{0, 0, 0};
-  std::array<double, 2> aim_m{0, 0};  ///< [y, z] on the front face (m)
-};
-StructureGrid structureGrid(const bridge::JsonDocument& doc);
 
 /// Checks a micro.structure document run as `part` (the cell file, the
 /// scene with the part's plates), as `gabion check` would.

@@ -43,6 +43,9 @@ TEST(ResolvedStructure, TwoCellsStruckBeforeTheirMacroTwin) {
       << "the struck layer moves more than the one held by the back support";
   EXPECT_LT(std::fabs(s["energy"]["balance_rel_error"].get<double>()), 0.05);
   EXPECT_TRUE(s.contains("settle"));
+  // (a cell's largest move along x is at least the front face's)
+  EXPECT_GE(s["max_cell_displacement_x_m"].get<double>(), s["max_front_face_displacement_m"].get<double>());
+  EXPECT_GE(s["max_cell_displacement_across_m"].get<double>(), 0.0);
   // The boulder's momentum along x: m (v_end - v_0) = -(integral of the
   // structure's force on it) over the series (trapezoids at 0.1 ms; gravity
   // acts across x). The force is the one each sample read: the rule's error
