@@ -269,7 +269,7 @@ StructurePart partOf(const Plan& p, Coupler* coupler) {
   return part;
 }
 
-void check(const JsonDocument& doc, const bridge::CaseKind&) {
+void check(const JsonDocument& doc) {
   const Plan p = plan(doc);
   const JsonDocument micro(p.micro_case, p.micro_file);
   micro::lab::checkStructurePart(micro, partOf(p, nullptr));
@@ -346,7 +346,7 @@ bridge::CaseKind withHybrid(const bridge::CaseKind& impact) {
   k.description += "; with \"resolve\", the cells near the aim point resolved at the fine scale (hybrid)";
   k.check = [impact, hybrid](const JsonDocument& doc) {
     if (hybrid(doc))
-      check(doc, impact);
+      check(doc);
     else
       impact.check(doc);
   };

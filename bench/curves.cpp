@@ -67,12 +67,18 @@ double interpolate(const std::vector<double>& x, const std::vector<double>& y, d
   return y[k - 1] + w * (y[k] - y[k - 1]);
 }
 
-int plot(int argc, char** argv) {
-  if (argc < 7) return 2;
+// The chart of `plot` and `points`: OUT.png TITLE XLABEL YLABEL from argv[2..5].
+gabion::bridge::PlotSpec chart(char** argv) {
   gabion::bridge::PlotSpec spec;
   spec.title = argv[3];
   spec.x_label = argv[4];
   spec.y_label = argv[5];
+  return spec;
+}
+
+int plot(int argc, char** argv) {
+  if (argc < 7) return 2;
+  gabion::bridge::PlotSpec spec = chart(argv);
   for (int a = 6; a < argc; ++a) {
     const std::string arg = argv[a];
     const auto eq = arg.find('=');
@@ -117,10 +123,7 @@ int error(int argc, char** argv) {
 
 int points(int argc, char** argv) {
   if (argc < 7) return 2;
-  gabion::bridge::PlotSpec spec;
-  spec.title = argv[3];
-  spec.x_label = argv[4];
-  spec.y_label = argv[5];
+  gabion::bridge::PlotSpec spec = chart(argv);
   for (int a = 6; a < argc; ++a) {
     const std::string arg = argv[a];
     const auto eq = arg.find('=');

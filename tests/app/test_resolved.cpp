@@ -21,6 +21,21 @@ using gabion::testing::scratchDir;
 using gabion::testing::summaryOf;
 using gabion::testing::writeFile;
 
+// The boulder's momentum along x: m (v_end - v_0) = -(integral of the
+// structure's force on it) over the series of the run in `dir` (trapezoids
+// at 0.1 ms; gravity acts across x). The force is the one each sample read:
+// the rule's error is of the order of the change within a sample, a few %
+// of the momentum m v0.
+void expectMomentumIsImpulse(const std::filesystem::path& dir, double mass, double v0) {
+  const gabion::bridge::H5Reader h(dir / "result.h5");
+  const auto t = h.read("/curves/impact/time_s"), f = h.read("/curves/impact/force_N"),
+             v = h.read("/curves/impact/boulder_velocity_m_s");
+  ASSERT_GT(t.size(), 10u);
+  double impulse = 0.0;
+  for (std::size_t k = 1; k < t.size(); ++k) impulse += 0.5 * (f[k] + f[k - 1]) * (t[k] - t[k - 1]);
+  EXPECT_NEAR(mass * (v.front() - v.back()), impulse, 0.03 * mass * v0);
+}
+
 const char* kStructure = R"({"format": "gabion.case/1", "kind": "micro.structure", "cell": "cell/cell.h5",
  "structure": {"cells": [2, 1, 1]}, "boulder": {"diameter_m": 0.25, "velocity_m_s": 8},
  "settle": {"duration_s": 0.01}, "run": {"duration_s": 0.03}})";
@@ -46,20 +61,7 @@ TEST(ResolvedStructure, TwoCellsStruckBeforeTheirMacroTwin) {
   // (a cell's largest move along x is at least the front face's)
   EXPECT_GE(s["max_cell_displacement_x_m"].get<double>(), s["max_front_face_displacement_m"].get<double>());
   EXPECT_GE(s["max_cell_displacement_across_m"].get<double>(), 0.0);
-  // The boulder's momentum along x: m (v_end - v_0) = -(integral of the
-  // structure's force on it) over the series (trapezoids at 0.1 ms; gravity
-  // acts across x). The force is the one each sample read: the rule's error
-  // is of the order of the change within a sample.
-  {
-    const gabion::bridge::H5Reader h(dir / "structure" / "result.h5");
-    const auto t = h.read("/curves/impact/time_s"), f = h.read("/curves/impact/force_N"),
-               v = h.read("/curves/impact/boulder_velocity_m_s");
-    ASSERT_GT(t.size(), 10u);
-    const double m = s["boulder_mass_kg"].get<double>();
-    double impulse = 0.0;
-    for (std::size_t k = 1; k < t.size(); ++k) impulse += 0.5 * (f[k] + f[k - 1]) * (t[k] - t[k - 1]);
-    EXPECT_NEAR(m * (v.front() - v.back()), impulse, 0.03 * m * 8.0);
-  }
+  expectMomentumIsImpulse(dir / "structure", s["boulder_mass_kg"].get<double>(), 8.0);
 
   // Bad input is named before anything runs.
   {
@@ -159,16 +161,7 @@ TEST(HybridStructure, StruckCellResolvedTheCellBehindAMacroNode) {
   EXPECT_LT(std::fabs(h["balance_rel_error"].get<double>()), 0.02);
   EXPECT_GT(s["max_back_face_displacement_m"].get<double>(), 0.0) << "the macro node moved";
   EXPECT_TRUE(s["touched"].get<bool>());
-  {
-    const gabion::bridge::H5Reader f(dir / "out" / "result.h5");
-    const auto t = f.read("/curves/impact/time_s"), force = f.read("/curves/impact/force_N"),
-               v = f.read("/curves/impact/boulder_velocity_m_s");
-    ASSERT_GT(t.size(), 10u);
-    const double m = s["boulder_mass_kg"].get<double>();
-    double impulse = 0.0;
-    for (std::size_t k = 1; k < t.size(); ++k) impulse += 0.5 * (force[k] + force[k - 1]) * (t[k] - t[k - 1]);
-    EXPECT_NEAR(m * (v.front() - v.back()), impulse, 0.03 * m * 8.0);
-  }
+  expectMomentumIsImpulse(dir / "out", s["boulder_mass_kg"].get<double>(), 8.0);
   // Bad input, named before anything runs.
   const auto refused = [&](const nlohmann::json& bad, const std::string& pointer) {
     writeFile(dir / "bad.json", bad.dump());
