@@ -18,6 +18,11 @@ namespace gabion::bridge {
 constexpr double kMicroSecondsPerBodyStep = 3.5e-8;
 constexpr double kMicroBytesPerBody = 1000.0;
 constexpr double kMicroSnapshotBytesPerBody = 100.0;
+/// Fine DEM: seconds per link per sub-step of the link nodes, on top of the
+/// body-steps (the links' stage runs on one thread: a cell's 1,578 links at
+/// 8 sub-steps took 0.31 ms a step, half of the step, in the one-cell
+/// hybrid of docs/resolved.md).
+constexpr double kMicroSecondsPerLinkSubstep = 2.5e-8;
 /// Structure scale: seconds per cell-step (a 1,000-cell impact, 525 steps,
 /// 9.4 ms) and bytes per cell (measured on 1e6 cells).
 constexpr double kMacroSecondsPerCellStep = 1.8e-8;
@@ -26,8 +31,9 @@ constexpr double kMacroBytesPerCell = 450.0;
 constexpr double kBaseBytes = 20e6;
 
 /// One fine DEM run of `bodies` bodies, `steps` steps, `snapshots` body
-/// snapshots and `series` samples of the scalar series.
-Estimate microRun(double bodies, double steps, double snapshots, double series);
+/// snapshots and `series` samples of the scalar series; `link_substeps`:
+/// links times the link nodes' sub-steps per step.
+Estimate microRun(double bodies, double steps, double snapshots, double series, double link_substeps = 0.0);
 /// One structure impact on `cells` cells, at most `steps` steps, recording
 /// `samples` samples of its 14 series.
 Estimate macroRun(double cells, double steps, double samples);

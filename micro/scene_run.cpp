@@ -78,9 +78,13 @@ bridge::Estimate sceneEstimate(const Scene& scene, double dt) {
   for (const BlockSpec& b : scene.blocks) bodies += static_cast<double>(b.member_radii_m.size());
   const RunSpec& rs = scene.run;
   const double steps = std::ceil(rs.duration_s / dt);
-  return bridge::microRun(bodies, steps,
-                          rs.output_interval_s > 0.0 ? std::floor(rs.duration_s / rs.output_interval_s) + 1 : 101.0,
-                          rs.series_interval_s > 0.0 ? std::floor(rs.duration_s / rs.series_interval_s) + 1 : 101.0);
+  // (the links' stage: each link once per sub-step of the link nodes)
+  const double link_substeps = scene.links.empty() ? 0.0
+                                                   : static_cast<double>(scene.links.size()) *
+                                                         linkSubsteps(dt, rs.dt_safety, criticalLinkStep(scene));
+  return bridge::microRun(
+      bodies, steps, rs.output_interval_s > 0.0 ? std::floor(rs.duration_s / rs.output_interval_s) + 1 : 101.0,
+      rs.series_interval_s > 0.0 ? std::floor(rs.duration_s / rs.series_interval_s) + 1 : 101.0, link_substeps);
 }
 
 // The step to use: dt_s if given (refused above the critical step unless

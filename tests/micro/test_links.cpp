@@ -5,7 +5,9 @@
 #include <cmath>
 #include <random>
 
+#include "bridge/cost.hpp"
 #include "micro/engine.hpp"
+#include "micro/scene_run.hpp"
 #include "micro_test_util.hpp"
 
 namespace {
@@ -204,6 +206,35 @@ TEST(MicroLinkSubsteps, WithoutContactsTheyAreLeapfrogAtTheSubStep) {
   for (int n = 0; n < 100; ++n) ASSERT_EQ(coarse.step(false), StepStatus::Ok);
   for (int j = 1; j <= N; ++j)
     EXPECT_NEAR((fine.body(j).position_m - coarse.body(j).position_m).norm(), 0.0, 1e-12) << "node " << j;
+}
+
+// What a run costs before it runs counts the links' stage: each link at each
+// of the link nodes' sub-steps, on top of the body-steps (the same chain at
+// the coarse step: 20 sub-steps).
+TEST(MicroLinkSubsteps, TheCostEstimateCountsEachLinkAtEachSubStep) {
+  constexpr int N = 5;
+  const double k = 1e3, L0 = 0.05, r = 0.005;
+  Scene s;
+  s.materials = {rock()};
+  s.spheres.push_back(sphere(Vec3(0, 0, 0), r, true));
+  for (int j = 1; j <= N; ++j) s.spheres.push_back(sphere(Vec3(j * L0, 0, 0), r));
+  s.spheres.push_back(sphere(Vec3((N + 1) * L0, 0, 0), r, true));
+  for (int j = 0; j <= N; ++j) s.links.push_back(link(j, j + 1, k, L0));
+  s.run.duration_s = 1.0;
+  Engine e(s, 1);
+  const double dt = 20 * s.run.dt_safety * e.linkCriticalDt();
+  e.setDt(dt);
+  ASSERT_EQ(e.linkSubsteps(), 20);
+  const double steps = std::ceil(1.0 / dt), bodies = N + 2.0, links = N + 1.0;
+  const gabion::bridge::Estimate est = gabion::micro::sceneEstimate(s, dt);
+  EXPECT_EQ(est.steps, steps);
+  EXPECT_NEAR(est.wall_time_s,
+              gabion::bridge::kMicroSecondsPerBodyStep * bodies * steps +
+                  gabion::bridge::kMicroSecondsPerLinkSubstep * links * 20.0 * steps,
+              1e-12 * est.wall_time_s);
+  s.links.clear();
+  EXPECT_NEAR(gabion::micro::sceneEstimate(s, dt).wall_time_s,
+              gabion::bridge::kMicroSecondsPerBodyStep * bodies * steps, 1e-12 * est.wall_time_s);
 }
 
 // A stone dropped on a taut chain of stiff wires clamped at both ends: the
