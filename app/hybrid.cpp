@@ -130,7 +130,8 @@ Plan plan(const JsonDocument& doc) {
 /// The macro part in motion, stepped by the fine engine's wall driver.
 class Coupler {
  public:
-  explicit Coupler(const Plan& p) : model_(p.structure, p.c.run.kinematics), faces_(p.faces) {
+  explicit Coupler(const Plan& p)
+      : model_(p.structure, p.c.run.kinematics), faces_(p.faces), critical_s_(model_.criticalTimeStep()) {
     for (const StructurePart::Face& f : p.faces) {
       const int node = p.structure.node_of[static_cast<std::size_t>(f.other)];
       face_node_.push_back(static_cast<std::size_t>(node));
@@ -145,13 +146,10 @@ class Coupler {
   /// Engine::WallDriver: the plates' forces onto their nodes, one macro
   /// step, the nodes' displacements back to the plates.
   void drive(double, double dt, const std::vector<Vec3>& forces, std::vector<Vec3>& moves) {
-    if (critical_s_ < 0.0) {
-      critical_s_ = model_.criticalTimeStep();
-      if (dt > critical_s_) {
-        std::ostringstream m;
-        m << "the fine step " << dt << " s is above the macro part's critical step " << critical_s_ << " s";
-        throw bridge::NumericalError(model_.steps(), model_.time_s(), m.str());
-      }
+    if (dt > critical_s_) {
+      std::ostringstream m;
+      m << "the fine step " << dt << " s is above the macro part's critical step " << critical_s_ << " s";
+      throw bridge::NumericalError(model_.steps(), model_.time_s(), m.str());
     }
     for (const std::size_t n : face_node_) node_force_[n].setZero();
     for (std::size_t k = 0; k < forces.size(); ++k) node_force_[face_node_[k]] += forces[k];
@@ -245,8 +243,8 @@ class Coupler {
   std::vector<Vec3> node_force_;
   std::vector<StructurePart::Face> faces_;
   std::vector<Vec3> last_force_, settled_, at_peak_;  // the plates' forces: last step, settled, at the axial peak
+  double critical_s_;                                 // the macro part's (s)
   double peak_axial_N_ = 0.0;
-  double critical_s_ = -1.0;
   double work_on_fine_J_ = 0.0;  // the plates' work on the bodies, -sum F . d
   double fine0_ = 0.0, residual_J_ = 0.0;
   bool started_ = false;

@@ -198,12 +198,6 @@ Scene impactScene(const StructureCase& c, Scene structure, const Sample& sample,
   return structure;
 }
 
-double meanBlockX(const Engine& e, std::size_t spheres, std::size_t first, std::size_t count) {
-  double x = 0.0;
-  for (std::size_t b = first; b < first + count; ++b) x += e.body(spheres + b).position_m.x();
-  return count > 0 ? x / static_cast<double>(count) : 0.0;
-}
-
 Vec3 meanBlockPosition(const Engine& e, std::size_t spheres, std::size_t first, std::size_t count) {
   Vec3 x = Vec3::Zero();
   for (std::size_t b = first; b < first + count; ++b) x += e.body(spheres + b).position_m;
@@ -256,10 +250,9 @@ bridge::RunOutcome runOne(const StructureCase& c, const Sample& sample, const br
   }();
   double struck0 = NAN;
   double x_contact = NAN, t_contact = NAN, peak = 0.0, t_last_force = NAN;
-  std::vector<double> front0, back0;  // each front and back cell's mean block x at the start
-  // Every cell's mean block position at the start, and the largest moves
-  // of one along x and across it (the macro model's x-only assumption).
-  std::vector<Vec3> cell0;
+  // Every cell's mean block position at the start and now, and the largest
+  // moves of one along x and across it (the macro model's x-only assumption).
+  std::vector<Vec3> cell0, now;
   double max_cell_x = 0.0, max_cell_across = 0.0;
   const std::size_t laid_out = bpc > 0 ? layout.scene.blocks.size() / bpc : 0;
   SceneRunHooks hooks;
@@ -269,21 +262,17 @@ bridge::RunOutcome runOne(const StructureCase& c, const Sample& sample, const br
     const BodyState b = e.body(boulder);
     const double force = std::max(0.0, -f.x());
     if (std::isnan(x_contact) && f.squaredNorm() > 0.0) x_contact = b.position_m.x(), t_contact = e.time();
-    if (front0.empty()) {
-      for (const std::size_t k : layout.front_cells) front0.push_back(meanBlockX(e, spheres, k * bpc, bpc));
-      for (const std::size_t k : layout.back_cells) back0.push_back(meanBlockX(e, spheres, k * bpc, bpc));
-      for (std::size_t k = 0; k < laid_out; ++k) cell0.push_back(meanBlockPosition(e, spheres, k * bpc, bpc));
-    }
+    now.resize(laid_out);
+    for (std::size_t k = 0; k < laid_out; ++k) now[k] = meanBlockPosition(e, spheres, k * bpc, bpc);
+    if (cell0.empty()) cell0 = now;
     for (std::size_t k = 0; k < laid_out; ++k) {
-      const Vec3 d = meanBlockPosition(e, spheres, k * bpc, bpc) - cell0[k];
+      const Vec3 d = now[k] - cell0[k];
       max_cell_x = std::max(max_cell_x, std::fabs(d.x()));
       max_cell_across = std::max(max_cell_across, std::hypot(d.y(), d.z()));
     }
     double front = 0.0, back = 0.0;
-    for (std::size_t q = 0; q < layout.front_cells.size(); ++q)
-      front = std::max(front, meanBlockX(e, spheres, layout.front_cells[q] * bpc, bpc) - front0[q]);
-    for (std::size_t q = 0; q < layout.back_cells.size(); ++q)
-      back = std::max(back, meanBlockX(e, spheres, layout.back_cells[q] * bpc, bpc) - back0[q]);
+    for (const std::size_t k : layout.front_cells) front = std::max(front, now[k].x() - cell0[k].x());
+    for (const std::size_t k : layout.back_cells) back = std::max(back, now[k].x() - cell0[k].x());
     if (part && part->faces_moved) {
       const auto [macro_front, macro_back] = part->faces_moved();
       front = std::max(front, macro_front), back = std::max(back, macro_back);
@@ -293,7 +282,7 @@ bridge::RunOutcome runOne(const StructureCase& c, const Sample& sample, const br
     sr.force.push_back(force);
     sr.penetration.push_back(std::isnan(x_contact) ? 0.0 : b.position_m.x() - x_contact);
     if (struck >= 0) {
-      const double x = meanBlockX(e, spheres, static_cast<std::size_t>(struck) * bpc, bpc);
+      const double x = now[static_cast<std::size_t>(struck)].x();
       if (std::isnan(x_contact) || std::isnan(struck0)) struck0 = x;  // (its place at first contact)
       sr.indentation.push_back(sr.penetration.back() - (x - struck0));
     }
@@ -318,7 +307,7 @@ bridge::RunOutcome runOne(const StructureCase& c, const Sample& sample, const br
   };
   hooks.archive = [&](bridge::StateArchive& a) {
     a("time_s", sr.time), a("force_N", sr.force), a("penetration_m", sr.penetration), a("velocity_m_s", sr.velocity);
-    a("front_m", sr.front), a("back_m", sr.back), a("front0", front0), a("back0", back0);
+    a("front_m", sr.front), a("back_m", sr.back);
     a("x_contact", x_contact), a("t_contact", t_contact), a("peak", peak), a("t_last_force", t_last_force);
     a("cell0", cell0), a("max_cell_x", max_cell_x), a("max_cell_across", max_cell_across);
     a("indentation_m", sr.indentation), a("struck0", struck0);
