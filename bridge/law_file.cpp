@@ -15,6 +15,8 @@ const char* modelName(AxialModel m) {
       return "bilinear";
     case AxialModel::Densifying:
       return "densifying";
+    case AxialModel::Softening:
+      return "softening";
     case AxialModel::ElasticPerfectlyPlastic:
       break;
   }
@@ -27,15 +29,30 @@ void setDefaultLockup(AxialLawParams& p, double edge_m) {
   p.lockup_stiffness_N_m = kDefaultLockupStiffnessRatio * looseStiffness(p);
 }
 
-AxialLawParams readAxialLaw(const JsonReader& r, double edge_m, int version) {
+AxialLawParams readAxialLaw(const JsonReader& r, double edge_m, int version, bool impact) {
   AxialLawParams p;
-  const std::string model = version >= 2 ? r.choice("model", {"elastic_perfectly_plastic", "bilinear", "densifying"})
-                                         : r.choice("model", {"elastic_perfectly_plastic", "bilinear"});
+  const std::string model =
+      version >= 2
+          ? r.choice("model", impact ? std::vector<std::string>{"elastic_perfectly_plastic", "bilinear", "densifying",
+                                                                "softening"}
+                                     : std::vector<std::string>{"elastic_perfectly_plastic", "bilinear", "densifying"})
+          : r.choice("model", {"elastic_perfectly_plastic", "bilinear"});
   p.model = model == "bilinear"     ? AxialModel::Bilinear
             : model == "densifying" ? AxialModel::Densifying
+            : model == "softening"  ? AxialModel::Softening
                                     : AxialModel::ElasticPerfectlyPlastic;
   p.stiffness_N_m = r.number("stiffness_N_m", Check::Positive);
   p.yield_force_N = r.number("yield_force_N", Check::Positive);
+  if (p.model == AxialModel::Softening) {
+    p.softening_stiffness_N_m = r.number("softening_stiffness_N_m", Check::Positive);
+    p.residual_force_N = r.number("residual_force_N", Check::NonNegative);
+    if (p.residual_force_N > p.yield_force_N)
+      r.fail("residual_force_N",
+             "must not exceed yield_force_N (the peak) (" + std::to_string(p.yield_force_N) + " N)");
+  } else {
+    for (const char* key : {"softening_stiffness_N_m", "residual_force_N"})
+      if (r.has(key)) r.fail(key, "only for the model 'softening'");
+  }
   if (hardens(p.model)) {
     p.hardening_stiffness_N_m = r.number("hardening_stiffness_N_m", Check::NonNegative);
     if (p.hardening_stiffness_N_m >= p.stiffness_N_m)
@@ -77,6 +94,10 @@ json toJson(const AxialLawParams& p) {
     j["densification_onset_m"] = p.densification_onset_m;
     j["densification_stiffness_N_m"] = p.densification_stiffness_N_m;
   }
+  if (p.model == AxialModel::Softening) {
+    j["softening_stiffness_N_m"] = p.softening_stiffness_N_m;
+    j["residual_force_N"] = p.residual_force_N;
+  }
   if (std::isfinite(p.lockup_shortening_m)) {  // (a law built without one reads back with the default)
     j["lockup_shortening_m"] = p.lockup_shortening_m;
     j["lockup_stiffness_N_m"] = p.lockup_stiffness_N_m;
@@ -97,7 +118,7 @@ LawFile readLawMaterials(const JsonReader& materials, int version) {
     const JsonReader itf = m.object("interface");
     c.interface.friction = itf.number("friction", Check::NonNegative);
     c.interface.tangential_stiffness_N_m = itf.number("tangential_stiffness_N_m", Check::Positive);
-    c.impact = readAxialLaw(m.object("impact"), c.edge_m, version);
+    c.impact = readAxialLaw(m.object("impact"), c.edge_m, version, /*impact=*/true);
     const JsonReader prov = m.object("provenance");
     prov.choice("status", {"illustrative", "fitted", "measured"});
     c.provenance = m.raw("provenance");

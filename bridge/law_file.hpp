@@ -59,9 +59,11 @@ inline double lockupStrain(double porosity, double densest_porosity) {
 
 /// Reads an axial/impact law object ({"model", "stiffness_N_m", "yield_force_N",
 /// "hardening_stiffness_N_m" for bilinear and densifying, "lockup_shortening_m"
-/// and "lockup_stiffness_N_m"}). `edge_m` sets the default lock-up; version 1
-/// accepts neither the lock-up keys nor the densifying model.
-AxialLawParams readAxialLaw(const JsonReader& r, double edge_m, int version = 2);
+/// and "lockup_stiffness_N_m"}; "softening_stiffness_N_m" and
+/// "residual_force_N" for softening). `edge_m` sets the default lock-up;
+/// version 1 accepts neither the lock-up keys nor the densifying model;
+/// only an impact law (`impact`) may soften.
+AxialLawParams readAxialLaw(const JsonReader& r, double edge_m, int version = 2, bool impact = false);
 nlohmann::json toJson(const AxialLawParams& p);
 /// The default lock-up of a law for cells of edge `edge_m` (see above).
 void setDefaultLockup(AxialLawParams& p, double edge_m);

@@ -59,6 +59,8 @@ std::vector<std::string> parameterNames(LawModel m) {
     case LawModel::Densifying:
       return {"stiffness_N_m", "yield_force_N", "hardening_stiffness_N_m", "densification_onset_m",
               "densification_stiffness_N_m"};
+    case LawModel::Softening:
+      return {"stiffness_N_m", "yield_force_N", "softening_stiffness_N_m", "residual_ratio"};
     case LawModel::LateralLinear:
       return {"reaction_coefficient"};
     case LawModel::InterfaceSlider:
@@ -75,6 +77,8 @@ std::string modelName(LawModel m) {
       return "bilinear";
     case LawModel::Densifying:
       return "densifying";
+    case LawModel::Softening:
+      return "softening";
     case LawModel::LateralLinear:
       return "lateral_linear";
     case LawModel::InterfaceSlider:
@@ -108,10 +112,16 @@ bridge::AxialLawParams axialLaw(LawModel m, const std::vector<double>& theta, co
   bridge::AxialLawParams p;
   p.model = m == LawModel::Bilinear     ? bridge::AxialModel::Bilinear
             : m == LawModel::Densifying ? bridge::AxialModel::Densifying
+            : m == LawModel::Softening  ? bridge::AxialModel::Softening
                                         : bridge::AxialModel::ElasticPerfectlyPlastic;
   p.stiffness_N_m = theta[0];
   p.yield_force_N = theta[1];
-  if (m != LawModel::ElasticPerfectlyPlastic) {
+  if (m == LawModel::Softening) {
+    p.softening_stiffness_N_m = theta[2];
+    // (fitted as a fraction of the peak: every point of the box is a law)
+    p.residual_force_N = theta[3] * theta[1];
+    if (!(theta[3] >= 0.0 && theta[3] <= 1.0)) throw Infeasible("residual_ratio must lie in [0, 1]");
+  } else if (m != LawModel::ElasticPerfectlyPlastic) {
     p.hardening_stiffness_N_m = theta[2];
     if (!(theta[2] < theta[0])) throw Infeasible("hardening_stiffness_N_m must be below stiffness_N_m");
   }
@@ -131,7 +141,8 @@ void evaluateModel(LawModel m, const std::vector<double>& theta, const PathGrid&
   switch (m) {
     case LawModel::ElasticPerfectlyPlastic:
     case LawModel::Bilinear:
-    case LawModel::Densifying: {
+    case LawModel::Densifying:
+    case LawModel::Softening: {
       const bridge::AxialLawParams p = axialLaw(m, theta, lockup);
       double plastic = 0.0;
       for (std::size_t i = 0; i < g.x.size(); ++i) {

@@ -37,8 +37,9 @@ enum class LawModel {
   ElasticPerfectlyPlastic,  ///< axial/impact: stiffness_N_m, yield_force_N
   Bilinear,                 ///< axial/impact: + hardening_stiffness_N_m
   Densifying,               ///< axial/impact: + densification_onset_m, densification_stiffness_N_m
-  LateralLinear,            ///< lateral force = reaction_coefficient * axial force
-  InterfaceSlider           ///< shear force: spring tangential_stiffness_N_m capped at friction * normal force
+  Softening,  ///< impact: stiffness_N_m, yield_force_N (the peak), softening_stiffness_N_m, residual_ratio (F_r / F_y)
+  LateralLinear,   ///< lateral force = reaction_coefficient * axial force
+  InterfaceSlider  ///< shear force: spring tangential_stiffness_N_m capped at friction * normal force
 };
 
 /// Parameter names of a model, in the order of the parameter vector.
@@ -54,10 +55,10 @@ struct Lockup {
   double stiffness_ratio = 10.0;                                  ///< k_L / bridge::looseStiffness
 };
 
-/// The axial/impact law of parameters `theta` of model `m` (one of the three
+/// The axial/impact law of parameters `theta` of model `m` (one of the four
 /// axial models) with the lock-up `lockup`. Throws Infeasible for a hardening
-/// tangent not below the stiffness, or a densification onset not below the
-/// lock-up.
+/// tangent not below the stiffness, a densification onset not below the
+/// lock-up, or a residual ratio above 1.
 bridge::AxialLawParams axialLaw(LawModel m, const std::vector<double>& theta, const Lockup& lockup);
 
 /// Model values along the path of `g` (same length as g.x). Axial and impact laws

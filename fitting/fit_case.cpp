@@ -27,8 +27,11 @@ namespace {
 
 /// The four laws a `fit` case may identify, in the order they are run.
 const std::vector<std::string> kTests = {"axial", "lateral", "interface", "impact"};
-/// Parameters of the densifying model beyond the bilinear ones.
-const char* const kDensificationParameters[] = {"densification_onset_m", "densification_stiffness_N_m"};
+/// Parameters with default bounds (set from the curves or the other bounds
+/// at run time): the densifying model's beyond the bilinear ones, and the
+/// softening model's beyond the elastic-perfectly plastic ones.
+const char* const kDefaultedParameters[] = {"densification_onset_m", "densification_stiffness_N_m",
+                                            "softening_stiffness_N_m", "residual_ratio"};
 
 // Bounds of the densification where the case gives none: the onset anywhere
 // from 0 to the largest shortening of the curves (an onset beyond them cannot
@@ -43,6 +46,15 @@ void defaultDensificationBounds(Bounds& b, const std::vector<PathGrid>& grids, d
     const auto& k = b.at("stiffness_N_m");
     b["densification_stiffness_N_m"] = {0.01 * k.first, 10.0 * k.second};
   }
+}
+
+// Bounds of the softening where the case gives none: the falling tangent from
+// a thousandth of the smallest to the largest stiffness allowed; the residual
+// ratio F_r / F_y from 0 to 1.
+void defaultSofteningBounds(Bounds& b) {
+  const auto& k = b.at("stiffness_N_m");
+  if (b.count("softening_stiffness_N_m") == 0) b["softening_stiffness_N_m"] = {1e-3 * k.first, k.second};
+  if (b.count("residual_ratio") == 0) b["residual_ratio"] = {0.0, 1.0};
 }
 
 CurveDefaults defaultsFor(const std::string& test) {
@@ -91,8 +103,13 @@ std::vector<LawModel> readModels(const JsonReader& t, const std::string& test) {
       out.push_back(LawModel::Bilinear);
     else if (s == "densifying")
       out.push_back(LawModel::Densifying);
+    else if (s == "softening" && test == "impact")
+      out.push_back(LawModel::Softening);
+    else if (s == "softening")
+      t.fail("models", "'softening' is a model of the impact law only");
     else
-      t.fail("models", "unknown model '" + s + "' (elastic_perfectly_plastic, bilinear, densifying)");
+      t.fail("models", "unknown model '" + s + "' (elastic_perfectly_plastic, bilinear, densifying" +
+                           (test == "impact" ? ", softening)" : ")"));
   }
   return out;
 }
@@ -151,13 +168,13 @@ FitCase readFitCase(const bridge::JsonDocument& doc) {
     for (LawModel m : spec.candidates)
       for (const auto& n : parameterNames(m)) names.insert(n);
     const JsonReader b = t->object("bounds");
-    // The densification's bounds have defaults (set from the curves at run time).
-    for (const char* n : kDensificationParameters)
+    // The densification's and the softening's bounds have defaults (set at run time).
+    for (const char* n : kDefaultedParameters)
       if (!b.has(n)) names.erase(n);
     spec.bounds = readBounds(b, std::vector<std::string>(names.begin(), names.end()));
     for (const auto& [name, lu] : spec.bounds) {
-      const bool may_be_zero =
-          name == "hardening_stiffness_N_m" || name == "reaction_coefficient" || name == "densification_onset_m";
+      const bool may_be_zero = name == "hardening_stiffness_N_m" || name == "reaction_coefficient" ||
+                               name == "densification_onset_m" || name == "residual_ratio";
       if (may_be_zero ? lu.first < 0.0 : !(lu.first > 0.0))
         b.fail(name, may_be_zero ? "lower bound must be >= 0" : "lower bound must be > 0");
     }
@@ -330,6 +347,7 @@ bridge::RunOutcome runCase(const bridge::JsonDocument& doc, const bridge::RunCon
     Bounds bounds = t.bounds;
     const bool axial_kind = t.name == "axial" || t.name == "impact";
     if (axial_kind) defaultDensificationBounds(bounds, grids, settings.lockup.shortening_m);
+    if (t.name == "impact") defaultSofteningBounds(bounds);
     // The impact law is fitted without its lock-up: a UCI test is unconfined,
     // the cell spreads sideways and its boulder sinks past the lock-up
     // shortening. The law written carries it, for the confined cells of a

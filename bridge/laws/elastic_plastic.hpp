@@ -13,16 +13,21 @@
 /// and u_p its permanent (plastic) part, which only grows. The force
 /// F = k (u - u_p) >= 0 pushes apart; it is zero for u <= u_p (no tension: the
 /// bodies separate without force and the plastic part stays as a gap), and
-/// it is limited by the yield force F_y + H u_p (linear isotropic hardening
-/// with modulus H; H = 0: perfectly plastic, F <= F_y).
+/// it is limited by the yield force Y(u_p) = max(F_r, F_y + H u_p): linear
+/// isotropic hardening with modulus H (H = 0: perfectly plastic, F <= F_y),
+/// or softening (-k < H < 0) down to a residual force F_r, after which the
+/// spring flows at F_r. F_r is 0 (never reached) for a spring that hardens.
 ///
 /// Return mapping (Simo & Hughes 1998, Sec. 1.4), exact for any increment:
-/// when the trial force T = k (u - u_p) exceeds Y = F_y + H u_p, the new state
-/// is the one on the yield line, F' = F_y + H u_p' with u_p' = u - F'/k, i.e.
+/// when the trial force T = k (u - u_p) exceeds Y, the new state is the one
+/// on the yield line, F' = F_y + H u_p' with u_p' = u - F'/k, i.e.
 ///   F' = Y + (k_h / k) (T - Y),   k_h / k = H / (k + H),
-/// k_h being the post-yield tangent. The work dissipated by the update is the
-/// yield force integrated over the plastic increment, (Y + F')/2 (u_p' - u_p)
-/// (exact: the yield force is linear in u_p).
+/// k_h being the post-yield tangent (negative while softening), or F_r if
+/// that is below the residual. The work dissipated by the update is the
+/// yield force integrated over the plastic increment: (Y + F')/2 (u_p' - u_p)
+/// on the linear part, F_r times the increment past the knee
+/// u_k = (F_r - F_y) / H where softening meets the residual (exact: the yield
+/// force is piecewise linear in u_p).
 #include <limits>
 
 namespace gabion::bridge {
@@ -35,7 +40,8 @@ struct ElasticPlasticParams {
   double stiffness_N_m = 0.0;                                      ///< k (N/m), > 0
   double yield_force_N = std::numeric_limits<double>::infinity();  ///< first yield F_y (N), >= 0; infinity: elastic
   double hardening_N_m = 0.0;                                      ///< H (N/m), >= 0: the yield force is F_y + H u_p
-  double tangent_ratio = 0.0;                                      ///< k_h / k = H / (k + H) (-), in [0, 1)
+  double tangent_ratio = 0.0;                                      ///< k_h / k = H / (k + H) (-), in (-inf, 1)
+  double residual_force_N = 0.0;  ///< F_r (N), the floor of a softening yield force; 0 for one that hardens
 };
 
 /// One evaluation.
@@ -49,7 +55,16 @@ struct ElasticPlasticResponse {
 inline ElasticPlasticParams hardeningSpring(double stiffness_N_m, double yield_force_N,
                                             double hardening_stiffness_N_m) {
   const double k = stiffness_N_m, kh = hardening_stiffness_N_m;
-  return {k, yield_force_N, k * kh / (k - kh), kh / k};
+  return {k, yield_force_N, k * kh / (k - kh), kh / k, 0.0};
+}
+
+/// The spring that softens after its peak F_y with the falling tangent
+/// -k_s (k_s > 0: H = -k k_s / (k + k_s), so k + H > 0 for any k_s) down to
+/// the residual force F_r (0 <= F_r <= F_y), then flows at F_r.
+inline ElasticPlasticParams softeningSpring(double stiffness_N_m, double peak_force_N, double softening_stiffness_N_m,
+                                            double residual_force_N) {
+  const double k = stiffness_N_m, ks = softening_stiffness_N_m;
+  return {k, peak_force_N, -k * ks / (k + ks), -ks / k, residual_force_N};
 }
 
 /// Force for compression `u_m` given the plastic part `plastic_m` carried from
@@ -65,8 +80,11 @@ inline ElasticPlasticResponse elasticPlasticResponse(const ElasticPlasticParams&
   const double trial = k * (u_m - plastic_m);
   double yield = p.yield_force_N, returned = p.yield_force_N;
   if constexpr (kHardening) {
-    yield += p.hardening_N_m * plastic_m;
-    returned = yield + p.tangent_ratio * (trial - yield);
+    const double line = p.yield_force_N + p.hardening_N_m * plastic_m;  // the yield line at u_p
+    const double back = line + p.tangent_ratio * (trial - line);        // F' on the line
+    // (the floor F_r is 0 for a spring that hardens: the line and F' are >= F_y >= 0 there)
+    yield = line > p.residual_force_N ? line : p.residual_force_N;
+    returned = back > p.residual_force_N ? back : p.residual_force_N;
   }
   const bool flows = trial > yield;  // implies trial > 0 (yield >= 0)
   // Every quantity is computed for every input and selected: lanes that do
@@ -75,10 +93,19 @@ inline ElasticPlasticResponse elasticPlasticResponse(const ElasticPlasticParams&
   // keeps F_y / k of a uniform law out of the SIMD loops instead of a masked
   // division per lane.
   const double plastic = u_m - returned / k;
+  double work = 0.5 * (yield + returned) * (plastic - plastic_m);
+  if constexpr (kHardening) {
+    // Softening past the knee u_k: the line from u_p to min(u_p', max(u_p, u_k)), then F_r.
+    const double h = p.hardening_N_m;
+    const double knee = h < 0.0 ? (p.residual_force_N - p.yield_force_N) / h : plastic;
+    const double c = knee < plastic_m ? plastic_m : (knee > plastic ? plastic : knee);
+    const double at_c = c < plastic ? p.yield_force_N + h * c : returned;
+    work = h < 0.0 ? 0.5 * (yield + at_c) * (c - plastic_m) + p.residual_force_N * (plastic - c) : work;
+  }
   ElasticPlasticResponse r;
   r.force_N = trial <= 0.0 ? 0.0 : (flows ? returned : trial);
   r.plastic_m = trial > 0.0 && flows ? plastic : plastic_m;
-  r.plastic_work_J = trial > 0.0 && flows ? 0.5 * (yield + returned) * (plastic - plastic_m) : 0.0;
+  r.plastic_work_J = trial > 0.0 && flows ? work : 0.0;
   return r;
 }
 

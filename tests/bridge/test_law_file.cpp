@@ -125,3 +125,43 @@ TEST(LawFile, Version1IsReadWithTheDefaultLockup) {
     EXPECT_EQ(e.pointer(), "/materials/front/impact/model");
   }
 }
+
+// The softening model: an impact law of that model reads back as written; in
+// an axial law, with its keys on another model, or with a residual above the
+// peak, it is refused by name.
+TEST(LawFile, ASofteningImpactLawReadsBackAndIsRefusedElsewhere) {
+  LawFile laws = sampleLaws();
+  auto& imp = laws.materials.at("front").impact;
+  imp = {AxialModel::Softening, 8e5, 8e4, 0.0};
+  imp.softening_stiffness_N_m = 4e5;
+  imp.residual_force_N = 1.2e4;
+  imp.lockup_shortening_m = 0.25;
+  imp.lockup_stiffness_N_m = 8e6;
+  const std::string path = ::testing::TempDir() + "law_softening.json";
+  writeJsonAtomic(path, toJson(laws));
+  const auto& back = loadLawFile(path).materials.at("front").impact;
+  EXPECT_EQ(back.model, AxialModel::Softening);
+  EXPECT_DOUBLE_EQ(back.softening_stiffness_N_m, 4e5);
+  EXPECT_DOUBLE_EQ(back.residual_force_N, 1.2e4);
+  EXPECT_DOUBLE_EQ(back.yield_force_N, 8e4);
+  EXPECT_DOUBLE_EQ(back.lockup_shortening_m, 0.25);
+
+  const auto refused = [&](nlohmann::json j, const std::string& pointer) {
+    writeJsonAtomic(path, j);
+    try {
+      loadLawFile(path);
+      ADD_FAILURE() << "no error for " << pointer;
+    } catch (const InputError& e) {
+      EXPECT_EQ(e.pointer(), pointer) << e.what();
+    }
+  };
+  auto j = toJson(laws);
+  j["materials"]["front"]["axial"] = j["materials"]["front"]["impact"];
+  refused(j, "/materials/front/axial/model");
+  j = toJson(laws);
+  j["materials"]["front"]["impact"]["residual_force_N"] = 9e4;
+  refused(j, "/materials/front/impact/residual_force_N");
+  j = toJson(sampleLaws());
+  j["materials"]["front"]["impact"]["residual_force_N"] = 1e3;
+  refused(j, "/materials/front/impact/residual_force_N");
+}

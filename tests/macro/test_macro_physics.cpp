@@ -109,6 +109,35 @@ INSTANTIATE_TEST_SUITE_P(Laws, MacroPlastic, ::testing::Values(false, true),
                            return p.param ? "Bilinear" : "ElasticPerfectlyPlastic";
                          });
 
+// The boulder against a softening face (peak F_y, falling tangent -k_s to the
+// residual F_r) on a rigid support: it stops where the work of the backbone,
+// F_y^2 / (2k) + (F_y + F_r) (F_y - F_r) / (2 k_s) + F_r (u - u_r), is its
+// energy; it rebounds from F_r elastically: speed F_r / sqrt(k M), and the
+// plastic work is the rest. The peak force is F_y.
+TEST(MacroPlastic, SofteningFaceStopsTheBoulderWhereTheBackboneTakesItsEnergy) {
+  const double M = 170.0, v0 = 10.0, k = 2e7, fy = 1e5, ks = 2e6, fr = 5e4;
+  gabion::bridge::AxialLawParams imp = epp(k, fy);
+  imp.model = gabion::bridge::AxialModel::Softening;
+  imp.softening_stiffness_N_m = ks;
+  imp.residual_force_N = fr;
+  Structure s = buildStructure(grid(1, 1, 1), oneMaterial(epp(1e13, 1e15), imp, 1e9));
+  Model model(s, Kinematics::XOnly);
+  // (a step of 0.002 of the critical one: the force is sampled at the steps,
+  // and past the peak it falls by k_s v dt a step)
+  const ImpactResult r = runImpact(model, boulderAt(s, 0, 0, M, v0), quickRun(0.05, 0.002), 0, nullptr);
+  ASSERT_TRUE(r.ok) << r.message;
+  const double e0 = 0.5 * M * v0 * v0;
+  const double uy = fy / k, ur = uy + (fy - fr) / ks;
+  const double stop = ur + (e0 - 0.5 * fy * uy - 0.5 * (fy + fr) * (ur - uy)) / fr;  // 0.158 m, short of the centre
+  ASSERT_LT(stop, 0.2);
+  EXPECT_NEAR(r.max_penetration_m, stop, 0.005 * stop);
+  EXPECT_NEAR(r.peak_force_N, fy, 0.005 * fy);
+  const double dissipated = e0 - fr * fr / (2.0 * k);
+  EXPECT_NEAR(r.plastic_J, dissipated, 0.005 * dissipated);
+  EXPECT_NEAR(r.rebound_velocity_m_s, fr / std::sqrt(k * M), 0.01 * fr / std::sqrt(k * M));
+  EXPECT_LT(r.balance_rel_error, 1e-3);
+}
+
 // A 1-D chain pushed at its front at constant speed: the compression front
 // reaches the fixed back face after N e / c with c = e sqrt(k/m) (the long-wave
 // speed of the lattice). The discrete lattice smears the step over an Airy
