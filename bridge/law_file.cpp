@@ -46,11 +46,12 @@ AxialLawParams readAxialLaw(const JsonReader& r, double edge_m, int version, boo
   if (p.model == AxialModel::Softening) {
     p.softening_stiffness_N_m = r.number("softening_stiffness_N_m", Check::Positive);
     p.residual_force_N = r.number("residual_force_N", Check::NonNegative);
+    p.softening_onset_m = r.optionalNumber("softening_onset_m", Check::NonNegative).value_or(0.0);
     if (p.residual_force_N > p.yield_force_N)
       r.fail("residual_force_N",
              "must not exceed yield_force_N (the peak) (" + std::to_string(p.yield_force_N) + " N)");
   } else {
-    for (const char* key : {"softening_stiffness_N_m", "residual_force_N"})
+    for (const char* key : {"softening_stiffness_N_m", "residual_force_N", "softening_onset_m"})
       if (r.has(key)) r.fail(key, "only for the model 'softening'");
   }
   if (hardens(p.model)) {
@@ -97,6 +98,7 @@ json toJson(const AxialLawParams& p) {
   if (p.model == AxialModel::Softening) {
     j["softening_stiffness_N_m"] = p.softening_stiffness_N_m;
     j["residual_force_N"] = p.residual_force_N;
+    j["softening_onset_m"] = p.softening_onset_m;
   }
   if (std::isfinite(p.lockup_shortening_m)) {  // (a law built without one reads back with the default)
     j["lockup_shortening_m"] = p.lockup_shortening_m;

@@ -60,7 +60,7 @@ inline double lockupStrain(double porosity, double densest_porosity) {
 /// Reads an axial/impact law object ({"model", "stiffness_N_m", "yield_force_N",
 /// "hardening_stiffness_N_m" for bilinear and densifying, "lockup_shortening_m"
 /// and "lockup_stiffness_N_m"}; "softening_stiffness_N_m" and
-/// "residual_force_N" for softening). `edge_m` sets the default lock-up;
+/// "residual_force_N", optionally "softening_onset_m", for softening). `edge_m` sets the default lock-up;
 /// version 1 accepts neither the lock-up keys nor the densifying model;
 /// only an impact law (`impact`) may soften.
 AxialLawParams readAxialLaw(const JsonReader& r, double edge_m, int version = 2, bool impact = false);

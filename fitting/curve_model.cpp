@@ -60,7 +60,7 @@ std::vector<std::string> parameterNames(LawModel m) {
       return {"stiffness_N_m", "yield_force_N", "hardening_stiffness_N_m", "densification_onset_m",
               "densification_stiffness_N_m"};
     case LawModel::Softening:
-      return {"stiffness_N_m", "yield_force_N", "softening_stiffness_N_m", "residual_ratio"};
+      return {"stiffness_N_m", "yield_force_N", "softening_onset_m", "softening_stiffness_N_m", "residual_ratio"};
     case LawModel::LateralLinear:
       return {"reaction_coefficient"};
     case LawModel::InterfaceSlider:
@@ -117,10 +117,11 @@ bridge::AxialLawParams axialLaw(LawModel m, const std::vector<double>& theta, co
   p.stiffness_N_m = theta[0];
   p.yield_force_N = theta[1];
   if (m == LawModel::Softening) {
-    p.softening_stiffness_N_m = theta[2];
+    p.softening_onset_m = theta[2];
+    p.softening_stiffness_N_m = theta[3];
     // (fitted as a fraction of the peak: every point of the box is a law)
-    p.residual_force_N = theta[3] * theta[1];
-    if (!(theta[3] >= 0.0 && theta[3] <= 1.0)) throw Infeasible("residual_ratio must lie in [0, 1]");
+    p.residual_force_N = theta[4] * theta[1];
+    if (!(theta[4] >= 0.0 && theta[4] <= 1.0)) throw Infeasible("residual_ratio must lie in [0, 1]");
   } else if (m != LawModel::ElasticPerfectlyPlastic) {
     p.hardening_stiffness_N_m = theta[2];
     if (!(theta[2] < theta[0])) throw Infeasible("hardening_stiffness_N_m must be below stiffness_N_m");

@@ -37,7 +37,8 @@ enum class LawModel {
   ElasticPerfectlyPlastic,  ///< axial/impact: stiffness_N_m, yield_force_N
   Bilinear,                 ///< axial/impact: + hardening_stiffness_N_m
   Densifying,               ///< axial/impact: + densification_onset_m, densification_stiffness_N_m
-  Softening,  ///< impact: stiffness_N_m, yield_force_N (the peak), softening_stiffness_N_m, residual_ratio (F_r / F_y)
+  Softening,       ///< impact: stiffness_N_m, yield_force_N (the peak), softening_onset_m, softening_stiffness_N_m,
+                   ///< residual_ratio (F_r / F_y)
   LateralLinear,   ///< lateral force = reaction_coefficient * axial force
   InterfaceSlider  ///< shear force: spring tangential_stiffness_N_m capped at friction * normal force
 };

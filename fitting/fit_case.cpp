@@ -30,7 +30,7 @@ const std::vector<std::string> kTests = {"axial", "lateral", "interface", "impac
 /// Parameters with default bounds (set from the curves or the other bounds
 /// at run time): the densifying model's beyond the bilinear ones, and the
 /// softening model's beyond the elastic-perfectly plastic ones.
-const char* const kDefaultedParameters[] = {"densification_onset_m", "densification_stiffness_N_m",
+const char* const kDefaultedParameters[] = {"densification_onset_m", "densification_stiffness_N_m", "softening_onset_m",
                                             "softening_stiffness_N_m", "residual_ratio"};
 
 // Bounds of the densification where the case gives none: the onset anywhere
@@ -48,10 +48,15 @@ void defaultDensificationBounds(Bounds& b, const std::vector<PathGrid>& grids, d
   }
 }
 
-// Bounds of the softening where the case gives none: the falling tangent from
-// a thousandth of the smallest to the largest stiffness allowed; the residual
-// ratio F_r / F_y from 0 to 1.
-void defaultSofteningBounds(Bounds& b) {
+// Bounds of the softening where the case gives none: its onset from 0 to the
+// largest indentation of the curves; the falling tangent from a thousandth of
+// the smallest to the largest stiffness allowed; the residual ratio F_r / F_y
+// from 0 to 1.
+void defaultSofteningBounds(Bounds& b, const std::vector<PathGrid>& grids) {
+  double reach = 0.0;
+  for (const auto& g : grids)
+    for (double x : g.x) reach = std::max(reach, x);
+  if (b.count("softening_onset_m") == 0) b["softening_onset_m"] = {0.0, reach};
   const auto& k = b.at("stiffness_N_m");
   if (b.count("softening_stiffness_N_m") == 0) b["softening_stiffness_N_m"] = {1e-3 * k.first, k.second};
   if (b.count("residual_ratio") == 0) b["residual_ratio"] = {0.0, 1.0};
@@ -174,7 +179,8 @@ FitCase readFitCase(const bridge::JsonDocument& doc) {
     spec.bounds = readBounds(b, std::vector<std::string>(names.begin(), names.end()));
     for (const auto& [name, lu] : spec.bounds) {
       const bool may_be_zero = name == "hardening_stiffness_N_m" || name == "reaction_coefficient" ||
-                               name == "densification_onset_m" || name == "residual_ratio";
+                               name == "densification_onset_m" || name == "residual_ratio" ||
+                               name == "softening_onset_m";
       if (may_be_zero ? lu.first < 0.0 : !(lu.first > 0.0))
         b.fail(name, may_be_zero ? "lower bound must be >= 0" : "lower bound must be > 0");
     }
@@ -347,7 +353,7 @@ bridge::RunOutcome runCase(const bridge::JsonDocument& doc, const bridge::RunCon
     Bounds bounds = t.bounds;
     const bool axial_kind = t.name == "axial" || t.name == "impact";
     if (axial_kind) defaultDensificationBounds(bounds, grids, settings.lockup.shortening_m);
-    if (t.name == "impact") defaultSofteningBounds(bounds);
+    if (t.name == "impact") defaultSofteningBounds(bounds, grids);
     // The impact law is fitted without its lock-up: a UCI test is unconfined,
     // the cell spreads sideways and its boulder sinks past the lock-up
     // shortening. The law written carries it, for the confined cells of a

@@ -35,6 +35,7 @@ AxialLawParams cellLengthLaw(const AxialLawParams& a, double factor) {
   p.densification_onset_m *= factor;
   p.densification_stiffness_N_m /= factor;
   p.softening_stiffness_N_m /= factor;
+  p.softening_onset_m *= factor;
   p.lockup_shortening_m *= factor;
   p.lockup_stiffness_N_m /= factor;
   return p;

@@ -63,8 +63,8 @@ def main(out, curves=None):
                    for k, _, _ in KEYS]
             rows.append((label, "resolved again, step 5 % shorter", [f.get(k) for k, _, _ in KEYS], rel,
                          f.get("outcome"), f.get("wall_time_s"), None, f.get("energy", {}).get("balance_rel_error")))
-        twin2 = os.path.join(out, "in_place", "twin", "summary.json")
-        if name == "centre_10_m_s" and os.path.isfile(twin2):
+        twin2 = os.path.join(out, "in_place", "twin_" + name, "summary.json")
+        if os.path.isfile(twin2):
             f = json.load(open(twin2))
             f = f.get("results", f)
             rel = [None if r.get(k) in (None, 0) or f.get(k) is None else (f[k] - r[k]) / abs(r[k])

@@ -25,9 +25,10 @@
 ///   k_d max(0, u - u_d).
 /// - softening (the boulder-face impact law of a cell in place: a peak the
 ///   cell's confinement and its blocks' inertia hold, then a cell that gives
-///   way, docs/resolved.md): elastic up to the peak F_y, then a falling
-///   tangent -k_s down to the residual force F_r, at which it flows. Only
-///   for the impact law; unloading and reloading are elastic with k.
+///   way, docs/resolved.md): elastic up to the peak F_y, held over a plastic
+///   shortening u_s, then a falling tangent -k_s down to the residual force
+///   F_r, at which it flows. Only for the impact law; unloading and
+///   reloading are elastic with k.
 ///
 /// Lock-up (every model): a fill cannot be compressed beyond its densest
 /// state, reached at the lock-up shortening u_L (from the fill's porosity).
@@ -60,6 +61,7 @@ struct AxialLawParams {
   double lockup_stiffness_N_m = 0.0;                                       ///< k_L (N/m), >= 0
   double softening_stiffness_N_m = 0.0;  ///< k_s > 0, the falling tangent's magnitude, softening only (N/m)
   double residual_force_N = 0.0;         ///< F_r, 0 <= F_r <= F_y, softening only (N)
+  double softening_onset_m = 0.0;        ///< u_s >= 0, plastic shortening held at the peak, softening only (m)
 };
 
 /// True for the models with a hardening tangent (bilinear, densifying).
@@ -79,12 +81,13 @@ inline double looseStiffness(const AxialLawParams& p) {
 /// The law as the elastic-plastic spring of elastic_plastic.hpp (the same
 /// return mapping as the fine DEM's F_lim cap): no hardening for
 /// elastic_perfectly_plastic, H = k k_h / (k - k_h) for the hardening models,
-/// H = -k k_s / (k + k_s) down to F_r for softening.
+/// H = -k k_s / (k + k_s) from u_s down to F_r for softening.
 inline ElasticPlasticParams axialSpring(const AxialLawParams& p) {
   if (hardens(p.model)) return hardeningSpring(p.stiffness_N_m, p.yield_force_N, p.hardening_stiffness_N_m);
   if (p.model == AxialModel::Softening)
-    return softeningSpring(p.stiffness_N_m, p.yield_force_N, p.softening_stiffness_N_m, p.residual_force_N);
-  return {p.stiffness_N_m, p.yield_force_N, 0.0, 0.0, 0.0};
+    return softeningSpring(p.stiffness_N_m, p.yield_force_N, p.softening_onset_m, p.softening_stiffness_N_m,
+                           p.residual_force_N);
+  return {p.stiffness_N_m, p.yield_force_N, 0.0, 0.0, 0.0, 0.0};
 }
 
 /// The law ready for a step loop: the spring, its densification and its lock-up.

@@ -13,21 +13,23 @@
 /// and u_p its permanent (plastic) part, which only grows. The force
 /// F = k (u - u_p) >= 0 pushes apart; it is zero for u <= u_p (no tension: the
 /// bodies separate without force and the plastic part stays as a gap), and
-/// it is limited by the yield force Y(u_p) = max(F_r, F_y + H u_p): linear
-/// isotropic hardening with modulus H (H = 0: perfectly plastic, F <= F_y),
-/// or softening (-k < H < 0) down to a residual force F_r, after which the
-/// spring flows at F_r. F_r is 0 (never reached) for a spring that hardens.
+/// it is limited by the yield force Y(u_p): F_y + H u_p, linear isotropic
+/// hardening with modulus H >= 0 (H = 0: perfectly plastic, F <= F_y); or,
+/// for a spring that softens (-k < H < 0), F_y up to the plastic part u_s,
+/// then F_y + H (u_p - u_s) down to a residual force F_r, then F_r.
 ///
 /// Return mapping (Simo & Hughes 1998, Sec. 1.4), exact for any increment:
-/// when the trial force T = k (u - u_p) exceeds Y, the new state is the one
-/// on the yield line, F' = F_y + H u_p' with u_p' = u - F'/k, i.e.
+/// when the trial force T = k (u - u_p) exceeds Y(u_p), the new state is the
+/// one on the yield line, F' = Y(u_p') with u_p' = u - F'/k. Hardening:
 ///   F' = Y + (k_h / k) (T - Y),   k_h / k = H / (k + H),
-/// k_h being the post-yield tangent (negative while softening), or F_r if
-/// that is below the residual. The work dissipated by the update is the
-/// yield force integrated over the plastic increment: (Y + F')/2 (u_p' - u_p)
-/// on the linear part, F_r times the increment past the knee
-/// u_k = (F_r - F_y) / H where softening meets the residual (exact: the yield
-/// force is piecewise linear in u_p).
+/// k_h being the post-yield tangent. Softening: on the falling line
+/// F' = (F_y + H (u - u_s)) k / (k + H) (the line is a function of u_p'
+/// alone), clamped to [F_r, F_y]: F_y on the flat part before u_s, F_r past
+/// the knee u_k = u_s + (F_r - F_y) / H (k + H > 0 makes the root unique).
+/// The work dissipated by the update is the yield force integrated over the
+/// plastic increment: (Y + F')/2 (u_p' - u_p) while hardening; piece by piece
+/// over the flat part, the falling line and the residual while softening
+/// (exact: the yield force is piecewise linear in u_p).
 #include <limits>
 
 namespace gabion::bridge {
@@ -41,7 +43,8 @@ struct ElasticPlasticParams {
   double yield_force_N = std::numeric_limits<double>::infinity();  ///< first yield F_y (N), >= 0; infinity: elastic
   double hardening_N_m = 0.0;                                      ///< H (N/m), >= 0: the yield force is F_y + H u_p
   double tangent_ratio = 0.0;                                      ///< k_h / k = H / (k + H) (-), in (-inf, 1)
-  double residual_force_N = 0.0;  ///< F_r (N), the floor of a softening yield force; 0 for one that hardens
+  double residual_force_N = 0.0;                                   ///< F_r (N), softening only: the yield force's floor
+  double softening_onset_m = 0.0;  ///< u_s (m), softening only: the plastic part at which it starts to fall
 };
 
 /// One evaluation.
@@ -58,13 +61,14 @@ inline ElasticPlasticParams hardeningSpring(double stiffness_N_m, double yield_f
   return {k, yield_force_N, k * kh / (k - kh), kh / k, 0.0};
 }
 
-/// The spring that softens after its peak F_y with the falling tangent
-/// -k_s (k_s > 0: H = -k k_s / (k + k_s), so k + H > 0 for any k_s) down to
-/// the residual force F_r (0 <= F_r <= F_y), then flows at F_r.
-inline ElasticPlasticParams softeningSpring(double stiffness_N_m, double peak_force_N, double softening_stiffness_N_m,
-                                            double residual_force_N) {
+/// The spring that holds its peak F_y up to the plastic part u_s, then
+/// softens with the falling tangent -k_s (k_s > 0: H = -k k_s / (k + k_s),
+/// so k + H > 0 for any k_s) down to the residual force F_r
+/// (0 <= F_r <= F_y), then flows at F_r.
+inline ElasticPlasticParams softeningSpring(double stiffness_N_m, double peak_force_N, double onset_m,
+                                            double softening_stiffness_N_m, double residual_force_N) {
   const double k = stiffness_N_m, ks = softening_stiffness_N_m;
-  return {k, peak_force_N, -k * ks / (k + ks), -ks / k, residual_force_N};
+  return {k, peak_force_N, -k * ks / (k + ks), -ks / k, residual_force_N, onset_m};
 }
 
 /// Force for compression `u_m` given the plastic part `plastic_m` carried from
@@ -80,11 +84,16 @@ inline ElasticPlasticResponse elasticPlasticResponse(const ElasticPlasticParams&
   const double trial = k * (u_m - plastic_m);
   double yield = p.yield_force_N, returned = p.yield_force_N;
   if constexpr (kHardening) {
-    const double line = p.yield_force_N + p.hardening_N_m * plastic_m;  // the yield line at u_p
-    const double back = line + p.tangent_ratio * (trial - line);        // F' on the line
-    // (the floor F_r is 0 for a spring that hardens: the line and F' are >= F_y >= 0 there)
-    yield = line > p.residual_force_N ? line : p.residual_force_N;
-    returned = back > p.residual_force_N ? back : p.residual_force_N;
+    const double h = p.hardening_N_m, fy = p.yield_force_N, fr = p.residual_force_N, us = p.softening_onset_m;
+    // hardening: the yield line at u_p, and F' on it
+    const double line = fy + h * plastic_m;
+    const double back = line + p.tangent_ratio * (trial - line);
+    // softening: the yield force at u_p, and F' on the falling line, clamped
+    const double at_up = fy + h * (plastic_m > us ? plastic_m - us : 0.0);
+    const double falling = (fy + h * (u_m - us)) * (k / (k + h));
+    const bool softens = h < 0.0;
+    yield = softens ? (at_up > fr ? at_up : fr) : line;
+    returned = softens ? (falling < fy ? (falling > fr ? falling : fr) : fy) : back;
   }
   const bool flows = trial > yield;  // implies trial > 0 (yield >= 0)
   // Every quantity is computed for every input and selected: lanes that do
@@ -95,12 +104,16 @@ inline ElasticPlasticResponse elasticPlasticResponse(const ElasticPlasticParams&
   const double plastic = u_m - returned / k;
   double work = 0.5 * (yield + returned) * (plastic - plastic_m);
   if constexpr (kHardening) {
-    // Softening past the knee u_k: the line from u_p to min(u_p', max(u_p, u_k)), then F_r.
-    const double h = p.hardening_N_m;
-    const double knee = h < 0.0 ? (p.residual_force_N - p.yield_force_N) / h : plastic;
-    const double c = knee < plastic_m ? plastic_m : (knee > plastic ? plastic : knee);
-    const double at_c = c < plastic ? p.yield_force_N + h * c : returned;
-    work = h < 0.0 ? 0.5 * (yield + at_c) * (c - plastic_m) + p.residual_force_N * (plastic - c) : work;
+    // Softening: the flat part [0, u_s], the falling line [u_s, u_k] and the
+    // residual [u_k, inf) each over its share of [u_p, u_p'].
+    const double h = p.hardening_N_m, fy = p.yield_force_N, fr = p.residual_force_N, us = p.softening_onset_m;
+    const double knee = h < 0.0 ? us + (fr - fy) / h : us;
+    const auto clamp = [](double x, double lo, double hi) { return x < lo ? lo : (x > hi ? hi : x); };
+    const double flat = clamp(us, plastic_m, plastic) - plastic_m;
+    const double c0 = clamp(plastic_m, us, knee), c1 = clamp(plastic, us, knee);
+    const double fall = 0.5 * ((fy + h * (c0 - us)) + (fy + h * (c1 - us))) * (c1 - c0);
+    const double rest = plastic - clamp(knee, plastic_m, plastic);
+    work = h < 0.0 ? fy * flat + fall + fr * rest : work;
   }
   ElasticPlasticResponse r;
   r.force_N = trial <= 0.0 ? 0.0 : (flows ? returned : trial);

@@ -96,45 +96,51 @@ TEST(CellAxialLaw, DensifyingAddsItsTermPastTheOnset) {
   EXPECT_DOUBLE_EQ(maxTangentStiffness(p), 1e6 + 1e8);
 }
 
-// The softening impact law: elastic up to the peak F_y, the falling tangent
-// -k_s to the residual F_r, then flow at F_r; unloading and reloading with k.
+// The softening impact law: elastic up to the peak F_y, held there over a
+// plastic shortening u_s, the falling tangent -k_s to the residual F_r, then
+// flow at F_r; unloading and reloading with k.
 // Loading in steps of any size ends on the backbone (the return mapping is
 // exact), and the plastic work plus the stored energy is the work of the
-// backbone, the area under it, to round-off: the knee where softening meets
-// the residual is integrated exactly inside a step that crosses it.
+// backbone, the area under it, to round-off: the onset and the knee where
+// softening meets the residual are integrated exactly inside a step that
+// crosses them.
 TEST(CellAxialLaw, SofteningFallsToTheResidualAndBalancesEnergy) {
-  AxialLawParams p{AxialModel::Softening, 1e6, 1e4, 0.0};
-  p.softening_stiffness_N_m = 2e5;
-  p.residual_force_N = 2e3;
-  const double k = 1e6, fy = 1e4, ks = 2e5, fr = 2e3;
-  const double uy = fy / k, ur = uy + (fy - fr) / ks;  // peak at 0.01 m, residual from 0.05 m
-  const auto backbone = [&](double u) { return u <= uy ? k * u : std::max(fr, fy - ks * (u - uy)); };
-  const auto area = [&](double u) {  // the integral of the backbone from 0 to u (u >= ur)
-    return 0.5 * fy * uy + 0.5 * (fy + fr) * (ur - uy) + fr * (u - ur);
-  };
-  for (double step : {1e-4, 7.3e-3, 0.031, 0.08}) {  // fine steps, and steps across the peak and the knee
-    double up = 0.0, plastic = 0.0, u = 0.0;
-    AxialResponse r;
-    while (u < 0.08) {
-      u = std::min(0.08, u + step);
-      r = axialResponse(p, u, up);
-      up = r.plastic_m;
-      plastic += r.plastic_work_J;
-      EXPECT_NEAR(r.force_N, backbone(u), 1e-9 * fy) << "step " << step << " u " << u;
+  for (double us : {0.0, 0.012}) {
+    AxialLawParams p{AxialModel::Softening, 1e6, 1e4, 0.0};
+    p.softening_stiffness_N_m = 2e5;
+    p.residual_force_N = 2e3;
+    p.softening_onset_m = us;
+    const double k = 1e6, fy = 1e4, ks = 2e5, fr = 2e3;
+    const double uy = fy / k, uf = uy + us, ur = uf + (fy - fr) / ks;  // peak from 0.01 m, falls from uf to ur
+    const auto backbone = [&](double u) { return u <= uy ? k * u : u <= uf ? fy : std::max(fr, fy - ks * (u - uf)); };
+    const auto area = [&](double u) {  // the integral of the backbone from 0 to u (u >= ur)
+      return 0.5 * fy * uy + fy * us + 0.5 * (fy + fr) * (ur - uf) + fr * (u - ur);
+    };
+    for (double step : {1e-4, 7.3e-3, 0.031, 0.08}) {  // fine steps, and steps across the peak, onset and knee
+      double up = 0.0, plastic = 0.0, u = 0.0;
+      AxialResponse r;
+      while (u < 0.08) {
+        u = std::min(0.08, u + step);
+        r = axialResponse(p, u, up);
+        up = r.plastic_m;
+        plastic += r.plastic_work_J;
+        EXPECT_NEAR(r.force_N, backbone(u), 1e-9 * fy) << "step " << step << " u " << u;
+      }
+      EXPECT_NEAR(plastic + r.elastic_J, area(0.08), 1e-12 * area(0.08)) << "step " << step;
     }
-    EXPECT_NEAR(plastic + r.elastic_J, area(0.08), 1e-12 * area(0.08)) << "step " << step;
+    // On the falling branch: unloading is elastic with k, reloading returns to
+    // the yield force where it left it, with no plastic work on the way.
+    const double u = uf + 0.01;
+    const auto soft = axialResponse(p, u, 0.0);
+    EXPECT_NEAR(soft.force_N, fy - ks * (u - uf), 1e-9 * fy);
+    const auto un = axialResponse(p, u - 0.004, soft.plastic_m);
+    EXPECT_NEAR(un.force_N, soft.force_N - k * 0.004, 1e-9 * fy);
+    EXPECT_EQ(un.plastic_work_J, 0.0);
+    const auto back = axialResponse(p, u, un.plastic_m);
+    EXPECT_NEAR(back.force_N, soft.force_N, 1e-9 * fy);
+    EXPECT_EQ(back.plastic_work_J, 0.0);
+    // The stiffest tangent is still k (the time step's), the law is not "hardening".
+    EXPECT_EQ(maxTangentStiffness(p), k);
+    EXPECT_FALSE(hardens(p.model));
   }
-  // On the falling branch: unloading is elastic with k, reloading returns to
-  // the yield force where it left it, with no plastic work on the way.
-  const auto soft = axialResponse(p, 0.02, 0.0);
-  EXPECT_NEAR(soft.force_N, fy - ks * (0.02 - uy), 1e-9 * fy);
-  const auto un = axialResponse(p, 0.02 - 0.004, soft.plastic_m);
-  EXPECT_NEAR(un.force_N, soft.force_N - k * 0.004, 1e-9 * fy);
-  EXPECT_EQ(un.plastic_work_J, 0.0);
-  const auto back = axialResponse(p, 0.02, un.plastic_m);
-  EXPECT_NEAR(back.force_N, soft.force_N, 1e-9 * fy);
-  EXPECT_EQ(back.plastic_work_J, 0.0);
-  // The stiffest tangent is still k (the time step's), the law is not "hardening".
-  EXPECT_EQ(maxTangentStiffness(p), k);
-  EXPECT_FALSE(hardens(p.model));
 }

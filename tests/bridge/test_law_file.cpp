@@ -135,6 +135,7 @@ TEST(LawFile, ASofteningImpactLawReadsBackAndIsRefusedElsewhere) {
   imp = {AxialModel::Softening, 8e5, 8e4, 0.0};
   imp.softening_stiffness_N_m = 4e5;
   imp.residual_force_N = 1.2e4;
+  imp.softening_onset_m = 0.03;
   imp.lockup_shortening_m = 0.25;
   imp.lockup_stiffness_N_m = 8e6;
   const std::string path = ::testing::TempDir() + "law_softening.json";
@@ -143,6 +144,7 @@ TEST(LawFile, ASofteningImpactLawReadsBackAndIsRefusedElsewhere) {
   EXPECT_EQ(back.model, AxialModel::Softening);
   EXPECT_DOUBLE_EQ(back.softening_stiffness_N_m, 4e5);
   EXPECT_DOUBLE_EQ(back.residual_force_N, 1.2e4);
+  EXPECT_DOUBLE_EQ(back.softening_onset_m, 0.03);
   EXPECT_DOUBLE_EQ(back.yield_force_N, 8e4);
   EXPECT_DOUBLE_EQ(back.lockup_shortening_m, 0.25);
 
