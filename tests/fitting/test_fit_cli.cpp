@@ -3,6 +3,7 @@
 // law.json with provenance, plots and the summary entries.
 #include <gtest/gtest.h>
 
+#include <cmath>
 #include <fstream>
 
 #include "bridge/law_file.hpp"
@@ -114,6 +115,51 @@ TEST(FitCli, PartialFitFromIllustrativeBaseIsIllustrative) {
   const auto& m = law.materials.at("limestone_cell");
   EXPECT_EQ(m.provenance.at("status"), "illustrative");
   EXPECT_EQ(m.provenance.at("from_base_law").at("laws"), json({"interface", "impact"}));
+}
+
+// The softening impact law through a fit case: a curve of that law (a peak
+// held, a fall, a residual; 1 % noise) as CSV, the softening model among the
+// candidates with only the stiffness and peak bounded (the onset, falling
+// tangent and residual ratio take their default bounds), ISRES as the search:
+// law.json gets the softening law near the truth, readable by the macro model.
+TEST(FitCli, ASofteningImpactLawIsFittedWithItsDefaultBounds) {
+  const auto out = testing::scratchDir("fit_cli_softening");
+  bridge::AxialLawParams truth{bridge::AxialModel::Softening, 1.6e6, 8e4, 0.0};
+  truth.softening_onset_m = 0.025;
+  truth.softening_stiffness_N_m = 5e6;
+  truth.residual_force_N = 1e4;
+  std::ofstream csv(out / "impact.csv");
+  csv << "penetration_m,force_N\n";
+  double plastic = 0.0;
+  for (int i = 0; i <= 190; ++i) {
+    const double u = 0.001 * i;
+    const auto r = bridge::axialResponse(truth, u, plastic);
+    plastic = r.plastic_m;
+    csv << u << "," << r.force_N + 800.0 * std::sin(7.0 * i) << "\n";  // +-1 % of the peak, deterministic
+  }
+  csv.close();
+  const json c = {
+      {"format", "gabion.case/1"},
+      {"kind", "fit"},
+      {"seed", 1},
+      {"material", {{"name", "cell"}}},
+      {"base_law", {{"file", (kCases / "data/fit/illustrative_law.json").string()}, {"material", "limestone_cell"}}},
+      {"lockup", {{"strain", 0.5}}},
+      {"optimizer", {{"global", "GN_ISRES"}, {"global_max_evaluations", 4000}}},
+      {"impact",
+       {{"models", {"elastic_perfectly_plastic", "softening"}},
+        {"curves", {{{"file", (out / "impact.csv").string()}, {"velocity_m_s", 10}}}},
+        {"bounds", {{"stiffness_N_m", {1e5, 1e9}}, {"yield_force_N", {1e3, 1e6}}}}}}};
+  std::ofstream(out / "case.json") << c.dump(2);
+  const auto r = runGabion("run " + (out / "case.json").string() + " -q -o " + (out / "fit").string());
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  const auto& m = bridge::loadLawFile(out / "fit" / "law.json").materials.at("cell");
+  ASSERT_EQ(m.impact.model, bridge::AxialModel::Softening);
+  EXPECT_NEAR(m.impact.stiffness_N_m, 1.6e6, 0.05 * 1.6e6);
+  EXPECT_NEAR(m.impact.yield_force_N, 8e4, 0.02 * 8e4);
+  EXPECT_NEAR(m.impact.softening_onset_m, 0.025, 0.1 * 0.025);
+  EXPECT_NEAR(m.impact.softening_stiffness_N_m, 5e6, 0.2 * 5e6);
+  EXPECT_NEAR(m.impact.residual_force_N, 1e4, 0.05 * 1e4);
 }
 
 }  // namespace
