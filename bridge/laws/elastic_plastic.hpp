@@ -41,9 +41,9 @@ namespace gabion::bridge {
 struct ElasticPlasticParams {
   double stiffness_N_m = 0.0;                                      ///< k (N/m), > 0
   double yield_force_N = std::numeric_limits<double>::infinity();  ///< first yield F_y (N), >= 0; infinity: elastic
-  double hardening_N_m = 0.0;                                      ///< H (N/m), >= 0: the yield force is F_y + H u_p
-  double tangent_ratio = 0.0;                                      ///< k_h / k = H / (k + H) (-), in (-inf, 1)
-  double residual_force_N = 0.0;                                   ///< F_r (N), softening only: the yield force's floor
+  double hardening_N_m = 0.0;      ///< H (N/m): >= 0 hardening (the yield force F_y + H u_p), in (-k, 0) softening
+  double tangent_ratio = 0.0;      ///< k_h / k = H / (k + H) (-), in (-inf, 1)
+  double residual_force_N = 0.0;   ///< F_r (N), softening only: the yield force's floor
   double softening_onset_m = 0.0;  ///< u_s (m), softening only: the plastic part at which it starts to fall
 };
 
