@@ -81,6 +81,17 @@ TEST(MacroAnalytic, ElasticCellTwoMassSolution) {
 // rigid support: dissipated energy and rebound speed from the law alone.
 // EPP: D = 1/2 M v^2 - F_y^2 / (2k); rebound speed F_y / sqrt(k M).
 // Bilinear: F_max^2 = F_y^2 + k_h (M v^2 - F_y^2 / k); D = 1/2 M v^2 - F_max^2 / (2k).
+// A boulder of mass M at v0 against one cell whose face follows `face`: a
+// very heavy cell on a very stiff support, so the face does not move; the
+// step `fraction` of the critical one.
+namespace {
+ImpactResult strikeRigidFace(const gabion::bridge::AxialLawParams& face, double M, double v0, double fraction) {
+  Structure s = buildStructure(grid(1, 1, 1), oneMaterial(epp(1e13, 1e15), face, 1e9));
+  Model model(s, Kinematics::XOnly);
+  return runImpact(model, boulderAt(s, 0, 0, M, v0), quickRun(0.05, fraction), 0, nullptr);
+}
+}  // namespace
+
 class MacroPlastic : public ::testing::TestWithParam<bool> {};
 
 TEST_P(MacroPlastic, DissipatedEnergyAndRebound) {
@@ -91,10 +102,7 @@ TEST_P(MacroPlastic, DissipatedEnergyAndRebound) {
     imp.model = gabion::bridge::AxialModel::Bilinear;
     imp.hardening_stiffness_N_m = kh;
   }
-  // A very heavy cell on a very stiff support: the face does not move.
-  Structure s = buildStructure(grid(1, 1, 1), oneMaterial(epp(1e13, 1e15), imp, 1e9));
-  Model model(s, Kinematics::XOnly);
-  const ImpactResult r = runImpact(model, boulderAt(s, 0, 0, M, v0), quickRun(0.05, 0.02), 0, nullptr);
+  const ImpactResult r = strikeRigidFace(imp, M, v0, 0.02);
   ASSERT_TRUE(r.ok) << r.message;
   const double e0 = 0.5 * M * v0 * v0;
   const double fmax = bilinear ? std::sqrt(fy * fy + kh * (M * v0 * v0 - fy * fy / k)) : fy;
@@ -120,11 +128,9 @@ TEST(MacroPlastic, SofteningFaceStopsTheBoulderWhereTheBackboneTakesItsEnergy) {
   imp.model = gabion::bridge::AxialModel::Softening;
   imp.softening_stiffness_N_m = ks;
   imp.residual_force_N = fr;
-  Structure s = buildStructure(grid(1, 1, 1), oneMaterial(epp(1e13, 1e15), imp, 1e9));
-  Model model(s, Kinematics::XOnly);
   // (a step of 0.002 of the critical one: the force is sampled at the steps,
   // and past the peak it falls by k_s v dt a step)
-  const ImpactResult r = runImpact(model, boulderAt(s, 0, 0, M, v0), quickRun(0.05, 0.002), 0, nullptr);
+  const ImpactResult r = strikeRigidFace(imp, M, v0, 0.002);
   ASSERT_TRUE(r.ok) << r.message;
   const double e0 = 0.5 * M * v0 * v0;
   const double uy = fy / k, ur = uy + (fy - fr) / ks;
