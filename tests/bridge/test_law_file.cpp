@@ -140,7 +140,8 @@ TEST(LawFile, ASofteningImpactLawReadsBackAndIsRefusedElsewhere) {
   imp.lockup_stiffness_N_m = 8e6;
   const std::string path = ::testing::TempDir() + "law_softening.json";
   writeJsonAtomic(path, toJson(laws));
-  const auto& back = loadLawFile(path).materials.at("front").impact;
+  const LawFile read = loadLawFile(path);
+  const auto& back = read.materials.at("front").impact;
   EXPECT_EQ(back.model, AxialModel::Softening);
   EXPECT_DOUBLE_EQ(back.softening_stiffness_N_m, 4e5);
   EXPECT_DOUBLE_EQ(back.residual_force_N, 1.2e4);

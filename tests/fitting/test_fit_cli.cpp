@@ -153,7 +153,8 @@ TEST(FitCli, ASofteningImpactLawIsFittedWithItsDefaultBounds) {
   std::ofstream(out / "case.json") << c.dump(2);
   const auto r = runGabion("run " + (out / "case.json").string() + " -q -o " + (out / "fit").string());
   ASSERT_EQ(r.exit_code, 0) << r.output;
-  const auto& m = bridge::loadLawFile(out / "fit" / "law.json").materials.at("cell");
+  const auto law = bridge::loadLawFile(out / "fit" / "law.json");
+  const auto& m = law.materials.at("cell");
   ASSERT_EQ(m.impact.model, bridge::AxialModel::Softening);
   EXPECT_NEAR(m.impact.stiffness_N_m, 1.6e6, 0.05 * 1.6e6);
   EXPECT_NEAR(m.impact.yield_force_N, 8e4, 0.02 * 8e4);
