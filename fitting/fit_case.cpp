@@ -33,14 +33,20 @@ const std::vector<std::string> kTests = {"axial", "lateral", "interface", "impac
 const char* const kDefaultedParameters[] = {"densification_onset_m", "densification_stiffness_N_m", "softening_onset_m",
                                             "softening_stiffness_N_m", "residual_ratio"};
 
+// The largest x of the curves (the furthest shortening or indentation).
+double largestX(const std::vector<PathGrid>& grids) {
+  double reach = 0.0;
+  for (const auto& g : grids)
+    for (double x : g.x) reach = std::max(reach, x);
+  return reach;
+}
+
 // Bounds of the densification where the case gives none: the onset anywhere
 // from 0 to the largest shortening of the curves (an onset beyond them cannot
 // be seen) or the lock-up, whichever comes first; its stiffness from a
 // hundredth of the smallest to ten times the largest stiffness allowed.
 void defaultDensificationBounds(Bounds& b, const std::vector<PathGrid>& grids, double lockup_m) {
-  double reach = 0.0;
-  for (const auto& g : grids)
-    for (double x : g.x) reach = std::max(reach, x);
+  const double reach = largestX(grids);
   if (b.count("densification_onset_m") == 0) b["densification_onset_m"] = {0.0, std::min(reach, 0.999 * lockup_m)};
   if (b.count("densification_stiffness_N_m") == 0) {
     const auto& k = b.at("stiffness_N_m");
@@ -53,10 +59,7 @@ void defaultDensificationBounds(Bounds& b, const std::vector<PathGrid>& grids, d
 // the smallest to the largest stiffness allowed; the residual ratio F_r / F_y
 // from 0 to 1.
 void defaultSofteningBounds(Bounds& b, const std::vector<PathGrid>& grids) {
-  double reach = 0.0;
-  for (const auto& g : grids)
-    for (double x : g.x) reach = std::max(reach, x);
-  if (b.count("softening_onset_m") == 0) b["softening_onset_m"] = {0.0, reach};
+  if (b.count("softening_onset_m") == 0) b["softening_onset_m"] = {0.0, largestX(grids)};
   const auto& k = b.at("stiffness_N_m");
   if (b.count("softening_stiffness_N_m") == 0) b["softening_stiffness_N_m"] = {1e-3 * k.first, k.second};
   if (b.count("residual_ratio") == 0) b["residual_ratio"] = {0.0, 1.0};

@@ -71,6 +71,18 @@ inline ElasticPlasticParams softeningSpring(double stiffness_N_m, double peak_fo
   return {k, peak_force_N, -k * ks / (k + ks), -ks / k, residual_force_N, onset_m};
 }
 
+/// The softening yield force integrated over the plastic part from `a` to
+/// `b` (J): the flat part [0, u_s] at F_y, the falling line [u_s, u_k] and
+/// the residual [u_k, inf) at F_r, each over its share of [a, b].
+inline double softeningYieldIntegral(const ElasticPlasticParams& p, double a, double b) {
+  const double h = p.hardening_N_m, fy = p.yield_force_N, fr = p.residual_force_N, us = p.softening_onset_m;
+  const double knee = us + (fr - fy) / h;
+  const auto clamp = [](double x, double lo, double hi) { return x < lo ? lo : (x > hi ? hi : x); };
+  const double c0 = clamp(a, us, knee), c1 = clamp(b, us, knee);
+  const double fall = 0.5 * ((fy + h * (c0 - us)) + (fy + h * (c1 - us))) * (c1 - c0);
+  return fy * (clamp(us, a, b) - a) + fall + fr * (b - clamp(knee, a, b));
+}
+
 /// Force for compression `u_m` given the plastic part `plastic_m` carried from
 /// the previous evaluation (return mapping above). With H = 0 the capped force
 /// is exactly F_y and the new plastic part u - F_y / k. `kHardening` = false
@@ -103,18 +115,8 @@ inline ElasticPlasticResponse elasticPlasticResponse(const ElasticPlasticParams&
   // division per lane.
   const double plastic = u_m - returned / k;
   double work = 0.5 * (yield + returned) * (plastic - plastic_m);
-  if constexpr (kHardening) {
-    // Softening: the flat part [0, u_s], the falling line [u_s, u_k] and the
-    // residual [u_k, inf) each over its share of [u_p, u_p'].
-    const double h = p.hardening_N_m, fy = p.yield_force_N, fr = p.residual_force_N, us = p.softening_onset_m;
-    const double knee = h < 0.0 ? us + (fr - fy) / h : us;
-    const auto clamp = [](double x, double lo, double hi) { return x < lo ? lo : (x > hi ? hi : x); };
-    const double flat = clamp(us, plastic_m, plastic) - plastic_m;
-    const double c0 = clamp(plastic_m, us, knee), c1 = clamp(plastic, us, knee);
-    const double fall = 0.5 * ((fy + h * (c0 - us)) + (fy + h * (c1 - us))) * (c1 - c0);
-    const double rest = plastic - clamp(knee, plastic_m, plastic);
-    work = h < 0.0 ? fy * flat + fall + fr * rest : work;
-  }
+  // (only a softening spring integrates piece by piece: its knee divides by H < 0)
+  if constexpr (kHardening) work = p.hardening_N_m < 0.0 ? softeningYieldIntegral(p, plastic_m, plastic) : work;
   ElasticPlasticResponse r;
   r.force_N = trial <= 0.0 ? 0.0 : (flows ? returned : trial);
   r.plastic_m = trial > 0.0 && flows ? plastic : plastic_m;
