@@ -20,6 +20,9 @@ struct Curve {
   std::string x_name;        ///< column/dataset name with its SI unit suffix, e.g. "displacement_m"
   std::string y_name;        ///< e.g. "force_N"
   std::vector<double> x, y;  ///< same length, finite
+  /// The time of each point (s), strictly increasing; empty when the source
+  /// gives none. A law with a rate term reads the rate dx/dt from it.
+  std::vector<double> t = {};
   std::size_t size() const { return x.size(); }
 };
 

@@ -51,14 +51,17 @@ CurveSource readCurveSource(const JsonReader& r, const CurveDefaults& d, std::si
   s.replicate = r.string("replicate", d.replicate_per_curve ? std::to_string(index) : "all");
   if (!d.condition_key.empty() && r.has(d.condition_key)) s.condition = r.number(d.condition_key, Check::Positive);
   if (!h5) {
-    for (const char* k : {"x_dataset", "y_dataset", "wall"})
+    for (const char* k : {"x_dataset", "y_dataset", "t_dataset", "wall"})
       if (r.has(k)) r.fail(k, "only for HDF5 curve files");
+    s.t_column = r.string("t_column", "");
     if (!d.condition_key.empty() && !s.condition) r.fail(d.condition_key, "required for a CSV curve of this test");
     s.kind = CurveSource::Kind::Csv;
     return s;
   }
+  if (r.has("t_column")) r.fail("t_column", "only for CSV curve files (an HDF5 curve's is t_dataset)");
   if (auto w = r.optionalObject("wall")) {
     if (r.has("x_dataset") || r.has("y_dataset")) r.fail("wall", "give either \"wall\" or datasets, not both");
+    if (r.has("t_dataset")) r.fail("t_dataset", "only with x_dataset and y_dataset");
     s.kind = CurveSource::Kind::H5Wall;
     s.wall = readWallCurve(*w);
     if (!d.condition_key.empty() && !s.condition) r.fail(d.condition_key, "required for a wall curve");
@@ -67,16 +70,53 @@ CurveSource readCurveSource(const JsonReader& r, const CurveDefaults& d, std::si
   s.kind = CurveSource::Kind::H5Datasets;
   s.x_dataset = r.string("x_dataset", d.h5_group + "/" + s.request.x_name);
   s.y_dataset = r.string("y_dataset", d.h5_group + "/" + s.request.y_name);
+  s.t_dataset = r.string("t_dataset", "");
   if (!d.condition_key.empty()) s.condition_dataset = d.h5_group + "/" + d.condition_key;
   return s;
 }
 
+namespace {
+
+// The time axis of curve `c` read from `where` (a dataset or a column of
+// s.file): one value per point, strictly increasing.
+void attachTime(bridge::Curve& c, const CurveSource& s, const std::string& where, std::vector<double> t,
+                const std::vector<std::size_t>& lines) {
+  const std::string file = s.file.string();
+  if (t.size() != c.size())
+    throw bridge::InputError(file, where,
+                             "has " + std::to_string(t.size()) + " values for a curve of " + std::to_string(c.size()));
+  for (std::size_t i = 0; i < t.size(); ++i) {
+    if (!std::isfinite(t[i]))
+      throw bridge::InputError(file, where, "value " + std::to_string(i + 1) + " is not finite");
+    if (i > 0 && !(t[i] > t[i - 1]))
+      throw bridge::InputError(
+          file, where + (lines.empty() ? "" : ", line " + std::to_string(lines[i])),
+          "must increase strictly (the time of point " + std::to_string(i + 1) + " is not after the one before)");
+  }
+  c.t = std::move(t);
+}
+
+}  // namespace
+
 bridge::Curve loadCurve(const CurveSource& s) {
   switch (s.kind) {
-    case CurveSource::Kind::Csv:
-      return bridge::readCurveCsv(s.file, s.request);
-    case CurveSource::Kind::H5Datasets:
-      return bridge::readCurveH5(s.file, s.x_dataset, s.y_dataset, s.request);
+    case CurveSource::Kind::Csv: {
+      bridge::Curve c = bridge::readCurveCsv(s.file, s.request);
+      if (!s.t_column.empty()) {
+        const bridge::CsvTable t = bridge::readCsvTable(s.file, {s.t_column});
+        attachTime(c, s, "column " + s.t_column, t.columns.at(s.t_column), t.lines);
+      }
+      return c;
+    }
+    case CurveSource::Kind::H5Datasets: {
+      bridge::Curve c = bridge::readCurveH5(s.file, s.x_dataset, s.y_dataset, s.request);
+      if (!s.t_dataset.empty()) {
+        bridge::H5Reader h5(s.file);
+        if (!h5.has(s.t_dataset)) throw bridge::InputError(s.file.string(), s.t_dataset, "no such dataset");
+        attachTime(c, s, s.t_dataset, h5.read(s.t_dataset), {});
+      }
+      return c;
+    }
     case CurveSource::Kind::H5Wall:
       return bridge::readWallCurveH5(s.file, s.wall.name, s.wall.direction, s.request);
   }

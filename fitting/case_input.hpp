@@ -32,7 +32,10 @@ struct CurveSource {
   std::filesystem::path file;  ///< resolved against the case file's folder
   enum class Kind { Csv, H5Datasets, H5Wall } kind = Kind::Csv;
   std::string x_dataset, y_dataset;  ///< H5Datasets
-  WallCurve wall;                    ///< H5Wall: /series/walls/<name>/...
+  /// The curve's time axis (a law with a rate term needs it): an H5 dataset
+  /// (H5Datasets) or a CSV column (Csv); empty: none.
+  std::string t_dataset, t_column;
+  WallCurve wall;  ///< H5Wall: /series/walls/<name>/...
   bridge::CurveRequest request;
   std::string replicate;            ///< replicate label
   std::optional<double> condition;  ///< normal force (N) or velocity (m/s) when given in the case
@@ -49,10 +52,13 @@ struct CurveDefaults {
 };
 
 /// Reads one "curves" entry: {"file", "path", "replicate", "x_column", "y_column",
-/// "x_dataset", "y_dataset", "wall": {"name", "direction"}, <condition key>, "min_points"}.
+/// "t_column", "x_dataset", "y_dataset", "t_dataset", "wall": {"name", "direction"},
+/// <condition key>, "min_points"}.
 CurveSource readCurveSource(const bridge::JsonReader& r, const CurveDefaults& d, std::size_t index,
                             const std::filesystem::path& base_dir);
-/// Reads the curve (throws InputError naming file, line and column).
+/// Reads the curve, and its time axis where the entry names one (throws
+/// InputError naming file, line and column; a time axis of another length
+/// than the curve, or not strictly increasing, names its dataset or column).
 bridge::Curve loadCurve(const CurveSource& s);
 /// The condition of a curve: the case value, else the mean of the H5 dataset.
 double curveCondition(const CurveSource& s);

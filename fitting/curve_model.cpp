@@ -20,6 +20,15 @@ PathGrid resampleOnPath(const bridge::Curve& c, std::size_t points) {
   g.raw_points = c.size();
   g.raw_x = c.x;
   g.raw_y = c.y;
+  if (!c.t.empty()) {
+    // central differences inside, one-sided at the ends
+    const std::size_t m = c.size();
+    g.raw_rate.resize(m);
+    for (std::size_t i = 0; i < m; ++i) {
+      const std::size_t a = i > 0 ? i - 1 : 0, b = i + 1 < m ? i + 1 : m - 1;
+      g.raw_rate[i] = (c.x[b] - c.x[a]) / (c.t[b] - c.t[a]);
+    }
+  }
   g.scale = 0.0;
   for (double v : c.y) g.scale = std::max(g.scale, std::abs(v));
   if (!(g.scale > 0.0)) throw bridge::InputError(c.source, "", "the curve's " + c.y_name + " is zero everywhere");
@@ -46,6 +55,7 @@ PathGrid resampleOnPath(const bridge::Curve& c, std::size_t points) {
     const double t = ds > 0.0 ? std::min(1.0, std::max(0.0, (sk - s[j]) / ds)) : 1.0;
     g.x.push_back(c.x[j] + t * (c.x[j + 1] - c.x[j]));
     g.y.push_back(c.y[j] + t * (c.y[j + 1] - c.y[j]));
+    if (!g.raw_rate.empty()) g.rate.push_back(g.raw_rate[j] + t * (g.raw_rate[j + 1] - g.raw_rate[j]));
   }
   return g;
 }
@@ -61,6 +71,9 @@ std::vector<std::string> parameterNames(LawModel m) {
               "densification_stiffness_N_m"};
     case LawModel::Softening:
       return {"stiffness_N_m", "yield_force_N", "softening_onset_m", "softening_stiffness_N_m", "residual_ratio"};
+    case LawModel::SofteningRate:
+      return {"stiffness_N_m",           "yield_force_N",  "softening_onset_m",
+              "softening_stiffness_N_m", "residual_ratio", "rate_coefficient_N_s2_m2"};
     case LawModel::LateralLinear:
       return {"reaction_coefficient"};
     case LawModel::InterfaceSlider:
@@ -79,6 +92,8 @@ std::string modelName(LawModel m) {
       return "densifying";
     case LawModel::Softening:
       return "softening";
+    case LawModel::SofteningRate:
+      return "softening_rate";
     case LawModel::LateralLinear:
       return "lateral_linear";
     case LawModel::InterfaceSlider:
@@ -110,13 +125,14 @@ void evaluateSlider(double mu, double kt, const PathGrid& g, std::vector<double>
 
 bridge::AxialLawParams axialLaw(LawModel m, const std::vector<double>& theta, const Lockup& lockup) {
   bridge::AxialLawParams p;
-  p.model = m == LawModel::Bilinear     ? bridge::AxialModel::Bilinear
-            : m == LawModel::Densifying ? bridge::AxialModel::Densifying
-            : m == LawModel::Softening  ? bridge::AxialModel::Softening
-                                        : bridge::AxialModel::ElasticPerfectlyPlastic;
+  p.model = m == LawModel::Bilinear                                    ? bridge::AxialModel::Bilinear
+            : m == LawModel::Densifying                                ? bridge::AxialModel::Densifying
+            : m == LawModel::Softening || m == LawModel::SofteningRate ? bridge::AxialModel::Softening
+                                                                       : bridge::AxialModel::ElasticPerfectlyPlastic;
   p.stiffness_N_m = theta[0];
   p.yield_force_N = theta[1];
-  if (m == LawModel::Softening) {
+  if (m == LawModel::SofteningRate) p.rate_coefficient_N_s2_m2 = theta[5];
+  if (m == LawModel::Softening || m == LawModel::SofteningRate) {
     p.softening_onset_m = theta[2];
     p.softening_stiffness_N_m = theta[3];
     // (fitted as a fraction of the peak: every point of the box is a law)
@@ -143,11 +159,15 @@ void evaluateModel(LawModel m, const std::vector<double>& theta, const PathGrid&
     case LawModel::ElasticPerfectlyPlastic:
     case LawModel::Bilinear:
     case LawModel::Densifying:
-    case LawModel::Softening: {
+    case LawModel::Softening:
+    case LawModel::SofteningRate: {
       const bridge::AxialLawParams p = axialLaw(m, theta, lockup);
+      const bool rate = !g.rate.empty();
+      if (readsRate(m) && !rate)
+        throw bridge::InputError(g.source, "", "the model " + modelName(m) + " needs the curve's time axis");
       double plastic = 0.0;
       for (std::size_t i = 0; i < g.x.size(); ++i) {
-        const auto r = bridge::axialResponse(p, g.x[i], plastic);
+        const auto r = bridge::axialResponse(p, g.x[i], plastic, rate ? g.rate[i] : 0.0);
         out[i] = r.force_N;
         plastic = r.plastic_m;
       }
@@ -223,6 +243,7 @@ double residualVariance(const CurveSet& set, const std::vector<double>& theta) {
     PathGrid raw = g;
     raw.x = g.raw_x;
     raw.y = g.raw_y;
+    raw.rate = g.raw_rate;
     evaluateModel(set.model, theta, raw, model, set.lockup);
     for (std::size_t i = 0; i < model.size(); ++i) sum += lossValue((model[i] - raw.y[i]) / g.scale, set.loss);
     n += static_cast<double>(model.size());

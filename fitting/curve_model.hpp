@@ -22,8 +22,11 @@ struct PathGrid {
   double scale = 1.0;                ///< normalisation: max |y| of the data (residual = error / scale)
   std::size_t raw_points = 0;        ///< points of the original curve
   std::vector<double> raw_x, raw_y;  ///< the original curve (for the noise estimate)
-  double condition = 0.0;            ///< normal force (interface, N) or impact velocity (m/s); 0 otherwise
-  std::string replicate;             ///< replicate label (curves with the same label are fitted together)
+  /// The rate dx/dt at each point (m/s), resampled and original (central
+  /// differences of the curve's time axis); empty when the curve has none.
+  std::vector<double> rate, raw_rate;
+  double condition = 0.0;  ///< normal force (interface, N) or impact velocity (m/s); 0 otherwise
+  std::string replicate;   ///< replicate label (curves with the same label are fitted together)
   /// Independent observations this grid stands for: min(raw points, grid points).
   double effectivePoints() const;
 };
@@ -39,6 +42,8 @@ enum class LawModel {
   Densifying,               ///< axial/impact: + densification_onset_m, densification_stiffness_N_m
   Softening,       ///< impact: stiffness_N_m, yield_force_N (the peak), softening_onset_m, softening_stiffness_N_m,
                    ///< residual_ratio (F_r / F_y)
+  SofteningRate,   ///< impact: softening's + rate_coefficient_N_s2_m2 (the overstress c r^2); needs the
+                   ///< curves' time axis (PathGrid::rate)
   LateralLinear,   ///< lateral force = reaction_coefficient * axial force
   InterfaceSlider  ///< shear force: spring tangential_stiffness_N_m capped at friction * normal force
 };
@@ -62,8 +67,15 @@ struct Lockup {
 /// lock-up, or a residual ratio above 1.
 bridge::AxialLawParams axialLaw(LawModel m, const std::vector<double>& theta, const Lockup& lockup);
 
+/// True for a model that reads the curves' rate (PathGrid::rate).
+inline bool readsRate(LawModel m) {
+  return m == LawModel::SofteningRate;
+}
+
 /// Model values along the path of `g` (same length as g.x). Axial and impact laws
-/// are evaluated by bridge::axialResponse with plastic memory (axialLaw).
+/// are evaluated by bridge::axialResponse with plastic memory (axialLaw), at
+/// the curve's rate where it has one. Throws bridge::InputError for a model
+/// that reads the rate on a curve without a time axis.
 void evaluateModel(LawModel m, const std::vector<double>& theta, const PathGrid& g, std::vector<double>& out,
                    const Lockup& lockup = {});
 

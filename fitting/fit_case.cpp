@@ -30,8 +30,9 @@ const std::vector<std::string> kTests = {"axial", "lateral", "interface", "impac
 /// Parameters with default bounds (set from the curves or the other bounds
 /// at run time): the densifying model's beyond the bilinear ones, and the
 /// softening model's beyond the elastic-perfectly plastic ones.
-const char* const kDefaultedParameters[] = {"densification_onset_m", "densification_stiffness_N_m", "softening_onset_m",
-                                            "softening_stiffness_N_m", "residual_ratio"};
+const char* const kDefaultedParameters[] = {"densification_onset_m", "densification_stiffness_N_m",
+                                            "softening_onset_m",     "softening_stiffness_N_m",
+                                            "residual_ratio",        "rate_coefficient_N_s2_m2"};
 
 // The largest x of the curves (the furthest shortening or indentation).
 double largestX(const std::vector<PathGrid>& grids) {
@@ -57,12 +58,21 @@ void defaultDensificationBounds(Bounds& b, const std::vector<PathGrid>& grids, d
 // Bounds of the softening where the case gives none: its onset from 0 to the
 // largest indentation of the curves; the falling tangent from a thousandth of
 // the smallest to the largest stiffness allowed; the residual ratio F_r / F_y
-// from 0 to 1.
+// from 0 to 1; the rate coefficient (curves with a time axis) from 0 to the
+// one whose overstress alone, at the curves' largest rate, is twice their
+// largest force.
 void defaultSofteningBounds(Bounds& b, const std::vector<PathGrid>& grids) {
   if (b.count("softening_onset_m") == 0) b["softening_onset_m"] = {0.0, largestX(grids)};
   const auto& k = b.at("stiffness_N_m");
   if (b.count("softening_stiffness_N_m") == 0) b["softening_stiffness_N_m"] = {1e-3 * k.first, k.second};
   if (b.count("residual_ratio") == 0) b["residual_ratio"] = {0.0, 1.0};
+  double force = 0.0, rate = 0.0;
+  for (const auto& g : grids) {
+    force = std::max(force, g.scale);
+    for (double r : g.rate) rate = std::max(rate, r);
+  }
+  if (b.count("rate_coefficient_N_s2_m2") == 0 && rate > 0.0)
+    b["rate_coefficient_N_s2_m2"] = {0.0, 2.0 * force / (rate * rate)};
 }
 
 CurveDefaults defaultsFor(const std::string& test) {
@@ -113,11 +123,13 @@ std::vector<LawModel> readModels(const JsonReader& t, const std::string& test) {
       out.push_back(LawModel::Densifying);
     else if (s == "softening" && test == "impact")
       out.push_back(LawModel::Softening);
-    else if (s == "softening")
-      t.fail("models", "'softening' is a model of the impact law only");
+    else if (s == "softening_rate" && test == "impact")
+      out.push_back(LawModel::SofteningRate);
+    else if (s == "softening" || s == "softening_rate")
+      t.fail("models", "'" + s + "' is a model of the impact law only");
     else
       t.fail("models", "unknown model '" + s + "' (elastic_perfectly_plastic, bilinear, densifying" +
-                           (test == "impact" ? ", softening)" : ")"));
+                           (test == "impact" ? ", softening, softening_rate)" : ")"));
   }
   return out;
 }
@@ -170,8 +182,18 @@ FitCase readFitCase(const bridge::JsonDocument& doc) {
     spec.candidates = readModels(*t, test);
     const auto curves = t->objects("curves", true);
     if (curves.empty()) t->fail("curves", "at least one curve is required");
-    for (std::size_t i = 0; i < curves.size(); ++i)
+    const bool rate = std::any_of(spec.candidates.begin(), spec.candidates.end(), readsRate);
+    for (std::size_t i = 0; i < curves.size(); ++i) {
       spec.curves.push_back(readCurveSource(curves[i], defaultsFor(test), i, dir));
+      const CurveSource& s = spec.curves.back();
+      if (rate && s.t_dataset.empty() && s.t_column.empty())
+        curves[i].fail(s.kind == CurveSource::Kind::Csv ? "t_column" : "t_dataset",
+                       s.kind == CurveSource::Kind::H5Wall
+                           ? "the model softening_rate reads the indentation rate: give the curve as x_dataset, "
+                             "y_dataset and t_dataset (its time axis)"
+                           : "required by the model softening_rate (the curve's time axis: it reads the "
+                             "indentation rate)");
+    }
     std::set<std::string> names;
     for (LawModel m : spec.candidates)
       for (const auto& n : parameterNames(m)) names.insert(n);
@@ -183,7 +205,7 @@ FitCase readFitCase(const bridge::JsonDocument& doc) {
     for (const auto& [name, lu] : spec.bounds) {
       const bool may_be_zero = name == "hardening_stiffness_N_m" || name == "reaction_coefficient" ||
                                name == "densification_onset_m" || name == "residual_ratio" ||
-                               name == "softening_onset_m";
+                               name == "softening_onset_m" || name == "rate_coefficient_N_s2_m2";
       if (may_be_zero ? lu.first < 0.0 : !(lu.first > 0.0))
         b.fail(name, may_be_zero ? "lower bound must be >= 0" : "lower bound must be > 0");
     }

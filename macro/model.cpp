@@ -20,9 +20,11 @@ namespace {
 // One link's cell law (bridge::cellResponse: the return mapping shared with
 // the fine DEM's F_lim cap, plus the lock-up): the force (N) for compression
 // `u` (m), with the plastic memory `up` (m) updated and the plastic work and
-// the stored elastic energy added to the stage's sums (J).
-inline double linkLaw(const bridge::CellSpring& law, double u, double& up, double& plastic, double& elastic) {
-  const auto r = bridge::cellResponse(law, u, up);
+// the stored elastic energy added to the stage's sums (J); `rate` (m/s) is
+// the shortening rate a law with a rate term reads (the impact law's).
+inline double linkLaw(const bridge::CellSpring& law, double u, double& up, double& plastic, double& elastic,
+                      double rate = 0.0) {
+  const auto r = bridge::cellResponse(law, u, up, rate);
   up = r.plastic_m;
   plastic += r.plastic_work_J;
   elastic += r.elastic_J;
@@ -330,14 +332,18 @@ void Model::computeBoulderContacts(double dt) {
       continue;
     }
     const double indent = R - d;
+    const double nx = dx / d, ny = dy / d, nz = dz / d;  // from the cube to the centre
+    // Indentation rate: the boulder's approach to the cube along the normal,
+    // from the half-step velocities v(n-1/2) (the leapfrog's latest).
+    const double vny = three_d_ ? vy_[node] : 0.0, vnz = three_d_ ? vz_[node] : 0.0;
+    const double rate = -(nx * (bvel_.x() - vx_[node]) + ny * (bvel_.y() - vny) + nz * (bvel_.z() - vnz));
     const auto law = static_cast<std::size_t>(F.law[el]);
-    const double f = linkLaw(s_.axial_springs[law], indent, front_plastic_[el], plastic, elastic);
+    const double f = linkLaw(s_.axial_springs[law], indent, front_plastic_[el], plastic, elastic, rate);
     if (!(f > 0.0)) {  // inside the dent left by an earlier impact (and short of lock-up): no force
       front_ft_[el].setZero();
       continue;
     }
     if (indent > s_.axial_crush_m[law] && crushed_front_ < 0) crushed_front_ = static_cast<int>(el);
-    const double nx = dx / d, ny = dy / d, nz = dz / d;  // from the cube to the centre
     bforce_ += f * Vec3(nx, ny, nz);
     fx_[node] -= f * nx;
     cell_axial_[node] -= 0.5 * f * nx;

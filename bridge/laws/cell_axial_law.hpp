@@ -30,6 +30,14 @@
 ///   F_r, at which it flows. Only for the impact law; unloading and
 ///   reloading are elastic with k.
 ///
+/// Rate (impact law only, any model): the fill a boulder sets moving resists
+/// its indentation rate r = du/dt as a momentum flux does. The yield force
+/// (and a softening law's residual) is raised by the overstress c max(r, 0)^2
+/// while the cell flows: F <= Y(u_p) + c r^2. It can only hold the force
+/// higher along the elastic line, never above k (u - u_p), so it adds no
+/// stiffness to the critical time step; its work c r^2 du_p is dissipated
+/// with the plastic work. c = 0 (the default) is the rate-independent law.
+///
 /// Lock-up (every model): a fill cannot be compressed beyond its densest
 /// state, reached at the lock-up shortening u_L (from the fill's porosity).
 /// Beyond it the dense fill adds k_L max(0, u - u_L). With k_L many times k
@@ -59,9 +67,10 @@ struct AxialLawParams {
   double densification_stiffness_N_m = 0.0;                                ///< k_d, densifying only (N/m)
   double lockup_shortening_m = std::numeric_limits<double>::infinity();    ///< u_L (m); infinity: no lock-up
   double lockup_stiffness_N_m = 0.0;                                       ///< k_L (N/m), >= 0
-  double softening_stiffness_N_m = 0.0;  ///< k_s > 0, the falling tangent's magnitude, softening only (N/m)
-  double residual_force_N = 0.0;         ///< F_r, 0 <= F_r <= F_y, softening only (N)
-  double softening_onset_m = 0.0;        ///< u_s >= 0, plastic shortening held at the peak, softening only (m)
+  double softening_stiffness_N_m = 0.0;   ///< k_s > 0, the falling tangent's magnitude, softening only (N/m)
+  double residual_force_N = 0.0;          ///< F_r, 0 <= F_r <= F_y, softening only (N)
+  double softening_onset_m = 0.0;         ///< u_s >= 0, plastic shortening held at the peak, softening only (m)
+  double rate_coefficient_N_s2_m2 = 0.0;  ///< c >= 0, the overstress c r^2 at indentation rate r, impact only
 };
 
 /// True for the models with a hardening tangent (bilinear, densifying).
@@ -97,12 +106,17 @@ struct CellSpring {
   double densify_N_m = 0.0;                                   ///< k_d (N/m)
   double lockup_m = std::numeric_limits<double>::infinity();  ///< u_L (m)
   double lockup_N_m = 0.0;                                    ///< k_L (N/m)
+  double rate_N_s2_m2 = 0.0;                                  ///< c (N s^2/m^2)
 };
 
 inline CellSpring cellSpring(const AxialLawParams& p) {
   const bool densifies = p.model == AxialModel::Densifying;
-  return {axialSpring(p), densifies ? p.densification_onset_m : std::numeric_limits<double>::infinity(),
-          densifies ? p.densification_stiffness_N_m : 0.0, p.lockup_shortening_m, p.lockup_stiffness_N_m};
+  return {axialSpring(p),
+          densifies ? p.densification_onset_m : std::numeric_limits<double>::infinity(),
+          densifies ? p.densification_stiffness_N_m : 0.0,
+          p.lockup_shortening_m,
+          p.lockup_stiffness_N_m,
+          p.rate_coefficient_N_s2_m2};
 }
 
 /// Result of one evaluation: the force (N), the updated plastic shortening
@@ -116,9 +130,18 @@ struct AxialResponse {
 };
 
 /// Force for shortening `u_m` given the plastic shortening `plastic_m` carried
-/// from the previous evaluation (return mapping; exact for any step size).
-inline AxialResponse cellResponse(const CellSpring& c, double u_m, double plastic_m) {
-  const auto r = elasticPlasticResponse(c.spring, u_m, plastic_m);
+/// from the previous evaluation (return mapping; exact for any step size), at
+/// the shortening rate `rate_m_s` (m/s; only a law with a rate coefficient
+/// reads it). The overstress c r^2 shifts the yield force and the residual
+/// alike, so the same return mapping gives the force, and the plastic work
+/// it integrates is the shifted yield force's.
+inline AxialResponse cellResponse(const CellSpring& c, double u_m, double plastic_m, double rate_m_s = 0.0) {
+  ElasticPlasticParams spring = c.spring;
+  const double r_pos = rate_m_s > 0.0 ? rate_m_s : 0.0;
+  const double overstress = c.rate_N_s2_m2 * r_pos * r_pos;
+  spring.yield_force_N += overstress;
+  spring.residual_force_N += overstress;
+  const auto r = elasticPlasticResponse(spring, u_m, plastic_m);
   const double dense = u_m > c.onset_m ? u_m - c.onset_m : 0.0;
   const double over = u_m > c.lockup_m ? u_m - c.lockup_m : 0.0;
   const double fd = c.densify_N_m * dense, fl = c.lockup_N_m * over;
@@ -126,8 +149,8 @@ inline AxialResponse cellResponse(const CellSpring& c, double u_m, double plasti
           elasticPlasticEnergy(c.spring, r.force_N) + 0.5 * (fd * dense + fl * over)};
 }
 
-inline AxialResponse axialResponse(const AxialLawParams& p, double u_m, double plastic_m) {
-  return cellResponse(cellSpring(p), u_m, plastic_m);
+inline AxialResponse axialResponse(const AxialLawParams& p, double u_m, double plastic_m, double rate_m_s = 0.0) {
+  return cellResponse(cellSpring(p), u_m, plastic_m, rate_m_s);
 }
 
 /// The stiffest tangent the law can show (unloading past lock-up),

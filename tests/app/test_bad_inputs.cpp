@@ -167,6 +167,8 @@ std::vector<BadInput> badInputs(const fs::path& dir) {
       set("fit material name", "fit_lab_cc.json", {"material.name=\"\""}, "/material/name: must not be empty"),
       set("fit softening axial", "fit_lab_cc.json", {"axial.models=[\"softening\"]"},
           "/axial/models: 'softening' is a model of the impact law only"),
+      set("fit rate law without time", "fit_cell_laws.json", {"impact.models=[\"softening_rate\"]"},
+          "/impact/curves/0/t_column: required by the model softening_rate"),
       set("fit curve extension", "fit_lab_cc.json", {curve + "\"cc.txt\""}, "/axial/curves/0/file: must end in .csv"),
       set("fit.micro case file", "fit_micro_wall.json", {"micro_case=\"nope.json\""}, "/micro_case: no such case file"),
       set("fit.micro bounds", "fit_micro_wall.json", {"parameters.0.bounds=[5,1]"},

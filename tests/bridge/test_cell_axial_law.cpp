@@ -144,3 +144,48 @@ TEST(CellAxialLaw, SofteningFallsToTheResidualAndBalancesEnergy) {
     EXPECT_FALSE(hardens(p.model));
   }
 }
+
+// The rate term: while the cell flows at the shortening rate r, its yield
+// force (and a softening law's residual) is raised by c r^2, and the plastic
+// work of the step is the raised yield force times the plastic increment; a
+// rate of zero or of unloading (r < 0) gives the rate-independent law; the
+// elastic line is never left (k (u - u_p) bounds the force).
+TEST(CellAxialLaw, RateOverstressRaisesTheYieldForceWhileTheCellFlows) {
+  const double k = 1e6, fy = 1e4, c = 50.0, r = 8.0, s = c * r * r;  // 3.2 kN overstress
+  for (AxialModel m : {AxialModel::ElasticPerfectlyPlastic, AxialModel::Bilinear, AxialModel::Softening}) {
+    AxialLawParams p{m, k, fy, 0.0};
+    p.rate_coefficient_N_s2_m2 = c;
+    if (m == AxialModel::Bilinear) p.hardening_stiffness_N_m = 1e5;
+    if (m == AxialModel::Softening) {
+      p.softening_stiffness_N_m = 2e5;
+      p.residual_force_N = 2e3;
+    }
+    AxialLawParams still = p;
+    still.rate_coefficient_N_s2_m2 = 0.0;
+    // (well past the peak: on the hardening line, or on the softening's residual)
+    const double u = 0.1;
+    const auto slow = axialResponse(still, u, 0.0);
+    const auto fast = axialResponse(p, u, 0.0, r);
+    const double H = m == AxialModel::Bilinear ? k * 1e5 / (k - 1e5) : 0.0;
+    // hardening: F = Y(u_p) + s with u_p = u - F / k, so the force rises by s k / (k + H)
+    const double rise = m == AxialModel::Bilinear ? s * k / (k + H) : s;
+    EXPECT_NEAR(fast.force_N, slow.force_N + rise, 1e-9 * fy) << static_cast<int>(m);
+    EXPECT_NEAR(fast.plastic_m, u - fast.force_N / k, 1e-15);
+    EXPECT_NEAR(axialResponse(p, u, 0.0, 0.0).force_N, slow.force_N, 1e-12 * fy);
+    EXPECT_NEAR(axialResponse(p, u, 0.0, -r).force_N, slow.force_N, 1e-12 * fy);
+    // Elastic below the raised yield force: the rate changes nothing there.
+    const double ue = 0.5 * fy / k;
+    EXPECT_NEAR(axialResponse(p, ue, 0.0, r).force_N, k * ue, 1e-9 * fy);
+    // A step that flows at a constant rate: the work is the yield force raised
+    // by s, integrated over the plastic increment (EPP: (F_y + s) du_p).
+    if (m == AxialModel::ElasticPerfectlyPlastic) {
+      const auto a = axialResponse(p, 0.05, 0.0, r), b = axialResponse(p, 0.06, a.plastic_m, r);
+      EXPECT_NEAR(b.plastic_work_J, (fy + s) * (b.plastic_m - a.plastic_m), 1e-12 * fy);
+      EXPECT_NEAR(b.plastic_m - a.plastic_m, 0.01, 1e-15);
+    }
+  }
+  // The rate term adds no stiffness: the critical time step's tangent is k.
+  AxialLawParams p{AxialModel::ElasticPerfectlyPlastic, k, fy, 0.0};
+  p.rate_coefficient_N_s2_m2 = c;
+  EXPECT_EQ(maxTangentStiffness(p), k);
+}

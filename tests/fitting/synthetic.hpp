@@ -44,6 +44,30 @@ inline bridge::Curve axialCurve(const bridge::AxialLawParams& p, const std::vect
   return c;
 }
 
+/// An impact's indentation curve with its time axis: u(t) = v0 (t - t^2 / (2T))
+/// over [0, T], a boulder slowing at a constant rate from v0 to rest, the
+/// force the law `p` gives at the rate du/dt (its rate term, if any), with
+/// noise of standard deviation `sigma_N`; `n` points.
+inline bridge::Curve impactCurve(const bridge::AxialLawParams& p, double v0, double T, int n, double sigma_N,
+                                 unsigned seed) {
+  std::mt19937_64 rng(seed);
+  std::normal_distribution<double> noise(0.0, 1.0);
+  bridge::Curve c;
+  c.source = "synthetic impact";
+  c.x_name = "indentation_m";
+  c.y_name = "force_N";
+  double plastic = 0.0;
+  for (int i = 0; i <= n; ++i) {
+    const double t = T * i / n, u = v0 * (t - 0.5 * t * t / T), rate = v0 * (1.0 - t / T);
+    const auto r = bridge::axialResponse(p, u, plastic, rate);
+    plastic = r.plastic_m;
+    c.t.push_back(t);
+    c.x.push_back(u);
+    c.y.push_back(r.force_N + sigma_N * noise(rng));
+  }
+  return c;
+}
+
 inline bridge::AxialLawParams epp(double k, double fy) {
   bridge::AxialLawParams p;
   p.stiffness_N_m = k;

@@ -144,6 +144,33 @@ TEST(MacroPlastic, SofteningFaceStopsTheBoulderWhereTheBackboneTakesItsEnergy) {
   EXPECT_LT(r.balance_rel_error, 1e-3);
 }
 
+// The boulder against an elastic-perfectly plastic face with a rate term on a
+// rigid support. Elastic to F_y + c v1^2 (v1 the speed there: 1/2 M v0^2 =
+// 1/2 M v1^2 + F1^2 / (2k)); then the face flows and the boulder obeys
+// M dv/dt = -(F_y + c v^2): it travels M / (2c) ln(F1 / F_y) beyond F1 / k
+// and stops there, the face back at F_y. Peak force F1; it rebounds from
+// F_y: speed F_y / sqrt(k M); the rest is plastic work.
+TEST(MacroPlastic, RateTermHoldsTheFaceAtItsOverstressUntilTheBoulderStops) {
+  const double M = 170.0, v0 = 10.0, k = 2e8, fy = 2e4, c = 600.0;
+  gabion::bridge::AxialLawParams imp = epp(k, fy);
+  imp.rate_coefficient_N_s2_m2 = c;
+  const ImpactResult r = strikeRigidFace(imp, M, v0, 0.02);
+  ASSERT_TRUE(r.ok) << r.message;
+  double v1 = v0;  // fixed point of the elastic phase's energy balance
+  for (int i = 0; i < 50; ++i) {
+    const double f1 = fy + c * v1 * v1;
+    v1 = std::sqrt(v0 * v0 - f1 * f1 / (k * M));
+  }
+  const double f1 = fy + c * v1 * v1;
+  const double stop = f1 / k + M / (2.0 * c) * std::log(f1 / fy);
+  EXPECT_NEAR(r.peak_force_N, f1, 0.005 * f1);
+  EXPECT_NEAR(r.max_penetration_m, stop, 0.005 * stop);
+  const double e0 = 0.5 * M * v0 * v0, dissipated = e0 - fy * fy / (2.0 * k);
+  EXPECT_NEAR(r.plastic_J, dissipated, 0.005 * dissipated);
+  EXPECT_NEAR(r.rebound_velocity_m_s, fy / std::sqrt(k * M), 0.01 * fy / std::sqrt(k * M));
+  EXPECT_LT(r.balance_rel_error, 1e-3);
+}
+
 // A 1-D chain pushed at its front at constant speed: the compression front
 // reaches the fixed back face after N e / c with c = e sqrt(k/m) (the long-wave
 // speed of the lattice). The discrete lattice smears the step over an Airy
