@@ -54,10 +54,13 @@ AxialLawParams readAxialLaw(const JsonReader& r, double edge_m, int version, boo
     for (const char* key : {"softening_stiffness_N_m", "residual_force_N", "softening_onset_m"})
       if (r.has(key)) r.fail(key, "only for the model 'softening'");
   }
-  if (impact)
+  if (impact) {
     p.rate_coefficient_N_s2_m2 = r.optionalNumber("rate_coefficient_N_s2_m2", Check::NonNegative).value_or(0.0);
-  else if (r.has("rate_coefficient_N_s2_m2"))
-    r.fail("rate_coefficient_N_s2_m2", "only for an impact law (the overstress of the indentation rate)");
+    p.rate_growth_m = r.optionalNumber("rate_growth_m", Check::NonNegative).value_or(0.0);
+  } else {
+    for (const char* key : {"rate_coefficient_N_s2_m2", "rate_growth_m"})
+      if (r.has(key)) r.fail(key, "only for an impact law (the overstress of the indentation rate)");
+  }
   if (hardens(p.model)) {
     p.hardening_stiffness_N_m = r.number("hardening_stiffness_N_m", Check::NonNegative);
     if (p.hardening_stiffness_N_m >= p.stiffness_N_m)
@@ -105,6 +108,7 @@ json toJson(const AxialLawParams& p) {
     j["softening_onset_m"] = p.softening_onset_m;
   }
   if (p.rate_coefficient_N_s2_m2 > 0.0) j["rate_coefficient_N_s2_m2"] = p.rate_coefficient_N_s2_m2;
+  if (p.rate_growth_m > 0.0) j["rate_growth_m"] = p.rate_growth_m;
   if (std::isfinite(p.lockup_shortening_m)) {  // (a law built without one reads back with the default)
     j["lockup_shortening_m"] = p.lockup_shortening_m;
     j["lockup_stiffness_N_m"] = p.lockup_stiffness_N_m;

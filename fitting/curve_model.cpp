@@ -72,8 +72,10 @@ std::vector<std::string> parameterNames(LawModel m) {
     case LawModel::Softening:
       return {"stiffness_N_m", "yield_force_N", "softening_onset_m", "softening_stiffness_N_m", "residual_ratio"};
     case LawModel::SofteningRate:
-      return {"stiffness_N_m",           "yield_force_N",  "softening_onset_m",
-              "softening_stiffness_N_m", "residual_ratio", "rate_coefficient_N_s2_m2"};
+      return {"stiffness_N_m",     "yield_force_N",
+              "softening_onset_m", "softening_stiffness_N_m",
+              "residual_ratio",    "rate_coefficient_N_s2_m2",
+              "rate_growth_m"};
     case LawModel::LateralLinear:
       return {"reaction_coefficient"};
     case LawModel::InterfaceSlider:
@@ -131,7 +133,10 @@ bridge::AxialLawParams axialLaw(LawModel m, const std::vector<double>& theta, co
                                                                        : bridge::AxialModel::ElasticPerfectlyPlastic;
   p.stiffness_N_m = theta[0];
   p.yield_force_N = theta[1];
-  if (m == LawModel::SofteningRate) p.rate_coefficient_N_s2_m2 = theta[5];
+  if (m == LawModel::SofteningRate) {
+    p.rate_coefficient_N_s2_m2 = theta[5];
+    p.rate_growth_m = theta[6];
+  }
   if (m == LawModel::Softening || m == LawModel::SofteningRate) {
     p.softening_onset_m = theta[2];
     p.softening_stiffness_N_m = theta[3];

@@ -42,8 +42,8 @@ enum class LawModel {
   Densifying,               ///< axial/impact: + densification_onset_m, densification_stiffness_N_m
   Softening,       ///< impact: stiffness_N_m, yield_force_N (the peak), softening_onset_m, softening_stiffness_N_m,
                    ///< residual_ratio (F_r / F_y)
-  SofteningRate,   ///< impact: softening's + rate_coefficient_N_s2_m2 (the overstress c r^2); needs the
-                   ///< curves' time axis (PathGrid::rate)
+  SofteningRate,   ///< impact: softening's + rate_coefficient_N_s2_m2, rate_growth_m (the overstress
+                   ///< c r^2 min(1, u / u_a)); needs the curves' time axis (PathGrid::rate)
   LateralLinear,   ///< lateral force = reaction_coefficient * axial force
   InterfaceSlider  ///< shear force: spring tangential_stiffness_N_m capped at friction * normal force
 };

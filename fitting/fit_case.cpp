@@ -30,9 +30,9 @@ const std::vector<std::string> kTests = {"axial", "lateral", "interface", "impac
 /// Parameters with default bounds (set from the curves or the other bounds
 /// at run time): the densifying model's beyond the bilinear ones, and the
 /// softening model's beyond the elastic-perfectly plastic ones.
-const char* const kDefaultedParameters[] = {"densification_onset_m", "densification_stiffness_N_m",
-                                            "softening_onset_m",     "softening_stiffness_N_m",
-                                            "residual_ratio",        "rate_coefficient_N_s2_m2"};
+const char* const kDefaultedParameters[] = {
+    "densification_onset_m", "densification_stiffness_N_m", "softening_onset_m", "softening_stiffness_N_m",
+    "residual_ratio",        "rate_coefficient_N_s2_m2",    "rate_growth_m"};
 
 // The largest x of the curves (the furthest shortening or indentation).
 double largestX(const std::vector<PathGrid>& grids) {
@@ -73,6 +73,7 @@ void defaultSofteningBounds(Bounds& b, const std::vector<PathGrid>& grids) {
   }
   if (b.count("rate_coefficient_N_s2_m2") == 0 && rate > 0.0)
     b["rate_coefficient_N_s2_m2"] = {0.0, 2.0 * force / (rate * rate)};
+  if (b.count("rate_growth_m") == 0) b["rate_growth_m"] = {0.0, largestX(grids)};
 }
 
 CurveDefaults defaultsFor(const std::string& test) {
@@ -205,7 +206,8 @@ FitCase readFitCase(const bridge::JsonDocument& doc) {
     for (const auto& [name, lu] : spec.bounds) {
       const bool may_be_zero = name == "hardening_stiffness_N_m" || name == "reaction_coefficient" ||
                                name == "densification_onset_m" || name == "residual_ratio" ||
-                               name == "softening_onset_m" || name == "rate_coefficient_N_s2_m2";
+                               name == "softening_onset_m" || name == "rate_coefficient_N_s2_m2" ||
+                               name == "rate_growth_m";
       if (may_be_zero ? lu.first < 0.0 : !(lu.first > 0.0))
         b.fail(name, may_be_zero ? "lower bound must be >= 0" : "lower bound must be > 0");
     }

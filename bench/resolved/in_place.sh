@@ -62,7 +62,7 @@ if [ -f "$slow" ]; then
  "material": {"name": "front"},
  "base_law": {"file": "$law", "material": "front"},
  "lockup": {"strain": 0.5},
- "optimizer": {"global": "GN_ISRES", "global_max_evaluations": 6000},
+ "optimizer": {"global": "GN_ISRES", "global_max_evaluations": 10000},
  "impact": {"models": ["softening", "softening_rate"],
             "curves": [$(curve "$fit_from" 10), $(curve "$slow" 6)],
             "bounds": {"stiffness_N_m": [1e5, 1e9], "yield_force_N": [1e3, 1e6]}}}

@@ -32,8 +32,10 @@
 ///
 /// Rate (impact law only, any model): the fill a boulder sets moving resists
 /// its indentation rate r = du/dt as a momentum flux does. The yield force
-/// (and a softening law's residual) is raised by the overstress c max(r, 0)^2
-/// while the cell flows: F <= Y(u_p) + c r^2. It can only hold the force
+/// (and a softening law's residual) is raised by the overstress
+/// c max(r, 0)^2 g(u) while the cell flows: F <= Y(u_p) + c r^2 g(u), with
+/// g = min(1, u / u_a) (the boulder's section pressing on the fill grows
+/// with its indentation; u_a = 0: g = 1). It can only hold the force
 /// higher along the elastic line, never above k (u - u_p), so it adds no
 /// stiffness to the critical time step; its work c r^2 du_p is dissipated
 /// with the plastic work. c = 0 (the default) is the rate-independent law.
@@ -71,6 +73,7 @@ struct AxialLawParams {
   double residual_force_N = 0.0;          ///< F_r, 0 <= F_r <= F_y, softening only (N)
   double softening_onset_m = 0.0;         ///< u_s >= 0, plastic shortening held at the peak, softening only (m)
   double rate_coefficient_N_s2_m2 = 0.0;  ///< c >= 0, the overstress c r^2 at indentation rate r, impact only
+  double rate_growth_m = 0.0;             ///< u_a >= 0: the overstress grows as min(1, u / u_a); 0: constant
 };
 
 /// True for the models with a hardening tangent (bilinear, densifying).
@@ -107,6 +110,7 @@ struct CellSpring {
   double lockup_m = std::numeric_limits<double>::infinity();  ///< u_L (m)
   double lockup_N_m = 0.0;                                    ///< k_L (N/m)
   double rate_N_s2_m2 = 0.0;                                  ///< c (N s^2/m^2)
+  double rate_growth_m = 0.0;                                 ///< u_a (m)
 };
 
 inline CellSpring cellSpring(const AxialLawParams& p) {
@@ -116,7 +120,8 @@ inline CellSpring cellSpring(const AxialLawParams& p) {
           densifies ? p.densification_stiffness_N_m : 0.0,
           p.lockup_shortening_m,
           p.lockup_stiffness_N_m,
-          p.rate_coefficient_N_s2_m2};
+          p.rate_coefficient_N_s2_m2,
+          p.rate_growth_m};
 }
 
 /// Result of one evaluation: the force (N), the updated plastic shortening
@@ -132,13 +137,14 @@ struct AxialResponse {
 /// Force for shortening `u_m` given the plastic shortening `plastic_m` carried
 /// from the previous evaluation (return mapping; exact for any step size), at
 /// the shortening rate `rate_m_s` (m/s; only a law with a rate coefficient
-/// reads it). The overstress c r^2 shifts the yield force and the residual
+/// reads it). The overstress c r^2 g(u) shifts the yield force and the residual
 /// alike, so the same return mapping gives the force, and the plastic work
 /// it integrates is the shifted yield force's.
 inline AxialResponse cellResponse(const CellSpring& c, double u_m, double plastic_m, double rate_m_s = 0.0) {
   ElasticPlasticParams spring = c.spring;
   const double r_pos = rate_m_s > 0.0 ? rate_m_s : 0.0;
-  const double overstress = c.rate_N_s2_m2 * r_pos * r_pos;
+  const double grown = c.rate_growth_m > 0.0 && u_m < c.rate_growth_m ? (u_m > 0.0 ? u_m : 0.0) / c.rate_growth_m : 1.0;
+  const double overstress = c.rate_N_s2_m2 * r_pos * r_pos * grown;
   spring.yield_force_N += overstress;
   spring.residual_force_N += overstress;
   const auto r = elasticPlasticResponse(spring, u_m, plastic_m);

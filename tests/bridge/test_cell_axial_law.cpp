@@ -188,4 +188,11 @@ TEST(CellAxialLaw, RateOverstressRaisesTheYieldForceWhileTheCellFlows) {
   AxialLawParams p{AxialModel::ElasticPerfectlyPlastic, k, fy, 0.0};
   p.rate_coefficient_N_s2_m2 = c;
   EXPECT_EQ(maxTangentStiffness(p), k);
+  // With a growth indentation u_a the overstress is c r^2 min(1, u / u_a):
+  // the part of the boulder's section in contact grows with its indentation.
+  p.rate_growth_m = 0.04;
+  for (double u : {0.02, 0.03, 0.05}) {
+    const double grown = std::min(1.0, u / 0.04);
+    EXPECT_NEAR(axialResponse(p, u, 0.0, r).force_N, fy + s * grown, 1e-9 * fy) << u;
+  }
 }

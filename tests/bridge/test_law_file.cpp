@@ -174,21 +174,24 @@ TEST(LawFile, ASofteningImpactLawReadsBackAndIsRefusedElsewhere) {
 TEST(LawFile, TheImpactLawsRateTermReadsBackAndIsRefusedOnTheAxialLaw) {
   LawFile laws = sampleLaws();
   laws.materials.at("front").impact.rate_coefficient_N_s2_m2 = 650.0;
+  laws.materials.at("front").impact.rate_growth_m = 0.06;
   const std::string path = ::testing::TempDir() + "law_rate.json";
   writeJsonAtomic(path, toJson(laws));
   const LawFile read = loadLawFile(path);
   EXPECT_DOUBLE_EQ(read.materials.at("front").impact.rate_coefficient_N_s2_m2, 650.0);
+  EXPECT_DOUBLE_EQ(read.materials.at("front").impact.rate_growth_m, 0.06);
   EXPECT_EQ(read.materials.at("front").axial.rate_coefficient_N_s2_m2, 0.0);
   EXPECT_FALSE(toJson(sampleLaws())["materials"]["front"]["impact"].contains("rate_coefficient_N_s2_m2"));
-  for (const auto& [law, value] : {std::pair<std::string, double>{"axial", 650.0}, {"impact", -1.0}}) {
-    auto j = toJson(laws);
-    j["materials"]["front"][law]["rate_coefficient_N_s2_m2"] = value;
-    writeJsonAtomic(path, j);
-    try {
-      loadLawFile(path);
-      ADD_FAILURE() << "no error for " << law;
-    } catch (const InputError& e) {
-      EXPECT_EQ(e.pointer(), "/materials/front/" + law + "/rate_coefficient_N_s2_m2") << e.what();
+  for (const std::string key : {"rate_coefficient_N_s2_m2", "rate_growth_m"})
+    for (const auto& [law, value] : {std::pair<std::string, double>{"axial", 0.5}, {"impact", -1.0}}) {
+      auto j = toJson(laws);
+      j["materials"]["front"][law][key] = value;
+      writeJsonAtomic(path, j);
+      try {
+        loadLawFile(path);
+        ADD_FAILURE() << "no error for " << law << " " << key;
+      } catch (const InputError& e) {
+        EXPECT_EQ(e.pointer(), "/materials/front/" + law + "/" + key) << e.what();
+      }
     }
-  }
 }

@@ -267,14 +267,16 @@ TEST(LawFit, RateTermIsIdentifiedAcrossSpeeds) {
   const std::vector<LawModel> both = {LawModel::Softening, LawModel::SofteningRate};
   const Bounds b = {{"stiffness_N_m", {1e5, 1e8}},     {"yield_force_N", {1e3, 1e6}},
                     {"softening_onset_m", {0.0, 0.1}}, {"softening_stiffness_N_m", {1e3, 1e8}},
-                    {"residual_ratio", {0.0, 1.0}},    {"rate_coefficient_N_s2_m2", {0.0, 2000.0}}};
+                    {"residual_ratio", {0.0, 1.0}},    {"rate_coefficient_N_s2_m2", {0.0, 2000.0}},
+                    {"rate_growth_m", {0.0, 0.1}}};
   auto soft = testing::epp(kK, kFy);
   soft.model = bridge::AxialModel::Softening;
   soft.softening_onset_m = 0.01;
   soft.softening_stiffness_N_m = 0.5 * kK;
   soft.residual_force_N = 0.3 * kFy;
   auto rated = soft;
-  rated.rate_coefficient_N_s2_m2 = 400.0;  // 14.4 kN more at 6 m/s, 40 kN at 10 m/s
+  rated.rate_coefficient_N_s2_m2 = 400.0;  // 14.4 kN more at 6 m/s, 40 kN at 10 m/s,
+  rated.rate_growth_m = 0.03;              // reached at 30 mm of indentation
   const auto grids = [&](const bridge::AxialLawParams& p, unsigned seed) {
     std::vector<PathGrid> out;
     for (double v0 : {6.0, 10.0}) {
@@ -287,9 +289,11 @@ TEST(LawFit, RateTermIsIdentifiedAcrossSpeeds) {
   };
   const auto r = fitLaw(both, grids(rated, 3), b, LawFitSettings{});
   ASSERT_EQ(r.best().model, LawModel::SofteningRate);
-  ASSERT_EQ(r.parameters.size(), 6u);
+  ASSERT_EQ(r.parameters.size(), 7u);
   EXPECT_EQ(r.parameters[5].name, "rate_coefficient_N_s2_m2");
   EXPECT_NEAR(r.parameters[5].value, 400.0, 0.05 * 400.0);
+  EXPECT_EQ(r.parameters[6].name, "rate_growth_m");
+  EXPECT_NEAR(r.parameters[6].value, 0.03, 0.1 * 0.03);
   EXPECT_NEAR(r.parameters[1].value, kFy, 0.05 * kFy);
   // Without a rate effect in the data, the fitted overstress at 10 m/s is
   // within the noise (1 % of the peak; 2 % allowed).
@@ -298,7 +302,7 @@ TEST(LawFit, RateTermIsIdentifiedAcrossSpeeds) {
   // A curve without its time axis cannot be fitted with the rate term.
   const auto no_time = resampleOnPath(testing::axialCurve(soft, testing::monotonicPath(0.1, 100), 0.0, 1), 200);
   std::vector<double> out;
-  EXPECT_THROW(evaluateModel(LawModel::SofteningRate, {kK, kFy, 0.01, kK, 0.3, 400.0}, no_time, out),
+  EXPECT_THROW(evaluateModel(LawModel::SofteningRate, {kK, kFy, 0.01, kK, 0.3, 400.0, 0.0}, no_time, out),
                bridge::InputError);
 }
 
