@@ -70,6 +70,11 @@ CurveSource readCurveSource(const JsonReader& r, const CurveDefaults& d, std::si
   s.kind = CurveSource::Kind::H5Datasets;
   s.x_dataset = r.string("x_dataset", d.h5_group + "/" + s.request.x_name);
   s.y_dataset = r.string("y_dataset", d.h5_group + "/" + s.request.y_name);
+  // A dataset named without its column name names the curve's axes (a
+  // chart of /curves/impact/indentation_m says "indentation").
+  const auto leaf = [](const std::string& path) { return path.substr(path.find_last_of('/') + 1); };
+  if (r.has("x_dataset") && !r.has("x_column")) s.request.x_name = leaf(s.x_dataset);
+  if (r.has("y_dataset") && !r.has("y_column")) s.request.y_name = leaf(s.y_dataset);
   s.t_dataset = r.string("t_dataset", "");
   if (!d.condition_key.empty()) s.condition_dataset = d.h5_group + "/" + d.condition_key;
   return s;
