@@ -23,8 +23,8 @@ namespace {
 // the stored elastic energy added to the stage's sums (J); `rate` (m/s) is
 // the shortening rate a law with a rate term reads (the impact law's).
 inline double linkLaw(const bridge::CellSpring& law, double u, double& up, double& plastic, double& elastic,
-                      double rate = 0.0) {
-  const auto r = bridge::cellResponse(law, u, up, rate);
+                      double rate = 0.0, double* overstress = nullptr) {
+  const auto r = bridge::cellResponse(law, u, up, rate, overstress);
   up = r.plastic_m;
   plastic += r.plastic_work_J;
   elastic += r.elastic_J;
@@ -45,6 +45,7 @@ Model::Model(Structure structure, Kinematics kinematics)
   for (auto* v : {&lat_ftx_, &lat_fto_, &lat_plastic_, &lat_force_}) v->assign(nl, 0.0);
   for (auto* v : {&gnd_ftx_, &gnd_fty_, &gnd_plastic_, &gnd_force_}) v->assign(ng, 0.0);
   front_plastic_.assign(s_.front.node.size(), 0.0);
+  front_overstress_.assign(s_.front.node.size(), 0.0);
   front_ft_.assign(s_.front.node.size(), Vec3::Zero());
   front_kt_.assign(s_.front.node.size(), 0.0);
 }
@@ -213,6 +214,7 @@ void Model::archive(bridge::StateArchive& a) {
                          {"gnd_plastic", &gnd_plastic_},
                          {"gnd_force", &gnd_force_},
                          {"front_plastic", &front_plastic_},
+                         {"front_overstress", &front_overstress_},
                          {"front_kt", &front_kt_}})
     a(name, *v);
   a("front_ft", front_ft_);
@@ -309,6 +311,7 @@ void Model::computeBoulderContacts(double dt) {
     const double x0 = F.x_min[el] + ux_[node];
     if (bpos_.x() + R <= x0) {  // in front of the face: no contact possible
       front_ft_[el].setZero();
+      front_overstress_[el] = 0.0;
       continue;
     }
     const double y0 = F.y_min[el] + (three_d_ ? uy_[node] : 0.0);
@@ -318,12 +321,14 @@ void Model::computeBoulderContacts(double dt) {
     const double dyz2 = dy * dy + dz * dz;
     if (dyz2 >= R * R) {  // beside the cube
       front_ft_[el].setZero();
+      front_overstress_[el] = 0.0;
       continue;
     }
     const double dx = bpos_.x() - std::clamp(bpos_.x(), x0, x0 + e);
     const double d2 = dx * dx + dyz2;
     if (d2 >= R * R) {
       front_ft_[el].setZero();
+      front_overstress_[el] = 0.0;
       continue;
     }
     const double d = std::sqrt(d2);
@@ -338,9 +343,11 @@ void Model::computeBoulderContacts(double dt) {
     const double vny = three_d_ ? vy_[node] : 0.0, vnz = three_d_ ? vz_[node] : 0.0;
     const double rate = -(nx * (bvel_.x() - vx_[node]) + ny * (bvel_.y() - vny) + nz * (bvel_.z() - vnz));
     const auto law = static_cast<std::size_t>(F.law[el]);
-    const double f = linkLaw(s_.axial_springs[law], indent, front_plastic_[el], plastic, elastic, rate);
+    const double f =
+        linkLaw(s_.axial_springs[law], indent, front_plastic_[el], plastic, elastic, rate, &front_overstress_[el]);
     if (!(f > 0.0)) {  // inside the dent left by an earlier impact (and short of lock-up): no force
       front_ft_[el].setZero();
+      front_overstress_[el] = 0.0;
       continue;
     }
     if (indent > s_.axial_crush_m[law] && crushed_front_ < 0) crushed_front_ = static_cast<int>(el);

@@ -172,6 +172,7 @@ class Model {
   // Front elements: plastic indentation; boulder-face tangential force on the
   // boulder and tangential stiffness (3-D).
   std::vector<double> front_plastic_;
+  std::vector<double> front_overstress_;  // the rate term's overstress at the last evaluation (N)
   std::vector<Vec3> front_ft_;
   std::vector<double> front_kt_;
 

@@ -71,11 +71,9 @@ JSON
   tail -n 1 "$dir/fit_rate.log"
   cp "$dir/fit_rate/fit_impact.png" "$dir/figures/in_place_rate_fit.png"
 fi
-scenarios=()
 for s in "$out"/centre_*_m_s "$out"/side_*_m_s; do
   [ -f "$s/summary.json" ] || continue
   name=$(basename "$s")
-  scenarios+=("$name")
   for fit in fit fit_rate; do
     [ -f "$dir/$fit/law.json" ] || continue
     tag=${fit#fit}
@@ -83,39 +81,7 @@ for s in "$out"/centre_*_m_s "$out"/side_*_m_s; do
       echo "   $name: the twin with the law of $fit failed: $(tail -n 1 "$dir/twin${tag}_$name.log")" >&2
   done
 done
-python3 - "$out" "$dir" "${scenarios[@]}" <<'PY'
-import json, os, sys
-out, d, names = sys.argv[1], sys.argv[2], sys.argv[3:]
-for fit in ("fit", "fit_rate"):
-    if os.path.isfile(f"{d}/{fit}/law.json"):
-        law = json.load(open(f"{d}/{fit}/law.json"))["materials"]["front"]["impact"]
-        print(f"impact law of {fit}:", json.dumps(law))
-keys = [("peak_force_N", 1e-3, "peak force kN"), ("max_penetration_m", 1e3, "penetration mm"),
-        ("max_back_face_displacement_m", 1e3, "back face mm")]
-print("| scenario | model | " + " | ".join(k[2] for k in keys) + " | outcome |")
-print("|---" * (len(keys) + 3) + "|")
-for n in names:
-    r = json.load(open(f"{out}/{n}/summary.json"))
-    rows = [("resolved", r, None), ("macro twin, UCI impact law", r["macro_twin"], r)]
-    for tag, label in (("", "macro twin, impact law fitted in the wall at 10 m/s"),
-                       ("_rate", "macro twin, rate law fitted in the wall at 6 and 10 m/s")):
-        p = f"{d}/twin{tag}_{n}/summary.json"
-        if os.path.isfile(p):
-            rows.append((label, json.load(open(p)), r))
-        elif os.path.isfile(f"{d}/twin{tag}_{n}.log"):
-            log = open(f"{d}/twin{tag}_{n}.log").read().strip().splitlines()
-            rows.append((label, {"outcome": "failed: " + (log[-1] if log else "")}, r))
-    for label, s, ref in rows:
-        cells = []
-        for k, scale, _ in keys:
-            v = s.get(k)
-            if v is None:
-                cells.append("-")
-                continue
-            e = "" if ref is None else f" ({100 * (v - ref[k]) / ref[k]:+.0f} %)"
-            cells.append(f"{v * scale:.3g}{e}")
-        print(f"| {n} | {label} | " + " | ".join(cells) + f" | {s.get('outcome')} |")
-PY
+python3 "$here/table.py" --in-place "$out"
 # Force on the boulder at 10 m/s: the resolved wall and both twins.
 if [ -x "$curves" ] && [ -f "$dir/twin_centre_10_m_s/result.h5" ]; then
   "$curves" plot "$dir/figures/in_place_force_time.png" "Force on the boulder, 10 m/s on the centre" "time (s)" "force (N)" \

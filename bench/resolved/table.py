@@ -1,5 +1,6 @@
 #!/usr/bin/env python3
-"""The table of bench/resolved/run.sh: for each scenario, the resolved wall,
+"""The tables of bench/resolved/run.sh and, with --in-place OUT, of
+bench/resolved/in_place.sh. run.sh's: for each scenario, the resolved wall,
 its macro twin and its hybrids on the compared keys, with the relative errors
 against the resolved wall and the wall times (Python standard library); and,
 with bench_curves (argument 2), a chart per scenario of each model's error
@@ -20,6 +21,22 @@ def cell(value, scale):
 
 def err(e):
     return "-" if e is None else f"{100 * e:+.0f} %"
+
+
+def relative(run, ref):
+    """Relative errors of `run` against `ref` on KEYS (None where either lacks the key)."""
+    return [None if ref.get(k) in (None, 0) or run.get(k) is None else (run[k] - ref[k]) / abs(ref[k])
+            for k, _, _ in KEYS]
+
+
+# The twins of bench/resolved/in_place.sh: folder prefix under OUT/in_place, and label.
+IN_PLACE = [("twin_", "impact law fitted in the wall at 10 m/s"),
+            ("twin_rate_", "rate law fitted in the wall at 6 and 10 m/s")]
+
+
+def summary(path):
+    s = json.load(open(path))
+    return s.get("results", s)
 
 
 def chart(curves, out, name, label, points):
@@ -57,20 +74,15 @@ def main(out, curves=None):
                      r.get("speed_up"), None))
         floor = os.path.join(out, "floor_" + name.split("_", 1)[1], "summary.json")
         if name.startswith("centre_") and os.path.isfile(floor):
-            f = json.load(open(floor))
-            f = f.get("results", f)
-            rel = [None if r.get(k) in (None, 0) or f.get(k) is None else (f[k] - r[k]) / abs(r[k])
-                   for k, _, _ in KEYS]
-            rows.append((label, "resolved again, step 5 % shorter", [f.get(k) for k, _, _ in KEYS], rel,
+            f = summary(floor)
+            rows.append((label, "resolved again, step 5 % shorter", [f.get(k) for k, _, _ in KEYS], relative(f, r),
                          f.get("outcome"), f.get("wall_time_s"), None, f.get("energy", {}).get("balance_rel_error")))
-        twin2 = os.path.join(out, "in_place", "twin_" + name, "summary.json")
-        if os.path.isfile(twin2):
-            f = json.load(open(twin2))
-            f = f.get("results", f)
-            rel = [None if r.get(k) in (None, 0) or f.get(k) is None else (f[k] - r[k]) / abs(r[k])
-                   for k, _, _ in KEYS]
-            rows.append((label, "macro twin, impact law fitted in the wall (in_place.sh)", [f.get(k) for k, _, _ in KEYS],
-                         rel, f.get("outcome"), f.get("wall_time_s"), None, f.get("balance_rel_error")))
+        for prefix, what in IN_PLACE:
+            twin = os.path.join(out, "in_place", prefix + name, "summary.json")
+            if os.path.isfile(twin):
+                f = summary(twin)
+                rows.append((label, f"macro twin, {what} (in_place.sh)", [f.get(k) for k, _, _ in KEYS],
+                             relative(f, r), f.get("outcome"), f.get("wall_time_s"), None, f.get("balance_rel_error")))
         points = [("resolved", r.get("wall_time_s_resolved"), {k: 0.0 for k, _, _ in KEYS}),
                   ("macro twin", t.get("wall_time_s"), r.get("relative_error", {}))]
         for h in r.get("hybrids", []):
@@ -100,5 +112,41 @@ def main(out, curves=None):
         print("| " + " | ".join([label, model] + cells + [str(outcome), wall_s, fast, bal]) + " |")
 
 
+def in_place(out):
+    """The table of bench/resolved/in_place.sh: per scenario, the resolved
+    wall, its twin with the UCI impact law and its twins with the impact
+    laws fitted in the wall, on peak force, penetration and back face."""
+    d = os.path.join(out, "in_place")
+    for fit in ("fit", "fit_rate"):
+        law = os.path.join(d, fit, "law.json")
+        if os.path.isfile(law):
+            print(f"impact law of {fit}:", json.dumps(json.load(open(law))["materials"]["front"]["impact"]))
+    keys = [KEYS[0], KEYS[1], KEYS[3]]
+    print("| scenario | model | " + " | ".join(title for _, title, _ in keys) + " | outcome |")
+    print("|---" * (len(keys) + 3) + "|")
+    for name in sorted(os.listdir(out)):
+        path = os.path.join(out, name, "summary.json")
+        if not (name.startswith("centre_") or name.startswith("side_")) or not os.path.isfile(path):
+            continue
+        r = summary(path)
+        rows = [("resolved", r, None), ("macro twin, UCI impact law", r["macro_twin"], r)]
+        for prefix, what in IN_PLACE:
+            twin = os.path.join(d, prefix + name)
+            if os.path.isfile(os.path.join(twin, "summary.json")):
+                rows.append(("macro twin, " + what, summary(os.path.join(twin, "summary.json")), r))
+            elif os.path.isfile(twin + ".log"):
+                log = open(twin + ".log").read().strip().splitlines()
+                rows.append(("macro twin, " + what, {"outcome": "failed: " + (log[-1] if log else "")}, r))
+        for label, s, ref in rows:
+            cells = []
+            for k, _, scale in keys:
+                e = None if ref is None else relative(s, ref)[[q for q, _, _ in KEYS].index(k)]
+                cells.append(cell(s.get(k), scale) + ("" if e is None else f" ({err(e)})"))
+            print(f"| {name} | {label} | " + " | ".join(cells) + f" | {s.get('outcome')} |")
+
+
 if __name__ == "__main__":
-    main(sys.argv[1] if len(sys.argv) > 1 else "results/speed_error", sys.argv[2] if len(sys.argv) > 2 else None)
+    if len(sys.argv) > 1 and sys.argv[1] == "--in-place":
+        in_place(sys.argv[2] if len(sys.argv) > 2 else "results/speed_error")
+    else:
+        main(sys.argv[1] if len(sys.argv) > 1 else "results/speed_error", sys.argv[2] if len(sys.argv) > 2 else None)

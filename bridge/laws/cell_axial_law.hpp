@@ -139,15 +139,26 @@ struct AxialResponse {
 /// the shortening rate `rate_m_s` (m/s; only a law with a rate coefficient
 /// reads it). The overstress c r^2 g(u) shifts the yield force and the residual
 /// alike, so the same return mapping gives the force, and the plastic work
-/// it integrates is the shifted yield force's.
-inline AxialResponse cellResponse(const CellSpring& c, double u_m, double plastic_m, double rate_m_s = 0.0) {
+/// it integrates is the shifted yield force's. A caller stepping in time
+/// passes `overstress_N`: in, the overstress of its previous evaluation; out,
+/// this one's. The plastic work then takes the overstress at the mean of the
+/// two (the trapezoidal rule over the step, as the leapfrog's work of the
+/// force), not this step's alone, which would leave an error of
+/// (s_old - s_new) du_p / 2 a step in the energy balance while the rate
+/// changes fast.
+inline AxialResponse cellResponse(const CellSpring& c, double u_m, double plastic_m, double rate_m_s = 0.0,
+                                  double* overstress_N = nullptr) {
   ElasticPlasticParams spring = c.spring;
   const double r_pos = rate_m_s > 0.0 ? rate_m_s : 0.0;
   const double grown = c.rate_growth_m > 0.0 && u_m < c.rate_growth_m ? (u_m > 0.0 ? u_m : 0.0) / c.rate_growth_m : 1.0;
   const double overstress = c.rate_N_s2_m2 * r_pos * r_pos * grown;
   spring.yield_force_N += overstress;
   spring.residual_force_N += overstress;
-  const auto r = elasticPlasticResponse(spring, u_m, plastic_m);
+  auto r = elasticPlasticResponse(spring, u_m, plastic_m);
+  if (overstress_N) {
+    r.plastic_work_J += 0.5 * (*overstress_N - overstress) * (r.plastic_m - plastic_m);
+    *overstress_N = overstress;
+  }
   const double dense = u_m > c.onset_m ? u_m - c.onset_m : 0.0;
   const double over = u_m > c.lockup_m ? u_m - c.lockup_m : 0.0;
   const double fd = c.densify_N_m * dense, fl = c.lockup_N_m * over;
