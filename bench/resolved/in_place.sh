@@ -81,7 +81,7 @@ for s in "$out"/centre_*_m_s "$out"/side_*_m_s; do
       echo "   $name: the twin with the law of $fit failed: $(tail -n 1 "$dir/twin${tag}_$name.log")" >&2
   done
 done
-python3 "$here/table.py" --in-place "$out"
+python3 "$here/table.py" --in-place "$out" "$([ -x "$curves" ] && echo "$curves")"
 # Force on the boulder at 10 m/s: the resolved wall and both twins.
 if [ -x "$curves" ] && [ -f "$dir/twin_centre_10_m_s/result.h5" ]; then
   "$curves" plot "$dir/figures/in_place_force_time.png" "Force on the boulder, 10 m/s on the centre" "time (s)" "force (N)" \

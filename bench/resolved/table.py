@@ -112,11 +112,30 @@ def main(out, curves=None):
         print("| " + " | ".join([label, model] + cells + [str(outcome), wall_s, fast, bal]) + " |")
 
 
-def in_place(out):
+def in_place_charts(out, curves, by_speed):
+    """Peak force and penetration against the impact speed, one line per
+    model, the centre scenarios: OUT/in_place/figures/in_place_vs_speed_<key>.png."""
+    figures = os.path.join(out, "in_place", "figures")
+    os.makedirs(figures, exist_ok=True)
+    for key, title, scale in (KEYS[0], KEYS[1]):
+        series = []
+        for label in dict.fromkeys(label for rows in by_speed.values() for label, _ in rows):
+            xy = sorted((v, s[key] * scale) for v, rows in by_speed.items() for lab, s in rows
+                        if lab == label and s.get(key) is not None)
+            if xy:
+                series.append(label + "=" + ",".join(f"{x:g}:{y:.4g}" for x, y in xy))
+        png = os.path.join(figures, f"in_place_vs_speed_{key}.png")
+        subprocess.run([curves, "points", png, f"{title.rsplit(' ', 1)[0].capitalize()} against impact speed, "
+                        "aimed at the centre", "impact speed (m/s)", title] + series, check=True)
+
+
+def in_place(out, curves=None):
     """The table of bench/resolved/in_place.sh: per scenario, the resolved
     wall, its twin with the UCI impact law and its twins with the impact
-    laws fitted in the wall, on peak force, penetration and back face."""
+    laws fitted in the wall, on peak force, penetration and back face; with
+    bench_curves (`curves`), the charts of in_place_charts."""
     d = os.path.join(out, "in_place")
+    by_speed = {}
     for fit in ("fit", "fit_rate"):
         law = os.path.join(d, fit, "law.json")
         if os.path.isfile(law):
@@ -137,16 +156,21 @@ def in_place(out):
             elif os.path.isfile(twin + ".log"):
                 log = open(twin + ".log").read().strip().splitlines()
                 rows.append(("macro twin, " + what, {"outcome": "failed: " + (log[-1] if log else "")}, r))
+        speed = json.load(open(path)).get("case", {}).get("boulder", {}).get("velocity_m_s")
+        if name.startswith("centre_") and speed is not None:
+            by_speed[speed] = [(label, s) for label, s, _ in rows if "failed" not in str(s.get("outcome"))]
         for label, s, ref in rows:
             cells = []
             for k, _, scale in keys:
                 e = None if ref is None else relative(s, ref)[[q for q, _, _ in KEYS].index(k)]
                 cells.append(cell(s.get(k), scale) + ("" if e is None else f" ({err(e)})"))
             print(f"| {name} | {label} | " + " | ".join(cells) + f" | {s.get('outcome')} |")
+    if curves and by_speed:
+        in_place_charts(out, curves, by_speed)
 
 
 if __name__ == "__main__":
     if len(sys.argv) > 1 and sys.argv[1] == "--in-place":
-        in_place(sys.argv[2] if len(sys.argv) > 2 else "results/speed_error")
+        in_place(sys.argv[2] if len(sys.argv) > 2 else "results/speed_error", sys.argv[3] if len(sys.argv) > 3 else None)
     else:
         main(sys.argv[1] if len(sys.argv) > 1 else "results/speed_error", sys.argv[2] if len(sys.argv) > 2 else None)
