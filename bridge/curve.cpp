@@ -2,6 +2,7 @@
 
 #include <H5Cpp.h>
 
+#include <algorithm>
 #include <cerrno>
 #include <cmath>
 #include <cstdlib>
@@ -135,14 +136,15 @@ CsvTable readCsvTable(const fs::path& file, const std::vector<std::string>& requ
   }
   if (t.header.empty())
     throw InputError(name, location(std::max<std::size_t>(line_no, 1), 0, ""), "empty file: no header line");
-  std::vector<std::size_t> read;  // the columns read, by index
+  std::vector<std::size_t> read;  // the columns read, by index, each once
   for (const auto& want : required) {
-    read.push_back(findColumn(name, t.header, want, t.header_line));
+    const std::size_t i = findColumn(name, t.header, want, t.header_line);
+    if (std::find(read.begin(), read.end(), i) == read.end()) read.push_back(i);
     t.columns[want];
   }
   for (const auto& want : optional)
     for (std::size_t i = 0; i < t.header.size(); ++i)
-      if (t.header[i] == want) {
+      if (t.header[i] == want && std::find(read.begin(), read.end(), i) == read.end()) {
         read.push_back(i);
         t.columns[want];
       }

@@ -16,7 +16,10 @@
 # (softening_rate: the overstress c r^2 of the indentation rate r, read from
 # the curves' time axis), fitted on the walls at 6 and 10 m/s together
 # (centre_6_m_s, floor_10_m_s) and judged at 13 m/s, a speed it has not seen,
-# as well as on the other runs. Prints a table; draws DIR/in_place/figures/.
+# as well as on the other runs. Then the rate law identified on the walls'
+# histories at 6 and 10 m/s (fit.macro: force and penetration against time,
+# the twin run inside the objective). Prints a table; draws
+# DIR/in_place/figures/.
 set -euo pipefail
 here=$(cd "$(dirname "$0")" && pwd)
 root=$(cd "$here/../.." && pwd)
@@ -71,10 +74,45 @@ JSON
   tail -n 1 "$dir/fit_rate.log"
   cp "$dir/fit_rate/fit_impact.png" "$dir/figures/in_place_rate_fit.png"
 fi
+# The same law identified on the walls' histories instead (fit.macro): the
+# twin itself runs inside the objective, at 6 and 10 m/s, against the
+# force on the boulder and its penetration from first contact; the seven
+# parameters of the rate law, from the rate fit's law (its lock-up).
+if [ -f "$slow" ] && [ -f "$dir/fit_rate/law.json" ]; then
+  python3 - "$out" "$dir" <<'PY'
+import json, sys
+out, d = sys.argv[1], sys.argv[2]
+twin = json.load(open(f"{out}/centre_10_m_s/macro_twin/case.json"))
+twin["law_file"] = f"{d}/fit_rate/law.json"
+json.dump(twin, open(f"{d}/hist_twin.json", "w"), indent=1)
+imp = "laws.materials.front.impact."
+def p(name, key, lo, hi, scale="auto"):
+    return {"name": name, "set": imp + key, "bounds": [lo, hi], "scale": scale}
+def history(h5, quantity, dataset):
+    return {"quantity": quantity, "file": h5, "x_dataset": "/curves/impact/time_s", "y_dataset": "/curves/impact/" + dataset}
+scenarios = []
+for v, h5 in ((6, f"{out}/centre_6_m_s/resolved/result.h5"), (10, f"{out}/floor_10_m_s/result.h5")):
+    scenarios.append({"name": f"{v} m/s", "set": {"boulder.velocity_m_s": v},
+                      "curves": [history(h5, "boulder_force_N", "force_N"), history(h5, "penetration_m", "penetration_m")]})
+json.dump({"format": "gabion.case/1", "kind": "fit.macro", "seed": 1, "macro_case": "hist_twin.json",
+           "parameters": [p("stiffness", "stiffness_N_m", 3e5, 1e7), p("static yield force", "yield_force_N", 3e3, 6e4),
+                          p("rate coefficient", "rate_coefficient_N_s2_m2", 100, 5000),
+                          p("rate growth", "rate_growth_m", 0.005, 0.15),
+                          p("softening onset", "softening_onset_m", 0, 0.1, "linear"),
+                          p("softening stiffness", "softening_stiffness_N_m", 1e5, 1e9),
+                          p("residual force", "residual_force_N", 500, 2e4)],
+           "scenarios": scenarios,
+           "optimizer": {"global": "GN_ISRES", "global_max_evaluations": 4000, "local": "LN_SBPLX",
+                         "local_max_evaluations": 1000}}, open(f"{d}/fit_hist.json", "w"), indent=1)
+PY
+  "$gabion" run "$dir/fit_hist.json" -q -o "$dir/fit_hist" >"$dir/fit_hist.log" 2>&1 || { tail -n 3 "$dir/fit_hist.log" >&2; exit 1; }
+  tail -n 1 "$dir/fit_hist.log"
+  for png in "$dir"/fit_hist/fit_macro_*.png; do cp "$png" "$dir/figures/in_place_hist_$(basename "$png" .png | sed 's/^fit_macro_//').png"; done
+fi
 for s in "$out"/centre_*_m_s "$out"/side_*_m_s; do
   [ -f "$s/summary.json" ] || continue
   name=$(basename "$s")
-  for fit in fit fit_rate; do
+  for fit in fit fit_rate fit_hist; do
     [ -f "$dir/$fit/law.json" ] || continue
     tag=${fit#fit}
     "$gabion" run "$s/macro_twin/case.json" --law "$dir/$fit/law.json" -q -o "$dir/twin${tag}_$name" >"$dir/twin${tag}_$name.log" 2>&1 ||

@@ -31,7 +31,8 @@ def relative(run, ref):
 
 # The twins of bench/resolved/in_place.sh: folder prefix under OUT/in_place, and label.
 IN_PLACE = [("twin_", "impact law fitted in the wall at 10 m/s"),
-            ("twin_rate_", "rate law fitted in the wall at 6 and 10 m/s")]
+            ("twin_rate_", "rate law fitted in the wall at 6 and 10 m/s"),
+            ("twin_hist_", "rate law fitted on the walls' histories at 6 and 10 m/s")]
 
 
 def summary(path):
@@ -136,7 +137,7 @@ def in_place(out, curves=None):
     bench_curves (`curves`), the charts of in_place_charts."""
     d = os.path.join(out, "in_place")
     by_speed = {}
-    for fit in ("fit", "fit_rate"):
+    for fit in ("fit", "fit_rate", "fit_hist"):
         law = os.path.join(d, fit, "law.json")
         if os.path.isfile(law):
             print(f"impact law of {fit}:", json.dumps(json.load(open(law))["materials"]["front"]["impact"]))
