@@ -235,11 +235,17 @@ std::vector<std::vector<LabHistory>> labHistories(const MacroFitCase& c) {
   std::vector<std::vector<LabHistory>> out;
   for (const auto& s : c.scenarios) {
     std::vector<LabHistory> hs;
-    for (const auto& h : s.curves) {
-      LabHistory l{resampleOnPath(loadCurve(h.source), c.grid_points), {}};
-      const double t0 = labContact(h, l.grid);
-      for (double x : l.grid.x) l.t.push_back(x - t0);
-      hs.push_back(std::move(l));
+    for (const auto& h : s.curves) hs.push_back({resampleOnPath(loadCurve(h.source), c.grid_points), {}});
+    // The scenario's first contact: where its force history leaves zero, for
+    // every history of it that does not give its own t0_s (a back face moves
+    // later than the contact); without a force history, each its own.
+    double contact = NAN;
+    for (std::size_t k = 0; k < s.curves.size() && std::isnan(contact); ++k)
+      if (s.curves[k].quantity == "boulder_force_N") contact = labContact(s.curves[k], hs[k].grid);
+    for (std::size_t k = 0; k < s.curves.size(); ++k) {
+      const History& h = s.curves[k];
+      const double t0 = std::isfinite(h.t0_s) ? h.t0_s : std::isfinite(contact) ? contact : labContact(h, hs[k].grid);
+      for (double x : hs[k].grid.x) hs[k].t.push_back(x - t0);
     }
     out.push_back(std::move(hs));
   }
