@@ -13,6 +13,7 @@
 #include "bridge/units.hpp"
 #include "fitting/case_input.hpp"
 #include "fitting/sha256.hpp"
+#include "fitting/uncertainty.hpp"
 #include "gabion_version.hpp"
 #include "macro/case_reader.hpp"
 
@@ -257,25 +258,44 @@ struct Objective {
   const MacroFitCase* c;
   const std::vector<std::vector<LabHistory>>* lab;
 
-  // Robust misfit of every history, per effective observation.
-  double operator()(const std::vector<double>& values) const {
-    double total = 0.0, n = 0.0;
+  // Normalised residuals (model - data) / scale of every history point, and
+  // each row's effective-point factor a_c (as the law fits weight a curve).
+  std::vector<double> residuals(const std::vector<double>& values, std::vector<double>* row_factor = nullptr) const {
+    std::vector<double> r;
+    if (row_factor) row_factor->clear();
     for (std::size_t i = 0; i < c->scenarios.size(); ++i) {
-      MacroRun r;
+      MacroRun run;
       try {
-        r = runScenario(scenarioDocument(*base, *c, c->scenarios[i], values));
+        run = runScenario(scenarioDocument(*base, *c, c->scenarios[i], values));
       } catch (const bridge::InputError& e) {
         throw Infeasible(e.what());  // (a law the values make invalid: outside the model's domain)
       }
       for (std::size_t k = 0; k < c->scenarios[i].curves.size(); ++k) {
         const LabHistory& h = (*lab)[i][k];
-        const auto y = modelAt(r, c->scenarios[i].curves[k].quantity, h.t);
-        const double a = h.grid.effectivePoints() / static_cast<double>(h.grid.x.size());
-        for (std::size_t j = 0; j < y.size(); ++j) total += a * lossValue((y[j] - h.grid.y[j]) / h.grid.scale, c->loss);
-        n += h.grid.effectivePoints();
+        const auto y = modelAt(run, c->scenarios[i].curves[k].quantity, h.t);
+        for (std::size_t j = 0; j < y.size(); ++j) r.push_back((y[j] - h.grid.y[j]) / h.grid.scale);
+        if (row_factor)
+          row_factor->insert(row_factor->end(), y.size(),
+                             h.grid.effectivePoints() / static_cast<double>(h.grid.x.size()));
       }
     }
-    return total / n;
+    return r;
+  }
+
+  double effectiveObservations() const {
+    double n = 0.0;
+    for (const auto& s : *lab)
+      for (const auto& h : s) n += h.grid.effectivePoints();
+    return n;
+  }
+
+  // Robust misfit of every history, per effective observation.
+  double operator()(const std::vector<double>& values) const {
+    std::vector<double> a;
+    const auto r = residuals(values, &a);
+    double total = 0.0;
+    for (std::size_t j = 0; j < r.size(); ++j) total += a[j] * lossValue(r[j], c->loss);
+    return total / effectiveObservations();
   }
 };
 
@@ -430,6 +450,15 @@ bridge::RunOutcome runCase(const bridge::JsonDocument& doc, const bridge::RunCon
                          {"balance_rel_error", r.result.balance_rel_error},
                          {"curves", curves}});
   }
+  // 95 % intervals, linearised at the best point (fitting/uncertainty.hpp):
+  // the noise variance from the robust misfit over the degrees of freedom.
+  std::vector<double> row_factor, stderr_;
+  const auto r_best = objective.residuals(best.parameters, &row_factor);
+  const double n_eff = objective.effectiveObservations();
+  const double dof = n_eff - static_cast<double>(params.size());
+  const double s2 = dof > 0.0 ? best.value * n_eff / dof : NAN;
+  const auto intervals = linearisedIntervals([&](const std::vector<double>& v) { return objective.residuals(v); },
+                                             row_factor, c.loss, n_eff, s2, params, best.parameters, stderr_);
   json parameters = json::array();
   std::ostringstream answer;
   const double nrms = std::sqrt(sum2 / count);
@@ -438,16 +467,23 @@ bridge::RunOutcome runCase(const bridge::JsonDocument& doc, const bridge::RunCon
   for (std::size_t k = 0; k < c.params.size(); ++k) {
     const Parameter& p = c.params[k].param;
     const bool at_bound = std::abs(toUnit(p, best.parameters[k]) - 0.5) > 0.499;
+    const bool finite = std::isfinite(intervals[k].lower) && std::isfinite(intervals[k].upper);
     parameters.push_back({{"name", p.name},
                           {"set", c.params[k].set},
                           {"value", best.parameters[k]},
+                          {"standard_error", std::isfinite(stderr_[k]) ? json(stderr_[k]) : json(nullptr)},
+                          {"jacobian_95", finite ? json{intervals[k].lower, intervals[k].upper} : json(nullptr)},
                           {"bounds", {p.lower, p.upper}},
                           {"at_bound", at_bound}});
     // (in engineers' units, from the unit suffix of the key it sets)
     const std::string& key = c.params[k].set.front();
     const bridge::DisplayUnit u = bridge::displayUnit(key.substr(key.find_last_of('.') + 1));
     answer << "; " << p.name << " " << bridge::showNumber(best.parameters[k] * u.scale, 4)
-           << (u.unit == "-" ? "" : " " + u.unit) << (at_bound ? " (at its bound)" : "");
+           << (u.unit == "-" ? "" : " " + u.unit);
+    if (finite)
+      answer << " [" << bridge::showNumber(intervals[k].lower * u.scale, 4) << ", "
+             << bridge::showNumber(intervals[k].upper * u.scale, 4) << "]";
+    answer << (at_bound ? " (at its bound)" : "");
   }
   answer << "\n";
 

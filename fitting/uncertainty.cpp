@@ -23,23 +23,18 @@ double studentT975(double dof) {
   return z + (z3 + z) / (4.0 * dof) + (5.0 * z5 + 16.0 * z3 + 3.0 * z) / (96.0 * dof * dof);
 }
 
-std::vector<Interval> jacobianIntervals(const CurveSet& set, const std::vector<Parameter>& params,
-                                        const std::vector<double>& theta, std::vector<double>& stderr_out,
-                                        std::vector<double>* covariance_out) {
+std::vector<Interval> linearisedIntervals(const ResidualFunction& residuals, const std::vector<double>& row_factor,
+                                          const LossSettings& loss, double n_eff, double s2,
+                                          const std::vector<Parameter>& params, const std::vector<double>& theta,
+                                          std::vector<double>& stderr_out, std::vector<double>* covariance_out) {
   const std::size_t p = theta.size();
   if (covariance_out != nullptr) covariance_out->clear();
-  const auto r0 = residuals(set, theta);
+  const auto r0 = residuals(theta);
   const std::size_t m = r0.size();
-  // Row weights: effective-point factor of the row's curve times the robust weight.
+  // Row weights: the row's factor (effective points of its curve) times the robust weight.
   Eigen::VectorXd w(static_cast<Eigen::Index>(m));
-  {
-    std::size_t row = 0;
-    for (const auto& g : set.grids) {
-      const double a = g.effectivePoints() / static_cast<double>(g.x.size());
-      for (std::size_t i = 0; i < g.x.size(); ++i, ++row)
-        w[static_cast<Eigen::Index>(row)] = a * lossWeight(r0[row], set.loss);
-    }
-  }
+  for (std::size_t row = 0; row < m; ++row)
+    w[static_cast<Eigen::Index>(row)] = row_factor[row] * lossWeight(r0[row], loss);
   Eigen::MatrixXd J(static_cast<Eigen::Index>(m), static_cast<Eigen::Index>(p));
   std::vector<double> scale(p, 1.0);
   for (std::size_t j = 0; j < p; ++j) {
@@ -53,8 +48,8 @@ std::vector<Interval> jacobianIntervals(const CurveSet& set, const std::vector<P
     // both sides outside: no linearised interval.
     const auto at = [&](const std::vector<double>& t, std::vector<double>& r) {
       try {
-        r = residuals(set, t);
-        return true;
+        r = residuals(t);
+        return r.size() == m;
       } catch (const Infeasible&) {
         return false;
       }
@@ -75,12 +70,10 @@ std::vector<Interval> jacobianIntervals(const CurveSet& set, const std::vector<P
     for (std::size_t i = 0; i < m; ++i)
       J(static_cast<Eigen::Index>(i), static_cast<Eigen::Index>(j)) = d * (rp[i] - rm[i]) / span;
   }
-  const double n_eff = effectiveObservations(set);
   const double dof = n_eff - static_cast<double>(p);
   std::vector<Interval> out(p, Interval{kNaN, kNaN});
   stderr_out.assign(p, kNaN);
   if (!(dof >= 1.0)) return out;
-  const double s2 = residualVariance(set, theta);
   if (!std::isfinite(s2)) return out;
   const Eigen::MatrixXd A = J.transpose() * w.asDiagonal() * J;
   Eigen::FullPivLU<Eigen::MatrixXd> lu(A);
@@ -102,6 +95,17 @@ std::vector<Interval> jacobianIntervals(const CurveSet& set, const std::vector<P
     out[j] = {theta[j] - t * stderr_out[j], theta[j] + t * stderr_out[j]};
   }
   return out;
+}
+
+std::vector<Interval> jacobianIntervals(const CurveSet& set, const std::vector<Parameter>& params,
+                                        const std::vector<double>& theta, std::vector<double>& stderr_out,
+                                        std::vector<double>* covariance_out) {
+  std::vector<double> row_factor;
+  for (const auto& g : set.grids)
+    row_factor.insert(row_factor.end(), g.x.size(), g.effectivePoints() / static_cast<double>(g.x.size()));
+  return linearisedIntervals([&](const std::vector<double>& t) { return residuals(set, t); }, row_factor, set.loss,
+                             effectiveObservations(set), residualVariance(set, theta), params, theta, stderr_out,
+                             covariance_out);
 }
 
 namespace {

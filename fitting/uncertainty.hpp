@@ -3,6 +3,7 @@
 /// 95 % confidence intervals of fitted law parameters: from the Jacobian at the
 /// optimum (linearised least squares), from the profile likelihood, and from the
 /// spread of replicate fits (docs/fitting.md, "Uncertainty").
+#include <functional>
 #include <vector>
 
 #include "fitting/curve_model.hpp"
@@ -21,6 +22,25 @@ struct Interval {
 double studentT975(double dof);
 /// 95 % quantile of chi-square with one degree of freedom (3.841).
 constexpr double kChiSquare1_95 = 3.841458820694124;
+
+/// Residuals of a fit as a function of its parameters (physical units):
+/// normalised (model - data) / scale, one per observation row; throws
+/// Infeasible outside the model's domain.
+using ResidualFunction = std::function<std::vector<double>(const std::vector<double>&)>;
+
+/// The linearised intervals of any least-squares fit (jacobianIntervals
+/// below is this for a law's curves): J = d r / d theta by central
+/// differences of `residuals` (one-sided at the edge of the domain), row
+/// weights `row_factor`[i] times the robust IRLS weight at the optimum,
+/// cov = s2 (J^T W J)^-1, theta +- t_{n_eff - p} sqrt(cov). `n_eff` is the
+/// effective number of observations, `s2` the noise variance of the
+/// normalised residuals. Standard errors into `stderr_out` (NaN when
+/// singular), the covariance (physical units) into `covariance_out` if given.
+std::vector<Interval> linearisedIntervals(const ResidualFunction& residuals, const std::vector<double>& row_factor,
+                                          const LossSettings& loss, double n_eff, double s2,
+                                          const std::vector<Parameter>& params, const std::vector<double>& theta,
+                                          std::vector<double>& stderr_out,
+                                          std::vector<double>* covariance_out = nullptr);
 
 /// Linearised intervals: cov = s^2 (J^T W J)^-1 with J = d r / d theta (central
 /// differences), W = a_c w_i (effective-point factor times the robust IRLS weight

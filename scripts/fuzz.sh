@@ -53,7 +53,7 @@ micro_cli=MicroCell.*:CellFile.*:MicroCheckpoint.AKilled*:MicroLab.*:NettingScen
 micro_cli=$micro_cli:NettingEngine.DrivenWire*:Porosity.SceneReports*:BlockFill.SceneReports*:Grading.BadTables*
 "$dir"/tests/test_micro --gtest_brief=1 \
   --gtest_filter=-$micro_cli:MicroDeterminism.*:NettingEngine.ClosedBoxHangingFromItsTopFaceReachesEquilibrium
-"$dir"/tests/test_fitting --gtest_brief=1 --gtest_filter=-FitCli.*
+"$dir"/tests/test_fitting --gtest_brief=1 --gtest_filter=-FitCli.*:FitMacro.*
 
 seeds() {  # target -> seed folder, filled with the project's own files of that type
   local d=$dir/seeds/$1

@@ -3,9 +3,12 @@
 // come back), and bad input named by its key before anything runs.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <fstream>
+#include <random>
 
 #include "bridge/law_file.hpp"
+#include "bridge/output.hpp"
 #include "tests/support/run_gabion.hpp"
 
 namespace gabion::fitting {
@@ -102,6 +105,69 @@ TEST(FitMacro, TheImpactLawComesBackFromItsOwnHistories) {
   EXPECT_EQ(res["scenarios"].size(), 2u);
   EXPECT_EQ(res["plots"].size(), 4u);
   EXPECT_TRUE(fs::exists(dir / "out" / "fit_macro_2_boulder_force_N.png"));
+  // Noise-free histories: the 95 % intervals are there, hold the value and
+  // are narrow (0.1 % of it).
+  for (const auto& p : res["parameters"]) {
+    ASSERT_TRUE(p["jacobian_95"].is_array()) << p.dump();
+    const double v = p["value"].get<double>(), lo = p["jacobian_95"][0].get<double>(),
+                 hi = p["jacobian_95"][1].get<double>();
+    EXPECT_LE(lo, v);
+    EXPECT_GE(hi, v);
+    EXPECT_LT(hi - lo, 1e-3 * v) << p.dump();
+  }
+}
+
+// The same histories with Gaussian noise of 2 % of each history's largest
+// value (seeded): the linearised 95 % intervals hold the truth, and their
+// width is of the order the noise gives (not zero, not the bounds).
+TEST(FitMacro, IntervalsHoldTheTruthOnNoisyHistories) {
+  const fs::path dir = testing::scratchDir("fit_macro_noise");
+  std::ofstream(dir / "truth.json") << smallWall(6e4, 800.0).dump(2);
+  std::ofstream(dir / "wall.json") << smallWall(1e5, 100.0).dump(2);
+  std::mt19937_64 rng(20261127);
+  std::normal_distribution<double> noise(0.0, 1.0);
+  json fit = fitCase(dir);
+  for (int i = 0; i < 2; ++i) {
+    const int v = i == 0 ? 6 : 10;
+    const fs::path run = dir / ("v" + std::to_string(v));
+    ASSERT_EQ(runGabion("run " + (dir / "truth.json").string() + " -q --set boulder.velocity_m_s=" + std::to_string(v) +
+                        " -o " + run.string())
+                  .exit_code,
+              0);
+    const bridge::H5Reader h5(run / "result.h5");
+    const auto t = h5.read("/series/time_s");
+    const auto f = h5.read("/series/boulder_force_N"), pen = h5.read("/series/penetration_m");
+    const double fmax = *std::max_element(f.begin(), f.end()), pmax = *std::max_element(pen.begin(), pen.end());
+    const fs::path csv = dir / ("noisy_" + std::to_string(v) + ".csv");
+    std::ofstream out(csv);
+    out.precision(12);
+    out << "time_s,boulder_force_N,penetration_m\n";
+    // (zero before the contact, as measured: the contact is where the force leaves zero)
+    const auto contact =
+        static_cast<std::size_t>(std::find_if(f.begin(), f.end(), [](double x) { return x > 0; }) - f.begin());
+    for (std::size_t k = 0; k < t.size(); ++k) {
+      const bool after = k >= contact;
+      out << t[k] << "," << (after ? f[k] + 0.02 * fmax * noise(rng) : 0.0) << ","
+          << (after ? pen[k] + 0.02 * pmax * noise(rng) : 0.0) << "\n";
+    }
+    fit["scenarios"][i]["curves"] = {{{"quantity", "boulder_force_N"}, {"file", csv.string()}},
+                                     {{"quantity", "penetration_m"}, {"file", csv.string()}}};
+  }
+  std::ofstream(dir / "fit.json") << fit.dump(2);
+  const auto r = runGabion("run " + (dir / "fit.json").string() + " -q -o " + (dir / "out").string());
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  const json summary = json::parse(std::ifstream(dir / "out" / "summary.json"));
+  const json& res = summary.contains("results") ? summary["results"] : summary;
+  const double truth[] = {6e4, 800.0};
+  for (std::size_t k = 0; k < 2; ++k) {
+    const json& p = res["parameters"][k];
+    ASSERT_TRUE(p["jacobian_95"].is_array()) << p.dump();
+    const double lo = p["jacobian_95"][0].get<double>(), hi = p["jacobian_95"][1].get<double>();
+    EXPECT_LE(lo, truth[k]) << p.dump();
+    EXPECT_GE(hi, truth[k]) << p.dump();
+    EXPECT_GT(hi - lo, 1e-4 * truth[k]) << p.dump();
+    EXPECT_LT(hi - lo, 0.2 * truth[k]) << p.dump();
+  }
 }
 
 // Bad input exits 2 and names the fit case's key before anything runs.
