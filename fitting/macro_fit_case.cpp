@@ -453,7 +453,7 @@ bridge::RunOutcome runCase(const bridge::JsonDocument& doc, const bridge::RunCon
   // 95 % intervals, linearised at the best point (fitting/uncertainty.hpp):
   // the noise variance from the robust misfit over the degrees of freedom.
   std::vector<double> row_factor, stderr_;
-  const auto r_best = objective.residuals(best.parameters, &row_factor);
+  objective.residuals(best.parameters, &row_factor);  // (the rows' weights)
   const double n_eff = objective.effectiveObservations();
   const double dof = n_eff - static_cast<double>(params.size());
   const double s2 = dof > 0.0 ? best.value * n_eff / dof : NAN;
