@@ -29,7 +29,8 @@ namespace {
 const std::vector<std::string> kTests = {"axial", "lateral", "interface", "impact"};
 /// Parameters with default bounds (set from the curves or the other bounds
 /// at run time): the densifying model's beyond the bilinear ones, and the
-/// softening model's beyond the elastic-perfectly plastic ones.
+/// softening (and softening_rate) model's beyond the elastic-perfectly
+/// plastic ones.
 const char* const kDefaultedParameters[] = {
     "densification_onset_m", "densification_stiffness_N_m", "softening_onset_m", "softening_stiffness_N_m",
     "residual_ratio",        "rate_coefficient_N_s2_m2",    "rate_growth_m"};
@@ -71,8 +72,8 @@ void defaultSofteningBounds(Bounds& b, const std::vector<PathGrid>& grids) {
     force = std::max(force, g.scale);
     for (double r : g.rate) rate = std::max(rate, r);
   }
-  if (b.count("rate_coefficient_N_s2_m2") == 0 && rate > 0.0)
-    b["rate_coefficient_N_s2_m2"] = {0.0, 2.0 * force / (rate * rate)};
+  if (!(rate > 0.0)) rate = 1.0;  // (curves that never indent: any bound; the data cannot see the term)
+  if (b.count("rate_coefficient_N_s2_m2") == 0) b["rate_coefficient_N_s2_m2"] = {0.0, 2.0 * force / (rate * rate)};
   if (b.count("rate_growth_m") == 0) b["rate_growth_m"] = {0.0, largestX(grids)};
 }
 
