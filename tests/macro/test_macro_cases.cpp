@@ -219,6 +219,12 @@ TEST(MacroCli, ImpactOutputsSetAndLawOverride) {
   r = runGabion("check " + kSource + "/cases/micro_cc.json --law " + (dir / "one.json").string());
   EXPECT_EQ(r.exit_code, 2) << r.output;
   EXPECT_NE(r.output.find("reads no laws"), std::string::npos) << r.output;
+  // A macro case that names no laws yet takes them from --law.
+  nlohmann::json bare = nlohmann::json::parse(std::ifstream(kWallCase));
+  bare.erase("law_file");
+  std::ofstream(dir / "bare.json") << bare.dump(2);
+  r = runGabion("check " + (dir / "bare.json").string() + " --law " + kSource + "/cases/laws/illustrative.json");
+  EXPECT_EQ(r.exit_code, 0) << r.output;
 }
 
 // Repeated impacts through a case: per-impact results in the summary.
