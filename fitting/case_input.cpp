@@ -1,6 +1,9 @@
 #include "fitting/case_input.hpp"
 
+#include <algorithm>
 #include <cmath>
+#include <iomanip>
+#include <sstream>
 
 #include "bridge/errors.hpp"
 #include "bridge/output.hpp"
@@ -176,6 +179,62 @@ LossSettings readLoss(const std::optional<JsonReader>& r, std::size_t& grid_poin
   l.scale = r->number("loss_scale", l.scale, Check::Positive);
   grid_points = static_cast<std::size_t>(r->integer("grid_points", static_cast<long long>(grid_points), 10));
   return l;
+}
+
+std::vector<CaseParameter> readCaseParameters(const JsonReader& root, const std::string& set_example,
+                                              bool name_required) {
+  const auto params = root.objects("parameters", true);
+  if (params.empty()) root.fail("parameters", "at least one parameter is required");
+  std::vector<CaseParameter> out;
+  for (const auto& p : params) {
+    CaseParameter cp;
+    const std::string name = name_required ? p.string("name") : std::string();
+    const auto b = p.numbers("bounds", Check::Finite, 2);
+    if (b.size() != 2 || !(b[1] > b[0])) p.fail("bounds", "must be [lower, upper] with upper > lower");
+    const std::string scale = p.choice("scale", {"auto", "log", "linear"}, "auto");
+    if (scale == "log" && !(b[0] > 0.0)) p.fail("scale", "a log scale needs a positive lower bound");
+    const nlohmann::json& set = p.raw("set");
+    if (set.is_string()) {
+      cp.set.push_back(set.get<std::string>());
+    } else if (set.is_array() && !set.empty()) {
+      for (const auto& s : set) {
+        if (!s.is_string()) p.fail("set", "must be a key path or an array of key paths");
+        cp.set.push_back(s.get<std::string>());
+      }
+    } else {
+      p.fail("set", "must be a key path (\"" + set_example + "\") or an array of them");
+    }
+    cp.param = makeParameter(name_required ? name : p.string("name", cp.set.front()), b[0], b[1]);
+    if (scale != "auto") cp.param.log_scale = scale == "log";
+    out.push_back(std::move(cp));
+  }
+  return out;
+}
+
+std::string fullPrecision(double v) {
+  std::ostringstream s;
+  s << std::setprecision(17) << v;
+  return s.str();
+}
+
+bridge::JsonDocument withParameters(const bridge::JsonDocument& base, const std::vector<CaseParameter>& params,
+                                    const std::vector<double>& values) {
+  bridge::JsonDocument doc(base.json(), base.file());
+  for (std::size_t i = 0; i < params.size(); ++i)
+    for (const auto& path : params[i].set) doc.applySet(path + "=" + fullPrecision(values[i]));
+  return doc;
+}
+
+std::vector<double> midpoint(const std::vector<CaseParameter>& params) {
+  std::vector<double> v;
+  for (const auto& p : params) v.push_back(fromUnit(p.param, 0.5));
+  return v;
+}
+
+bool setPathMatches(const std::string& set, const std::string& pointer) {
+  std::string path = "/" + set;
+  std::replace(path.begin(), path.end(), '.', '/');
+  return !pointer.empty() && (pointer.rfind(path, 0) == 0 || path.rfind(pointer, 0) == 0);
 }
 
 Bounds readBounds(const JsonReader& r, const std::vector<std::string>& names) {

@@ -72,6 +72,31 @@ LossSettings readLoss(const std::optional<bridge::JsonReader>& r, std::size_t& g
 /// Reads {"name": [lower, upper], ...} for the given names (all required).
 Bounds readBounds(const bridge::JsonReader& r, const std::vector<std::string>& names);
 
+/// A parameter of a case run inside the objective (fit.micro, fit.macro):
+/// its search range and the key paths of the run's case it is written to.
+struct CaseParameter {
+  Parameter param;
+  std::vector<std::string> set;  ///< dotted paths for JsonDocument::applySet
+};
+
+/// Reads "parameters": [{"name", "set", "bounds", "scale"}, ...] (at least
+/// one): `set` a key path or a list of them (`set_example` shows one in the
+/// message), `bounds` [lower, upper], `scale` auto, log or linear. `name` is
+/// required when `name_required`, else it defaults to the first key path.
+std::vector<CaseParameter> readCaseParameters(const bridge::JsonReader& root, const std::string& set_example,
+                                              bool name_required);
+/// `base` with each parameter's value written at its keys (full precision).
+bridge::JsonDocument withParameters(const bridge::JsonDocument& base, const std::vector<CaseParameter>& params,
+                                    const std::vector<double>& values);
+/// The middle of every parameter's range (in its search scale).
+std::vector<double> midpoint(const std::vector<CaseParameter>& params);
+/// True when the key path `set` (dotted) and the JSON pointer `pointer`
+/// name the same value or one holds the other: an error at `pointer` of a
+/// case that had `set` written comes from it.
+bool setPathMatches(const std::string& set, const std::string& pointer);
+/// A number as written into a case by withParameters (17 digits).
+std::string fullPrecision(double v);
+
 /// The folder relative paths in a case are resolved against.
 std::filesystem::path caseDirectory(const bridge::JsonDocument& doc);
 

@@ -2,7 +2,6 @@
 
 #include <algorithm>
 #include <cmath>
-#include <iomanip>
 #include <sstream>
 
 #include "bridge/cost.hpp"
@@ -38,12 +37,6 @@ const std::vector<double>& quantityOf(const macro::Recording& r, const std::stri
   return r.force_N;
 }
 
-/// A law (or case) parameter and the keys of the macro case it is written to.
-struct MacroParameter {
-  Parameter param;
-  std::vector<std::string> set;  ///< dotted paths for JsonDocument::applySet
-};
-
 /// A measured history of one scenario and the series it is compared with.
 struct History {
   std::string quantity;  ///< one of kQuantities
@@ -62,19 +55,13 @@ struct Scenario {
 
 struct MacroFitCase {
   fs::path macro_case;
-  std::vector<MacroParameter> params;
+  std::vector<CaseParameter> params;
   std::vector<Scenario> scenarios;
   OptimizerSettings optimizer;
   LossSettings loss;
   std::size_t grid_points = 200;
   bool plots = true;
 };
-
-std::string formatValue(double v) {
-  std::ostringstream s;
-  s << std::setprecision(17) << v;
-  return s.str();
-}
 
 // The macro case with its laws embedded (a law file's materials under
 // "laws"), so that every parameter is a key of the case.
@@ -105,33 +92,7 @@ MacroFitCase readMacroFitCase(const bridge::JsonDocument& doc) {
   c.macro_case = dir / root.string("macro_case");
   std::error_code ec;
   if (!fs::is_regular_file(c.macro_case, ec)) root.fail("macro_case", "no such case file " + c.macro_case.string());
-  const auto params = root.objects("parameters", true);
-  if (params.empty()) root.fail("parameters", "at least one parameter is required");
-  for (const auto& p : params) {
-    MacroParameter mp;
-    const auto b = p.numbers("bounds", Check::Finite, 2);
-    if (b.size() != 2 || !(b[1] > b[0])) p.fail("bounds", "must be [lower, upper] with upper > lower");
-    const json& set = p.raw("set");
-    if (set.is_string()) {
-      mp.set.push_back(set.get<std::string>());
-    } else if (set.is_array() && !set.empty()) {
-      for (const auto& s : set) {
-        if (!s.is_string()) p.fail("set", "must be a key path or an array of key paths");
-        mp.set.push_back(s.get<std::string>());
-      }
-    } else {
-      p.fail("set", "must be a key path (\"laws.materials.front.impact.yield_force_N\") or an array of them");
-    }
-    mp.param = makeParameter(p.string("name", mp.set.front()), b[0], b[1]);
-    const std::string scale = p.choice("scale", {"auto", "log", "linear"}, "auto");
-    if (scale == "log") {
-      if (!(b[0] > 0.0)) p.fail("scale", "a log scale needs a positive lower bound");
-      mp.param.log_scale = true;
-    } else if (scale == "linear") {
-      mp.param.log_scale = false;
-    }
-    c.params.push_back(mp);
-  }
+  c.params = readCaseParameters(root, "laws.materials.front.impact.yield_force_N", false);
   const auto scenarios = root.objects("scenarios", true);
   if (scenarios.empty()) root.fail("scenarios", "at least one scenario is required");
   for (std::size_t i = 0; i < scenarios.size(); ++i) {
@@ -169,9 +130,7 @@ bridge::JsonDocument scenarioDocument(const bridge::JsonDocument& base, const Ma
                                       const std::vector<double>& values) {
   bridge::JsonDocument doc(base.json(), base.file());
   for (const auto& [path, value] : s.set) doc.applySet(path + "=" + value.dump());
-  for (std::size_t i = 0; i < c.params.size(); ++i)
-    for (const auto& path : c.params[i].set) doc.applySet(path + "=" + formatValue(values[i]));
-  return doc;
+  return withParameters(doc, c.params, values);
 }
 
 struct MacroRun {
@@ -300,9 +259,7 @@ struct Objective {
 };
 
 std::vector<double> midpoint(const MacroFitCase& c) {
-  std::vector<double> v;
-  for (const auto& p : c.params) v.push_back(fromUnit(p.param, 0.5));
-  return v;
+  return midpoint(c.params);
 }
 
 // An InputError of the case with the parameters (and a scenario's keys)
@@ -310,16 +267,12 @@ std::vector<double> midpoint(const MacroFitCase& c) {
 [[noreturn]] void rethrowAsCaseError(const bridge::JsonDocument& doc, const MacroFitCase& c, std::size_t scenario,
                                      const bridge::InputError& e) {
   std::string at = "/macro_case";
-  const auto matches = [&](const std::string& set) {
-    std::string path = "/" + set;
-    std::replace(path.begin(), path.end(), '.', '/');
-    return !e.pointer().empty() && (e.pointer().rfind(path, 0) == 0 || path.rfind(e.pointer(), 0) == 0);
-  };
   for (std::size_t k = 0; k < c.params.size(); ++k)
     for (const std::string& set : c.params[k].set)
-      if (matches(set)) at = "/parameters/" + std::to_string(k) + "/set";
+      if (setPathMatches(set, e.pointer())) at = "/parameters/" + std::to_string(k) + "/set";
   for (const auto& [key, value] : c.scenarios[scenario].set)
-    if (matches(key)) at = c.scenarios[scenario].pointer + "/set/" + bridge::escapePointerToken(key);
+    if (setPathMatches(key, e.pointer()))
+      at = c.scenarios[scenario].pointer + "/set/" + bridge::escapePointerToken(key);
   throw bridge::InputError(doc.file(), at,
                            "the macro case of " + c.scenarios[scenario].name +
                                " with the parameters at the middle of their bounds is not valid: " + e.what());

@@ -6,7 +6,6 @@
 #include <atomic>
 #include <chrono>
 #include <cmath>
-#include <iomanip>
 #include <sstream>
 
 #include "bridge/cost.hpp"
@@ -30,12 +29,6 @@ using nlohmann::json;
 
 namespace {
 
-/// A micro parameter and the keys of the micro case it is written to.
-struct MicroParameter {
-  Parameter param;
-  std::vector<std::string> set;  ///< dotted paths for JsonDocument::applySet
-};
-
 /// How the model curve is read from the micro run's result.h5.
 struct ModelCurve {
   bool wall = false;
@@ -45,7 +38,7 @@ struct ModelCurve {
 
 struct MicroCase {
   fs::path micro_case;
-  std::vector<MicroParameter> params;
+  std::vector<CaseParameter> params;
   ModelCurve model;
   std::vector<CurveSource> lab;
   LossSettings loss;
@@ -54,19 +47,10 @@ struct MicroCase {
   bool resume = true;
 };
 
-std::string formatValue(double v) {
-  std::ostringstream s;
-  s << std::setprecision(17) << v;
-  return s.str();
-}
-
 // The base micro case with `values` written at the parameters' keys.
 bridge::JsonDocument substituted(const bridge::JsonDocument& base, const MicroCase& c,
                                  const std::vector<double>& values) {
-  bridge::JsonDocument doc(base.json(), base.file());
-  for (std::size_t i = 0; i < c.params.size(); ++i)
-    for (const auto& path : c.params[i].set) doc.applySet(path + "=" + formatValue(values[i]));
-  return doc;
+  return withParameters(base, c.params, values);
 }
 
 const bridge::CaseKind& microKind(const bridge::JsonDocument& base) {
@@ -89,34 +73,7 @@ MicroCase readMicroCase(const bridge::JsonDocument& doc) {
   c.micro_case = dir / root.string("micro_case");
   std::error_code ec;
   if (!fs::is_regular_file(c.micro_case, ec)) root.fail("micro_case", "no such case file " + c.micro_case.string());
-  const auto params = root.objects("parameters", true);
-  if (params.empty()) root.fail("parameters", "at least one parameter is required");
-  for (const auto& p : params) {
-    MicroParameter mp;
-    const std::string name = p.string("name");
-    const auto b = p.numbers("bounds", Check::Finite, 2);
-    if (b.size() != 2 || !(b[1] > b[0])) p.fail("bounds", "must be [lower, upper] with upper > lower");
-    mp.param = makeParameter(name, b[0], b[1]);
-    const std::string scale = p.choice("scale", {"auto", "log", "linear"}, "auto");
-    if (scale == "log") {
-      if (!(b[0] > 0.0)) p.fail("scale", "a log scale needs a positive lower bound");
-      mp.param.log_scale = true;
-    } else if (scale == "linear") {
-      mp.param.log_scale = false;
-    }
-    const json& set = p.raw("set");
-    if (set.is_string()) {
-      mp.set.push_back(set.get<std::string>());
-    } else if (set.is_array() && !set.empty()) {
-      for (const auto& s : set) {
-        if (!s.is_string()) p.fail("set", "must be a key path or an array of key paths");
-        mp.set.push_back(s.get<std::string>());
-      }
-    } else {
-      p.fail("set", "must be a key path (\"materials.grain.normal_stiffness_N_m\") or an array of them");
-    }
-    c.params.push_back(mp);
-  }
+  c.params = readCaseParameters(root, "materials.grain.normal_stiffness_N_m", true);
   const JsonReader m = root.object("model_curve");
   if (auto w = m.optionalObject("wall")) {
     c.model.wall = true;
@@ -173,9 +130,9 @@ std::vector<double> modelAt(const bridge::Curve& model, const std::vector<double
   std::vector<double> out;
   for (double xi : x) {
     if (mx.size() < 2 || xi > mx.back() + 1e-12 * std::abs(mx.back()) || xi < mx.front())
-      throw std::runtime_error("the micro run's curve does not cover the lab curve (x = " + formatValue(xi) +
-                               " outside [" + formatValue(mx.empty() ? 0.0 : mx.front()) + ", " +
-                               formatValue(mx.empty() ? 0.0 : mx.back()) + "]): lengthen the micro run");
+      throw std::runtime_error("the micro run's curve does not cover the lab curve (x = " + fullPrecision(xi) +
+                               " outside [" + fullPrecision(mx.empty() ? 0.0 : mx.front()) + ", " +
+                               fullPrecision(mx.empty() ? 0.0 : mx.back()) + "]): lengthen the micro run");
     const auto it = std::lower_bound(mx.begin(), mx.end(), xi);
     const std::size_t j =
         it == mx.begin() ? 1 : std::min<std::size_t>(static_cast<std::size_t>(it - mx.begin()), mx.size() - 1);
@@ -232,9 +189,7 @@ std::vector<PathGrid> labGrids(const MicroCase& c) {
 }
 
 std::vector<double> midpoint(const MicroCase& c) {
-  std::vector<double> v;
-  for (const auto& p : c.params) v.push_back(fromUnit(p.param, 0.5));
-  return v;
+  return midpoint(c.params);
 }
 
 void checkCase(const bridge::JsonDocument& doc) {
@@ -255,12 +210,8 @@ void checkCase(const bridge::JsonDocument& doc) {
   } catch (const bridge::InputError& e) {
     std::string at = "/micro_case";
     for (std::size_t k = 0; k < c.params.size(); ++k)
-      for (const std::string& set : c.params[k].set) {
-        std::string path = "/" + set;
-        std::replace(path.begin(), path.end(), '.', '/');
-        if (!e.pointer().empty() && (e.pointer().rfind(path, 0) == 0 || path.rfind(e.pointer(), 0) == 0))
-          at = "/parameters/" + std::to_string(k) + "/set";
-      }
+      for (const std::string& set : c.params[k].set)
+        if (setPathMatches(set, e.pointer())) at = "/parameters/" + std::to_string(k) + "/set";
     throw bridge::InputError(
         doc.file(), at,
         "the micro case with the parameters at the middle of their bounds is not valid: " + std::string(e.what()));
