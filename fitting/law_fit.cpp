@@ -134,6 +134,16 @@ const nlohmann::json& reportedInterval(const nlohmann::json& parameter) {
   return profile.is_null() ? parameter.at("jacobian_95") : profile;
 }
 
+std::string describeValue(const std::string& key, double value, const nlohmann::json& interval) {
+  using bridge::showNumber;
+  const bridge::DisplayUnit u = bridge::displayUnit(key);
+  std::string s = showNumber(u.scale * value, 4) + (u.unit == "-" ? "" : " " + u.unit);
+  if (!interval.is_null())
+    s += " [" + showNumber(u.scale * interval[0].get<double>(), 4) + ", " +
+         showNumber(u.scale * interval[1].get<double>(), 4) + "]";
+  return s;
+}
+
 std::string describeFit(const std::string& law, const nlohmann::json& entry) {
   using bridge::showNumber;
   const double nrms = entry.at("nrms").get<double>();
@@ -143,12 +153,7 @@ std::string describeFit(const std::string& law, const nlohmann::json& entry) {
   const char* sep = " ";
   for (const auto& [name, p] : entry.at("parameters").items()) {
     const bridge::DisplayUnit u = bridge::displayUnit(name);
-    line << sep << u.stem << " " << showNumber(u.scale * p.at("value").get<double>(), 4)
-         << (u.unit == "-" ? "" : " " + u.unit);
-    const nlohmann::json& iv = reportedInterval(p);
-    if (!iv.is_null())
-      line << " [" << showNumber(u.scale * iv[0].get<double>(), 4) << ", "
-           << showNumber(u.scale * iv[1].get<double>(), 4) << "]";
+    line << sep << u.stem << " " << describeValue(name, p.at("value").get<double>(), reportedInterval(p));
     if (p.contains("replicate_mean_95") && !p.at("replicate_mean_95").is_null()) {
       const nlohmann::json& rv = p.at("replicate_mean_95");
       line << ", between replicates [" << showNumber(u.scale * rv[0].get<double>(), 4) << ", "

@@ -90,6 +90,10 @@ const nlohmann::json& reportedInterval(const nlohmann::json& parameter);
 /// interval (profile, else linearised); "poor fit" past kPoorFitNrms.
 std::string describeFit(const std::string& law, const nlohmann::json& entry);
 
+/// A value named by its SI key (`yield_force_N`) in engineers' units with its
+/// 95 % interval [lower, upper] (a JSON pair; null: none): "81.73 kN [80.05, 83.48]".
+std::string describeValue(const std::string& key, double value, const nlohmann::json& interval);
+
 /// The summary.json entry of a result (parameters, intervals, residual,
 /// evaluations, wall time, chosen model and criterion values).
 nlohmann::json toJson(const LawFitResult& r, Criterion criterion);

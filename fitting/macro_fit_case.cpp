@@ -430,13 +430,9 @@ bridge::RunOutcome runCase(const bridge::JsonDocument& doc, const bridge::RunCon
                           {"at_bound", at_bound}});
     // (in engineers' units, from the unit suffix of the key it sets)
     const std::string& key = c.params[k].set.front();
-    const bridge::DisplayUnit u = bridge::displayUnit(key.substr(key.find_last_of('.') + 1));
-    answer << "; " << p.name << " " << bridge::showNumber(best.parameters[k] * u.scale, 4)
-           << (u.unit == "-" ? "" : " " + u.unit);
-    if (finite)
-      answer << " [" << bridge::showNumber(intervals[k].lower * u.scale, 4) << ", "
-             << bridge::showNumber(intervals[k].upper * u.scale, 4) << "]";
-    answer << (at_bound ? " (at its bound)" : "");
+    answer << "; " << p.name << " "
+           << describeValue(key.substr(key.find_last_of('.') + 1), best.parameters[k], parameters.back()["jacobian_95"])
+           << (at_bound ? " (at its bound)" : "");
   }
   answer << "\n";
 
