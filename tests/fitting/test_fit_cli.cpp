@@ -19,6 +19,24 @@ using testing::runGabion;
 const fs::path kData = fs::path(GABION_TEST_DATA_DIR) / "fitting";
 const fs::path kCases = fs::path(GABION_SOURCE_DIR) / "cases";
 
+// A fit case of the impact law of material "cell" (the others from the
+// example base law): the candidate `models` on `curves`, no lock-up within
+// the curves (strain 0.5), ISRES with `evaluations` global evaluations.
+json impactFitCase(const json& models, const json& curves, int evaluations) {
+  return {
+      {"format", "gabion.case/1"},
+      {"kind", "fit"},
+      {"seed", 1},
+      {"material", {{"name", "cell"}}},
+      {"base_law", {{"file", (kCases / "data/fit/illustrative_law.json").string()}, {"material", "limestone_cell"}}},
+      {"lockup", {{"strain", 0.5}}},
+      {"optimizer", {{"global", "GN_ISRES"}, {"global_max_evaluations", evaluations}}},
+      {"impact",
+       {{"models", models},
+        {"curves", curves},
+        {"bounds", {{"stiffness_N_m", {1e5, 1e9}}, {"yield_force_N", {1e3, 1e6}}}}}}};
+}
+
 // A fit case of the axial law from one CSV curve, completed by the example base law.
 fs::path writeAxialCase(const fs::path& dir, const fs::path& csv) {
   const json c = {
@@ -138,18 +156,8 @@ TEST(FitCli, ASofteningImpactLawIsFittedWithItsDefaultBounds) {
     csv << u << "," << r.force_N + 800.0 * std::sin(7.0 * i) << "\n";  // +-1 % of the peak, deterministic
   }
   csv.close();
-  const json c = {
-      {"format", "gabion.case/1"},
-      {"kind", "fit"},
-      {"seed", 1},
-      {"material", {{"name", "cell"}}},
-      {"base_law", {{"file", (kCases / "data/fit/illustrative_law.json").string()}, {"material", "limestone_cell"}}},
-      {"lockup", {{"strain", 0.5}}},
-      {"optimizer", {{"global", "GN_ISRES"}, {"global_max_evaluations", 4000}}},
-      {"impact",
-       {{"models", {"elastic_perfectly_plastic", "softening"}},
-        {"curves", {{{"file", (out / "impact.csv").string()}, {"velocity_m_s", 10}}}},
-        {"bounds", {{"stiffness_N_m", {1e5, 1e9}}, {"yield_force_N", {1e3, 1e6}}}}}}};
+  const json c = impactFitCase({"elastic_perfectly_plastic", "softening"},
+                               {{{"file", (out / "impact.csv").string()}, {"velocity_m_s", 10}}}, 4000);
   std::ofstream(out / "case.json") << c.dump(2);
   const auto r = runGabion("run " + (out / "case.json").string() + " -q -o " + (out / "fit").string());
   ASSERT_EQ(r.exit_code, 0) << r.output;
@@ -190,18 +198,7 @@ TEST(FitCli, ARateImpactLawIsFittedFromCurvesWithTheirTimeAxis) {
     }
     curves.push_back({{"file", (out / name).string()}, {"velocity_m_s", v0}, {"t_column", "time_s"}});
   }
-  json c = {
-      {"format", "gabion.case/1"},
-      {"kind", "fit"},
-      {"seed", 1},
-      {"material", {{"name", "cell"}}},
-      {"base_law", {{"file", (kCases / "data/fit/illustrative_law.json").string()}, {"material", "limestone_cell"}}},
-      {"lockup", {{"strain", 0.5}}},
-      {"optimizer", {{"global", "GN_ISRES"}, {"global_max_evaluations", 10000}}},
-      {"impact",
-       {{"models", {"softening_rate"}},
-        {"curves", curves},
-        {"bounds", {{"stiffness_N_m", {1e5, 1e9}}, {"yield_force_N", {1e3, 1e6}}}}}}};
+  json c = impactFitCase({"softening_rate"}, curves, 10000);
   std::ofstream(out / "case.json") << c.dump(2);
   const auto r = runGabion("run " + (out / "case.json").string() + " -q -o " + (out / "fit").string());
   ASSERT_EQ(r.exit_code, 0) << r.output;
