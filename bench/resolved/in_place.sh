@@ -38,41 +38,38 @@ law=$(python3 -c "import json, sys; print(json.load(open(sys.argv[1]))['law_file
 [ -f "$fit_from" ] && [ -f "$law" ] || { echo "run bench/resolved/run.sh first" >&2; exit 2; }
 dir=$out/in_place
 mkdir -p "$dir/figures"
-# The pipeline's laws with the impact law of material "front" fitted anew;
-# no lock-up within the indentation the wall shows (half the edge).
-cat >"$dir/fit.json" <<JSON
+# Runs DIR/NAME.json into DIR/NAME and prints its answer line.
+run_case() {  # NAME
+  "$gabion" run "$dir/$1.json" -q -o "$dir/$1" >"$dir/$1.log" 2>&1 || { tail -n 3 "$dir/$1.log" >&2; exit 1; }
+  tail -n 1 "$dir/$1.log"
+}
+# A curve entry of a resolved wall's indentation curve; with "time", its time axis too.
+curve() {  # FILE VELOCITY [time]
+  printf '{"file": "%s", "path": "cyclic", "velocity_m_s": %s, "x_dataset": "/curves/impact/indentation_m", "y_dataset": "/curves/impact/force_N"%s}' \
+    "$1" "$2" "$([ "${3:-}" = time ] && echo ', "t_dataset": "/curves/impact/time_s"')"
+}
+# The pipeline's laws with the impact law of material "front" fitted anew
+# (no lock-up within the indentation the wall shows: half the edge), run;
+# its chart copied to figures/FIGURE.
+impact_fit() {  # NAME GLOBAL_EVALUATIONS MODELS CURVES BOUNDS FIGURE
+  cat >"$dir/$1.json" <<JSON
 {"format": "gabion.case/1", "kind": "fit", "seed": 1,
  "material": {"name": "front"},
  "base_law": {"file": "$law", "material": "front"},
  "lockup": {"strain": 0.5},
- "optimizer": {"global": "GN_ISRES", "global_max_evaluations": 4000},
- "impact": {"models": ["elastic_perfectly_plastic", "bilinear", "softening"],
-            "curves": [{"file": "$fit_from", "path": "cyclic", "velocity_m_s": 10,
-                        "x_dataset": "/curves/impact/indentation_m", "y_dataset": "/curves/impact/force_N"}],
-            "bounds": {"stiffness_N_m": [1e5, 1e9], "yield_force_N": [1e3, 1e6], "hardening_stiffness_N_m": [0, 1e7]}}}
+ "optimizer": {"global": "GN_ISRES", "global_max_evaluations": $2},
+ "impact": {"models": $3, "curves": $4, "bounds": $5}}
 JSON
-"$gabion" run "$dir/fit.json" -q -o "$dir/fit" >"$dir/fit.log" 2>&1 || { tail -n 3 "$dir/fit.log" >&2; exit 1; }
-tail -n 1 "$dir/fit.log"
-cp "$dir/fit/fit_impact.png" "$dir/figures/in_place_fit.png"
+  run_case "$1"
+  cp "$dir/$1/fit_impact.png" "$dir/figures/$6"
+}
+impact_fit fit 4000 '["elastic_perfectly_plastic", "bilinear", "softening"]' "[$(curve "$fit_from" 10)]" \
+  '{"stiffness_N_m": [1e5, 1e9], "yield_force_N": [1e3, 1e6], "hardening_stiffness_N_m": [0, 1e7]}' in_place_fit.png
 # The rate term: the walls at 6 and 10 m/s, each curve with its time axis.
 slow=$out/centre_6_m_s/resolved/result.h5
 if [ -f "$slow" ]; then
-  curve() {  # FILE VELOCITY: a curve entry with its time axis
-    printf '{"file": "%s", "path": "cyclic", "velocity_m_s": %s, "x_dataset": "/curves/impact/indentation_m", "y_dataset": "/curves/impact/force_N", "t_dataset": "/curves/impact/time_s"}' "$1" "$2"
-  }
-  cat >"$dir/fit_rate.json" <<JSON
-{"format": "gabion.case/1", "kind": "fit", "seed": 1,
- "material": {"name": "front"},
- "base_law": {"file": "$law", "material": "front"},
- "lockup": {"strain": 0.5},
- "optimizer": {"global": "GN_ISRES", "global_max_evaluations": 10000},
- "impact": {"models": ["softening", "softening_rate"],
-            "curves": [$(curve "$fit_from" 10), $(curve "$slow" 6)],
-            "bounds": {"stiffness_N_m": [1e5, 1e9], "yield_force_N": [1e3, 1e6]}}}
-JSON
-  "$gabion" run "$dir/fit_rate.json" -q -o "$dir/fit_rate" >"$dir/fit_rate.log" 2>&1 || { tail -n 3 "$dir/fit_rate.log" >&2; exit 1; }
-  tail -n 1 "$dir/fit_rate.log"
-  cp "$dir/fit_rate/fit_impact.png" "$dir/figures/in_place_rate_fit.png"
+  impact_fit fit_rate 10000 '["softening", "softening_rate"]' "[$(curve "$fit_from" 10 time), $(curve "$slow" 6 time)]" \
+    '{"stiffness_N_m": [1e5, 1e9], "yield_force_N": [1e3, 1e6]}' in_place_rate_fit.png
 fi
 # The same law identified on the walls' histories instead (fit.macro): the
 # twin itself runs inside the objective, at 6 and 10 m/s, against the
@@ -105,8 +102,7 @@ json.dump({"format": "gabion.case/1", "kind": "fit.macro", "seed": 1, "macro_cas
            "optimizer": {"global": "GN_ISRES", "global_max_evaluations": 4000, "local": "LN_SBPLX",
                          "local_max_evaluations": 1000}}, open(f"{d}/fit_hist.json", "w"), indent=1)
 PY
-  "$gabion" run "$dir/fit_hist.json" -q -o "$dir/fit_hist" >"$dir/fit_hist.log" 2>&1 || { tail -n 3 "$dir/fit_hist.log" >&2; exit 1; }
-  tail -n 1 "$dir/fit_hist.log"
+  run_case fit_hist
   for png in "$dir"/fit_hist/fit_macro_*.png; do cp "$png" "$dir/figures/in_place_hist_$(basename "$png" .png | sed 's/^fit_macro_//').png"; done
 fi
 for s in "$out"/centre_*_m_s "$out"/side_*_m_s; do
