@@ -217,11 +217,9 @@ struct Objective {
   const MacroFitCase* c;
   const std::vector<std::vector<LabHistory>>* lab;
 
-  // Normalised residuals (model - data) / scale of every history point, and
-  // each row's effective-point factor a_c (as the law fits weight a curve).
-  std::vector<double> residuals(const std::vector<double>& values, std::vector<double>* row_factor = nullptr) const {
+  // Normalised residuals (model - data) / scale of every history point.
+  std::vector<double> residuals(const std::vector<double>& values) const {
     std::vector<double> r;
-    if (row_factor) row_factor->clear();
     for (std::size_t i = 0; i < c->scenarios.size(); ++i) {
       MacroRun run;
       try {
@@ -233,12 +231,19 @@ struct Objective {
         const LabHistory& h = (*lab)[i][k];
         const auto y = modelAt(run, c->scenarios[i].curves[k].quantity, h.t);
         for (std::size_t j = 0; j < y.size(); ++j) r.push_back((y[j] - h.grid.y[j]) / h.grid.scale);
-        if (row_factor)
-          row_factor->insert(row_factor->end(), y.size(),
-                             h.grid.effectivePoints() / static_cast<double>(h.grid.x.size()));
       }
     }
     return r;
+  }
+
+  // Each residual row's effective-point factor a_c (as the law fits weight a
+  // curve): the histories' alone, in the order of residuals().
+  std::vector<double> rowFactors() const {
+    std::vector<double> a;
+    for (const auto& s : *lab)
+      for (const auto& h : s)
+        a.insert(a.end(), h.grid.x.size(), h.grid.effectivePoints() / static_cast<double>(h.grid.x.size()));
+    return a;
   }
 
   double effectiveObservations() const {
@@ -250,8 +255,8 @@ struct Objective {
 
   // Robust misfit of every history, per effective observation.
   double operator()(const std::vector<double>& values) const {
-    std::vector<double> a;
-    const auto r = residuals(values, &a);
+    const auto r = residuals(values);
+    const auto a = rowFactors();
     double total = 0.0;
     for (std::size_t j = 0; j < r.size(); ++j) total += a[j] * lossValue(r[j], c->loss);
     return total / effectiveObservations();
@@ -405,8 +410,8 @@ bridge::RunOutcome runCase(const bridge::JsonDocument& doc, const bridge::RunCon
   }
   // 95 % intervals, linearised at the best point (fitting/uncertainty.hpp):
   // the noise variance from the robust misfit over the degrees of freedom.
-  std::vector<double> row_factor, stderr_;
-  objective.residuals(best.parameters, &row_factor);  // (the rows' weights)
+  std::vector<double> stderr_;
+  const std::vector<double> row_factor = objective.rowFactors();
   const double n_eff = objective.effectiveObservations();
   const double dof = n_eff - static_cast<double>(params.size());
   const double s2 = dof > 0.0 ? best.value * n_eff / dof : NAN;
