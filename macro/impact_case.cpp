@@ -106,6 +106,15 @@ void writeResults(const std::filesystem::path& outdir, const Structure& s, const
                              {"material", "/nodes/material", 1, false}});
 }
 
+// A relaxation that ran out of steps: the residual displacements are a
+// moving structure's (a cell thrown out of the wall by the rebound drifts
+// with no force to stop it: the cells carry no tension).
+std::string relaxWarning(const ImpactResult& r) {
+  return "the structure was not at rest after " + std::to_string(r.relax_steps) +
+         " steps of relaxation (run.relax_max_steps): its residual displacements are those of a structure still "
+         "moving";
+}
+
 }  // namespace
 
 json toJson(const ImpactResult& r) {
@@ -202,6 +211,11 @@ bridge::RunOutcome runImpactCase(const JsonDocument& doc, const bridge::RunConte
   double worst = 0.0;
   for (const auto& x : results) worst = std::max(worst, x.balance_rel_error);
   r["balance_rel_error"] = worst;
+  json warnings = json::array();
+  for (std::size_t i = 0; i < results.size(); ++i)
+    if (results[i].ok && results[i].relaxed && !results[i].relax_converged)
+      warnings.push_back("impact " + std::to_string(i) + ": " + relaxWarning(results[i]));
+  if (!warnings.empty()) r["warnings"] = warnings;
   r["kinematics"] = p.c.run.kinematics == Kinematics::ThreeD ? "3d" : "x-only";
   r["structure"] = {
       {"cells", {s.nx, s.ny, s.nz}},          {"nodes", s.nodeCount()},          {"edge_m", s.edge_m},
@@ -220,6 +234,7 @@ bridge::RunOutcome runImpactCase(const JsonDocument& doc, const bridge::RunConte
            << showNumber(1e3 * x.contact_duration_s) << " ms; energy balance error "
            << showNumber(x.balance_rel_error, 2) << "\n";
     if (!x.perforation.empty()) answer << "  " << x.perforation << "\n";
+    if (x.relaxed && !x.relax_converged) answer << "  warning: " << relaxWarning(x) << "\n";
   }
   out.answer = answer.str();
   return out;

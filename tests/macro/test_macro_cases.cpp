@@ -242,6 +242,18 @@ TEST(MacroCli, RepeatedImpactsInSummary) {
   ASSERT_EQ(s.at("per_impact_peak_force_N").size(), 3u);
   ASSERT_EQ(s.at("per_impact_max_penetration_m").size(), 3u);
   EXPECT_LT(s.at("balance_rel_error").get<double>(), 0.005);
+  EXPECT_FALSE(s.contains("warnings")) << s.dump();
+
+  // A relaxation cut short says so, in the answer and in the summary's
+  // warnings, naming the impact.
+  c["run"]["relax_max_steps"] = 10;
+  writeFile(dir / "short.json", c.dump());
+  const auto r2 = runGabion("run " + (dir / "short.json").string() + " -q -o " + (dir / "short").string());
+  ASSERT_EQ(r2.exit_code, 0) << r2.output;
+  EXPECT_NE(r2.output.find("warning: the structure was not at rest after 10 steps"), std::string::npos) << r2.output;
+  const json w = readJson(dir / "short" / "summary.json").at("warnings");
+  ASSERT_EQ(w.size(), 3u) << w.dump();
+  EXPECT_EQ(w[0].get<std::string>().rfind("impact 0: the structure was not at rest", 0), 0u) << w.dump();
 }
 
 // A sweep: rows in grid order whatever the thread count; failed points are
