@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 #include <stdexcept>
 
 namespace gabion::macro {
@@ -148,7 +149,8 @@ void Model::placeBoulder(const BoulderSpec& b) {
   bforce_.setZero();
   max_indent_ = 0.0;
   n_contacts_ = 0;
-  centre_inside_ = false;
+  lost_front_ = -1;
+  lost_past_middle_ = false;
   crushed_link_ = crushed_front_ = -1;
 }
 
@@ -224,7 +226,8 @@ void Model::archive(bridge::StateArchive& a) {
   b("gravity_m_s2", boulder_.gravity_m_s2), b("z0_m", boulder_.z0_m);
   b("position", bpos_), b("position_at_forces", bpos_force_), b("velocity", bvel_), b("velocity_full", bvel_full_);
   b("force", bforce_), b("spin", bspin_), b("spin_full", bspin_full_), b("torque", btorque_);
-  a("max_indent", max_indent_), a("contacts", n_contacts_), a("centre_inside", centre_inside_);
+  a("max_indent", max_indent_), a("contacts", n_contacts_), a("lost_front", lost_front_),
+      a("lost_past_middle", lost_past_middle_);
   a("crushed_link", crushed_link_), a("crushed_front", crushed_front_);
   a("time_s", time_), a("steps", steps_);
   bridge::StateArchive e = a.group("energy");
@@ -298,6 +301,14 @@ void Model::computeAxialForces(double dt) {
 // The boulder against the front cubes through the impact law: the indentation
 // is the sphere's overlap with the cube (radius minus the distance from the
 // centre to the nearest point of the cube), the force acts along that line.
+// A boulder that sinks into a cell by more than its radius (the struck cell
+// cratered, or pushed back at it by the cells behind) is embedded: its centre
+// is inside the cube, the indentation is the radius plus the centre's depth
+// behind the front face and the force acts along -x, which continues both
+// across the front face. The model follows it so until the centre passes the
+// cube's middle or comes nearer an open side face (one no cell covers) than
+// the front face: the cube's faces no longer say where the fill pushes, and
+// the impact ends `perforated`.
 void Model::computeBoulderContacts(double dt) {
   // Local sums: the loop's stores to the force arrays cannot alias them.
   double elastic = 0.0, friction = 0.0, plastic = 0.0;
@@ -331,13 +342,20 @@ void Model::computeBoulderContacts(double dt) {
       front_overstress_[el] = 0.0;
       continue;
     }
-    const double d = std::sqrt(d2);
-    if (d <= 1e-9 * R) {  // the centre is inside a cell: the model no longer applies
-      centre_inside_ = true;
-      continue;
+    double indent = 0.0, nx = -1.0, ny = 0.0, nz = 0.0;  // n: from the cube to the centre
+    if (d2 > 0.0) {
+      const double d = std::sqrt(d2);
+      indent = R - d;
+      nx = dx / d, ny = dy / d, nz = dz / d;
+    } else {  // embedded: the centre is inside the cube
+      const double depth = bpos_.x() - x0;
+      const bool past_middle = depth > 0.5 * e;
+      if (past_middle || depth > openSideDistance(el, y0, z0)) {
+        if (lost_front_ < 0) lost_front_ = static_cast<int>(el), lost_past_middle_ = past_middle;
+        continue;
+      }
+      indent = R + depth;
     }
-    const double indent = R - d;
-    const double nx = dx / d, ny = dy / d, nz = dz / d;  // from the cube to the centre
     // Indentation rate: the boulder's approach to the cube along the normal,
     // from the half-step velocities v(n-1/2) (the leapfrog's latest).
     const double vny = three_d_ ? vy_[node] : 0.0, vnz = three_d_ ? vz_[node] : 0.0;
@@ -366,6 +384,21 @@ void Model::computeBoulderContacts(double dt) {
   elastic_acc_ += elastic;
   energy_.friction_J += friction;
   energy_.plastic_J += plastic;
+}
+
+// Distance from the boulder's centre, inside front cube `el` (corner x0 +
+// ux, y0, z0), to the nearest of the cube's open side faces; infinity if all
+// four are covered.
+double Model::openSideDistance(std::size_t el, double y0, double z0) const {
+  using F = Structure::FrontElements;
+  const unsigned char open = s_.front.open_sides[el];
+  const double e = s_.edge_m;
+  double d = std::numeric_limits<double>::infinity();
+  if (open & F::kOpenYMinus) d = std::min(d, bpos_.y() - y0);
+  if (open & F::kOpenYPlus) d = std::min(d, y0 + e - bpos_.y());
+  if (open & F::kOpenZMinus) d = std::min(d, bpos_.z() - z0);
+  if (open & F::kOpenZPlus) d = std::min(d, z0 + e - bpos_.z());
+  return d;
 }
 
 // Boulder-face friction on front element `el` (3-D): the tangential spring
@@ -526,8 +559,14 @@ StepStatus Model::checkState() {
     failure_ = "non-finite state (energy or boulder position) at step " + std::to_string(steps_);
     return StepStatus::NonFinite;
   }
-  if (centre_inside_) {
-    failure_ = "the boulder's centre entered a front cell at step " + std::to_string(steps_);
+  if (lost_front_ >= 0) {
+    const auto node = static_cast<std::size_t>(s_.front.node[static_cast<std::size_t>(lost_front_)]);
+    const std::string cell = "(" + std::to_string(s_.gi[node]) + ", " + std::to_string(s_.gj[node]) + ", " +
+                             std::to_string(s_.gk[node]) + ")";
+    failure_ = (lost_past_middle_ ? "the boulder's centre went past the middle of front cell " + cell
+                                  : "the boulder's centre came nearer an open side of front cell " + cell +
+                                        " than its front (it entered the cell from the side)") +
+               " at step " + std::to_string(steps_);
     return StepStatus::Perforation;
   }
   if (crushed_front_ >= 0) {

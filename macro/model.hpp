@@ -45,8 +45,9 @@ struct BoulderSpec {
   double gravity_m_s2 = 0.0;  ///< gravity on the boulder, along -z (3-D kinematics only)
 };
 
-/// What step() found. Perforation: the boulder's centre entered a front
-/// cell, or a cell was crushed beyond its lock-up (failure() says which).
+/// What step() found. Perforation: the boulder's centre went past the middle
+/// of a front cell (or nearer an open side than the front), or a cell was
+/// crushed beyond its lock-up (failure() says which).
 enum class StepStatus { Ok, NonFinite, Perforation };
 
 /// Energy of the model (J). Plastic and friction are accumulated since the
@@ -149,6 +150,7 @@ class Model {
   void computeAxialForces(double dt);
   void computeBoulderContacts(double dt);
   double faceFriction(std::size_t el, std::size_t node, const Vec3& n, double fn, double dt, double& elastic);
+  double openSideDistance(std::size_t el, double y0, double z0) const;
   void computeLateralForces(double dt);
   void computeGroundForces(double dt);
   void integrate(double dt, double damping_rate_1_s);
@@ -189,9 +191,10 @@ class Model {
   Vec3 bspin_ = Vec3::Zero(), bspin_full_ = Vec3::Zero(), btorque_ = Vec3::Zero();  // rotation (3-D)
   double max_indent_ = 0.0;
   int n_contacts_ = 0;
-  bool centre_inside_ = false;  // the boulder's centre entered a front cell
-  int crushed_link_ = -1;       // first axial link shortened past its crushing shortening (-1: none)
-  int crushed_front_ = -1;      // first front element indented past it (-1: none)
+  int lost_front_ = -1;  // front element whose cube the boulder's centre went deeper into than the model follows
+  bool lost_past_middle_ = false;  // (or nearer an open side than the front)
+  int crushed_link_ = -1;          // first axial link shortened past its crushing shortening (-1: none)
+  int crushed_front_ = -1;         // first front element indented past it (-1: none)
 
   double time_ = 0.0;
   long long steps_ = 0;

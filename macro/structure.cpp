@@ -248,6 +248,17 @@ Structure buildStructure(const StructureSpec& spec, const bridge::LawFile& laws)
       s.front.x_min.push_back(i * e);
       s.front.y_min.push_back(j * e);
       s.front.z_min.push_back(k * e);
+      // A side face is covered by the cell beside it (macro or resolved):
+      // one in the grid beside it in y, or in the layer above or below
+      // whose front is not set back behind this cell; the bottom layer's
+      // underside, by the base the structure stands on.
+      const auto covered_z = [&](int kk) {
+        return kk < 0 || (kk < s.nz && s.front_offset_cells[static_cast<std::size_t>(kk)] <= i);
+      };
+      using F = Structure::FrontElements;
+      s.front.open_sides.push_back(
+          static_cast<unsigned char>((j == 0 ? F::kOpenYMinus : 0) | (j == s.ny - 1 ? F::kOpenYPlus : 0) |
+                                     (covered_z(k - 1) ? 0 : F::kOpenZMinus) | (covered_z(k + 1) ? 0 : F::kOpenZPlus)));
     }
   return s;
 }

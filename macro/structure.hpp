@@ -106,6 +106,10 @@ struct Structure {
   struct FrontElements {
     std::vector<int> node, law;               ///< law: the impact law of the node's material
     std::vector<double> x_min, y_min, z_min;  ///< undeformed cube corner (m); the cube is edge_m wide
+    /// Which of the cube's side faces no cell of the structure covers (a
+    /// boulder can sink into the cube through them): kOpen* bits.
+    std::vector<unsigned char> open_sides;
+    static constexpr unsigned char kOpenYMinus = 1, kOpenYPlus = 2, kOpenZMinus = 4, kOpenZPlus = 8;
   } front;
   std::vector<int> back_nodes;  ///< the back cell of each row
 

@@ -93,7 +93,7 @@ for v, h5 in ((6, f"{out}/centre_6_m_s/resolved/result.h5"), (10, f"{out}/floor_
                       "curves": [history(h5, "boulder_force_N", "force_N"), history(h5, "penetration_m", "penetration_m")]})
 json.dump({"format": "gabion.case/1", "kind": "fit.macro", "seed": 1, "macro_case": "hist_twin.json",
            "parameters": [p("stiffness", "stiffness_N_m", 3e5, 1e7), p("static yield force", "yield_force_N", 3e3, 6e4),
-                          p("rate coefficient", "rate_coefficient_N_s2_m2", 100, 5000),
+                          p("rate coefficient", "rate_coefficient_N_s2_m2", 100, 2e4),
                           p("rate growth", "rate_growth_m", 0.005, 0.15),
                           p("softening onset", "softening_onset_m", 0, 0.1, "linear"),
                           p("softening stiffness", "softening_stiffness_N_m", 1e5, 1e9),

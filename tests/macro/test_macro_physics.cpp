@@ -340,8 +340,8 @@ TEST(MacroDeterminism, SameInputSameResult) {
 //   would reach) keeps nearly all the energy within 0.11 m, less than the
 //   boulder's radius: it comes back at fy / sqrt(k M), 2.6 % of its speed,
 //   under the 5 % of a rebound: stopped;
-// - a wall of light, weak cells lets the boulder through: its centre enters
-//   a front cell, perforated (an answer, not a failure).
+// - a wall of light, weak cells lets the boulder through: its centre passes
+//   the middle of a front cell, perforated (an answer, not a failure).
 TEST(MacroOutcome, StoppedReboundedPerforatedOnConstructedCases) {
   const double M = 170.0, v0 = 10.0, k = 2e7;
   {
@@ -369,10 +369,54 @@ TEST(MacroOutcome, StoppedReboundedPerforatedOnConstructedCases) {
     const ImpactResult r = runImpact(model, boulderAt(s, 0, 0, 2000.0, 20.0), quickRun(0.05, 0.05), 0, nullptr);
     ASSERT_TRUE(r.ok) << r.message;
     EXPECT_EQ(r.outcome, Outcome::Perforated);
-    // Its centre entered a cube: it had sunk by its radius at least.
-    EXPECT_GT(r.final_penetration_m, 0.25);
+    EXPECT_NE(r.perforation.find("past the middle of front cell (0, 0, 0)"), std::string::npos) << r.perforation;
+    // Its centre passed the cube's middle: it had sunk by its radius and
+    // half an edge at least.
+    EXPECT_GT(r.final_penetration_m, 0.5);
     EXPECT_GE(r.max_penetration_m, r.final_penetration_m);
   }
+}
+
+// A boulder that sinks into a cell by more than its radius is embedded, and
+// the model follows it: the indentation goes on as the radius plus the
+// centre's depth behind the front face, so against a rigidly held cube of
+// impact law k, F_y it comes to rest at M v^2 / (2 F_y) + F_y / (2 k) (the
+// same closed form as a shallow stop), here 0.35 m into a 0.5 m cube with
+// R = 0.25 m; the energy balance holds across the front face (the force is
+// continuous there). Aimed 0.1 m inside the open side of a one-cell-wide
+// wall, its centre comes nearer that side than the front once 0.1 m deep: the
+// cube no longer says where the fill pushes, and the impact is perforated.
+// Aimed as close to the side of a cell whose side the next cell covers (a
+// two-cell-wide wall; a little faster, as that cell resists too), it is
+// followed to rest.
+TEST(MacroOutcome, AnEmbeddedBoulderIsFollowedUntilTheCubeNoLongerHoldsIt) {
+  const double M = 170.0, v = 10.0, k = 2e7, depth = 0.35;
+  const double fy = 0.5 * M * v * v / depth;
+  const auto run = [&](int ny, double aim_y, double speed) {
+    Structure s = buildStructure(grid(1, ny, 1), oneMaterial(epp(1e13, 1e15), epp(k, fy), 1e9));
+    Model model(s, Kinematics::XOnly);
+    BoulderSpec b = boulderAt(s, 0, 0, M, speed);
+    b.aim_y_m = aim_y;
+    return runImpact(model, b, quickRun(0.1, 0.02), 0, nullptr);
+  };
+  const ImpactResult centred = run(1, 0.25, v);
+  ASSERT_TRUE(centred.ok) << centred.message;
+  EXPECT_EQ(centred.outcome, Outcome::Stopped) << centred.perforation;
+  const double expected = 0.5 * M * v * v / fy + 0.5 * fy / k;
+  EXPECT_NEAR(centred.max_penetration_m, expected, 0.01 * expected);
+  EXPECT_GT(centred.max_indentation_m, 0.3);  // (embedded: deeper than the radius)
+  EXPECT_LT(centred.balance_rel_error, 1e-3);
+
+  const ImpactResult open = run(1, 0.1, v);
+  ASSERT_TRUE(open.ok) << open.message;
+  EXPECT_EQ(open.outcome, Outcome::Perforated);
+  EXPECT_NE(open.perforation.find("came nearer an open side of front cell (0, 0, 0)"), std::string::npos)
+      << open.perforation;
+
+  const ImpactResult covered = run(2, 0.6, 1.2 * v);  // (the first cell resists too)
+  ASSERT_TRUE(covered.ok) << covered.message;
+  EXPECT_NE(covered.outcome, Outcome::Perforated) << covered.perforation;
+  EXPECT_GT(covered.max_indentation_m, 0.25);  // (embedded in the cell it was aimed at)
 }
 
 // The results do not depend on the duration asked for: an impact runs to its
