@@ -89,6 +89,19 @@ AxialLawParams readAxialLaw(const JsonReader& r, double edge_m, int version, boo
   if (p.model == AxialModel::Densifying && p.densification_onset_m >= p.lockup_shortening_m)
     r.fail("densification_onset_m",
            "must be below lockup_shortening_m (" + std::to_string(p.lockup_shortening_m) + " m)");
+  if (r.has("densification")) {
+    if (impact) r.fail("densification", "only for an axial law (the compaction of a cell pushed by its neighbour)");
+    if (p.model != AxialModel::Densifying) r.fail("densification", "only for the model 'densifying'");
+    p.plastic_densification = r.choice("densification", {"elastic", "plastic"}) == "plastic";
+    // The compaction is read from the plastic shortening (cell_axial_law.hpp):
+    // the densification must start past first yield.
+    const double first_yield = p.yield_force_N / p.stiffness_N_m;
+    if (p.plastic_densification && p.densification_onset_m < first_yield)
+      r.fail("densification",
+             "'plastic' needs densification_onset_m at or past first yield, yield_force_N / "
+             "stiffness_N_m = " +
+                 std::to_string(first_yield) + " m");
+  }
   return p;
 }
 
@@ -109,6 +122,7 @@ json toJson(const AxialLawParams& p) {
   }
   if (p.rate_coefficient_N_s2_m2 > 0.0) j["rate_coefficient_N_s2_m2"] = p.rate_coefficient_N_s2_m2;
   if (p.rate_growth_m > 0.0) j["rate_growth_m"] = p.rate_growth_m;
+  if (p.plastic_densification) j["densification"] = "plastic";
   if (std::isfinite(p.lockup_shortening_m)) {  // (a law built without one reads back with the default)
     j["lockup_shortening_m"] = p.lockup_shortening_m;
     j["lockup_stiffness_N_m"] = p.lockup_stiffness_N_m;

@@ -22,6 +22,7 @@ AxialLawParams seriesAxialLaw(const AxialLawParams& a, const AxialLawParams& b) 
   if (a.model == AxialModel::Densifying && b.model == AxialModel::Densifying) {
     p.densification_onset_m = 0.5 * (a.densification_onset_m + b.densification_onset_m);
     p.densification_stiffness_N_m = series(a.densification_stiffness_N_m, b.densification_stiffness_N_m);
+    p.plastic_densification = a.plastic_densification && b.plastic_densification;
   }
   p.lockup_shortening_m = 0.5 * (a.lockup_shortening_m + b.lockup_shortening_m);
   p.lockup_stiffness_N_m = series(a.lockup_stiffness_N_m, b.lockup_stiffness_N_m);
@@ -62,13 +63,7 @@ namespace {
 int internAxial(Structure& s, const AxialLawParams& p, double length_m) {
   const double crush = crushShortening(p, length_m);
   for (std::size_t i = 0; i < s.axial_laws.size(); ++i) {
-    const auto& q = s.axial_laws[i];
-    if (q.model == p.model && q.stiffness_N_m == p.stiffness_N_m && q.yield_force_N == p.yield_force_N &&
-        q.hardening_stiffness_N_m == p.hardening_stiffness_N_m && q.densification_onset_m == p.densification_onset_m &&
-        q.densification_stiffness_N_m == p.densification_stiffness_N_m &&
-        q.lockup_shortening_m == p.lockup_shortening_m && q.lockup_stiffness_N_m == p.lockup_stiffness_N_m &&
-        s.axial_crush_m[i] == crush)
-      return static_cast<int>(i);
+    if (bridge::sameLaw(s.axial_laws[i], p) && s.axial_crush_m[i] == crush) return static_cast<int>(i);
   }
   s.axial_laws.push_back(p);
   s.axial_springs.push_back(bridge::cellSpring(p));

@@ -45,11 +45,28 @@
 /// Beyond it the dense fill adds k_L max(0, u - u_L). With k_L many times k
 /// the cell stops shortening at u_L under any force the loose fill could
 /// carry; the macro model reports a cell pushed well beyond u_L as crushed
-/// (docs/macro.md). Both added terms are functions of u alone (no memory):
-/// they store k (u - u_0)^2 / 2 and give it back, so
-///   F = F_ep(u, u_p) + k_d max(0, u - u_d) + k_L max(0, u - u_L),
+/// (docs/macro.md). By default both added terms are functions of u alone
+/// (no memory): they store k (u - u_0)^2 / 2 and give it back, so
+///   F = F_ep(u, u_p) + G(u),  G(u) = k_d max(0, u - u_d) + k_L max(0, u - u_L),
 /// and the stiffest tangent, unloading past both, is k + k_d + k_L: the one
 /// that sets the critical time step.
+///
+/// Plastic densification (densifying model with a lock-up, axial laws only;
+/// law files: "densification": "plastic"): a fill compacted past u_d keeps
+/// its compaction. The added force follows G on first loading and, below the
+/// largest shortening m reached, the steep line of the dense skeleton,
+/// k_u = k_d + k_L:  F_d = max(0, G(m) - k_u (m - u)), so that unloading and
+/// reloading are stiffer than loading and the critical time step is
+/// unchanged. It stores F_d^2 / (2 k_u) and dissipates
+/// D(m) = A(m) - G(m)^2 / (2 k_u) (A the integral of G from 0 to m) as m
+/// grows; past u_L, where G's tangent is k_u, D stops growing: the lock-up
+/// is the dense skeleton's elastic response, compaction is not. The
+/// compaction m is not a second state variable: the densifying spring is
+/// hardening, so once it has yielded m is where its elastic line meets its
+/// yield line, m = u_p + (F_y + H u_p) / k (every shortening reached since
+/// lies on or below that line, and reloading yields again exactly there);
+/// before it has yielded m <= F_y / k, below u_d (the law file checks
+/// u_d >= F_y / k), where G is zero.
 #include <cmath>
 #include <limits>
 
@@ -74,7 +91,19 @@ struct AxialLawParams {
   double softening_onset_m = 0.0;         ///< u_s >= 0, plastic shortening held at the peak, softening only (m)
   double rate_coefficient_N_s2_m2 = 0.0;  ///< c >= 0, the overstress c r^2 at indentation rate r, impact only
   double rate_growth_m = 0.0;             ///< u_a >= 0: the overstress grows as min(1, u / u_a); 0: constant
+  bool plastic_densification = false;     ///< densifying with a lock-up, axial only: compaction is kept (above)
 };
+
+/// Whether two laws are the same law (every parameter equal).
+inline bool sameLaw(const AxialLawParams& a, const AxialLawParams& b) {
+  return a.model == b.model && a.stiffness_N_m == b.stiffness_N_m && a.yield_force_N == b.yield_force_N &&
+         a.hardening_stiffness_N_m == b.hardening_stiffness_N_m && a.densification_onset_m == b.densification_onset_m &&
+         a.densification_stiffness_N_m == b.densification_stiffness_N_m &&
+         a.lockup_shortening_m == b.lockup_shortening_m && a.lockup_stiffness_N_m == b.lockup_stiffness_N_m &&
+         a.softening_stiffness_N_m == b.softening_stiffness_N_m && a.residual_force_N == b.residual_force_N &&
+         a.softening_onset_m == b.softening_onset_m && a.rate_coefficient_N_s2_m2 == b.rate_coefficient_N_s2_m2 &&
+         a.rate_growth_m == b.rate_growth_m && a.plastic_densification == b.plastic_densification;
+}
 
 /// True for the models with a hardening tangent (bilinear, densifying).
 inline bool hardens(AxialModel m) {
@@ -111,6 +140,7 @@ struct CellSpring {
   double lockup_N_m = 0.0;                                    ///< k_L (N/m)
   double rate_N_s2_m2 = 0.0;                                  ///< c (N s^2/m^2)
   double rate_growth_m = 0.0;                                 ///< u_a (m)
+  double compaction_N_m = 0.0;  ///< k_u = k_d + k_L with plastic densification; 0: G is elastic
 };
 
 inline CellSpring cellSpring(const AxialLawParams& p) {
@@ -121,7 +151,21 @@ inline CellSpring cellSpring(const AxialLawParams& p) {
           p.lockup_shortening_m,
           p.lockup_stiffness_N_m,
           p.rate_coefficient_N_s2_m2,
-          p.rate_growth_m};
+          p.rate_growth_m,
+          densifies && p.plastic_densification ? p.densification_stiffness_N_m + p.lockup_stiffness_N_m : 0.0};
+}
+
+/// G(m): the densification and lock-up force on first loading (N).
+inline double denseForce(const CellSpring& c, double m) {
+  return c.densify_N_m * (m > c.onset_m ? m - c.onset_m : 0.0) + c.lockup_N_m * (m > c.lockup_m ? m - c.lockup_m : 0.0);
+}
+
+/// D(m) = A(m) - G(m)^2 / (2 k_u): what plastic densification has
+/// dissipated once compacted to m (J).
+inline double compactionWork(const CellSpring& c, double m) {
+  const double a = m > c.onset_m ? m - c.onset_m : 0.0, b = m > c.lockup_m ? m - c.lockup_m : 0.0;
+  const double g = denseForce(c, m);
+  return 0.5 * (c.densify_N_m * a * a + c.lockup_N_m * b * b) - 0.5 * g * g / c.compaction_N_m;
 }
 
 /// Result of one evaluation: the force (N), the updated plastic shortening
@@ -158,6 +202,17 @@ inline AxialResponse cellResponse(const CellSpring& c, double u_m, double plasti
   if (overstress_N) {
     r.plastic_work_J += 0.5 * (*overstress_N - overstress) * (r.plastic_m - plastic_m);
     *overstress_N = overstress;
+  }
+  if (c.compaction_N_m > 0.0) {  // plastic densification: the compaction m from the plastic part (above)
+    const ElasticPlasticParams& e = c.spring;
+    const auto reached = [&](double up) {
+      return up > 0.0 ? up + (e.yield_force_N + e.hardening_N_m * up) / e.stiffness_N_m : 0.0;
+    };
+    const double m_old = reached(plastic_m), m_new = reached(r.plastic_m), m = m_new > u_m ? m_new : u_m;
+    const double fd = denseForce(c, m) - c.compaction_N_m * (m - u_m);
+    const double f = fd > 0.0 ? fd : 0.0;
+    return {r.force_N + f, r.plastic_m, r.plastic_work_J + compactionWork(c, m) - compactionWork(c, m_old),
+            elasticPlasticEnergy(e, r.force_N) + 0.5 * f * f / c.compaction_N_m};
   }
   const double dense = u_m > c.onset_m ? u_m - c.onset_m : 0.0;
   const double over = u_m > c.lockup_m ? u_m - c.lockup_m : 0.0;

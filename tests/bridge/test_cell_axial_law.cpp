@@ -3,6 +3,8 @@
 #include <gtest/gtest.h>
 
 #include <algorithm>
+#include <cmath>
+#include <vector>
 
 #include "bridge/laws/cell_axial_law.hpp"
 
@@ -94,6 +96,67 @@ TEST(CellAxialLaw, DensifyingAddsItsTermPastTheOnset) {
   p.model = AxialModel::Bilinear;
   EXPECT_NEAR(at(0.08), 1e4 + 2e5 * 0.07, 1e-6);
   EXPECT_DOUBLE_EQ(maxTangentStiffness(p), 1e6 + 1e8);
+}
+
+// Plastic densification against a reference that tracks the largest
+// shortening m explicitly: F = F_ep(u, u_p) + max(0, G(m) - k_u (m - u)),
+// k_u = k_d + k_L, along a path that loads past the onset, unloads, reloads
+// past where it turned, unloads to separation, loads past the lock-up and
+// unloads again (forces equal to round-off: the law reads m from u_p). The
+// work of the path (trapezoids of 1e-6 m) is the plastic work plus the
+// stored energy; past the lock-up the compaction dissipates nothing more
+// (the lock-up is elastic); unloading is stiffer than loading, k + k_u
+// against k_h + k_d, and the critical tangent is unchanged.
+TEST(CellAxialLaw, PlasticDensificationKeepsTheCompaction) {
+  AxialLawParams p{AxialModel::Densifying, 3e5, 1e3, 3e4};
+  p.densification_onset_m = 0.03;
+  p.densification_stiffness_N_m = 4e5;
+  p.lockup_shortening_m = 0.12;
+  p.lockup_stiffness_N_m = 4e6;
+  AxialLawParams elastic = p;
+  p.plastic_densification = true;
+  const double ku = 4e5 + 4e6;
+  const auto G = [&](double m) { return 4e5 * std::max(0.0, m - 0.03) + 4e6 * std::max(0.0, m - 0.12); };
+  const CellSpring law = cellSpring(p);
+  std::vector<double> path;
+  const auto go = [&](double to) {
+    const double from = path.empty() ? 0.0 : path.back();
+    const int n = static_cast<int>(std::lround(std::abs(to - from) / 1e-6));
+    for (int i = 1; i <= n; ++i) path.push_back(from + (to - from) * i / n);
+  };
+  for (double to : {0.08, 0.06, 0.1, 0.0, 0.13, 0.11}) go(to);
+  double up = 0.0, up_ref = 0.0, m_ref = 0.0, work = 0.0, plastic = 0.0, f_prev = 0.0, u_prev = 0.0;
+  double worst = 0.0;
+  AxialResponse r;
+  for (const double u : path) {
+    r = cellResponse(law, u, up);
+    const auto ep = elasticPlasticResponse(law.spring, u, up_ref);
+    up_ref = ep.plastic_m;
+    m_ref = std::max(m_ref, u);
+    const double ref = ep.force_N + std::max(0.0, G(m_ref) - ku * (m_ref - u));
+    worst = std::max(worst, std::abs(r.force_N - ref) / std::max(1.0, ref));
+    plastic += r.plastic_work_J;
+    work += 0.5 * (f_prev + r.force_N) * (u - u_prev);
+    f_prev = r.force_N, u_prev = u, up = r.plastic_m;
+  }
+  EXPECT_LT(worst, 1e-9);
+  EXPECT_NEAR(work, plastic + r.elastic_J, 1e-6 * plastic);
+  // Unloading from m = 0.08: k + k_u, against the loading tangent k_h + k_d.
+  double u8 = 0.0;
+  for (int i = 1; i <= 80; ++i) u8 = cellResponse(law, 1e-3 * i, u8).plastic_m;
+  const double f8 = cellResponse(law, 0.08, u8).force_N, f8b = cellResponse(law, 0.08 - 1e-4, u8).force_N;
+  EXPECT_NEAR((f8 - f8b) / 1e-4, 3e5 + ku, 1e-6 * ku);
+  const double f8e = axialResponse(elastic, 0.08, 0.0).force_N;
+  EXPECT_NEAR(f8, f8e, 1e-9 * f8e);  // (the same first loading as the elastic law)
+  // What the compaction has dissipated at m: D(m) = A(m) - G(m)^2 / (2 k_u),
+  // and not a joule more past the lock-up.
+  const auto D = [&](double m) {
+    const double a = std::max(0.0, m - 0.03), b = std::max(0.0, m - 0.12);
+    return 0.5 * 4e5 * a * a + 0.5 * 4e6 * b * b - 0.5 * G(m) * G(m) / ku;
+  };
+  EXPECT_NEAR(compactionWork(law, 0.1), D(0.1), 1e-9 * D(0.1));
+  EXPECT_NEAR(compactionWork(law, 0.13), compactionWork(law, 0.12), 1e-9 * D(0.12));
+  EXPECT_DOUBLE_EQ(maxTangentStiffness(p), maxTangentStiffness(elastic));
 }
 
 // The softening impact law: elastic up to the peak F_y, held there over a

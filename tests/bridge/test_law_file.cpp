@@ -195,3 +195,40 @@ TEST(LawFile, TheImpactLawsRateTermReadsBackAndIsRefusedOnTheAxialLaw) {
       }
     }
 }
+
+// Plastic densification reads back on a densifying axial law; it is refused
+// by name on the impact law, on another model, as an unknown word, and where
+// the densification would start before first yield (the compaction is read
+// from the plastic shortening: bridge/laws/cell_axial_law.hpp).
+TEST(LawFile, PlasticDensificationReadsBackAndIsRefusedWhereItCannotHold) {
+  LawFile laws = sampleLaws();
+  auto& axial = laws.materials.at("front").axial;
+  axial = {AxialModel::Densifying, 2e6, 5e4, 1e5, 0.04, 2e6, 0.1, 3e7};
+  axial.plastic_densification = true;
+  const std::string path = ::testing::TempDir() + "law_plastic_densification.json";
+  writeJsonAtomic(path, toJson(laws));
+  EXPECT_TRUE(loadLawFile(path).materials.at("front").axial.plastic_densification);
+  EXPECT_EQ(toJson(laws)["materials"]["front"]["axial"]["densification"], "plastic");
+  EXPECT_FALSE(toJson(sampleLaws())["materials"]["front"]["axial"].contains("densification"));
+  const auto refusedAt = [&](nlohmann::json j, const std::string& pointer) {
+    writeJsonAtomic(path, j);
+    try {
+      loadLawFile(path);
+      ADD_FAILURE() << "no error for " << pointer << " in " << j.dump();
+    } catch (const InputError& e) {
+      EXPECT_EQ(e.pointer(), pointer) << e.what();
+    }
+  };
+  auto j = toJson(laws);
+  j["materials"]["front"]["impact"]["densification"] = "plastic";
+  refusedAt(j, "/materials/front/impact/densification");
+  j = toJson(laws);
+  j["materials"]["front"]["axial"]["densification"] = "crushed";
+  refusedAt(j, "/materials/front/axial/densification");
+  j = toJson(laws);
+  j["materials"]["front"]["axial"]["densification_onset_m"] = 0.01;  // first yield: 5e4 / 2e6 = 0.025 m
+  refusedAt(j, "/materials/front/axial/densification");
+  j = toJson(sampleLaws());
+  j["materials"]["front"]["axial"]["densification"] = "plastic";  // (elastic_perfectly_plastic)
+  refusedAt(j, "/materials/front/axial/densification");
+}
