@@ -411,12 +411,14 @@ bridge::RunOutcome runCase(const bridge::JsonDocument& doc, const bridge::RunCon
   // 95 % intervals, linearised at the best point (fitting/uncertainty.hpp):
   // the noise variance from the robust misfit over the degrees of freedom.
   std::vector<double> stderr_;
+  std::string no_intervals;
   const std::vector<double> row_factor = objective.rowFactors();
   const double n_eff = objective.effectiveObservations();
   const double dof = n_eff - static_cast<double>(params.size());
   const double s2 = dof > 0.0 ? best.value * n_eff / dof : NAN;
-  const auto intervals = linearisedIntervals([&](const std::vector<double>& v) { return objective.residuals(v); },
-                                             row_factor, c.loss, n_eff, s2, params, best.parameters, stderr_);
+  const auto intervals =
+      linearisedIntervals([&](const std::vector<double>& v) { return objective.residuals(v); }, row_factor, c.loss,
+                          n_eff, s2, params, best.parameters, stderr_, nullptr, &no_intervals);
   json parameters = json::array();
   std::ostringstream answer;
   const double nrms = std::sqrt(sum2 / count);
@@ -440,6 +442,7 @@ bridge::RunOutcome runCase(const bridge::JsonDocument& doc, const bridge::RunCon
            << (at_bound ? " (at its bound)" : "");
   }
   answer << "\n";
+  if (!no_intervals.empty()) answer << "  no 95 % intervals: " << no_intervals << "\n";
 
   json law_json = bridge::toJson(laws);
   law_json["description"] = "Cell laws identified by `gabion run " + ctx.case_file.string() + "` (fit.macro)";
@@ -453,6 +456,7 @@ bridge::RunOutcome runCase(const bridge::JsonDocument& doc, const bridge::RunCon
 
   out.results["parameters"] = parameters;
   out.results["nrms"] = nrms;
+  if (!no_intervals.empty()) out.results["intervals_note"] = no_intervals;
   out.results["misfit"] = best.value;
   out.results["scenarios"] = scenarios;
   out.results["evaluations"] = best.evaluations;

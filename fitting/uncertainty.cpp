@@ -26,9 +26,13 @@ double studentT975(double dof) {
 std::vector<Interval> linearisedIntervals(const ResidualFunction& residuals, const std::vector<double>& row_factor,
                                           const LossSettings& loss, double n_eff, double s2,
                                           const std::vector<Parameter>& params, const std::vector<double>& theta,
-                                          std::vector<double>& stderr_out, std::vector<double>* covariance_out) {
+                                          std::vector<double>& stderr_out, std::vector<double>* covariance_out,
+                                          std::string* why_none) {
   const std::size_t p = theta.size();
   if (covariance_out != nullptr) covariance_out->clear();
+  const auto none = [&](const std::string& why) {
+    if (why_none != nullptr) *why_none = why;
+  };
   const auto r0 = residuals(theta);
   const std::size_t m = r0.size();
   // Row weights: the row's factor (effective points of its curve) times the robust weight.
@@ -57,6 +61,7 @@ std::vector<Interval> linearisedIntervals(const ResidualFunction& residuals, con
     std::vector<double> rp, rm;
     const bool ok_p = at(plus, rp), ok_m = at(minus, rm);
     if (!ok_p && !ok_m) {
+      none("both sides of " + params[j].name + " leave the model's domain at the best point");
       stderr_out.assign(p, kNaN);
       return std::vector<Interval>(p, Interval{kNaN, kNaN});
     }
@@ -73,12 +78,28 @@ std::vector<Interval> linearisedIntervals(const ResidualFunction& residuals, con
   const double dof = n_eff - static_cast<double>(p);
   std::vector<Interval> out(p, Interval{kNaN, kNaN});
   stderr_out.assign(p, kNaN);
-  if (!(dof >= 1.0)) return out;
-  if (!std::isfinite(s2)) return out;
+  if (!(dof >= 1.0)) {
+    none("fewer than one degree of freedom");
+    return out;
+  }
+  if (!std::isfinite(s2)) {
+    none("the misfit is not finite");
+    return out;
+  }
   const Eigen::MatrixXd A = J.transpose() * w.asDiagonal() * J;
   Eigen::FullPivLU<Eigen::MatrixXd> lu(A);
   lu.setThreshold(1e-12);
-  if (!lu.isInvertible()) return out;
+  if (!lu.isInvertible()) {
+    // The direction the curves do not see: A's smallest eigenvector.
+    const Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> eig(A);
+    Eigen::Index worst = 0;
+    eig.eigenvectors().col(0).cwiseAbs().maxCoeff(&worst);
+    none(
+        "the curves do not determine every parameter at the best point (the linearised covariance is singular; "
+        "the direction they do not see is mostly " +
+        params[static_cast<std::size_t>(worst)].name + ")");
+    return out;
+  }
   const Eigen::MatrixXd cov = s2 * lu.inverse();
   if (covariance_out != nullptr) {
     covariance_out->resize(p * p);

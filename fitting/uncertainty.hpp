@@ -4,6 +4,7 @@
 /// optimum (linearised least squares), from the profile likelihood, and from the
 /// spread of replicate fits (docs/fitting.md, "Uncertainty").
 #include <functional>
+#include <string>
 #include <vector>
 
 #include "fitting/curve_model.hpp"
@@ -36,11 +37,16 @@ using ResidualFunction = std::function<std::vector<double>(const std::vector<dou
 /// effective number of observations, `s2` the noise variance of the
 /// normalised residuals. Standard errors into `stderr_out` (NaN when
 /// singular), the covariance (physical units) into `covariance_out` if given.
+/// Where there are no intervals, `why_none` (if given) says why, naming the
+/// parameter: one whose both sides leave the model's domain, or the one that
+/// dominates the direction the curves do not determine (J^T W J singular:
+/// its smallest eigenvector's largest component, in relative units).
 std::vector<Interval> linearisedIntervals(const ResidualFunction& residuals, const std::vector<double>& row_factor,
                                           const LossSettings& loss, double n_eff, double s2,
                                           const std::vector<Parameter>& params, const std::vector<double>& theta,
                                           std::vector<double>& stderr_out,
-                                          std::vector<double>* covariance_out = nullptr);
+                                          std::vector<double>* covariance_out = nullptr,
+                                          std::string* why_none = nullptr);
 
 /// Linearised intervals: cov = s^2 (J^T W J)^-1 with J = d r / d theta (central
 /// differences), W = a_c w_i (effective-point factor times the robust IRLS weight

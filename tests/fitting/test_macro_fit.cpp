@@ -170,6 +170,35 @@ TEST(FitMacro, IntervalsHoldTheTruthOnNoisyHistories) {
   }
 }
 
+// A parameter the histories cannot see (the impact law of the core
+// material, which no front cell has): no intervals for any, and the answer
+// and the summary's `intervals_note` say why, naming that parameter.
+TEST(FitMacro, AParameterTheHistoriesDoNotSeeIsNamed) {
+  const fs::path dir = testing::scratchDir("fit_macro_unseen");
+  std::ofstream(dir / "truth.json") << smallWall(6e4, 800.0).dump(2);
+  for (int v : {6, 10})
+    ASSERT_EQ(runGabion("run " + (dir / "truth.json").string() + " -q --set boulder.velocity_m_s=" + std::to_string(v) +
+                        " -o " + (dir / ("v" + std::to_string(v))).string())
+                  .exit_code,
+              0);
+  std::ofstream(dir / "wall.json") << smallWall(1e5, 100.0).dump(2);
+  json fit = fitCase(dir);
+  fit["parameters"].push_back(
+      {{"name", "core peak"}, {"set", "laws.materials.core.impact.yield_force_N"}, {"bounds", {2e4, 2e5}}});
+  fit["optimizer"] = {{"global", "GN_ISRES"}, {"global_max_evaluations", 300}, {"local_max_evaluations", 200}};
+  std::ofstream(dir / "fit.json") << fit.dump(2);
+  const auto r = runGabion("run " + (dir / "fit.json").string() + " -o " + (dir / "out").string());
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  EXPECT_NE(r.output.find("no 95 % intervals: the curves do not determine every parameter"), std::string::npos)
+      << r.output;
+  const json summary = json::parse(std::ifstream(dir / "out" / "summary.json"));
+  const json& res = summary.contains("results") ? summary["results"] : summary;
+  ASSERT_TRUE(res.contains("intervals_note")) << res.dump();
+  EXPECT_NE(res["intervals_note"].get<std::string>().find("mostly core peak"), std::string::npos)
+      << res["intervals_note"];
+  for (const auto& p : res["parameters"]) EXPECT_TRUE(p["jacobian_95"].is_null()) << p.dump();
+}
+
 // Bad input exits 2 and names the fit case's key before anything runs.
 TEST(FitMacro, BadInputNamesTheKey) {
   const fs::path dir = testing::scratchDir("fit_macro_bad");
