@@ -18,8 +18,9 @@
 # (centre_6_m_s, floor_10_m_s) and judged at 13 m/s, a speed it has not seen,
 # as well as on the other runs. Then the rate law identified on the walls'
 # histories at 6 and 10 m/s (fit.macro: force and penetration against time,
-# the twin run inside the objective). Prints a table; draws
-# DIR/in_place/figures/.
+# the twin run inside the objective), the axial laws' densification made
+# plastic (DENSIFICATION=elastic keeps the pipeline's). Prints a table;
+# draws DIR/in_place/figures/.
 set -euo pipefail
 here=$(cd "$(dirname "$0")" && pwd)
 root=$(cd "$here/../.." && pwd)
@@ -74,13 +75,19 @@ fi
 # The same law identified on the walls' histories instead (fit.macro): the
 # twin itself runs inside the objective, at 6 and 10 m/s, against the
 # force on the boulder and its penetration from first contact; the seven
-# parameters of the rate law, from the rate fit's law (its lock-up).
+# parameters of the rate law, from the rate fit's law (its lock-up), with
+# the axial laws' densification plastic (DENSIFICATION, "plastic" or
+# "elastic": a compacted cell keeps its compaction, docs/formats.md).
 if [ -f "$slow" ] && [ -f "$dir/fit_rate/law.json" ]; then
-  python3 - "$out" "$dir" <<'PY'
+  python3 - "$out" "$dir" "${DENSIFICATION:-plastic}" <<'PY'
 import json, sys
-out, d = sys.argv[1], sys.argv[2]
+out, d, densification = sys.argv[1], sys.argv[2], sys.argv[3]
+law = json.load(open(f"{d}/fit_rate/law.json"))
+for m in law["materials"].values():
+    m["axial"]["densification"] = densification
+json.dump(law, open(f"{d}/hist_law.json", "w"), indent=1)
 twin = json.load(open(f"{out}/centre_10_m_s/macro_twin/case.json"))
-twin["law_file"] = f"{d}/fit_rate/law.json"
+twin["law_file"] = f"{d}/hist_law.json"
 json.dump(twin, open(f"{d}/hist_twin.json", "w"), indent=1)
 imp = "laws.materials.front.impact."
 def p(name, key, lo, hi, scale="auto"):
