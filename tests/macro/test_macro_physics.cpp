@@ -178,6 +178,21 @@ TEST(MacroPlastic, RateTermHoldsTheFaceAtItsOverstressUntilTheBoulderStops) {
   EXPECT_LT(coarse.balance_rel_error, 5e-3);
 }
 
+// The structure keeps one table of link laws, equal laws sharing an entry:
+// an impact law that differs from the axial law of the link behind it only
+// in its rate term keeps its rate term (it was once merged into the axial
+// law, which compared only the older fields).
+TEST(MacroPlastic, LawsThatDifferOnlyInTheirRateTermAreNotMerged) {
+  gabion::bridge::AxialLawParams impact = epp(2e7, 2e4);
+  impact.rate_coefficient_N_s2_m2 = 600.0;
+  const Structure s = buildStructure(grid(2, 1, 1), oneMaterial(epp(2e7, 2e4), impact, 183.0));
+  const auto& front = s.axial_laws[static_cast<std::size_t>(s.front.law[0])];
+  EXPECT_EQ(front.rate_coefficient_N_s2_m2, 600.0);
+  EXPECT_EQ(s.axial_springs[static_cast<std::size_t>(s.front.law[0])].rate_N_s2_m2, 600.0);
+  for (const int law : s.axial.law)
+    EXPECT_EQ(s.axial_laws[static_cast<std::size_t>(law)].rate_coefficient_N_s2_m2, 0.0);
+}
+
 // Plastic densification in the wall: a column of two cells struck hard
 // enough to compact both links past the densification onset. At every step
 // each axial link's force and the model's elastic energy are the bridge
