@@ -108,13 +108,14 @@ std::pair<JsonDocument, const gabion::bridge::CaseKind*> loadAndCheck(Options& o
   return {std::move(doc), kind};
 }
 
-// What the case will cost (bridge/cost.hpp), from a copy of the checked
-// document; nullopt where its kind cannot say. Bad input throws InputError
-// as check does.
+// What the case will cost (bridge/cost.hpp), from the checked document
+// (check has already refused its unknown keys; no copy of a large case);
+// nullopt where its kind cannot say. Bad input throws InputError as check
+// does.
 std::optional<gabion::bridge::Estimate> estimateOf(const gabion::bridge::CaseKind& kind, const JsonDocument& doc) {
   if (!kind.estimate) return std::nullopt;
   try {
-    return kind.estimate(JsonDocument(doc.json(), doc.file()));
+    return kind.estimate(doc);
   } catch (const InputError&) {
     throw;
   } catch (const std::exception&) {
@@ -145,10 +146,11 @@ fs::path makeOutdir(const std::string& given) {
 // the effective case as it starts (kinds that keep their finished work take
 // it: a sweep's rows, a calibration's evaluations, a pipeline's stages).
 void writeRunRecord(const Options& o, const fs::path& outdir, const JsonDocument& doc) {
-  gabion::bridge::writeJsonAtomic(outdir / "run.json", {{"format", "gabion.run/1"},
-                                                        {"case_file", fs::absolute(o.case_file).string()},
-                                                        {"threads", o.threads},
-                                                        {"case", doc.json()}});
+  nlohmann::json record = {
+      {"format", "gabion.run/1"}, {"case_file", fs::absolute(o.case_file).string()}, {"threads", o.threads}};
+  // (the case lent, not copied: a large case's document is the run's largest)
+  doc.lendValue(record, "case",
+                [&](const nlohmann::json& r) { gabion::bridge::writeJsonAtomic(outdir / "run.json", r); });
 }
 
 // The rows a case has, or an InputError naming the option that needs them.

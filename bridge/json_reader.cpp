@@ -271,11 +271,29 @@ void JsonDocument::applySet(const std::string& assignment) {
 }
 
 void JsonDocument::finish() const {
+  if (state_->finished) return;
   for (auto* v : {&state_->used, &state_->whole}) {
     std::sort(v->begin(), v->end());
     v->erase(std::unique(v->begin(), v->end()), v->end());
   }
   findUnknown(state_->value, "", state_->used, state_->whole, state_->file);
+  state_->finished = true;
+  std::vector<const Json*>().swap(state_->used);
+  std::vector<const Json*>().swap(state_->whole);
+}
+
+void JsonDocument::lendValue(nlohmann::json& record, const std::string& key,
+                             const std::function<void(const nlohmann::json&)>& use) const {
+  // (a move hands over the root's storage: the nodes below it stay put)
+  record[key] = std::move(state_->value);
+  const auto take_back = [&] { state_->value = std::move(record[key]); };
+  try {
+    use(record);
+  } catch (...) {
+    take_back();
+    throw;
+  }
+  take_back();
 }
 
 void JsonDocument::releaseValue() const {
@@ -316,7 +334,7 @@ const Json* JsonReader::find(const std::string& key) const {
   if (!node_->is_object()) failHere("expected an object, got " + typeName(*node_));
   auto it = node_->find(key);
   if (it == node_->end()) return nullptr;
-  state_->used.push_back(&*it);
+  if (!state_->finished) state_->used.push_back(&*it);
   return &*it;
 }
 
@@ -476,12 +494,32 @@ std::vector<JsonReader> JsonReader::objects(const std::string& key, bool require
   return out;
 }
 
+std::size_t JsonReader::forEachObject(const std::string& key, const std::function<void(const JsonReader&)>& use,
+                                      bool required_key) const {
+  const Json* v = required_key ? &required(key) : find(key);
+  if (v == nullptr) return 0;
+  if (!v->is_array()) fail(key, "expected an array of objects, got " + typeName(*v));
+  const std::string base = pointer(key);
+  for (std::size_t i = 0; i < v->size(); ++i) {
+    const std::string p = base + "/" + std::to_string(i);
+    if (!(*v)[i].is_object()) throw InputError(state_->file, p, "expected an object, got " + typeName((*v)[i]));
+    use(JsonReader(&(*v)[i], p, state_));
+  }
+  return v->size();
+}
+
+std::size_t JsonReader::arraySize(const std::string& key) const {
+  if (!node_->is_object()) return 0;
+  const auto it = node_->find(key);
+  return it != node_->end() && it->is_array() ? it->size() : 0;
+}
+
 std::vector<std::pair<std::string, JsonReader>> JsonReader::members() const {
   if (!node_->is_object()) failHere("expected an object, got " + typeName(*node_));
   std::vector<std::pair<std::string, JsonReader>> out;
   for (auto it = node_->begin(); it != node_->end(); ++it) {
     const std::string p = pointer(it.key());
-    state_->used.push_back(&it.value());
+    if (!state_->finished) state_->used.push_back(&it.value());
     if (!it.value().is_object()) throw InputError(state_->file, p, "expected an object, got " + typeName(it.value()));
     out.emplace_back(it.key(), JsonReader(&it.value(), p, state_));
   }
@@ -490,7 +528,7 @@ std::vector<std::pair<std::string, JsonReader>> JsonReader::members() const {
 
 const Json& JsonReader::raw(const std::string& key) const {
   const Json& v = required(key);
-  state_->whole.push_back(&v);
+  if (!state_->finished) state_->whole.push_back(&v);
   return v;
 }
 

@@ -10,6 +10,7 @@
 #include <Eigen/Core>
 #include <cstdint>
 #include <filesystem>
+#include <functional>
 #include <memory>
 #include <nlohmann/json.hpp>
 #include <optional>
@@ -48,6 +49,12 @@ class JsonDocument {
   /// allows it (RunContext::may_release_case). Readers of this document must
   /// not be used afterwards.
   void releaseValue() const;
+  /// Puts the parsed value under `key` of `record`, calls `use(record)` and
+  /// takes the value back, also when `use` throws: a record that holds the
+  /// whole case (run.json) without a copy of a large one. The value's nodes,
+  /// which readers point at, do not move.
+  void lendValue(nlohmann::json& record, const std::string& key,
+                 const std::function<void(const nlohmann::json&)>& use) const;
 
   const nlohmann::json& json() const { return state_->value; }
   const std::string& file() const { return state_->file; }
@@ -59,8 +66,11 @@ class JsonDocument {
     std::string file;
     // Values that were read, by address (stable: the value is not modified
     // after applySet); `whole`: read as a whole (raw), nothing inside is
-    // checked. Sorted by finish(). A pointer per key read, not a string.
+    // checked. A pointer per key read, not a string. Once finish() has found
+    // no unknown key, reading goes on unrecorded (what a kind reads was
+    // checked by then) and both lists are freed.
     std::vector<const nlohmann::json*> used, whole;
+    bool finished = false;
   };
   std::shared_ptr<State> state_;
 };
@@ -102,6 +112,12 @@ class JsonReader {
   std::optional<JsonReader> optionalObject(const std::string& key) const;
   /// An array of objects; absent means empty unless `required`.
   std::vector<JsonReader> objects(const std::string& key, bool required = false) const;
+  /// The same, one reader at a time, for an array too large to hold a reader
+  /// per element beside it (a case's listed spheres); returns the count.
+  std::size_t forEachObject(const std::string& key, const std::function<void(const JsonReader&)>& use,
+                            bool required = false) const;
+  /// The length of an array (0 when absent or not an array; nothing marked read).
+  std::size_t arraySize(const std::string& key) const;
   /// The members of this object read as a name -> object map (all marked read).
   std::vector<std::pair<std::string, JsonReader>> members() const;
   /// The raw value of a key, its whole subtree marked as read (free-form data).

@@ -191,9 +191,9 @@ Scene parseScene(const JsonReader& root) {
     s.materials.push_back(parseMaterial(name, r));
   }
 
-  const std::vector<bridge::JsonReader> sphere_readers = root.objects("spheres");
-  s.spheres.reserve(sphere_readers.size());
-  for (const auto& r : sphere_readers) {
+  // (one reader at a time: a large case lists tens of thousands)
+  s.spheres.reserve(root.arraySize("spheres"));
+  root.forEachObject("spheres", [&](const bridge::JsonReader& r) {
     SphereSpec sp;
     sp.center_m = r.vec3("center_m");
     sp.radius_m = r.number("radius_m", Check::Positive);
@@ -207,7 +207,7 @@ Scene parseScene(const JsonReader& root) {
     sp.mass_scale = r.number("mass_scale", 1.0, Check::Positive);
     if (sp.mass_scale < 1.0) r.fail("mass_scale", "must be >= 1 (it scales the sphere's inertia up)");
     s.spheres.push_back(sp);
-  }
+  });
 
   for (const auto& r : root.objects("blocks")) {
     BlockSpec b;

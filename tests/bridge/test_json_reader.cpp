@@ -4,6 +4,7 @@
 #include <sys/stat.h>
 
 #include <cstdio>
+#include <stdexcept>
 
 #include "bridge/errors.hpp"
 #include "bridge/json_reader.hpp"
@@ -11,6 +12,7 @@
 using gabion::bridge::Check;
 using gabion::bridge::InputError;
 using gabion::bridge::JsonDocument;
+using gabion::bridge::JsonReader;
 using nlohmann::json;
 
 namespace {
@@ -71,6 +73,50 @@ TEST(JsonReader, ReleaseFreesTheValue) {
   d.releaseValue();
   EXPECT_TRUE(d.json().is_null());
   EXPECT_EQ(d.file(), "case.json");
+}
+
+// A record lent the whole value (run.json) gets it without a copy, and the
+// document has it back afterwards, also when the use throws; readers made
+// before still read it (its nodes did not move).
+TEST(JsonReader, ALentValueComesBack) {
+  auto d = doc(R"({"spheres":[{"r":1},{"r":2}]})");
+  const auto spheres = d.root().objects("spheres");
+  const nlohmann::json* before = &d.json().at("spheres");
+  nlohmann::json record = {{"format", "x"}};
+  d.lendValue(record, "case", [&](const nlohmann::json& r) {
+    EXPECT_EQ(r.at("case").at("spheres").size(), 2u);
+    EXPECT_EQ(&r.at("case").at("spheres"), before);
+    EXPECT_TRUE(d.json().is_null());
+  });
+  EXPECT_EQ(&d.json().at("spheres"), before);
+  EXPECT_DOUBLE_EQ(spheres[1].number("r"), 2.0);
+  EXPECT_THROW(d.lendValue(record, "case", [](const nlohmann::json&) { throw std::runtime_error("disk full"); }),
+               std::runtime_error);
+  EXPECT_EQ(d.json().at("spheres").size(), 2u);
+  EXPECT_DOUBLE_EQ(spheres[0].number("r"), 1.0);
+  EXPECT_NO_THROW(d.finish());
+}
+
+// One reader at a time over an array: the same values, the same pointers in
+// errors as objects(); a finished document reads on (unrecorded) and
+// finishes again without complaint.
+TEST(JsonReader, ForEachObjectAndReadingAfterFinish) {
+  auto d = doc(R"({"spheres":[{"r":1},{"r":2},{"r":-3}]})");
+  EXPECT_EQ(d.root().arraySize("spheres"), 3u);
+  EXPECT_EQ(d.root().arraySize("none"), 0u);
+  double sum = 0.0;
+  EXPECT_EQ(errorOf([&] {
+              d.root().forEachObject("spheres", [&](const JsonReader& r) { sum += r.number("r", Check::Positive); });
+            }),
+            "case.json: /spheres/2/r: must be > 0 (got -3)");
+  EXPECT_DOUBLE_EQ(sum, 3.0);
+  EXPECT_NO_THROW(d.finish());
+  auto bad = doc(R"({"spheres":[{"r":1}, 7]})");
+  EXPECT_EQ(errorOf([&] { bad.root().forEachObject("spheres", [](const JsonReader&) {}); }),
+            "case.json: /spheres/1: expected an object, got a number");
+  // (after finish: reads go on, nothing recorded, finish passes again)
+  EXPECT_DOUBLE_EQ(d.root().objects("spheres")[1].number("r"), 2.0);
+  EXPECT_NO_THROW(d.finish());
 }
 
 TEST(JsonReader, DefaultsDoNotMarkAbsentKeys) {
