@@ -35,15 +35,19 @@ int NeighbourGrid::assignClasses(Particles& p) {
   return classCount();
 }
 
-std::uint32_t NeighbourGrid::Grid::cellOf(double x, double y, double z) const {
+void NeighbourGrid::Grid::coords(double x, double y, double z, std::size_t c[3]) const {
   const double pos[3] = {x, y, z};
-  std::size_t c[3];
   for (int a = 0; a < 3; ++a) {
     const double s = (pos[a] - lo[a]) * inv_h;
     // (clamped: a particle of a smaller class lies inside this grid's box;
     // the clamp keeps a rounding at the far face inside too)
     c[a] = s <= 0.0 ? 0 : std::min(ncells[a] - 1, static_cast<std::size_t>(s));
   }
+}
+
+std::uint32_t NeighbourGrid::Grid::cellOf(double x, double y, double z) const {
+  std::size_t c[3];
+  coords(x, y, z, c);
   return static_cast<std::uint32_t>(base + ((c[slow] + 1) * pm + (c[mid] + 1)) * pf + (c[fast] + 1));
 }
 
@@ -126,12 +130,74 @@ std::vector<std::uint32_t> NeighbourGrid::sortOrder(const Particles& p, double s
   return order;
 }
 
+// The pairs of a particle with the particles of the larger classes, found
+// from the larger particle j: the cells of each smaller class's grid within
+// its reach, r_j + skin + r_max(class), a window of 2k + 1 cells a side.
+// From the small particle's side (the 27 cells of the large class's grid,
+// each of edge 2 r_max + skin of that class) a 4 mm sphere would test a few
+// dozen far spheres of 18 and 70 mm for each one near it. The test is the
+// row scan's, with i the smaller particle; the pairs are then put in row
+// order (a stable counting sort by i of pairs met in increasing j), so the
+// list is the same, entry for entry.
+void NeighbourGrid::crossPairs(const Particles& p, double skin, bool groups, std::size_t nblocks,
+                               const ForBlocks& for_blocks) {
+  const std::size_t n = p.size(), nclass = grids_.size();
+  cross_begin_.assign(n + 1, 0);
+  cross_j_.clear();
+  if (nclass < 2) return;
+  const auto blockBegin = [&](std::size_t b) { return n * b / nblocks; };
+  cross_blocks_.resize(nblocks);
+  for_blocks(nblocks, [&](std::size_t blk) {
+    std::vector<std::uint32_t>& found = cross_blocks_[blk];  // (i, j) pairs, flat
+    found.clear();
+    const double *__restrict X = p.x.data(), *__restrict Y = p.y.data(), *__restrict Z = p.z.data(),
+                 *__restrict R = p.r.data(), *__restrict IMB = p.inv_body_mass.data();
+    const std::int32_t* __restrict BODY = p.body.data();
+    const std::uint8_t* __restrict GRP = p.group.data();
+    const std::uint32_t* __restrict START = cell_start_.data();
+    for (std::size_t j = blockBegin(blk); j < blockBegin(blk + 1); ++j) {
+      const std::size_t d = p.size_class[j];
+      for (std::size_t c = 0; c < d; ++c) {
+        const Grid& g = grids_[c];
+        std::size_t at[3];
+        g.coords(X[j], Y[j], Z[j], at);
+        const auto k = static_cast<std::size_t>((R[j] + skin + class_rmax_[c]) * g.inv_h) + 1;
+        const auto lo = [&](int a) { return at[a] > k ? at[a] - k : 0; };
+        const auto hi = [&](int a) { return std::min(g.ncells[a] - 1, at[a] + k); };
+        const std::size_t f0 = lo(g.fast), f1 = hi(g.fast);
+        for (std::size_t s = lo(g.slow); s <= hi(g.slow); ++s)
+          for (std::size_t m = lo(g.mid); m <= hi(g.mid); ++m) {
+            const std::size_t row = g.base + ((s + 1) * g.pm + (m + 1)) * g.pf + 1;
+            for (std::uint32_t i = START[row + f0]; i < START[row + f1 + 1]; ++i) {
+              const double xi = X[i], yi = Y[i], zi = Z[i], ri = R[i] + skin;
+              const std::int32_t bi = BODY[i];
+              const double ex = X[j] - xi, ey = Y[j] - yi, ez = Z[j] - zi, reach = ri + R[j];
+              const bool near = ex * ex + ey * ey + ez * ez < reach * reach;
+              const bool allowed = (bi < 0 || BODY[j] != bi) && (IMB[i] > 0.0 || IMB[j] > 0.0) &&
+                                   (!groups || ((p.group_mask[GRP[i]] >> GRP[j]) & 1u));
+              if (near && allowed) found.push_back(i), found.push_back(static_cast<std::uint32_t>(j));
+            }
+          }
+      }
+    }
+  });
+  // Rows in order: count per i, then place in block order (increasing j).
+  for (const auto& found : cross_blocks_)
+    for (std::size_t q = 0; q < found.size(); q += 2) ++cross_begin_[found[q] + 1];
+  for (std::size_t i = 0; i < n; ++i) cross_begin_[i + 1] += cross_begin_[i];
+  cross_j_.resize(cross_begin_[n]);
+  std::vector<std::uint32_t> fill(cross_begin_.begin(), cross_begin_.end() - 1);
+  for (const auto& found : cross_blocks_)
+    for (std::size_t q = 0; q < found.size(); q += 2) cross_j_[fill[found[q]]++] = found[q + 1];
+}
+
 void NeighbourGrid::buildList(const Particles& p, double skin, const ExcludedPairs& excluded, std::size_t nblocks,
                               const ForBlocks& for_blocks, NeighbourList& out) {
-  const std::size_t n = p.size(), nclass = grids_.size();
+  const std::size_t n = p.size();
   const auto blockBegin = [&](std::size_t b) { return n * b / nblocks; };
   const bool groups =
       std::any_of(std::begin(p.group_mask), std::end(p.group_mask), [](std::uint32_t m) { return m != ~0u; });
+  crossPairs(p, skin, groups, nblocks, for_blocks);
   out.row_begin.assign(n + 1, 0);
   list_blocks_.resize(nblocks);
   for_blocks(nblocks, [&](std::size_t blk) {
@@ -188,15 +254,15 @@ void NeighbourGrid::buildList(const Particles& p, double skin, const ExcludedPai
         const std::size_t centre = cell + row_offset[r];
         scan(i, r == 0 ? static_cast<std::uint32_t>(i + 1) : START[centre - 1], START[centre + 2]);
       }
-      // Larger classes: the 3 x 3 rows of three cells around i in each grid.
-      for (std::size_t d = c + 1; d < nclass; ++d) {
-        const Grid& g = grids_[d];
-        const std::size_t centre = g.cellOf(X[i], Y[i], Z[i]);
-        for (std::size_t ds = 0; ds < 3; ++ds)
-          for (std::size_t dm = 0; dm < 3; ++dm) {
-            const std::size_t mid = centre + ds * g.pf * g.pm + dm * g.pf - g.pf * g.pm - g.pf;
-            scan(i, START[mid - 1], START[mid + 2]);
-          }
+      // Larger classes: the partners found from their side (crossPairs),
+      // after the own class's: every larger class's particles come later
+      // in the order, in increasing index within the row.
+      const std::uint32_t cb = cross_begin_[i], ce = cross_begin_[i + 1];
+      if (cb < ce) {
+        if (list.size() < len + (ce - cb))
+          list.resize(std::max<std::size_t>(len + (ce - cb), list.size() + list.size() / 4 + 1024));
+        std::copy(cross_j_.begin() + cb, cross_j_.begin() + ce, list.begin() + static_cast<long>(len));
+        len += ce - cb;
       }
       // Linked pairs never touch: drop them from the row (rare rows only).
       if (!excluded.empty()) {

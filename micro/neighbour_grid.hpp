@@ -4,11 +4,12 @@
 /// cell grids, one per size class (radii within a factor kClassRatio of the
 /// class's smallest), each with cells of 2 r_max(class) + skin. A particle
 /// finds the partners of its own class through the half stencil of its own
-/// grid (5 runs of cells) and the partners of every larger class through the
-/// 27 cells around it in that class's grid (9 runs), so each pair is found
-/// once, from its smaller particle, in O(N) for size ratios of 1:200 and
-/// more (docs/micro.md, Neighbour search). A boulder among netting nodes is
-/// a class of its own with a coarse grid; no pair goes to a serial path.
+/// grid (5 runs of cells); a pair of two classes is found from the larger
+/// particle, through the cells of the smaller class's grid within its reach,
+/// and filed in the smaller particle's row, so each pair is found once, in
+/// O(N) for size ratios of 1:200 and more (docs/micro.md, Neighbour search).
+/// A boulder among netting nodes is a class of its own; no pair goes to a
+/// serial path.
 ///
 /// Particles are sorted by class, then by cell: partners are close in
 /// memory, and a row's partners come out in increasing index order.
@@ -77,13 +78,20 @@ class NeighbourGrid {
     std::size_t base = 0;        // first global cell
     std::size_t count = 0;       // padded cells in all
     std::uint32_t cellOf(double x, double y, double z) const;
+    /// The cell coordinates along x, y, z (unpadded, clamped to the grid).
+    void coords(double x, double y, double z, std::size_t c[3]) const;
   };
+  void crossPairs(const Particles& p, double skin, bool groups, std::size_t nblocks, const ForBlocks& for_blocks);
   std::vector<double> class_rmax_;
   double finest_mean_r_ = 0.0;
   std::vector<Grid> grids_;
   std::vector<std::uint32_t> cell_start_;  // global cell -> first particle (sorted order); size cells + 2
   std::vector<std::uint32_t> cell_;        // particle -> global cell, in sorted order
   std::vector<std::vector<std::uint32_t>> list_blocks_;
+  // The pairs with larger classes, by row i: partners cross_j_[cross_begin_[i] ..
+  // cross_begin_[i + 1]), increasing (crossPairs); per block while found.
+  std::vector<std::uint32_t> cross_begin_, cross_j_;
+  std::vector<std::vector<std::uint32_t>> cross_blocks_;
 };
 
 }  // namespace gabion::micro
