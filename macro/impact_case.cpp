@@ -108,7 +108,12 @@ void writeResults(const std::filesystem::path& outdir, const Structure& s, const
 
 // A relaxation that ran out of steps: the residual displacements are a
 // moving structure's (a cell thrown out of the wall by the rebound drifts
-// with no force to stop it: the cells carry no tension).
+// with no force to stop it: the cells carry no tension). (A perforated
+// structure is not relaxed at all: its outcome says why.)
+bool relaxCutShort(const ImpactResult& r) {
+  return r.ok && r.relaxed && !r.relax_converged && r.outcome != Outcome::Perforated;
+}
+
 std::string relaxWarning(const ImpactResult& r) {
   return "the structure was not at rest after " + std::to_string(r.relax_steps) +
          " steps of relaxation (run.relax_max_steps): its residual displacements are those of a structure still "
@@ -213,8 +218,7 @@ bridge::RunOutcome runImpactCase(const JsonDocument& doc, const bridge::RunConte
   r["balance_rel_error"] = worst;
   json warnings = json::array();
   for (std::size_t i = 0; i < results.size(); ++i)
-    if (results[i].ok && results[i].relaxed && !results[i].relax_converged)
-      warnings.push_back("impact " + std::to_string(i) + ": " + relaxWarning(results[i]));
+    if (relaxCutShort(results[i])) warnings.push_back("impact " + std::to_string(i) + ": " + relaxWarning(results[i]));
   if (!warnings.empty()) r["warnings"] = warnings;
   r["kinematics"] = p.c.run.kinematics == Kinematics::ThreeD ? "3d" : "x-only";
   r["structure"] = {
@@ -234,7 +238,7 @@ bridge::RunOutcome runImpactCase(const JsonDocument& doc, const bridge::RunConte
            << showNumber(1e3 * x.contact_duration_s) << " ms; energy balance error "
            << showNumber(x.balance_rel_error, 2) << "\n";
     if (!x.perforation.empty()) answer << "  " << x.perforation << "\n";
-    if (x.relaxed && !x.relax_converged) answer << "  warning: " << relaxWarning(x) << "\n";
+    if (relaxCutShort(x)) answer << "  warning: " << relaxWarning(x) << "\n";
   }
   out.answer = answer.str();
   return out;

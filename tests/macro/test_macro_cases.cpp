@@ -254,6 +254,15 @@ TEST(MacroCli, RepeatedImpactsInSummary) {
   const json w = readJson(dir / "short" / "summary.json").at("warnings");
   ASSERT_EQ(w.size(), 3u) << w.dump();
   EXPECT_EQ(w[0].get<std::string>().rfind("impact 0: the structure was not at rest", 0), 0u) << w.dump();
+  // A perforated structure is not relaxed at all (its outcome says why): no warning.
+  c["impacts"] = json::array({{{"velocity_m_s", 60}}});
+  writeFile(dir / "through.json", c.dump());
+  const auto r3 = runGabion("run " + (dir / "through.json").string() + " -q -o " + (dir / "through").string());
+  ASSERT_EQ(r3.exit_code, 0) << r3.output;
+  const json s3 = readJson(dir / "through" / "summary.json");
+  EXPECT_EQ(s3.at("impacts").at(0).at("outcome"), "perforated") << s3.dump();
+  EXPECT_FALSE(s3.contains("warnings")) << s3.dump();
+  EXPECT_EQ(r3.output.find("warning:"), std::string::npos) << r3.output;
 }
 
 // A sweep: rows in grid order whatever the thread count; failed points are
