@@ -57,7 +57,11 @@ AxialLawParams readAxialLaw(const JsonReader& r, double edge_m, int version, boo
   if (impact) {
     p.rate_coefficient_N_s2_m2 = r.optionalNumber("rate_coefficient_N_s2_m2", Check::NonNegative).value_or(0.0);
     p.rate_growth_m = r.optionalNumber("rate_growth_m", Check::NonNegative).value_or(0.0);
+    if (r.has("viscosity_N_s_m"))
+      r.fail("viscosity_N_s_m",
+             "only for an axial law (a cell pushed by its neighbour); the impact law has its rate term");
   } else {
+    p.viscosity_N_s_m = r.optionalNumber("viscosity_N_s_m", Check::NonNegative).value_or(0.0);
     for (const char* key : {"rate_coefficient_N_s2_m2", "rate_growth_m"})
       if (r.has(key)) r.fail(key, "only for an impact law (the overstress of the indentation rate)");
   }
@@ -123,6 +127,7 @@ json toJson(const AxialLawParams& p) {
   if (p.rate_coefficient_N_s2_m2 > 0.0) j["rate_coefficient_N_s2_m2"] = p.rate_coefficient_N_s2_m2;
   if (p.rate_growth_m > 0.0) j["rate_growth_m"] = p.rate_growth_m;
   if (p.plastic_densification) j["densification"] = "plastic";
+  if (p.viscosity_N_s_m > 0.0) j["viscosity_N_s_m"] = p.viscosity_N_s_m;
   if (std::isfinite(p.lockup_shortening_m)) {  // (a law built without one reads back with the default)
     j["lockup_shortening_m"] = p.lockup_shortening_m;
     j["lockup_stiffness_N_m"] = p.lockup_stiffness_N_m;

@@ -42,7 +42,7 @@ Model::Model(Structure structure, Kinematics kinematics)
   const std::size_t n = s_.nodeCount();
   for (auto* v : {&ux_, &uy_, &uz_, &vx_, &vy_, &vz_, &fx_, &fy_, &fz_, &cell_axial_}) v->assign(n, 0.0);
   const std::size_t na = s_.axial.a.size(), nl = s_.lateral.a.size(), ng = s_.ground.node.size();
-  for (auto* v : {&axial_plastic_, &axial_force_, &axial_ft1_, &axial_ft2_}) v->assign(na, 0.0);
+  for (auto* v : {&axial_plastic_, &axial_force_, &axial_ft1_, &axial_ft2_, &axial_dashpot_}) v->assign(na, 0.0);
   for (auto* v : {&lat_ftx_, &lat_fto_, &lat_plastic_, &lat_force_}) v->assign(nl, 0.0);
   for (auto* v : {&gnd_ftx_, &gnd_fty_, &gnd_plastic_, &gnd_force_}) v->assign(ng, 0.0);
   front_plastic_.assign(s_.front.node.size(), 0.0);
@@ -54,7 +54,7 @@ Model::Model(Structure structure, Kinematics kinematics)
 double Model::criticalTimeStep() const {
   // Sum of the tangent stiffnesses acting on each degree of freedom.
   const std::size_t n = s_.nodeCount();
-  std::vector<double> kx(n, 0.0), ky(n, 0.0), kz(n, 0.0);
+  std::vector<double> kx(n, 0.0), ky(n, 0.0), kz(n, 0.0), cx(n, 0.0);
   auto add = [](std::vector<double>& v, int node, double k) {
     if (node >= 0) v[static_cast<std::size_t>(node)] += k;
   };
@@ -62,6 +62,8 @@ double Model::criticalTimeStep() const {
   auto tangent = [&](int law) { return bridge::maxTangentStiffness(s_.axial_laws[static_cast<std::size_t>(law)]); };
   for (std::size_t l = 0; l < s_.axial.a.size(); ++l) {
     const double k = tangent(s_.axial.law[l]);
+    const double eta = s_.axial_laws[static_cast<std::size_t>(s_.axial.law[l])].viscosity_N_s_m;
+    for (int node : {s_.axial.a[l], s_.axial.b[l]}) add(cx, node, eta);
     const double kt = s_.friction_laws[static_cast<std::size_t>(s_.axial.friction[l])].tangential_stiffness_N_m;
     for (int node : {s_.axial.a[l], s_.axial.b[l]}) {
       add(kx, node, k);
@@ -97,11 +99,20 @@ double Model::criticalTimeStep() const {
       add(kz, s_.front.node[e], k);
     }
   }
-  double w2 = 0.0;
+  double w2 = 0.0, dt_damped = INFINITY;
   for (std::size_t i = 0; i < n; ++i) {
     double k = kx[i];
     if (three_d_) k = std::max({k, ky[i], kz[i]});
-    w2 = std::max(w2, 2.0 * k * s_.inv_mass[i]);
+    const double w2i = 2.0 * k * s_.inv_mass[i];
+    w2 = std::max(w2, w2i);
+    // A dashpot on the node (the axial links' viscosity, along x): the
+    // leapfrog with the half-step velocity in the force is stable for
+    // w^2 dt^2 + 2 beta dt < 4, beta = 2 c / m (as w^2 = 2 k / m), i.e.
+    // dt < 2 / w (sqrt(1 + zeta^2) - zeta) with zeta = beta / (2 w).
+    if (cx[i] > 0.0 && kx[i] > 0.0) {
+      const double beta = 2.0 * cx[i] * s_.inv_mass[i], wx2 = 2.0 * kx[i] * s_.inv_mass[i];
+      dt_damped = std::min(dt_damped, (std::sqrt(beta * beta + 4.0 * wx2) - beta) / wx2);
+    }
   }
   if (boulder_.present) {
     // The boulder can touch at most the front elements within its diameter.
@@ -114,7 +125,8 @@ double Model::criticalTimeStep() const {
       w2 = std::max(w2, 2.0 * touching * 2.5 * kt_max / boulder_.mass_kg);
     }
   }
-  return w2 > 0.0 ? 2.0 / std::sqrt(w2) : INFINITY;
+  const double dt = w2 > 0.0 ? 2.0 / std::sqrt(w2) : INFINITY;
+  return std::min(dt, dt_damped);
 }
 
 void Model::placeBoulder(const BoulderSpec& b) {
@@ -207,6 +219,7 @@ void Model::archive(bridge::StateArchive& a) {
                          {"axial_force", &axial_force_},
                          {"axial_ft1", &axial_ft1_},
                          {"axial_ft2", &axial_ft2_},
+                         {"axial_dashpot", &axial_dashpot_},
                          {"lat_ftx", &lat_ftx_},
                          {"lat_fto", &lat_fto_},
                          {"lat_plastic", &lat_plastic_},
@@ -269,7 +282,18 @@ void Model::computeAxialForces(double dt) {
     const auto b = static_cast<std::size_t>(bi);
     const double shortening = ux_[a] - (bi >= 0 ? ux_[b] : 0.0);
     const auto law = static_cast<std::size_t>(L.law[l]);
-    const double F = linkLaw(s_.axial_springs[law], shortening, axial_plastic_[l], plastic, elastic);
+    double F = linkLaw(s_.axial_springs[law], shortening, axial_plastic_[l], plastic, elastic);
+    if (const double eta = s_.axial_laws[law].viscosity_N_s_m; eta > 0.0) {
+      // The fill's viscosity: a dashpot on the shortening rate (half-step
+      // velocities, the leapfrog's latest). Its work over the last step
+      // takes the force at both ends (the trapezoidal rule, as the
+      // leapfrog's work of the other forces), so it keeps last step's.
+      const double rate = vx_[a] - (bi >= 0 ? vx_[b] : 0.0);
+      const double fd = bridge::dashpotForce(eta, rate, F);
+      plastic += 0.5 * (axial_dashpot_[l] + fd) * rate * dt;
+      axial_dashpot_[l] = fd;
+      F += fd;
+    }
     if (shortening > s_.axial_crush_m[law] && crushed_link_ < 0) crushed_link_ = static_cast<int>(l);
     axial_force_[l] = F;
     fx_[a] -= F;

@@ -26,6 +26,7 @@ AxialLawParams seriesAxialLaw(const AxialLawParams& a, const AxialLawParams& b) 
   }
   p.lockup_shortening_m = 0.5 * (a.lockup_shortening_m + b.lockup_shortening_m);
   p.lockup_stiffness_N_m = series(a.lockup_stiffness_N_m, b.lockup_stiffness_N_m);
+  p.viscosity_N_s_m = series(a.viscosity_N_s_m, b.viscosity_N_s_m);  // (two dashpots in series, as the springs)
   return p;
 }
 
@@ -39,6 +40,7 @@ AxialLawParams cellLengthLaw(const AxialLawParams& a, double factor) {
   p.softening_onset_m *= factor;
   p.lockup_shortening_m *= factor;
   p.lockup_stiffness_N_m /= factor;
+  p.viscosity_N_s_m /= factor;  // (a viscosity per strain rate, as a stiffness per strain)
   return p;
 }
 

@@ -51,6 +51,15 @@
 /// and the stiffest tangent, unloading past both, is k + k_d + k_L: the one
 /// that sets the critical time step.
 ///
+/// Viscosity (axial laws only; law files: "viscosity_N_s_m"): the fill of a
+/// cell pushed by its neighbour resists the rate of its shortening as a
+/// dashpot in parallel with the law, F + eta r, while the cell is in
+/// contact (F > 0), never pulling (the total stays >= 0): a cell behind the
+/// struck one then creeps to its shortening instead of overshooting it and
+/// coming back (docs/resolved.md). Its work eta r^2 is dissipated; the
+/// macro model applies it along x between neighbours and against the back
+/// support, and takes it into the critical time step (macro/model.cpp).
+///
 /// Plastic densification (densifying model with a lock-up, axial laws only;
 /// law files: "densification": "plastic"): a fill compacted past u_d keeps
 /// its compaction. The added force follows G on first loading and, below the
@@ -92,7 +101,17 @@ struct AxialLawParams {
   double rate_coefficient_N_s2_m2 = 0.0;  ///< c >= 0, the overstress c r^2 at indentation rate r, impact only
   double rate_growth_m = 0.0;             ///< u_a >= 0: the overstress grows as min(1, u / u_a); 0: constant
   bool plastic_densification = false;     ///< densifying with a lock-up, axial only: compaction is kept (above)
+  double viscosity_N_s_m = 0.0;           ///< eta >= 0: a dashpot in parallel while in contact, axial only (above)
 };
+
+/// The dashpot of a law of viscosity `eta_N_s_m` at shortening rate `rate_m_s`
+/// added to the law's force `law_force_N` (N): eta r while the cell is in
+/// contact, no more negative than takes the total to zero.
+inline double dashpotForce(double eta_N_s_m, double rate_m_s, double law_force_N) {
+  if (!(law_force_N > 0.0)) return 0.0;
+  const double f = eta_N_s_m * rate_m_s;
+  return f > -law_force_N ? f : -law_force_N;
+}
 
 /// Whether two laws are the same law (every parameter equal).
 inline bool sameLaw(const AxialLawParams& a, const AxialLawParams& b) {
@@ -102,7 +121,8 @@ inline bool sameLaw(const AxialLawParams& a, const AxialLawParams& b) {
          a.lockup_shortening_m == b.lockup_shortening_m && a.lockup_stiffness_N_m == b.lockup_stiffness_N_m &&
          a.softening_stiffness_N_m == b.softening_stiffness_N_m && a.residual_force_N == b.residual_force_N &&
          a.softening_onset_m == b.softening_onset_m && a.rate_coefficient_N_s2_m2 == b.rate_coefficient_N_s2_m2 &&
-         a.rate_growth_m == b.rate_growth_m && a.plastic_densification == b.plastic_densification;
+         a.rate_growth_m == b.rate_growth_m && a.plastic_densification == b.plastic_densification &&
+         a.viscosity_N_s_m == b.viscosity_N_s_m;
 }
 
 /// True for the models with a hardening tangent (bilinear, densifying).

@@ -232,3 +232,25 @@ TEST(LawFile, PlasticDensificationReadsBackAndIsRefusedWhereItCannotHold) {
   j["materials"]["front"]["axial"]["densification"] = "plastic";  // (elastic_perfectly_plastic)
   refusedAt(j, "/materials/front/axial/densification");
 }
+
+// The axial law's viscosity reads back; the impact law has its rate term and
+// refuses it by name, as a negative value is refused.
+TEST(LawFile, AxialViscosityReadsBackAndIsRefusedOnTheImpactLaw) {
+  LawFile laws = sampleLaws();
+  laws.materials.at("front").axial.viscosity_N_s_m = 1.5e4;
+  const std::string path = ::testing::TempDir() + "law_viscosity.json";
+  writeJsonAtomic(path, toJson(laws));
+  EXPECT_DOUBLE_EQ(loadLawFile(path).materials.at("front").axial.viscosity_N_s_m, 1.5e4);
+  EXPECT_FALSE(toJson(sampleLaws())["materials"]["front"]["axial"].contains("viscosity_N_s_m"));
+  for (const auto& [law, value] : {std::pair<std::string, double>{"impact", 1e4}, {"axial", -1.0}}) {
+    auto j = toJson(laws);
+    j["materials"]["front"][law]["viscosity_N_s_m"] = value;
+    writeJsonAtomic(path, j);
+    try {
+      loadLawFile(path);
+      ADD_FAILURE() << "no error for " << law;
+    } catch (const InputError& e) {
+      EXPECT_EQ(e.pointer(), "/materials/front/" + law + "/viscosity_N_s_m") << e.what();
+    }
+  }
+}

@@ -18,6 +18,8 @@ TEST(DisplayUnit, SiSuffixToEngineersUnit) {
                {"yield_force_N", "yield force", "kN", 1e-3},
                {"tangential_stiffness_N_m", "tangential stiffness", "kN/m", 1e-3},
                {"velocity_m_s", "velocity", "m/s", 1.0},
+               {"viscosity_N_s_m", "viscosity", "kN s/m", 1e-3},
+               {"rate_coefficient_N_s2_m2", "rate coefficient", "kg/m", 1.0},
                {"time_s", "time", "s", 1.0},
                {"reaction_coefficient", "reaction coefficient", "-", 1.0},
                {"friction", "friction", "-", 1.0}};
