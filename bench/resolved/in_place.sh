@@ -19,8 +19,9 @@
 # as well as on the other runs. Then the rate law identified on the walls'
 # histories at 6 and 10 m/s (fit.macro: force and penetration against time,
 # the twin run inside the objective), the axial laws' densification made
-# plastic (DENSIFICATION=elastic keeps the pipeline's). Prints a table;
-# draws DIR/in_place/figures/.
+# plastic (DENSIFICATION=elastic keeps the pipeline's); and once more with
+# the axial laws viscous (VISCOSITY). Prints a table; draws
+# DIR/in_place/figures/.
 set -euo pipefail
 here=$(cd "$(dirname "$0")" && pwd)
 root=$(cd "$here/../.." && pwd)
@@ -111,11 +112,29 @@ json.dump({"format": "gabion.case/1", "kind": "fit.macro", "seed": 1, "macro_cas
 PY
   run_case fit_hist
   for png in "$dir"/fit_hist/fit_macro_*.png; do cp "$png" "$dir/figures/in_place_hist_$(basename "$png" .png | sed 's/^fit_macro_//').png"; done
+  # The same fit with the axial laws viscous (VISCOSITY N s/m, default
+  # 1e4: a dashpot in parallel while the cell is in contact,
+  # docs/formats.md), against the back face's overshoot.
+  python3 - "$dir" "${VISCOSITY:-1e4}" <<'PY'
+import json, sys
+d, eta = sys.argv[1], float(sys.argv[2])
+law = json.load(open(f"{d}/hist_law.json"))
+for m in law["materials"].values():
+    m["axial"]["viscosity_N_s_m"] = eta
+json.dump(law, open(f"{d}/visc_law.json", "w"), indent=1)
+twin = json.load(open(f"{d}/hist_twin.json"))
+twin["law_file"] = f"{d}/visc_law.json"
+json.dump(twin, open(f"{d}/visc_twin.json", "w"), indent=1)
+fit = json.load(open(f"{d}/fit_hist.json"))
+fit["macro_case"] = "visc_twin.json"
+json.dump(fit, open(f"{d}/fit_visc.json", "w"), indent=1)
+PY
+  run_case fit_visc
 fi
 for s in "$out"/centre_*_m_s "$out"/side_*_m_s; do
   [ -f "$s/summary.json" ] || continue
   name=$(basename "$s")
-  for fit in fit fit_rate fit_hist; do
+  for fit in fit fit_rate fit_hist fit_visc; do
     [ -f "$dir/$fit/law.json" ] || continue
     tag=${fit#fit}
     "$gabion" run "$s/macro_twin/case.json" --law "$dir/$fit/law.json" -q -o "$dir/twin${tag}_$name" >"$dir/twin${tag}_$name.log" 2>&1 ||

@@ -32,7 +32,8 @@ def relative(run, ref):
 # The twins of bench/resolved/in_place.sh: folder prefix under OUT/in_place, and label.
 IN_PLACE = [("twin_", "impact law fitted in the wall at 10 m/s"),
             ("twin_rate_", "rate law fitted in the wall at 6 and 10 m/s"),
-            ("twin_hist_", "rate law fitted on the walls' histories at 6 and 10 m/s")]
+            ("twin_hist_", "rate law fitted on the walls' histories at 6 and 10 m/s"),
+            ("twin_visc_", "rate law fitted on the histories, axial laws viscous")]
 
 
 def summary(path):
