@@ -481,16 +481,9 @@ std::optional<JsonReader> JsonReader::optionalObject(const std::string& key) con
 
 std::vector<JsonReader> JsonReader::objects(const std::string& key, bool required_key) const {
   std::vector<JsonReader> out;
-  const Json* v = required_key ? &required(key) : find(key);
-  if (v == nullptr) return out;
-  if (!v->is_array()) fail(key, "expected an array of objects, got " + typeName(*v));
-  const std::string base = pointer(key);
-  out.reserve(v->size());
-  for (std::size_t i = 0; i < v->size(); ++i) {
-    const std::string p = base + "/" + std::to_string(i);
-    if (!(*v)[i].is_object()) throw InputError(state_->file, p, "expected an object, got " + typeName((*v)[i]));
-    out.push_back(JsonReader(&(*v)[i], p, state_));
-  }
+  out.reserve(arraySize(key));
+  forEachObject(
+      key, [&](const JsonReader& r) { out.push_back(r); }, required_key);
   return out;
 }
 
