@@ -62,7 +62,7 @@ double Model::criticalTimeStep() const {
   auto tangent = [&](int law) { return bridge::maxTangentStiffness(s_.axial_laws[static_cast<std::size_t>(law)]); };
   for (std::size_t l = 0; l < s_.axial.a.size(); ++l) {
     const double k = tangent(s_.axial.law[l]);
-    const double eta = s_.axial_laws[static_cast<std::size_t>(s_.axial.law[l])].viscosity_N_s_m;
+    const double eta = s_.axial_springs[static_cast<std::size_t>(s_.axial.law[l])].viscosity_N_s_m;
     for (int node : {s_.axial.a[l], s_.axial.b[l]}) add(cx, node, eta);
     const double kt = s_.friction_laws[static_cast<std::size_t>(s_.axial.friction[l])].tangential_stiffness_N_m;
     for (int node : {s_.axial.a[l], s_.axial.b[l]}) {
@@ -283,7 +283,7 @@ void Model::computeAxialForces(double dt) {
     const double shortening = ux_[a] - (bi >= 0 ? ux_[b] : 0.0);
     const auto law = static_cast<std::size_t>(L.law[l]);
     double F = linkLaw(s_.axial_springs[law], shortening, axial_plastic_[l], plastic, elastic);
-    if (const double eta = s_.axial_laws[law].viscosity_N_s_m; eta > 0.0) {
+    if (const double eta = s_.axial_springs[law].viscosity_N_s_m; eta > 0.0) {
       // The fill's viscosity: a dashpot on the shortening rate (half-step
       // velocities, the leapfrog's latest). Its work over the last step
       // takes the force at both ends (the trapezoidal rule, as the

@@ -160,7 +160,8 @@ struct CellSpring {
   double lockup_N_m = 0.0;                                    ///< k_L (N/m)
   double rate_N_s2_m2 = 0.0;                                  ///< c (N s^2/m^2)
   double rate_growth_m = 0.0;                                 ///< u_a (m)
-  double compaction_N_m = 0.0;  ///< k_u = k_d + k_L with plastic densification; 0: G is elastic
+  double compaction_N_m = 0.0;   ///< k_u = k_d + k_L with plastic densification; 0: G is elastic
+  double viscosity_N_s_m = 0.0;  ///< eta (N s/m): the dashpot in parallel (the caller applies it, dashpotForce)
 };
 
 inline CellSpring cellSpring(const AxialLawParams& p) {
@@ -172,7 +173,8 @@ inline CellSpring cellSpring(const AxialLawParams& p) {
           p.lockup_stiffness_N_m,
           p.rate_coefficient_N_s2_m2,
           p.rate_growth_m,
-          densifies && p.plastic_densification ? p.densification_stiffness_N_m + p.lockup_stiffness_N_m : 0.0};
+          densifies && p.plastic_densification ? p.densification_stiffness_N_m + p.lockup_stiffness_N_m : 0.0,
+          p.viscosity_N_s_m};
 }
 
 /// G(m): the densification and lock-up force on first loading (N).
