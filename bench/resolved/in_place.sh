@@ -80,16 +80,25 @@ fi
 # the axial laws' densification plastic (DENSIFICATION, "plastic" or
 # "elastic": a compacted cell keeps its compaction, docs/formats.md).
 if [ -f "$slow" ] && [ -f "$dir/fit_rate/law.json" ]; then
-  python3 - "$out" "$dir" "${DENSIFICATION:-plastic}" <<'PY'
+  # The same fit once more with the axial laws viscous (VISCOSITY N s/m,
+  # default 1e4: a dashpot in parallel while the cell is in contact,
+  # docs/formats.md), against the back face's overshoot: fit_visc.
+  python3 - "$out" "$dir" "${DENSIFICATION:-plastic}" "${VISCOSITY:-1e4}" <<'PY'
 import json, sys
-out, d, densification = sys.argv[1], sys.argv[2], sys.argv[3]
+out, d, densification, eta = sys.argv[1], sys.argv[2], sys.argv[3], float(sys.argv[4])
 law = json.load(open(f"{d}/fit_rate/law.json"))
 for m in law["materials"].values():
     m["axial"]["densification"] = densification
-json.dump(law, open(f"{d}/hist_law.json", "w"), indent=1)
-twin = json.load(open(f"{out}/centre_10_m_s/macro_twin/case.json"))
-twin["law_file"] = f"{d}/hist_law.json"
-json.dump(twin, open(f"{d}/hist_twin.json", "w"), indent=1)
+# The twin with these laws, with each axial law's `axial` keys changed: NAME_law.json, NAME_twin.json.
+def twin_with(name, axial):
+    for m in law["materials"].values():
+        m["axial"].update(axial)
+    json.dump(law, open(f"{d}/{name}_law.json", "w"), indent=1)
+    twin = json.load(open(f"{out}/centre_10_m_s/macro_twin/case.json"))
+    twin["law_file"] = f"{d}/{name}_law.json"
+    json.dump(twin, open(f"{d}/{name}_twin.json", "w"), indent=1)
+twin_with("hist", {})
+twin_with("visc", {"viscosity_N_s_m": eta})
 imp = "laws.materials.front.impact."
 def p(name, key, lo, hi, scale="auto"):
     return {"name": name, "set": imp + key, "bounds": [lo, hi], "scale": scale}
@@ -99,7 +108,7 @@ scenarios = []
 for v, h5 in ((6, f"{out}/centre_6_m_s/resolved/result.h5"), (10, f"{out}/floor_10_m_s/result.h5")):
     scenarios.append({"name": f"{v} m/s", "set": {"boulder.velocity_m_s": v},
                       "curves": [history(h5, "boulder_force_N", "force_N"), history(h5, "penetration_m", "penetration_m")]})
-json.dump({"format": "gabion.case/1", "kind": "fit.macro", "seed": 1, "macro_case": "hist_twin.json",
+fit = {"format": "gabion.case/1", "kind": "fit.macro", "seed": 1, "macro_case": "hist_twin.json",
            "parameters": [p("stiffness", "stiffness_N_m", 3e5, 1e7), p("static yield force", "yield_force_N", 3e3, 6e4),
                           p("rate coefficient", "rate_coefficient_N_s2_m2", 100, 2e4),
                           p("rate growth", "rate_growth_m", 0.005, 0.15),
@@ -108,27 +117,12 @@ json.dump({"format": "gabion.case/1", "kind": "fit.macro", "seed": 1, "macro_cas
                           p("residual force", "residual_force_N", 500, 2e4)],
            "scenarios": scenarios,
            "optimizer": {"global": "GN_ISRES", "global_max_evaluations": 4000, "local": "LN_SBPLX",
-                         "local_max_evaluations": 1000}}, open(f"{d}/fit_hist.json", "w"), indent=1)
+                         "local_max_evaluations": 1000}}
+json.dump(fit, open(f"{d}/fit_hist.json", "w"), indent=1)
+json.dump(dict(fit, macro_case="visc_twin.json"), open(f"{d}/fit_visc.json", "w"), indent=1)
 PY
   run_case fit_hist
   for png in "$dir"/fit_hist/fit_macro_*.png; do cp "$png" "$dir/figures/in_place_hist_$(basename "$png" .png | sed 's/^fit_macro_//').png"; done
-  # The same fit with the axial laws viscous (VISCOSITY N s/m, default
-  # 1e4: a dashpot in parallel while the cell is in contact,
-  # docs/formats.md), against the back face's overshoot.
-  python3 - "$dir" "${VISCOSITY:-1e4}" <<'PY'
-import json, sys
-d, eta = sys.argv[1], float(sys.argv[2])
-law = json.load(open(f"{d}/hist_law.json"))
-for m in law["materials"].values():
-    m["axial"]["viscosity_N_s_m"] = eta
-json.dump(law, open(f"{d}/visc_law.json", "w"), indent=1)
-twin = json.load(open(f"{d}/hist_twin.json"))
-twin["law_file"] = f"{d}/visc_law.json"
-json.dump(twin, open(f"{d}/visc_twin.json", "w"), indent=1)
-fit = json.load(open(f"{d}/fit_hist.json"))
-fit["macro_case"] = "visc_twin.json"
-json.dump(fit, open(f"{d}/fit_visc.json", "w"), indent=1)
-PY
   run_case fit_visc
 fi
 for s in "$out"/centre_*_m_s "$out"/side_*_m_s; do
