@@ -51,6 +51,11 @@ long long relax(Model& model, double dt, long long max_steps, double tolerance_J
   // hold the residual motion lose their energy in a few of their own
   // periods, whatever the ratio of the fastest to the slowest frequency (a
   // viscous rate tuned to the fast ones overdamps the slow ones and crawls).
+  // A plateau is a peak too: a cell that the rebound threw out of the wall
+  // (the cells carry no tension) drifts with no force on it, its kinetic
+  // energy exactly constant, and would otherwise drift to the last step.
+  // (Not right after a stop, where the energy may be zero two steps running:
+  // stopping again then would freeze the structure instead of relaxing it.)
   converged = false;
   long long n = 0;
   double previous = 0.0;
@@ -58,7 +63,7 @@ long long relax(Model& model, double dt, long long max_steps, double tolerance_J
     if (model.step(dt) != StepStatus::Ok) return n;
     ++n;
     const double kinetic = model.energy().kinetic_J;
-    if (kinetic < previous) {
+    if (previous > 0.0 && kinetic <= previous) {
       model.stopNodes();
       previous = 0.0;
     } else {
