@@ -54,16 +54,20 @@ AxialLawParams readAxialLaw(const JsonReader& r, double edge_m, int version, boo
     for (const char* key : {"softening_stiffness_N_m", "residual_force_N", "softening_onset_m"})
       if (r.has(key)) r.fail(key, "only for the model 'softening'");
   }
+  // The rate overstress c r^2: the impact law's at the indentation rate, an
+  // axial law's at the shortening rate (cell_axial_law.hpp); only the impact
+  // law's grows with the indentation (the boulder's section).
+  p.rate_coefficient_N_s2_m2 = r.optionalNumber("rate_coefficient_N_s2_m2", Check::NonNegative).value_or(0.0);
   if (impact) {
-    p.rate_coefficient_N_s2_m2 = r.optionalNumber("rate_coefficient_N_s2_m2", Check::NonNegative).value_or(0.0);
     p.rate_growth_m = r.optionalNumber("rate_growth_m", Check::NonNegative).value_or(0.0);
     if (r.has("viscosity_N_s_m"))
       r.fail("viscosity_N_s_m",
              "only for an axial law (a cell pushed by its neighbour); the impact law has its rate term");
   } else {
     p.viscosity_N_s_m = r.optionalNumber("viscosity_N_s_m", Check::NonNegative).value_or(0.0);
-    for (const char* key : {"rate_coefficient_N_s2_m2", "rate_growth_m"})
-      if (r.has(key)) r.fail(key, "only for an impact law (the overstress of the indentation rate)");
+    if (r.has("rate_growth_m"))
+      r.fail("rate_growth_m",
+             "only for an impact law (the boulder's section pressing on the fill grows with its indentation)");
   }
   if (hardens(p.model)) {
     p.hardening_stiffness_N_m = r.number("hardening_stiffness_N_m", Check::NonNegative);

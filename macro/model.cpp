@@ -24,8 +24,8 @@ namespace {
 // the stored elastic energy added to the stage's sums (J); `rate` (m/s) is
 // the shortening rate a law with a rate term reads (the impact law's).
 inline double linkLaw(const bridge::CellSpring& law, double u, double& up, double& plastic, double& elastic,
-                      double rate = 0.0, double* overstress = nullptr) {
-  const auto r = bridge::cellResponse(law, u, up, rate, overstress);
+                      double rate = 0.0, double* overstress = nullptr, double* reached = nullptr) {
+  const auto r = bridge::cellResponse(law, u, up, rate, overstress, reached);
   up = r.plastic_m;
   plastic += r.plastic_work_J;
   elastic += r.elastic_J;
@@ -42,7 +42,9 @@ Model::Model(Structure structure, Kinematics kinematics)
   const std::size_t n = s_.nodeCount();
   for (auto* v : {&ux_, &uy_, &uz_, &vx_, &vy_, &vz_, &fx_, &fy_, &fz_, &cell_axial_}) v->assign(n, 0.0);
   const std::size_t na = s_.axial.a.size(), nl = s_.lateral.a.size(), ng = s_.ground.node.size();
-  for (auto* v : {&axial_plastic_, &axial_force_, &axial_ft1_, &axial_ft2_, &axial_dashpot_}) v->assign(na, 0.0);
+  for (auto* v :
+       {&axial_plastic_, &axial_force_, &axial_ft1_, &axial_ft2_, &axial_dashpot_, &axial_overstress_, &axial_reached_})
+    v->assign(na, 0.0);
   for (auto* v : {&lat_ftx_, &lat_fto_, &lat_plastic_, &lat_force_}) v->assign(nl, 0.0);
   for (auto* v : {&gnd_ftx_, &gnd_fty_, &gnd_plastic_, &gnd_force_}) v->assign(ng, 0.0);
   front_plastic_.assign(s_.front.node.size(), 0.0);
@@ -220,6 +222,8 @@ void Model::archive(bridge::StateArchive& a) {
                          {"axial_ft1", &axial_ft1_},
                          {"axial_ft2", &axial_ft2_},
                          {"axial_dashpot", &axial_dashpot_},
+                         {"axial_overstress", &axial_overstress_},
+                         {"axial_reached", &axial_reached_},
                          {"lat_ftx", &lat_ftx_},
                          {"lat_fto", &lat_fto_},
                          {"lat_plastic", &lat_plastic_},
@@ -282,13 +286,16 @@ void Model::computeAxialForces(double dt) {
     const auto b = static_cast<std::size_t>(bi);
     const double shortening = ux_[a] - (bi >= 0 ? ux_[b] : 0.0);
     const auto law = static_cast<std::size_t>(L.law[l]);
-    double F = linkLaw(s_.axial_springs[law], shortening, axial_plastic_[l], plastic, elastic);
+    // The shortening rate from the half-step velocities (the leapfrog's
+    // latest): what the rate overstress and the dashpot read.
+    const double rate = vx_[a] - (bi >= 0 ? vx_[b] : 0.0);
+    double F = linkLaw(s_.axial_springs[law], shortening, axial_plastic_[l], plastic, elastic, rate,
+                       &axial_overstress_[l], &axial_reached_[l]);
     if (const double eta = s_.axial_springs[law].viscosity_N_s_m; eta > 0.0) {
-      // The fill's viscosity: a dashpot on the shortening rate (half-step
-      // velocities, the leapfrog's latest). Its work over the last step
-      // takes the force at both ends (the trapezoidal rule, as the
-      // leapfrog's work of the other forces), so it keeps last step's.
-      const double rate = vx_[a] - (bi >= 0 ? vx_[b] : 0.0);
+      // The fill's viscosity: a dashpot on the shortening rate. Its work
+      // over the last step takes the force at both ends (the trapezoidal
+      // rule, as the leapfrog's work of the other forces), so it keeps last
+      // step's.
       const double fd = bridge::dashpotForce(eta, rate, F);
       plastic += 0.5 * (axial_dashpot_[l] + fd) * rate * dt;
       axial_dashpot_[l] = fd;

@@ -30,12 +30,15 @@
 ///   F_r, at which it flows. Only for the impact law; unloading and
 ///   reloading are elastic with k.
 ///
-/// Rate (impact law only, any model): the fill a boulder sets moving resists
-/// its indentation rate r = du/dt as a momentum flux does. The yield force
+/// Rate (any model; law files: "rate_coefficient_N_s2_m2"): the fill set
+/// moving resists the rate r = du/dt at which it is compacted as a momentum
+/// flux does: the impact law's at the boulder's indentation rate, an axial
+/// law's at the cell's shortening rate (what confined compressions at
+/// several plate speeds show, docs/resolved.md). The yield force
 /// (and a softening law's residual) is raised by the overstress
 /// c max(r, 0)^2 g(u) while the cell flows: F <= Y(u_p) + c r^2 g(u), with
 /// g = min(1, u / u_a) (the boulder's section pressing on the fill grows
-/// with its indentation; u_a = 0: g = 1). It can only hold the force
+/// with its indentation; u_a = 0: g = 1; impact law only). It can only hold the force
 /// higher along the elastic line, never above k (u - u_p), so it adds no
 /// stiffness to the critical time step; its work c r^2 du_p is dissipated
 /// with the plastic work. c = 0 (the default) is the rate-independent law.
@@ -98,7 +101,7 @@ struct AxialLawParams {
   double softening_stiffness_N_m = 0.0;   ///< k_s > 0, the falling tangent's magnitude, softening only (N/m)
   double residual_force_N = 0.0;          ///< F_r, 0 <= F_r <= F_y, softening only (N)
   double softening_onset_m = 0.0;         ///< u_s >= 0, plastic shortening held at the peak, softening only (m)
-  double rate_coefficient_N_s2_m2 = 0.0;  ///< c >= 0, the overstress c r^2 at indentation rate r, impact only
+  double rate_coefficient_N_s2_m2 = 0.0;  ///< c >= 0, the overstress c r^2 at the compaction rate r (above)
   double rate_growth_m = 0.0;             ///< u_a >= 0: the overstress grows as min(1, u / u_a); 0: constant
   bool plastic_densification = false;     ///< densifying with a lock-up, axial only: compaction is kept (above)
   double viscosity_N_s_m = 0.0;           ///< eta >= 0: a dashpot in parallel while in contact, axial only (above)
@@ -212,8 +215,14 @@ struct AxialResponse {
 /// force), not this step's alone, which would leave an error of
 /// (s_old - s_new) du_p / 2 a step in the energy balance while the rate
 /// changes fast.
+///
+/// With both plastic densification and a rate term the overstress holds the
+/// state above the static yield line, so the compaction m (the largest
+/// shortening reached) can no longer be read from u_p: the caller then
+/// carries it in `reached_m` (in, the last evaluation's; out, this one's;
+/// start at 0). Without it m is read from u_p as above.
 inline AxialResponse cellResponse(const CellSpring& c, double u_m, double plastic_m, double rate_m_s = 0.0,
-                                  double* overstress_N = nullptr) {
+                                  double* overstress_N = nullptr, double* reached_m = nullptr) {
   ElasticPlasticParams spring = c.spring;
   const double r_pos = rate_m_s > 0.0 ? rate_m_s : 0.0;
   const double grown = c.rate_growth_m > 0.0 && u_m < c.rate_growth_m ? (u_m > 0.0 ? u_m : 0.0) / c.rate_growth_m : 1.0;
@@ -230,7 +239,12 @@ inline AxialResponse cellResponse(const CellSpring& c, double u_m, double plasti
     const auto reached = [&](double up) {
       return up > 0.0 ? up + (e.yield_force_N + e.hardening_N_m * up) / e.stiffness_N_m : 0.0;
     };
-    const double m_old = reached(plastic_m), m_new = reached(r.plastic_m), m = m_new > u_m ? m_new : u_m;
+    double m_old = reached(plastic_m), m_new = reached(r.plastic_m), m = m_new > u_m ? m_new : u_m;
+    if (reached_m && c.rate_N_s2_m2 > 0.0) {  // (rate-free, m from u_p is exact: the same bits as before)
+      m_old = *reached_m;
+      m = m > m_old ? m : m_old;
+      *reached_m = m;
+    }
     const double fd = denseForce(c, m) - c.compaction_N_m * (m - u_m);
     const double f = fd > 0.0 ? fd : 0.0;
     return {r.force_N + f, r.plastic_m, r.plastic_work_J + compactionWork(c, m) - compactionWork(c, m_old),

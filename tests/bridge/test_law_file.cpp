@@ -3,6 +3,7 @@
 
 #include <fstream>
 #include <string>
+#include <tuple>
 #include <utility>
 #include <vector>
 
@@ -169,9 +170,9 @@ TEST(LawFile, ASofteningImpactLawReadsBackAndIsRefusedElsewhere) {
   refused(j, "/materials/front/impact/residual_force_N");
 }
 
-// The impact law's rate term reads back; an axial law has no indentation
-// rate and refuses it by name, and a negative coefficient is refused.
-TEST(LawFile, TheImpactLawsRateTermReadsBackAndIsRefusedOnTheAxialLaw) {
+// The rate term reads back on both laws; its growth with the indentation
+// only on the impact law (the boulder's section).
+TEST(LawFile, TheRateTermReadsBackAndItsGrowthIsRefusedOnTheAxialLaw) {
   LawFile laws = sampleLaws();
   laws.materials.at("front").impact.rate_coefficient_N_s2_m2 = 650.0;
   laws.materials.at("front").impact.rate_growth_m = 0.06;
@@ -182,18 +183,23 @@ TEST(LawFile, TheImpactLawsRateTermReadsBackAndIsRefusedOnTheAxialLaw) {
   EXPECT_DOUBLE_EQ(read.materials.at("front").impact.rate_growth_m, 0.06);
   EXPECT_EQ(read.materials.at("front").axial.rate_coefficient_N_s2_m2, 0.0);
   EXPECT_FALSE(toJson(sampleLaws())["materials"]["front"]["impact"].contains("rate_coefficient_N_s2_m2"));
-  for (const std::string key : {"rate_coefficient_N_s2_m2", "rate_growth_m"})
-    for (const auto& [law, value] : {std::pair<std::string, double>{"axial", 0.5}, {"impact", -1.0}}) {
-      auto j = toJson(laws);
-      j["materials"]["front"][law][key] = value;
-      writeJsonAtomic(path, j);
-      try {
-        loadLawFile(path);
-        ADD_FAILURE() << "no error for " << law << " " << key;
-      } catch (const InputError& e) {
-        EXPECT_EQ(e.pointer(), "/materials/front/" + law + "/" + key) << e.what();
-      }
+  laws.materials.at("front").axial.rate_coefficient_N_s2_m2 = 1700.0;
+  writeJsonAtomic(path, toJson(laws));
+  EXPECT_DOUBLE_EQ(loadLawFile(path).materials.at("front").axial.rate_coefficient_N_s2_m2, 1700.0);
+  for (const auto& [law, key, value] : {std::tuple<std::string, std::string, double>{"axial", "rate_growth_m", 0.5},
+                                        {"axial", "rate_coefficient_N_s2_m2", -1.0},
+                                        {"impact", "rate_coefficient_N_s2_m2", -1.0},
+                                        {"impact", "rate_growth_m", -1.0}}) {
+    auto j = toJson(laws);
+    j["materials"]["front"][law][key] = value;
+    writeJsonAtomic(path, j);
+    try {
+      loadLawFile(path);
+      ADD_FAILURE() << "no error for " << law << " " << key;
+    } catch (const InputError& e) {
+      EXPECT_EQ(e.pointer(), "/materials/front/" + law + "/" + key) << e.what();
     }
+  }
 }
 
 // Plastic densification reads back on a densifying axial law; it is refused
