@@ -54,20 +54,20 @@ AxialLawParams readAxialLaw(const JsonReader& r, double edge_m, int version, boo
     for (const char* key : {"softening_stiffness_N_m", "residual_force_N", "softening_onset_m"})
       if (r.has(key)) r.fail(key, "only for the model 'softening'");
   }
-  // The rate overstress c r^2: the impact law's at the indentation rate, an
-  // axial law's at the shortening rate (cell_axial_law.hpp); only the impact
-  // law's grows with the indentation (the boulder's section).
-  p.rate_coefficient_N_s2_m2 = r.optionalNumber("rate_coefficient_N_s2_m2", Check::NonNegative).value_or(0.0);
   if (impact) {
+    p.rate_coefficient_N_s2_m2 = r.optionalNumber("rate_coefficient_N_s2_m2", Check::NonNegative).value_or(0.0);
     p.rate_growth_m = r.optionalNumber("rate_growth_m", Check::NonNegative).value_or(0.0);
-    if (r.has("viscosity_N_s_m"))
-      r.fail("viscosity_N_s_m",
-             "only for an axial law (a cell pushed by its neighbour); the impact law has its rate term");
+    for (const char* key : {"viscosity_N_s_m", "momentum_flux_kg_m", "momentum_flux_growth_m"})
+      if (r.has(key))
+        r.fail(key, "only for an axial law (a cell pushed by its neighbour); the impact law has its rate term");
   } else {
     p.viscosity_N_s_m = r.optionalNumber("viscosity_N_s_m", Check::NonNegative).value_or(0.0);
-    if (r.has("rate_growth_m"))
-      r.fail("rate_growth_m",
-             "only for an impact law (the boulder's section pressing on the fill grows with its indentation)");
+    p.momentum_flux_kg_m = r.optionalNumber("momentum_flux_kg_m", Check::NonNegative).value_or(0.0);
+    p.momentum_flux_growth_m = r.optionalNumber("momentum_flux_growth_m", Check::NonNegative).value_or(0.0);
+    if (r.has("momentum_flux_growth_m") && !(p.momentum_flux_kg_m > 0.0))
+      r.fail("momentum_flux_growth_m", "needs momentum_flux_kg_m > 0 (the growth of the flux it sets)");
+    for (const char* key : {"rate_coefficient_N_s2_m2", "rate_growth_m"})
+      if (r.has(key)) r.fail(key, "only for an impact law (the overstress of the indentation rate)");
   }
   if (hardens(p.model)) {
     p.hardening_stiffness_N_m = r.number("hardening_stiffness_N_m", Check::NonNegative);
@@ -132,6 +132,8 @@ json toJson(const AxialLawParams& p) {
   if (p.rate_growth_m > 0.0) j["rate_growth_m"] = p.rate_growth_m;
   if (p.plastic_densification) j["densification"] = "plastic";
   if (p.viscosity_N_s_m > 0.0) j["viscosity_N_s_m"] = p.viscosity_N_s_m;
+  if (p.momentum_flux_kg_m > 0.0) j["momentum_flux_kg_m"] = p.momentum_flux_kg_m;
+  if (p.momentum_flux_growth_m > 0.0) j["momentum_flux_growth_m"] = p.momentum_flux_growth_m;
   if (std::isfinite(p.lockup_shortening_m)) {  // (a law built without one reads back with the default)
     j["lockup_shortening_m"] = p.lockup_shortening_m;
     j["lockup_stiffness_N_m"] = p.lockup_stiffness_N_m;

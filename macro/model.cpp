@@ -24,8 +24,8 @@ namespace {
 // the stored elastic energy added to the stage's sums (J); `rate` (m/s) is
 // the shortening rate a law with a rate term reads (the impact law's).
 inline double linkLaw(const bridge::CellSpring& law, double u, double& up, double& plastic, double& elastic,
-                      double rate = 0.0, double* overstress = nullptr, double* reached = nullptr) {
-  const auto r = bridge::cellResponse(law, u, up, rate, overstress, reached);
+                      double rate = 0.0, double* overstress = nullptr) {
+  const auto r = bridge::cellResponse(law, u, up, rate, overstress);
   up = r.plastic_m;
   plastic += r.plastic_work_J;
   elastic += r.elastic_J;
@@ -42,9 +42,7 @@ Model::Model(Structure structure, Kinematics kinematics)
   const std::size_t n = s_.nodeCount();
   for (auto* v : {&ux_, &uy_, &uz_, &vx_, &vy_, &vz_, &fx_, &fy_, &fz_, &cell_axial_}) v->assign(n, 0.0);
   const std::size_t na = s_.axial.a.size(), nl = s_.lateral.a.size(), ng = s_.ground.node.size();
-  for (auto* v :
-       {&axial_plastic_, &axial_force_, &axial_ft1_, &axial_ft2_, &axial_dashpot_, &axial_overstress_, &axial_reached_})
-    v->assign(na, 0.0);
+  for (auto* v : {&axial_plastic_, &axial_force_, &axial_ft1_, &axial_ft2_, &axial_dashpot_}) v->assign(na, 0.0);
   for (auto* v : {&lat_ftx_, &lat_fto_, &lat_plastic_, &lat_force_}) v->assign(nl, 0.0);
   for (auto* v : {&gnd_ftx_, &gnd_fty_, &gnd_plastic_, &gnd_force_}) v->assign(ng, 0.0);
   front_plastic_.assign(s_.front.node.size(), 0.0);
@@ -64,8 +62,13 @@ double Model::criticalTimeStep() const {
   auto tangent = [&](int law) { return bridge::maxTangentStiffness(s_.axial_laws[static_cast<std::size_t>(law)]); };
   for (std::size_t l = 0; l < s_.axial.a.size(); ++l) {
     const double k = tangent(s_.axial.law[l]);
-    const double eta = s_.axial_springs[static_cast<std::size_t>(s_.axial.law[l])].viscosity_N_s_m;
-    for (int node : {s_.axial.a[l], s_.axial.b[l]}) add(cx, node, eta);
+    // The fill's rate term as a damping: eta, and the momentum flux's
+    // tangent d(c_m r^2)/dr = 2 c_m r at the fastest shortening expected,
+    // twice the boulder's speed (a node struck by a heavier boulder moves
+    // at up to twice its speed).
+    const bridge::CellSpring& spring = s_.axial_springs[static_cast<std::size_t>(s_.axial.law[l])];
+    const double damping = spring.viscosity_N_s_m + 2.0 * spring.flux_kg_m * 2.0 * flux_rate_bound_m_s_;
+    for (int node : {s_.axial.a[l], s_.axial.b[l]}) add(cx, node, damping);
     const double kt = s_.friction_laws[static_cast<std::size_t>(s_.axial.friction[l])].tangential_stiffness_N_m;
     for (int node : {s_.axial.a[l], s_.axial.b[l]}) {
       add(kx, node, k);
@@ -160,6 +163,7 @@ void Model::placeBoulder(const BoulderSpec& b) {
   bpos_force_ = bpos_;
   bvel_ = b.velocity_m_s;
   bvel_full_ = bvel_;
+  flux_rate_bound_m_s_ = std::max(flux_rate_bound_m_s_, speed);
   bforce_.setZero();
   max_indent_ = 0.0;
   n_contacts_ = 0;
@@ -222,8 +226,6 @@ void Model::archive(bridge::StateArchive& a) {
                          {"axial_ft1", &axial_ft1_},
                          {"axial_ft2", &axial_ft2_},
                          {"axial_dashpot", &axial_dashpot_},
-                         {"axial_overstress", &axial_overstress_},
-                         {"axial_reached", &axial_reached_},
                          {"lat_ftx", &lat_ftx_},
                          {"lat_fto", &lat_fto_},
                          {"lat_plastic", &lat_plastic_},
@@ -246,7 +248,7 @@ void Model::archive(bridge::StateArchive& a) {
   a("max_indent", max_indent_), a("contacts", n_contacts_), a("lost_front", lost_front_),
       a("lost_past_middle", lost_past_middle_);
   a("crushed_link", crushed_link_), a("crushed_front", crushed_front_);
-  a("time_s", time_), a("steps", steps_);
+  a("time_s", time_), a("steps", steps_), a("flux_rate_bound_m_s", flux_rate_bound_m_s_);
   bridge::StateArchive e = a.group("energy");
   e("kinetic_J", energy_.kinetic_J), e("elastic_J", energy_.elastic_J), e("plastic_J", energy_.plastic_J);
   e("friction_J", energy_.friction_J), e("potential_J", energy_.potential_J);
@@ -286,17 +288,14 @@ void Model::computeAxialForces(double dt) {
     const auto b = static_cast<std::size_t>(bi);
     const double shortening = ux_[a] - (bi >= 0 ? ux_[b] : 0.0);
     const auto law = static_cast<std::size_t>(L.law[l]);
-    // The shortening rate from the half-step velocities (the leapfrog's
-    // latest): what the rate overstress and the dashpot read.
-    const double rate = vx_[a] - (bi >= 0 ? vx_[b] : 0.0);
-    double F = linkLaw(s_.axial_springs[law], shortening, axial_plastic_[l], plastic, elastic, rate,
-                       &axial_overstress_[l], &axial_reached_[l]);
-    if (const double eta = s_.axial_springs[law].viscosity_N_s_m; eta > 0.0) {
-      // The fill's viscosity: a dashpot on the shortening rate. Its work
-      // over the last step takes the force at both ends (the trapezoidal
-      // rule, as the leapfrog's work of the other forces), so it keeps last
-      // step's.
-      const double fd = bridge::dashpotForce(eta, rate, F);
+    double F = linkLaw(s_.axial_springs[law], shortening, axial_plastic_[l], plastic, elastic);
+    if (const bridge::CellSpring& spring = s_.axial_springs[law]; spring.hasRateForce()) {
+      // The fill's rate term (viscosity, momentum flux) on the shortening
+      // rate (half-step velocities, the leapfrog's latest). Its work over
+      // the last step takes the force at both ends (the trapezoidal rule, as
+      // the leapfrog's work of the other forces), so it keeps last step's.
+      const double rate = vx_[a] - (bi >= 0 ? vx_[b] : 0.0);
+      const double fd = spring.rateForce(shortening, rate, F);
       plastic += 0.5 * (axial_dashpot_[l] + fd) * rate * dt;
       axial_dashpot_[l] = fd;
       F += fd;

@@ -166,10 +166,8 @@ class Model {
   std::vector<double> ext_x_, ext_y_, ext_z_;
   // Axial links: plastic shortening, force, tangential face forces (3-D).
   std::vector<double> axial_plastic_, axial_force_, axial_ft1_, axial_ft2_;
-  std::vector<double> axial_dashpot_;     // the viscosity's force at the last step (N), for its work
-  std::vector<double> axial_overstress_;  // the rate term's overstress at the last evaluation (N)
-  std::vector<double>
-      axial_reached_;  // largest shortening reached, a law with a rate term and plastic densification (m)
+  std::vector<double> axial_dashpot_;  // the fill's rate term at the last step (N), for its work
+  double flux_rate_bound_m_s_ = 0.0;   // the fastest boulder placed: bounds the links' shortening rates
   // Lateral links: tangential force along x and along the other lateral axis
   // (3-D), normal spring plastic shortening and force (3-D).
   std::vector<double> lat_ftx_, lat_fto_, lat_plastic_, lat_force_;

@@ -27,13 +27,14 @@ AxialLawParams seriesAxialLaw(const AxialLawParams& a, const AxialLawParams& b) 
   p.lockup_shortening_m = 0.5 * (a.lockup_shortening_m + b.lockup_shortening_m);
   p.lockup_stiffness_N_m = series(a.lockup_stiffness_N_m, b.lockup_stiffness_N_m);
   p.viscosity_N_s_m = series(a.viscosity_N_s_m, b.viscosity_N_s_m);  // (two dashpots in series, as the springs)
-  // The rate overstress c r^2 of two half cells in series: each half (4 c,
+  // The momentum flux c_m r^2 of two half cells in series: each half (4 c_m,
   // cellLengthLaw) takes the part of the rate that gives both the same
-  // overstress, so 1 / sqrt(c) adds up: c = 4 / (1/sqrt(c_a) + 1/sqrt(c_b))^2,
-  // c itself for two equal cells, 0 when either half has none.
-  const double ca = a.rate_coefficient_N_s2_m2, cb = b.rate_coefficient_N_s2_m2;
-  p.rate_coefficient_N_s2_m2 =
-      ca > 0.0 && cb > 0.0 ? 4.0 / std::pow(1.0 / std::sqrt(ca) + 1.0 / std::sqrt(cb), 2) : 0.0;
+  // force, so 1 / sqrt(c_m) adds up: c_m = 4 / (1/sqrt(c_a) + 1/sqrt(c_b))^2,
+  // c_m itself for two equal cells, 0 when either half has none; its growth
+  // a shortening, as the densification onset.
+  const double ca = a.momentum_flux_kg_m, cb = b.momentum_flux_kg_m;
+  p.momentum_flux_kg_m = ca > 0.0 && cb > 0.0 ? 4.0 / std::pow(1.0 / std::sqrt(ca) + 1.0 / std::sqrt(cb), 2) : 0.0;
+  p.momentum_flux_growth_m = 0.5 * (a.momentum_flux_growth_m + b.momentum_flux_growth_m);
   return p;
 }
 
@@ -47,9 +48,9 @@ AxialLawParams cellLengthLaw(const AxialLawParams& a, double factor) {
   p.softening_onset_m *= factor;
   p.lockup_shortening_m *= factor;
   p.lockup_stiffness_N_m /= factor;
-  p.viscosity_N_s_m /= factor;  // (a viscosity per strain rate, as a stiffness per strain)
-  // (the overstress goes with the square of the strain rate: c L^2)
-  p.rate_coefficient_N_s2_m2 /= factor * factor;
+  p.viscosity_N_s_m /= factor;              // (a viscosity per strain rate, as a stiffness per strain)
+  p.momentum_flux_kg_m /= factor * factor;  // (a force that goes with the strain rate squared: c_m L^2)
+  p.momentum_flux_growth_m *= factor;
   return p;
 }
 

@@ -30,15 +30,12 @@
 ///   F_r, at which it flows. Only for the impact law; unloading and
 ///   reloading are elastic with k.
 ///
-/// Rate (any model; law files: "rate_coefficient_N_s2_m2"): the fill set
-/// moving resists the rate r = du/dt at which it is compacted as a momentum
-/// flux does: the impact law's at the boulder's indentation rate, an axial
-/// law's at the cell's shortening rate (what confined compressions at
-/// several plate speeds show, docs/resolved.md). The yield force
+/// Rate (impact law only, any model): the fill a boulder sets moving resists
+/// its indentation rate r = du/dt as a momentum flux does. The yield force
 /// (and a softening law's residual) is raised by the overstress
 /// c max(r, 0)^2 g(u) while the cell flows: F <= Y(u_p) + c r^2 g(u), with
 /// g = min(1, u / u_a) (the boulder's section pressing on the fill grows
-/// with its indentation; u_a = 0: g = 1; impact law only). It can only hold the force
+/// with its indentation; u_a = 0: g = 1). It can only hold the force
 /// higher along the elastic line, never above k (u - u_p), so it adds no
 /// stiffness to the critical time step; its work c r^2 du_p is dissipated
 /// with the plastic work. c = 0 (the default) is the rate-independent law.
@@ -53,6 +50,19 @@
 ///   F = F_ep(u, u_p) + G(u),  G(u) = k_d max(0, u - u_d) + k_L max(0, u - u_L),
 /// and the stiffest tangent, unloading past both, is k + k_d + k_L: the one
 /// that sets the critical time step.
+///
+/// Momentum flux (axial laws only; law files: "momentum_flux_kg_m",
+/// "momentum_flux_growth_m"): a cell compacted fast by its neighbour sets its
+/// fill moving ahead of the compaction front, and the neighbour pays the
+/// momentum it gives: c_m max(r, 0)^2 g(u) added to the law's force while
+/// the cell is in contact and shortens (r > 0), g = min(1, u / u_a) (u_a = 0:
+/// g = 1) as the front forms. Confined compressions of a cell at several
+/// plate speeds show it: the lid force rises with the plate speed squared,
+/// the base force does not (docs/resolved.md); `fit` identifies c_m and u_a
+/// on such curves (docs/fitting.md, "Momentum flux"). Its work is
+/// dissipated (the fill's kinetic energy, lost in the compaction). Unlike
+/// the impact law's rate term it does not raise a yield force: it adds to
+/// the force whatever the law's state, so a soft cell law does not cap it.
 ///
 /// Viscosity (axial laws only; law files: "viscosity_N_s_m"): the fill of a
 /// cell pushed by its neighbour resists the rate of its shortening as a
@@ -101,18 +111,24 @@ struct AxialLawParams {
   double softening_stiffness_N_m = 0.0;   ///< k_s > 0, the falling tangent's magnitude, softening only (N/m)
   double residual_force_N = 0.0;          ///< F_r, 0 <= F_r <= F_y, softening only (N)
   double softening_onset_m = 0.0;         ///< u_s >= 0, plastic shortening held at the peak, softening only (m)
-  double rate_coefficient_N_s2_m2 = 0.0;  ///< c >= 0, the overstress c r^2 at the compaction rate r (above)
+  double rate_coefficient_N_s2_m2 = 0.0;  ///< c >= 0, the overstress c r^2 at indentation rate r, impact only
   double rate_growth_m = 0.0;             ///< u_a >= 0: the overstress grows as min(1, u / u_a); 0: constant
   bool plastic_densification = false;     ///< densifying with a lock-up, axial only: compaction is kept (above)
   double viscosity_N_s_m = 0.0;           ///< eta >= 0: a dashpot in parallel while in contact, axial only (above)
+  double momentum_flux_kg_m = 0.0;        ///< c_m >= 0: the momentum flux c_m r^2 g(u), axial only (above)
+  double momentum_flux_growth_m = 0.0;    ///< u_a >= 0: g = min(1, u / u_a); 0: g = 1
 };
 
-/// The dashpot of a law of viscosity `eta_N_s_m` at shortening rate `rate_m_s`
-/// added to the law's force `law_force_N` (N): eta r while the cell is in
+/// What the fill's rate adds to an axial law's force `law_force_N` (N) at
+/// shortening `u_m` and shortening rate `rate_m_s`: the dashpot eta r and the
+/// momentum flux c_m max(r, 0)^2 min(1, u / u_a), while the cell is in
 /// contact, no more negative than takes the total to zero.
-inline double dashpotForce(double eta_N_s_m, double rate_m_s, double law_force_N) {
+inline double fillRateForce(double eta_N_s_m, double flux_kg_m, double flux_growth_m, double u_m, double rate_m_s,
+                            double law_force_N) {
   if (!(law_force_N > 0.0)) return 0.0;
-  const double f = eta_N_s_m * rate_m_s;
+  const double r_pos = rate_m_s > 0.0 ? rate_m_s : 0.0;
+  const double grown = flux_growth_m > 0.0 && u_m < flux_growth_m ? (u_m > 0.0 ? u_m : 0.0) / flux_growth_m : 1.0;
+  const double f = eta_N_s_m * rate_m_s + flux_kg_m * r_pos * r_pos * grown;
   return f > -law_force_N ? f : -law_force_N;
 }
 
@@ -125,7 +141,8 @@ inline bool sameLaw(const AxialLawParams& a, const AxialLawParams& b) {
          a.softening_stiffness_N_m == b.softening_stiffness_N_m && a.residual_force_N == b.residual_force_N &&
          a.softening_onset_m == b.softening_onset_m && a.rate_coefficient_N_s2_m2 == b.rate_coefficient_N_s2_m2 &&
          a.rate_growth_m == b.rate_growth_m && a.plastic_densification == b.plastic_densification &&
-         a.viscosity_N_s_m == b.viscosity_N_s_m;
+         a.viscosity_N_s_m == b.viscosity_N_s_m && a.momentum_flux_kg_m == b.momentum_flux_kg_m &&
+         a.momentum_flux_growth_m == b.momentum_flux_growth_m;
 }
 
 /// True for the models with a hardening tangent (bilinear, densifying).
@@ -164,7 +181,14 @@ struct CellSpring {
   double rate_N_s2_m2 = 0.0;                                  ///< c (N s^2/m^2)
   double rate_growth_m = 0.0;                                 ///< u_a (m)
   double compaction_N_m = 0.0;   ///< k_u = k_d + k_L with plastic densification; 0: G is elastic
-  double viscosity_N_s_m = 0.0;  ///< eta (N s/m): the dashpot in parallel (the caller applies it, dashpotForce)
+  double viscosity_N_s_m = 0.0;  ///< eta (N s/m): the dashpot in parallel (the caller applies it, fillRateForce)
+  double flux_kg_m = 0.0;        ///< c_m (kg/m): the momentum flux (the caller applies it, fillRateForce)
+  double flux_growth_m = 0.0;    ///< u_a (m)
+  /// The fill's rate term at shortening u and rate r on top of the law's force F (fillRateForce).
+  double rateForce(double u_m, double rate_m_s, double law_force_N) const {
+    return fillRateForce(viscosity_N_s_m, flux_kg_m, flux_growth_m, u_m, rate_m_s, law_force_N);
+  }
+  bool hasRateForce() const { return viscosity_N_s_m > 0.0 || flux_kg_m > 0.0; }
 };
 
 inline CellSpring cellSpring(const AxialLawParams& p) {
@@ -177,7 +201,9 @@ inline CellSpring cellSpring(const AxialLawParams& p) {
           p.rate_coefficient_N_s2_m2,
           p.rate_growth_m,
           densifies && p.plastic_densification ? p.densification_stiffness_N_m + p.lockup_stiffness_N_m : 0.0,
-          p.viscosity_N_s_m};
+          p.viscosity_N_s_m,
+          p.momentum_flux_kg_m,
+          p.momentum_flux_growth_m};
 }
 
 /// G(m): the densification and lock-up force on first loading (N).
@@ -215,14 +241,8 @@ struct AxialResponse {
 /// force), not this step's alone, which would leave an error of
 /// (s_old - s_new) du_p / 2 a step in the energy balance while the rate
 /// changes fast.
-///
-/// With both plastic densification and a rate term the overstress holds the
-/// state above the static yield line, so the compaction m (the largest
-/// shortening reached) can no longer be read from u_p: the caller then
-/// carries it in `reached_m` (in, the last evaluation's; out, this one's;
-/// start at 0). Without it m is read from u_p as above.
 inline AxialResponse cellResponse(const CellSpring& c, double u_m, double plastic_m, double rate_m_s = 0.0,
-                                  double* overstress_N = nullptr, double* reached_m = nullptr) {
+                                  double* overstress_N = nullptr) {
   ElasticPlasticParams spring = c.spring;
   const double r_pos = rate_m_s > 0.0 ? rate_m_s : 0.0;
   const double grown = c.rate_growth_m > 0.0 && u_m < c.rate_growth_m ? (u_m > 0.0 ? u_m : 0.0) / c.rate_growth_m : 1.0;
@@ -239,12 +259,7 @@ inline AxialResponse cellResponse(const CellSpring& c, double u_m, double plasti
     const auto reached = [&](double up) {
       return up > 0.0 ? up + (e.yield_force_N + e.hardening_N_m * up) / e.stiffness_N_m : 0.0;
     };
-    double m_old = reached(plastic_m), m_new = reached(r.plastic_m), m = m_new > u_m ? m_new : u_m;
-    if (reached_m && c.rate_N_s2_m2 > 0.0) {  // (rate-free, m from u_p is exact: the same bits as before)
-      m_old = *reached_m;
-      m = m > m_old ? m : m_old;
-      *reached_m = m;
-    }
+    const double m_old = reached(plastic_m), m_new = reached(r.plastic_m), m = m_new > u_m ? m_new : u_m;
     const double fd = denseForce(c, m) - c.compaction_N_m * (m - u_m);
     const double f = fd > 0.0 ? fd : 0.0;
     return {r.force_N + f, r.plastic_m, r.plastic_work_J + compactionWork(c, m) - compactionWork(c, m_old),

@@ -3,7 +3,6 @@
 
 #include <fstream>
 #include <string>
-#include <tuple>
 #include <utility>
 #include <vector>
 
@@ -170,9 +169,9 @@ TEST(LawFile, ASofteningImpactLawReadsBackAndIsRefusedElsewhere) {
   refused(j, "/materials/front/impact/residual_force_N");
 }
 
-// The rate term reads back on both laws; its growth with the indentation
-// only on the impact law (the boulder's section).
-TEST(LawFile, TheRateTermReadsBackAndItsGrowthIsRefusedOnTheAxialLaw) {
+// The impact law's rate term reads back; an axial law has no indentation
+// rate and refuses it by name, and a negative coefficient is refused.
+TEST(LawFile, TheImpactLawsRateTermReadsBackAndIsRefusedOnTheAxialLaw) {
   LawFile laws = sampleLaws();
   laws.materials.at("front").impact.rate_coefficient_N_s2_m2 = 650.0;
   laws.materials.at("front").impact.rate_growth_m = 0.06;
@@ -183,23 +182,18 @@ TEST(LawFile, TheRateTermReadsBackAndItsGrowthIsRefusedOnTheAxialLaw) {
   EXPECT_DOUBLE_EQ(read.materials.at("front").impact.rate_growth_m, 0.06);
   EXPECT_EQ(read.materials.at("front").axial.rate_coefficient_N_s2_m2, 0.0);
   EXPECT_FALSE(toJson(sampleLaws())["materials"]["front"]["impact"].contains("rate_coefficient_N_s2_m2"));
-  laws.materials.at("front").axial.rate_coefficient_N_s2_m2 = 1700.0;
-  writeJsonAtomic(path, toJson(laws));
-  EXPECT_DOUBLE_EQ(loadLawFile(path).materials.at("front").axial.rate_coefficient_N_s2_m2, 1700.0);
-  for (const auto& [law, key, value] : {std::tuple<std::string, std::string, double>{"axial", "rate_growth_m", 0.5},
-                                        {"axial", "rate_coefficient_N_s2_m2", -1.0},
-                                        {"impact", "rate_coefficient_N_s2_m2", -1.0},
-                                        {"impact", "rate_growth_m", -1.0}}) {
-    auto j = toJson(laws);
-    j["materials"]["front"][law][key] = value;
-    writeJsonAtomic(path, j);
-    try {
-      loadLawFile(path);
-      ADD_FAILURE() << "no error for " << law << " " << key;
-    } catch (const InputError& e) {
-      EXPECT_EQ(e.pointer(), "/materials/front/" + law + "/" + key) << e.what();
+  for (const std::string key : {"rate_coefficient_N_s2_m2", "rate_growth_m"})
+    for (const auto& [law, value] : {std::pair<std::string, double>{"axial", 0.5}, {"impact", -1.0}}) {
+      auto j = toJson(laws);
+      j["materials"]["front"][law][key] = value;
+      writeJsonAtomic(path, j);
+      try {
+        loadLawFile(path);
+        ADD_FAILURE() << "no error for " << law << " " << key;
+      } catch (const InputError& e) {
+        EXPECT_EQ(e.pointer(), "/materials/front/" + law + "/" + key) << e.what();
+      }
     }
-  }
 }
 
 // Plastic densification reads back on a densifying axial law; it is refused
@@ -258,5 +252,44 @@ TEST(LawFile, AxialViscosityReadsBackAndIsRefusedOnTheImpactLaw) {
     } catch (const InputError& e) {
       EXPECT_EQ(e.pointer(), "/materials/front/" + law + "/viscosity_N_s_m") << e.what();
     }
+  }
+}
+
+// The axial momentum flux and its growth read back; on the impact law, as a
+// negative number, or a growth without a flux, they are refused by name.
+TEST(LawFile, AxialMomentumFluxReadsBackAndIsRefusedWhereItCannotHold) {
+  LawFile laws = sampleLaws();
+  laws.materials.at("front").axial.momentum_flux_kg_m = 1700.0;
+  laws.materials.at("front").axial.momentum_flux_growth_m = 0.05;
+  const std::string path = ::testing::TempDir() + "law_flux.json";
+  writeJsonAtomic(path, toJson(laws));
+  const auto& read = loadLawFile(path).materials.at("front").axial;
+  EXPECT_DOUBLE_EQ(read.momentum_flux_kg_m, 1700.0);
+  EXPECT_DOUBLE_EQ(read.momentum_flux_growth_m, 0.05);
+  EXPECT_FALSE(toJson(sampleLaws())["materials"]["front"]["axial"].contains("momentum_flux_kg_m"));
+  struct Bad {
+    std::string law, key;
+    double value;
+  };
+  for (const Bad& b : {Bad{"impact", "momentum_flux_kg_m", 1000.0}, Bad{"impact", "momentum_flux_growth_m", 0.05},
+                       Bad{"axial", "momentum_flux_kg_m", -1.0}, Bad{"axial", "momentum_flux_growth_m", -0.01}}) {
+    auto j = toJson(laws);
+    j["materials"]["front"][b.law][b.key] = b.value;
+    writeJsonAtomic(path, j);
+    try {
+      loadLawFile(path);
+      ADD_FAILURE() << "no error for " << b.law << " " << b.key;
+    } catch (const InputError& e) {
+      EXPECT_EQ(e.pointer(), "/materials/front/" + b.law + "/" + b.key) << e.what();
+    }
+  }
+  auto j = toJson(laws);
+  j["materials"]["front"]["axial"].erase("momentum_flux_kg_m");
+  writeJsonAtomic(path, j);
+  try {
+    loadLawFile(path);
+    ADD_FAILURE() << "no error for a growth without a flux";
+  } catch (const InputError& e) {
+    EXPECT_EQ(e.pointer(), "/materials/front/axial/momentum_flux_growth_m") << e.what();
   }
 }
