@@ -13,11 +13,15 @@
 //     that form and give way is not the same in any two runs), RUN's
 //     interpolated at REF's points over the x range both cover (up to XMAX
 //     if given); the RMS and
-//     the largest difference over the largest |y| of REF in that range.
+//     the largest difference over the largest |y| of REF in that range;
+//   bench_curves at FILE.h5 XDS YDS X
+//     prints YDS at XDS = X on the curve's first loading, interpolated (a
+//     number for a table: bench/resolved/cc_rate.sh).
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
+#include <stdexcept>
 #include <string>
 #include <vector>
 
@@ -119,6 +123,15 @@ int error(int argc, char** argv) {
   return 0;
 }
 
+int at(char** argv) {
+  const gabion::bridge::H5Reader h(argv[2]);
+  std::vector<double> x = h.read(argv[3]), y = h.read(argv[4]);
+  firstLoading(x, y);
+  if (x.empty()) throw std::runtime_error(std::string(argv[2]) + ": empty curve");
+  std::printf("%.6g\n", interpolate(x, y, std::atof(argv[5])));
+  return 0;
+}
+
 }  // namespace
 
 int points(int argc, char** argv) {
@@ -148,6 +161,7 @@ int main(int argc, char** argv) {
     if (verb == "plot") rc = plot(argc, argv);
     if (verb == "points") rc = points(argc, argv);
     if (verb == "error" && argc >= 6 && argc <= 8) rc = error(argc, argv);
+    if (verb == "at" && argc == 6) rc = at(argv);
   } catch (const std::exception& e) {
     std::fprintf(stderr, "bench_curves: %s\n", e.what());
     return 1;
@@ -156,6 +170,7 @@ int main(int argc, char** argv) {
     std::fprintf(stderr,
                  "usage: bench_curves plot OUT.png TITLE XLABEL YLABEL LABEL=FILE.h5:XDS:YDS[:XSCALE:YSCALE] ...\n"
                  "       bench_curves points OUT.png TITLE XLABEL YLABEL LABEL=X:Y,X:Y,... ...\n"
-                 "       bench_curves error REF.h5 RUN.h5 XDS YDS [WINDOW [XMAX]]\n");
+                 "       bench_curves error REF.h5 RUN.h5 XDS YDS [WINDOW [XMAX]]\n"
+                 "       bench_curves at FILE.h5 XDS YDS X\n");
   return rc;
 }

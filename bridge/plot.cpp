@@ -143,7 +143,15 @@ MarkerShape seriesMarker(std::size_t index) {
 }
 
 bool hasLine(PlotSeries::Style s) {
-  return s == PlotSeries::Style::Line || s == PlotSeries::Style::LineMarkers;
+  return s == PlotSeries::Style::Line || s == PlotSeries::Style::LineMarkers || s == PlotSeries::Style::Dashed;
+}
+// Sets the dash pattern of a series' line (none for a solid one).
+void setDash(cairo_t* cr, PlotSeries::Style s) {
+  static const double dash[] = {7.0, 5.0};
+  if (s == PlotSeries::Style::Dashed)
+    cairo_set_dash(cr, dash, 2, 0.0);
+  else
+    cairo_set_dash(cr, nullptr, 0, 0.0);
 }
 bool hasMarkers(PlotSeries::Style s) {
   return s == PlotSeries::Style::Markers || s == PlotSeries::Style::LineMarkers;
@@ -258,7 +266,9 @@ void drawLegend(Painter& p, const PlotSpec& spec, const Frame& f, const std::vec
       cairo_set_line_width(p.raw(), kLineWidthPx);
       cairo_move_to(p.raw(), bx + pad, y);
       cairo_line_to(p.raw(), bx + pad + sample_w, y);
+      setDash(p.raw(), s.style);
       cairo_stroke(p.raw());
+      setDash(p.raw(), PlotSeries::Style::Line);
     }
     if (hasMarkers(s.style)) p.marker(bx + pad + sample_w / 2.0, y, seriesMarker(i));
     if (s.style == PlotSeries::Style::Band) {
@@ -404,7 +414,9 @@ void render(cairo_t* cr, const PlotSpec& spec) {
       }
       have_prev = true;
     }
+    setDash(cr, s.style);
     if (hasLine(s.style)) cairo_stroke(cr);
+    setDash(cr, PlotSeries::Style::Line);
     cairo_new_path(cr);
     if (hasMarkers(s.style))
       for (std::size_t i = 0; i < s.x.size(); ++i)

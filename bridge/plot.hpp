@@ -12,7 +12,8 @@ namespace gabion::bridge {
 /// One data series of a chart.
 struct PlotSeries {
   /// Band: the region between y (lower edge) and y_upper, filled pale.
-  enum class Style { Line, Markers, LineMarkers, Band };
+  /// Dashed: a line drawn in dashes (a reference beside the solid lines).
+  enum class Style { Line, Markers, LineMarkers, Band, Dashed };
   std::string label;         ///< legend text (empty: not in the legend)
   std::vector<double> x, y;  ///< same length; non-finite points are skipped
   Style style = Style::Line;

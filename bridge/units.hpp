@@ -29,10 +29,10 @@ inline DisplayUnit displayUnit(const std::string& name) {
   // Longest suffixes first: "_N_m" before "_m", "_m_s" before "_s".
   // (N s^2/m^2, a rate coefficient, is a mass per length: kg/m; N s/m, a
   // viscosity, is shown in kN s/m as a stiffness in kN/m)
-  static const Rule rules[] = {{"_N_s2_m2", "kg/m", 1.0}, {"_N_s_m", "kN s/m", 1e-3}, {"_m_s", "m/s", 1.0},
-                               {"_N_m", "kN/m", 1e-3},    {"_N", "kN", 1e-3},         {"_m", "mm", 1e3},
-                               {"_s", "s", 1.0},          {"_J", "J", 1.0},           {"_Pa", "Pa", 1.0},
-                               {"_kg", "kg", 1.0}};
+  static const Rule rules[] = {{"_N_s2_m2", "kg/m", 1.0}, {"_kg_m", "kg/m", 1.0}, {"_N_s_m", "kN s/m", 1e-3},
+                               {"_m_s", "m/s", 1.0},      {"_N_m", "kN/m", 1e-3}, {"_N", "kN", 1e-3},
+                               {"_m", "mm", 1e3},         {"_s", "s", 1.0},       {"_J", "J", 1.0},
+                               {"_Pa", "Pa", 1.0},        {"_kg", "kg", 1.0}};
   const auto spaced = [](std::string s) {
     std::replace(s.begin(), s.end(), '_', ' ');
     return s;

@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 #include <limits>
+#include <stdexcept>
 
 #include "bridge/errors.hpp"
 #include "bridge/laws/cell_axial_law.hpp"
@@ -76,6 +77,8 @@ std::vector<std::string> parameterNames(LawModel m) {
               "softening_onset_m", "softening_stiffness_N_m",
               "residual_ratio",    "rate_coefficient_N_s2_m2",
               "rate_growth_m"};
+    case LawModel::MomentumFlux:
+      return {"momentum_flux_kg_m", "momentum_flux_growth_m"};
     case LawModel::LateralLinear:
       return {"reaction_coefficient"};
     case LawModel::InterfaceSlider:
@@ -96,6 +99,8 @@ std::string modelName(LawModel m) {
       return "softening";
     case LawModel::SofteningRate:
       return "softening_rate";
+    case LawModel::MomentumFlux:
+      return "momentum_flux";
     case LawModel::LateralLinear:
       return "lateral_linear";
     case LawModel::InterfaceSlider:
@@ -178,6 +183,8 @@ void evaluateModel(LawModel m, const std::vector<double>& theta, const PathGrid&
       }
       return;
     }
+    case LawModel::MomentumFlux:
+      throw std::logic_error("the momentum_flux model is evaluated on its base law (evaluateSet)");
     case LawModel::LateralLinear:
       for (std::size_t i = 0; i < g.x.size(); ++i) out[i] = theta[0] * g.x[i];
       return;
@@ -185,6 +192,27 @@ void evaluateModel(LawModel m, const std::vector<double>& theta, const PathGrid&
       evaluateSlider(theta[0], theta[1], g, out);
       return;
   }
+}
+
+void evaluateFluxModel(const bridge::AxialLawParams& base, double flux_kg_m, double growth_m, const PathGrid& g,
+                       std::vector<double>& out) {
+  if (g.rate.size() != g.x.size())
+    throw bridge::InputError(g.source, "", "the momentum flux needs the curve's time axis");
+  const bridge::CellSpring law = bridge::cellSpring(base);
+  out.resize(g.x.size());
+  double plastic = 0.0;
+  for (std::size_t i = 0; i < g.x.size(); ++i) {
+    const auto r = bridge::cellResponse(law, g.x[i], plastic);
+    out[i] = r.force_N + bridge::fillRateForce(0.0, flux_kg_m, growth_m, g.x[i], g.rate[i], r.force_N);
+    plastic = r.plastic_m;
+  }
+}
+
+void evaluateSet(const CurveSet& set, const std::vector<double>& theta, const PathGrid& g, std::vector<double>& out) {
+  if (set.model == LawModel::MomentumFlux)
+    evaluateFluxModel(set.base, theta.at(0), theta.at(1), g, out);
+  else
+    evaluateModel(set.model, theta, g, out, set.lockup);
 }
 
 double lossValue(double r, const LossSettings& loss) {
@@ -216,7 +244,7 @@ double lossWeight(double r, const LossSettings& loss) {
 std::vector<double> residuals(const CurveSet& set, const std::vector<double>& theta) {
   std::vector<double> r, model;
   for (const auto& g : set.grids) {
-    evaluateModel(set.model, theta, g, model, set.lockup);
+    evaluateSet(set, theta, g, model);
     for (std::size_t i = 0; i < g.x.size(); ++i) r.push_back((model[i] - g.y[i]) / g.scale);
   }
   return r;
@@ -226,7 +254,7 @@ double misfit(const CurveSet& set, const std::vector<double>& theta) {
   double total = 0.0;
   std::vector<double> model;
   for (const auto& g : set.grids) {
-    evaluateModel(set.model, theta, g, model, set.lockup);
+    evaluateSet(set, theta, g, model);
     const double a = g.effectivePoints() / static_cast<double>(g.x.size());
     double sum = 0.0;
     for (std::size_t i = 0; i < g.x.size(); ++i) sum += lossValue((model[i] - g.y[i]) / g.scale, set.loss);
@@ -249,7 +277,7 @@ double residualVariance(const CurveSet& set, const std::vector<double>& theta) {
     raw.x = g.raw_x;
     raw.y = g.raw_y;
     raw.rate = g.raw_rate;
-    evaluateModel(set.model, theta, raw, model, set.lockup);
+    evaluateSet(set, theta, raw, model);
     for (std::size_t i = 0; i < model.size(); ++i) sum += lossValue((model[i] - raw.y[i]) / g.scale, set.loss);
     n += static_cast<double>(model.size());
   }

@@ -44,6 +44,9 @@ enum class LawModel {
                    ///< residual_ratio (F_r / F_y)
   SofteningRate,   ///< impact: softening's + rate_coefficient_N_s2_m2, rate_growth_m (the overstress
                    ///< c r^2 min(1, u / u_a)); needs the curves' time axis (PathGrid::rate)
+  MomentumFlux,    ///< axial: the momentum flux alone, momentum_flux_kg_m and momentum_flux_growth_m, on a
+                   ///< law already fitted (CurveSet::base), against curves at other plate speeds; needs
+                   ///< their time axis
   LateralLinear,   ///< lateral force = reaction_coefficient * axial force
   InterfaceSlider  ///< shear force: spring tangential_stiffness_N_m capped at friction * normal force
 };
@@ -69,7 +72,7 @@ bridge::AxialLawParams axialLaw(LawModel m, const std::vector<double>& theta, co
 
 /// True for a model that reads the curves' rate (PathGrid::rate).
 inline bool readsRate(LawModel m) {
-  return m == LawModel::SofteningRate;
+  return m == LawModel::SofteningRate || m == LawModel::MomentumFlux;
 }
 
 /// Model values along the path of `g` (same length as g.x). Axial and impact laws
@@ -92,13 +95,25 @@ double lossValue(double r, const LossSettings& loss);
 /// IRLS weight rho'(r) / (2 r) (1 for L2), used for the covariance at the optimum.
 double lossWeight(double r, const LossSettings& loss);
 
+/// The law `base` with the momentum flux c_m (kg/m) and its growth u_a (m)
+/// along the path of `g` at its rate: the law's force
+/// (bridge::cellResponse) plus bridge::fillRateForce, as the macro model
+/// adds them. Throws bridge::InputError for a curve without a time axis.
+void evaluateFluxModel(const bridge::AxialLawParams& base, double flux_kg_m, double growth_m, const PathGrid& g,
+                       std::vector<double>& out);
+
 /// One law to fit against a set of curves.
 struct CurveSet {
   LawModel model = LawModel::ElasticPerfectlyPlastic;
   std::vector<PathGrid> grids;
   LossSettings loss;
   Lockup lockup;
+  bridge::AxialLawParams base;  ///< MomentumFlux: the law whose momentum flux is fitted
 };
+
+/// The model of `set` along `g` (evaluateModel; evaluateFluxModel on
+/// set.base for MomentumFlux).
+void evaluateSet(const CurveSet& set, const std::vector<double>& theta, const PathGrid& g, std::vector<double>& out);
 
 /// Normalised residuals (model - data) / scale of every grid point, curve after curve.
 std::vector<double> residuals(const CurveSet& set, const std::vector<double>& theta);

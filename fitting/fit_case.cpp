@@ -33,7 +33,8 @@ const std::vector<std::string> kTests = {"axial", "lateral", "interface", "impac
 /// plastic ones.
 const char* const kDefaultedParameters[] = {
     "densification_onset_m", "densification_stiffness_N_m", "softening_onset_m", "softening_stiffness_N_m",
-    "residual_ratio",        "rate_coefficient_N_s2_m2",    "rate_growth_m"};
+    "residual_ratio",        "rate_coefficient_N_s2_m2",    "rate_growth_m",     "momentum_flux_kg_m",
+    "momentum_flux_growth_m"};
 
 // The largest x of the curves (the furthest shortening or indentation).
 double largestX(const std::vector<PathGrid>& grids) {
@@ -88,6 +89,9 @@ struct TestSpec {
   std::string name;
   std::vector<LawModel> candidates;
   std::vector<CurveSource> curves;
+  /// axial only: curves at other plate speeds, with their time axis; the
+  /// momentum flux is fitted on them with the law from `curves` held.
+  std::vector<CurveSource> rate_curves;
   Bounds bounds;
   std::string pointer;
 };
@@ -196,19 +200,36 @@ FitCase readFitCase(const bridge::JsonDocument& doc) {
                            : "required by the model softening_rate (the curve's time axis: it reads the "
                              "indentation rate)");
     }
+    if (test == "axial") {
+      const auto fast = t->objects("rate_curves", false);
+      for (std::size_t i = 0; i < fast.size(); ++i) {
+        spec.rate_curves.push_back(readCurveSource(fast[i], defaultsFor(test), i, dir));
+        CurveSource& s = spec.rate_curves.back();
+        // (a micro.cc result carries its time axis beside the curve)
+        if (s.kind == CurveSource::Kind::H5Datasets && s.t_dataset.empty()) s.t_dataset = "/curves/axial/time_s";
+        if (s.kind == CurveSource::Kind::H5Wall)
+          fast[i].fail("wall", "a rate curve needs its time axis: give x_dataset, y_dataset and t_dataset");
+        if (s.kind == CurveSource::Kind::Csv && s.t_column.empty())
+          fast[i].fail("t_column",
+                       "required for a rate curve (its time axis: the momentum flux reads the plate speed)");
+      }
+    } else if (t->has("rate_curves")) {
+      t->fail("rate_curves", "only for the axial law (confined compressions at several plate speeds)");
+    }
     std::set<std::string> names;
     for (LawModel m : spec.candidates)
       for (const auto& n : parameterNames(m)) names.insert(n);
+    if (!spec.rate_curves.empty()) names.insert({"momentum_flux_kg_m", "momentum_flux_growth_m"});
     const JsonReader b = t->object("bounds");
     // The densification's and the softening's bounds have defaults (set at run time).
     for (const char* n : kDefaultedParameters)
       if (!b.has(n)) names.erase(n);
     spec.bounds = readBounds(b, std::vector<std::string>(names.begin(), names.end()));
     for (const auto& [name, lu] : spec.bounds) {
-      const bool may_be_zero = name == "hardening_stiffness_N_m" || name == "reaction_coefficient" ||
-                               name == "densification_onset_m" || name == "residual_ratio" ||
-                               name == "softening_onset_m" || name == "rate_coefficient_N_s2_m2" ||
-                               name == "rate_growth_m";
+      const bool may_be_zero =
+          name == "hardening_stiffness_N_m" || name == "reaction_coefficient" || name == "densification_onset_m" ||
+          name == "residual_ratio" || name == "softening_onset_m" || name == "rate_coefficient_N_s2_m2" ||
+          name == "rate_growth_m" || name == "momentum_flux_kg_m" || name == "momentum_flux_growth_m";
       if (may_be_zero ? lu.first < 0.0 : !(lu.first > 0.0))
         b.fail(name, may_be_zero ? "lower bound must be >= 0" : "lower bound must be > 0");
     }
@@ -226,10 +247,10 @@ FitCase readFitCase(const bridge::JsonDocument& doc) {
   return c;
 }
 
-// Loads and checks every curve of a test (InputError names file, line, column).
-std::vector<PathGrid> loadGrids(const TestSpec& t, std::size_t grid_points) {
+// Loads and checks every curve of a list (InputError names file, line, column).
+std::vector<PathGrid> loadGrids(const std::vector<CurveSource>& curves, std::size_t grid_points) {
   std::vector<PathGrid> grids;
-  for (const auto& s : t.curves) {
+  for (const auto& s : curves) {
     PathGrid g = resampleOnPath(loadCurve(s), grid_points);
     g.condition = curveCondition(s);
     g.replicate = s.replicate;
@@ -250,13 +271,13 @@ std::pair<std::string, double> axisOf(const std::string& name) {
 // C their covariance. Empty where it cannot be had (singular covariance, a
 // parameter at the edge of the model's domain).
 std::pair<std::vector<double>, std::vector<double>> confidenceBand(const LawFitResult& r, const PathGrid& g,
-                                                                   const Lockup& lockup) {
+                                                                   const CurveSet& set) {
   const ModelFit& fit = r.best();
   const std::size_t p = fit.theta.size(), n = g.x.size();
   const double dof = r.effective_observations - static_cast<double>(p);
   if (r.covariance.size() != p * p || !(dof >= 1.0)) return {};
   std::vector<double> model;
-  evaluateModel(fit.model, fit.theta, g, model, lockup);
+  evaluateSet(set, fit.theta, g, model);
   std::vector<std::vector<double>> grad(p);
   try {
     for (std::size_t j = 0; j < p; ++j) {
@@ -264,8 +285,8 @@ std::pair<std::vector<double>, std::vector<double>> confidenceBand(const LawFitR
       auto plus = fit.theta, minus = fit.theta;
       plus[j] += h, minus[j] -= h;
       std::vector<double> fp, fm;
-      evaluateModel(fit.model, plus, g, fp, lockup);
-      evaluateModel(fit.model, minus, g, fm, lockup);
+      evaluateSet(set, plus, g, fp);
+      evaluateSet(set, minus, g, fm);
       grad[j].resize(n);
       for (std::size_t i = 0; i < n; ++i) grad[j][i] = (fp[i] - fm[i]) / (2.0 * h);
     }
@@ -284,8 +305,10 @@ std::pair<std::vector<double>, std::vector<double>> confidenceBand(const LawFitR
   return {lo, hi};
 }
 
-void plotFit(const fs::path& file, const TestSpec& t, const std::vector<PathGrid>& grids, const LawFitResult& r,
-             const Lockup& lockup) {
+// The data of `curves` (on `grids`), the fitted law and its 95 % band; for
+// the momentum flux (set.model MomentumFlux), also the law without it, dashed.
+void plotFit(const fs::path& file, const TestSpec& t, const std::vector<CurveSource>& curves,
+             const std::vector<PathGrid>& grids, const LawFitResult& r, const CurveSet& set) {
   const ModelFit& fit = r.best();
   bridge::PlotSpec spec;
   std::ostringstream nrms;
@@ -294,15 +317,23 @@ void plotFit(const fs::path& file, const TestSpec& t, const std::vector<PathGrid
   spec.title =
       t.name + ": data and the fitted " + modelName(fit.model) + " law (normalised RMS error " + nrms.str() + ")";
   const auto d = defaultsFor(t.name);
-  const auto [x_label, x_scale] = axisOf(t.curves.front().request.x_name);
-  const auto [y_label, y_scale] = axisOf(t.curves.front().request.y_name);
+  const auto [x_label, x_scale] = axisOf(curves.front().request.x_name);
+  const auto [y_label, y_scale] = axisOf(curves.front().request.y_name);
+  const bool rate = set.model == LawModel::MomentumFlux;
+  if (rate) spec.title = "momentum flux at other plate speeds (normalised RMS error " + nrms.str() + ")";
   spec.x_label = x_label;
   spec.y_label = y_label;
   std::vector<double> model;
   for (std::size_t i = 0; i < grids.size(); ++i) {
     const auto& g = grids[i];
     std::string tag = grids.size() > 1 ? "curve " + std::to_string(i + 1) : "";
-    if (!d.condition_key.empty()) {
+    if (rate && !g.rate.empty()) {  // (the plate speed: the largest rate of the curve)
+      std::ostringstream c;
+      c.precision(3);
+      c << *std::max_element(g.rate.begin(), g.rate.end()) << " m/s";
+      tag = c.str();
+    }
+    if (!d.condition_key.empty() && !rate) {
       const auto [cond, cond_scale] = axisOf(d.condition_key);
       std::ostringstream c;
       c.precision(4);
@@ -311,18 +342,30 @@ void plotFit(const fs::path& file, const TestSpec& t, const std::vector<PathGrid
         << cond.substr(open + 2, cond.size() - open - 3);
       tag = c.str();
     }
+    // Each curve in one colour: its data (markers), the fit (line) and the
+    // fit's 95 % band behind it.
+    const int colour = bridge::paletteColor(i);
     spec.series.push_back(
         bridge::scaledSeries("data " + tag, g.x, g.y, x_scale, y_scale, bridge::PlotSeries::Style::Markers));
-    evaluateModel(fit.model, fit.theta, g, model, lockup);
-    spec.series.push_back(bridge::scaledSeries("fit " + tag, g.x, model, x_scale, y_scale));
-    const auto [lo, hi] = confidenceBand(r, g, lockup);
-    if (!lo.empty()) {  // (in the fit's colour, behind it)
+    spec.series.back().color_rgb = colour;
+    const auto [lo, hi] = confidenceBand(r, g, set);
+    if (!lo.empty()) {
       bridge::PlotSeries band = bridge::scaledSeries(i == 0 ? "95 % band of the fit" : "", g.x, lo, x_scale, y_scale,
                                                      bridge::PlotSeries::Style::Band);
       band.y_upper = hi;
       for (double& y : band.y_upper) y *= y_scale;
-      band.color_rgb = spec.series.back().color_rgb = bridge::paletteColor(spec.series.size() - 1);
-      spec.series.insert(spec.series.end() - 1, band);
+      band.color_rgb = colour;
+      spec.series.push_back(band);
+    }
+    evaluateSet(set, fit.theta, g, model);
+    spec.series.push_back(bridge::scaledSeries("fit " + tag, g.x, model, x_scale, y_scale));
+    spec.series.back().color_rgb = colour;
+    if (rate && i == 0) {  // (the law alone does not depend on the rate: one line for every curve)
+      std::vector<double> still;
+      evaluateSet(set, {0.0, 0.0}, g, still);
+      spec.series.push_back(bridge::scaledSeries("the law without the flux", g.x, still, x_scale, y_scale,
+                                                 bridge::PlotSeries::Style::Dashed));
+      spec.series.back().color_rgb = 0x555555;
     }
   }
   bridge::writePlotPng(file, spec);
@@ -330,7 +373,10 @@ void plotFit(const fs::path& file, const TestSpec& t, const std::vector<PathGrid
 
 void checkCase(const bridge::JsonDocument& doc) {
   const FitCase c = readFitCase(doc);
-  for (const auto& t : c.tests) loadGrids(t, c.grid_points);
+  for (const auto& t : c.tests) {
+    loadGrids(t.curves, c.grid_points);
+    loadGrids(t.rate_curves, c.grid_points);
+  }
   if (c.base_law) {
     const auto base = bridge::loadLawFile(*c.base_law);
     if (base.materials.count(c.base_material) == 0)
@@ -377,7 +423,7 @@ bridge::RunOutcome runCase(const bridge::JsonDocument& doc, const bridge::RunCon
   int evaluations = 0;
   double fit_time = 0.0;
   for (const auto& t : c.tests) {
-    const auto grids = loadGrids(t, c.grid_points);
+    const auto grids = loadGrids(t.curves, c.grid_points);
     Bounds bounds = t.bounds;
     const bool axial_kind = t.name == "axial" || t.name == "impact";
     if (axial_kind) defaultDensificationBounds(bounds, grids, settings.lockup.shortening_m);
@@ -429,8 +475,59 @@ bridge::RunOutcome runCase(const bridge::JsonDocument& doc, const bridge::RunCon
     }
     if (c.plots) {
       const std::string png = "fit_" + t.name + ".png";
-      plotFit(ctx.outdir / png, t, grids, r, law_settings.lockup);
+      plotFit(ctx.outdir / png, t, t.curves, grids, r,
+              CurveSet{best.model, {}, c.settings.loss, law_settings.lockup, {}});
       plots.push_back(png);
+    }
+    if (!t.rate_curves.empty()) {
+      // The momentum flux: fitted on the curves at other plate speeds with
+      // the law just identified held (docs/fitting.md, "Momentum flux").
+      const auto fast = loadGrids(t.rate_curves, c.grid_points);
+      Bounds rb = bounds;
+      if (rb.count("momentum_flux_kg_m") == 0) {
+        // from 0 to the coefficient whose overstress alone, at the curves'
+        // largest rate, is twice their largest force
+        double force = 0.0, speed = 0.0;
+        for (const auto& g : fast) {
+          force = std::max(force, g.scale);
+          for (double v : g.rate) speed = std::max(speed, v);
+        }
+        if (!(speed > 0.0))
+          throw bridge::InputError(doc.file(), t.pointer + "/rate_curves", "no curve is loaded at a positive rate");
+        rb["momentum_flux_kg_m"] = {0.0, 2.0 * force / (speed * speed)};
+      }
+      if (rb.count("momentum_flux_growth_m") == 0) rb["momentum_flux_growth_m"] = {0.0, largestX(fast)};
+      LawFitSettings rate_settings = law_settings;
+      rate_settings.flux_base = material.axial;
+      LawFitResult rr;
+      try {
+        rr = fitLaw({LawModel::MomentumFlux}, fast, rb, rate_settings);
+      } catch (const Infeasible& e) {
+        throw bridge::InputError(doc.file(), t.pointer + "/bounds", e.what());
+      }
+      evaluations += rr.evaluations;
+      fit_time += rr.wall_time_s;
+      material.axial.momentum_flux_kg_m = rr.best().theta[0];
+      material.axial.momentum_flux_growth_m = rr.best().theta[1];
+      json rentry = toJson(rr, c.settings.criterion);
+      json rin = json::array();
+      for (std::size_t i = 0; i < t.rate_curves.size(); ++i) {
+        double speed = 0.0;
+        for (double v : fast[i].rate) speed = std::max(speed, v);
+        rin.push_back({{"file", t.rate_curves[i].file.string()},
+                       {"sha256", sha256File(t.rate_curves[i].file)},
+                       {"points", fast[i].raw_points},
+                       {"largest_rate_m_s", speed}});
+      }
+      rentry["inputs"] = rin;
+      results["momentum_flux"] = rentry;
+      fitted["momentum_flux"] = rentry;
+      if (c.plots) {
+        const std::string png = "fit_momentum_flux.png";
+        plotFit(ctx.outdir / png, t, t.rate_curves, fast, rr,
+                CurveSet{LawModel::MomentumFlux, {}, c.settings.loss, law_settings.lockup, material.axial});
+        plots.push_back(png);
+      }
     }
   }
 

@@ -23,7 +23,7 @@ ModelFit fitModel(LawModel model, const std::vector<PathGrid>& grids, const Boun
     const auto& b = bounds.at(name);
     fit.params.push_back(makeParameter(name, b.first, b.second));
   }
-  CurveSet set{model, grids, settings.loss, settings.lockup};
+  CurveSet set{model, grids, settings.loss, settings.lockup, settings.flux_base};
   fit.optimization = minimise(
       fit.params, [&](const std::vector<double>& t) { return misfit(set, t); }, settings.optimizer);
   fit.theta = fit.optimization.parameters;
@@ -73,7 +73,7 @@ LawFitResult fitLaw(const std::vector<LawModel>& candidates, const std::vector<P
         "no candidate model found a feasible parameter set within the bounds (e.g. a hardening "
         "stiffness below the stiffness): widen or correct the bounds");
   const ModelFit& best = r.candidates[r.chosen];
-  const CurveSet set{best.model, grids, settings.loss, settings.lockup};
+  const CurveSet set{best.model, grids, settings.loss, settings.lockup, settings.flux_base};
   r.effective_observations = effectiveObservations(set);
 
   std::vector<double> se;

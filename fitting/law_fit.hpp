@@ -24,8 +24,9 @@ struct LawFitSettings {
   OptimizerSettings optimizer;
   LossSettings loss;
   Criterion criterion = Criterion::Bic;
-  bool profile = true;  ///< profile-likelihood intervals (costs evaluations)
-  Lockup lockup;        ///< the axial/impact laws' fixed lock-up
+  bool profile = true;               ///< profile-likelihood intervals (costs evaluations)
+  Lockup lockup;                     ///< the axial/impact laws' fixed lock-up
+  bridge::AxialLawParams flux_base;  ///< the momentum_flux model's law, whose flux alone is fitted
 };
 
 /// One fitted candidate model.

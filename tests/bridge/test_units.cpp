@@ -20,6 +20,7 @@ TEST(DisplayUnit, SiSuffixToEngineersUnit) {
                {"velocity_m_s", "velocity", "m/s", 1.0},
                {"viscosity_N_s_m", "viscosity", "kN s/m", 1e-3},
                {"rate_coefficient_N_s2_m2", "rate coefficient", "kg/m", 1.0},
+               {"momentum_flux_kg_m", "momentum flux", "kg/m", 1.0},
                {"time_s", "time", "s", 1.0},
                {"reaction_coefficient", "reaction coefficient", "-", 1.0},
                {"friction", "friction", "-", 1.0}};

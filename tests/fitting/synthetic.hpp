@@ -44,6 +44,31 @@ inline bridge::Curve axialCurve(const bridge::AxialLawParams& p, const std::vect
   return c;
 }
 
+/// A confined compression at the constant plate speed `v` to `u_max`, with
+/// its time axis: the axial law `p` plus its momentum flux at that rate
+/// (bridge::fillRateForce), as the macro model adds them, with noise of
+/// standard deviation `sigma_N`; `n` points.
+inline bridge::Curve compressionAtSpeed(const bridge::AxialLawParams& p, double v, double u_max, int n, double sigma_N,
+                                        unsigned seed) {
+  std::mt19937_64 rng(seed);
+  std::normal_distribution<double> noise(0.0, 1.0);
+  bridge::Curve c;
+  c.source = "synthetic compression";
+  c.x_name = "displacement_m";
+  c.y_name = "force_N";
+  double plastic = 0.0;
+  for (int i = 0; i <= n; ++i) {
+    const double u = u_max * i / n;
+    const auto r = bridge::axialResponse(p, u, plastic);
+    plastic = r.plastic_m;
+    const double flux = bridge::fillRateForce(0.0, p.momentum_flux_kg_m, p.momentum_flux_growth_m, u, v, r.force_N);
+    c.t.push_back(u / v);
+    c.x.push_back(u);
+    c.y.push_back(r.force_N + flux + sigma_N * noise(rng));
+  }
+  return c;
+}
+
 /// An impact's indentation curve with its time axis: u(t) = v0 (t - t^2 / (2T))
 /// over [0, T], a boulder slowing at a constant rate from v0 to rest, the
 /// force the law `p` gives at the rate du/dt (its rate term, if any), with

@@ -310,6 +310,50 @@ TEST(LawFit, RateTermIsIdentifiedAcrossSpeeds) {
                bridge::InputError);
 }
 
+// Confined compressions at 1 and 3 m/s, their curves with a time axis: the
+// momentum flux fitted on them with the law held recovers its coefficient
+// and growth; on curves without it, the flux found is negligible; a curve
+// without its time axis is refused.
+TEST(LawFit, MomentumFluxIsIdentifiedAtOtherPlateSpeeds) {
+  bridge::AxialLawParams law{bridge::AxialModel::Densifying, 3e5, 1e3, 3e4, 0.03, 4e5, 0.12, 4e6};
+  bridge::AxialLawParams fast = law;
+  fast.momentum_flux_kg_m = 1500.0;    // 13.5 kN at 3 m/s once grown,
+  fast.momentum_flux_growth_m = 0.04;  // from 40 mm of shortening
+  const double sigma = 200.0;          // (N: 2 % of the force at 60 mm)
+  const auto grids = [&](const bridge::AxialLawParams& p, unsigned seed) {
+    std::vector<PathGrid> out;
+    for (double v : {1.0, 3.0}) {
+      out.push_back(resampleOnPath(testing::compressionAtSpeed(p, v, 0.06, 300, sigma, seed), 200));
+      out.back().replicate = "all";
+      seed += 11;
+    }
+    return out;
+  };
+  const Bounds b = {{"momentum_flux_kg_m", {0.0, 10000.0}}, {"momentum_flux_growth_m", {0.0, 0.06}}};
+  LawFitSettings s;
+  s.flux_base = law;
+  const auto r = fitLaw({LawModel::MomentumFlux}, grids(fast, 3), b, s);
+  ASSERT_EQ(r.parameters.size(), 2u);
+  EXPECT_EQ(r.parameters[0].name, "momentum_flux_kg_m");
+  EXPECT_NEAR(r.parameters[0].value, 1500.0, 0.03 * 1500.0);
+  EXPECT_NEAR(r.parameters[1].value, 0.04, 0.05 * 0.04);
+  EXPECT_LT(r.best().nrms, 0.05);
+  // The truth lies within the intervals reported.
+  for (std::size_t j = 0; j < 2; ++j) {
+    const double truth = j == 0 ? 1500.0 : 0.04;
+    EXPECT_LE(r.parameters[j].jacobian.lower, truth) << r.parameters[j].name;
+    EXPECT_GE(r.parameters[j].jacobian.upper, truth) << r.parameters[j].name;
+  }
+  // Without a flux in the data, what is found at 3 m/s is within the noise.
+  const auto none = fitLaw({LawModel::MomentumFlux}, grids(law, 5), b, s);
+  EXPECT_LT(none.best().theta[0] * 9.0, 2.0 * sigma);
+  // A curve without its time axis cannot be fitted.
+  const auto no_time = resampleOnPath(testing::axialCurve(law, testing::monotonicPath(0.06, 100), 0.0, 1), 200);
+  std::vector<double> out;
+  EXPECT_THROW(evaluateSet(CurveSet{LawModel::MomentumFlux, {}, {}, {}, law}, {1500.0, 0.04}, no_time, out),
+               bridge::InputError);
+}
+
 TEST(Optimizer, FailingEvaluationsArePenaltiesNotCrashes) {
   // The objective throws in one region and returns NaN in another; the search
   // still ends at the minimum of the valid region and records the failures.
