@@ -20,7 +20,10 @@
 # histories at 6 and 10 m/s (fit.macro: force and penetration against time,
 # the twin run inside the objective), the axial laws' densification made
 # plastic (DENSIFICATION=elastic keeps the pipeline's); and once more with
-# the axial laws viscous (VISCOSITY). Prints a table; draws
+# the axial laws viscous (VISCOSITY). Where bench/resolved/cc_rate.sh has
+# run, the axial laws also get the momentum flux it identified on the cell
+# alone: the histories' law with it (hist_flux), and that law's impact law
+# fitted anew on the histories with it (fit_flux). Prints a table; draws
 # DIR/in_place/figures/.
 set -euo pipefail
 here=$(cd "$(dirname "$0")" && pwd)
@@ -84,7 +87,7 @@ if [ -f "$slow" ] && [ -f "$dir/fit_rate/law.json" ]; then
   # default 1e4: a dashpot in parallel while the cell is in contact,
   # docs/formats.md), against the back face's overshoot: fit_visc.
   python3 - "$out" "$dir" "${DENSIFICATION:-plastic}" "${VISCOSITY:-1e4}" <<'PY'
-import json, sys
+import json, os, sys
 out, d, densification, eta = sys.argv[1], sys.argv[2], sys.argv[3], float(sys.argv[4])
 law = json.load(open(f"{d}/fit_rate/law.json"))
 for m in law["materials"].values():
@@ -99,6 +102,13 @@ def twin_with(name, axial):
     json.dump(twin, open(f"{d}/{name}_twin.json", "w"), indent=1)
 twin_with("hist", {})
 twin_with("visc", {"viscosity_N_s_m": eta})
+# The cell's momentum flux from bench/resolved/cc_rate.sh (the viscosity off again).
+cc = f"{out}/cc_rate/fit/law.json"
+if os.path.isfile(cc):
+    a = next(iter(json.load(open(cc))["materials"].values()))["axial"]
+    flux = {k: a[k] for k in ("momentum_flux_kg_m", "momentum_flux_growth_m") if k in a}
+    json.dump(flux, open(f"{d}/flux.json", "w"))
+    twin_with("flux", dict(flux, viscosity_N_s_m=0.0))
 imp = "laws.materials.front.impact."
 def p(name, key, lo, hi, scale="auto"):
     return {"name": name, "set": imp + key, "bounds": [lo, hi], "scale": scale}
@@ -120,18 +130,30 @@ fit = {"format": "gabion.case/1", "kind": "fit.macro", "seed": 1, "macro_case": 
                          "local_max_evaluations": 1000}}
 json.dump(fit, open(f"{d}/fit_hist.json", "w"), indent=1)
 json.dump(dict(fit, macro_case="visc_twin.json"), open(f"{d}/fit_visc.json", "w"), indent=1)
+if os.path.isfile(cc):
+    json.dump(dict(fit, macro_case="flux_twin.json"), open(f"{d}/fit_flux.json", "w"), indent=1)
 PY
   run_case fit_hist
   for png in "$dir"/fit_hist/fit_macro_*.png; do cp "$png" "$dir/figures/in_place_hist_$(basename "$png" .png | sed 's/^fit_macro_//').png"; done
   run_case fit_visc
+  if [ -f "$dir/flux.json" ]; then
+    # The histories' law with the cell's momentum flux, not refitted; then refitted with it.
+    python3 -c "import json, sys; l = json.load(open(sys.argv[1])); f = json.load(open(sys.argv[2]))
+for m in l['materials'].values(): m['axial'].update(f)
+json.dump(l, open(sys.argv[3], 'w'), indent=1)" "$dir/fit_hist/law.json" "$dir/flux.json" "$dir/hist_flux_law.json"
+    run_case fit_flux
+  fi
 fi
 for s in "$out"/centre_*_m_s "$out"/side_*_m_s; do
   [ -f "$s/summary.json" ] || continue
   name=$(basename "$s")
-  for fit in fit fit_rate fit_hist fit_visc; do
-    [ -f "$dir/$fit/law.json" ] || continue
-    tag=${fit#fit}
-    "$gabion" run "$s/macro_twin/case.json" --law "$dir/$fit/law.json" -q -o "$dir/twin${tag}_$name" >"$dir/twin${tag}_$name.log" 2>&1 ||
+  for fit in fit fit_rate fit_hist fit_visc hist_flux fit_flux; do
+    law_file=$dir/$fit/law.json
+    [ "$fit" = hist_flux ] && law_file=$dir/hist_flux_law.json
+    [ -f "$law_file" ] || continue
+    tag=_${fit#fit_}
+    [ "$fit" = fit ] && tag=
+    "$gabion" run "$s/macro_twin/case.json" --law "$law_file" -q -o "$dir/twin${tag}_$name" >"$dir/twin${tag}_$name.log" 2>&1 ||
       echo "   $name: the twin with the law of $fit failed: $(tail -n 1 "$dir/twin${tag}_$name.log")" >&2
   done
 done

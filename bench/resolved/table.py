@@ -33,7 +33,9 @@ def relative(run, ref):
 IN_PLACE = [("twin_", "impact law fitted in the wall at 10 m/s"),
             ("twin_rate_", "rate law fitted in the wall at 6 and 10 m/s"),
             ("twin_hist_", "rate law fitted on the walls' histories at 6 and 10 m/s"),
-            ("twin_visc_", "rate law fitted on the histories, axial laws viscous")]
+            ("twin_visc_", "rate law fitted on the histories, axial laws viscous"),
+            ("twin_hist_flux_", "rate law fitted on the histories, axial laws with the cell's momentum flux"),
+            ("twin_flux_", "rate law fitted on the histories with the cell's momentum flux")]
 
 
 def summary(path):
@@ -119,7 +121,7 @@ def in_place_charts(out, curves, by_speed):
     model, the centre scenarios: OUT/in_place/figures/in_place_vs_speed_<key>.png."""
     figures = os.path.join(out, "in_place", "figures")
     os.makedirs(figures, exist_ok=True)
-    for key, title, scale in (KEYS[0], KEYS[1]):
+    for key, title, scale in (KEYS[0], KEYS[1], KEYS[3]):
         series = []
         for label in dict.fromkeys(label for rows in by_speed.values() for label, _ in rows):
             xy = sorted((v, s[key] * scale) for v, rows in by_speed.items() for lab, s in rows
@@ -138,7 +140,7 @@ def in_place(out, curves=None):
     bench_curves (`curves`), the charts of in_place_charts."""
     d = os.path.join(out, "in_place")
     by_speed = {}
-    for fit in ("fit", "fit_rate", "fit_hist"):
+    for fit in ("fit", "fit_rate", "fit_hist", "fit_flux"):
         law = os.path.join(d, fit, "law.json")
         if os.path.isfile(law):
             print(f"impact law of {fit}:", json.dumps(json.load(open(law))["materials"]["front"]["impact"]))
