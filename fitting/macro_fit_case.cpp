@@ -61,6 +61,7 @@ struct MacroFitCase {
   LossSettings loss;
   std::size_t grid_points = 200;
   bool plots = true;
+  bool profile = false;  ///< profile-likelihood intervals ("uncertainty": {"profile": true})
 };
 
 // The macro case with its laws embedded (a law file's materials under
@@ -122,6 +123,7 @@ MacroFitCase readMacroFitCase(const bridge::JsonDocument& doc) {
                               OptimizerSettings{});
   c.loss = readLoss(root.optionalObject("objective"), c.grid_points);
   c.plots = root.boolean("plots", true);
+  if (auto u = root.optionalObject("uncertainty")) c.profile = u->boolean("profile", false);
   return c;
 }
 
@@ -419,6 +421,16 @@ bridge::RunOutcome runCase(const bridge::JsonDocument& doc, const bridge::RunCon
   const auto intervals =
       linearisedIntervals([&](const std::vector<double>& v) { return objective.residuals(v); }, row_factor, c.loss,
                           n_eff, s2, params, best.parameters, stderr_, nullptr, &no_intervals);
+  // Profile-likelihood intervals where asked: every parameter pushed out
+  // from the best point, the others re-fitted at each value (local search,
+  // twin runs inside), until the misfit has grown by chi2_1 (95 %) of the
+  // noise; they exist where the linearised ones do not (a direction the
+  // histories do not see gives an end at its bound).
+  std::vector<Interval> profile(params.size(), Interval{NAN, NAN});
+  int profile_evaluations = 0;
+  if (c.profile && std::isfinite(s2))
+    profile = profileIntervals([&](const std::vector<double>& v) { return objective(v); }, n_eff, s2, params,
+                               best.parameters, stderr_, c.optimizer, profile_evaluations);
   json parameters = json::array();
   std::ostringstream answer;
   const double nrms = std::sqrt(sum2 / count);
@@ -428,21 +440,29 @@ bridge::RunOutcome runCase(const bridge::JsonDocument& doc, const bridge::RunCon
     const Parameter& p = c.params[k].param;
     const bool at_bound = std::abs(toUnit(p, best.parameters[k]) - 0.5) > 0.499;
     const bool finite = std::isfinite(intervals[k].lower) && std::isfinite(intervals[k].upper);
+    const bool profiled = std::isfinite(profile[k].lower) && std::isfinite(profile[k].upper);
     parameters.push_back({{"name", p.name},
                           {"set", c.params[k].set},
                           {"value", best.parameters[k]},
                           {"standard_error", std::isfinite(stderr_[k]) ? json(stderr_[k]) : json(nullptr)},
                           {"jacobian_95", finite ? json{intervals[k].lower, intervals[k].upper} : json(nullptr)},
+                          {"profile_95", profiled ? json{profile[k].lower, profile[k].upper} : json(nullptr)},
+                          {"profile_at_bound", profiled && profile[k].at_bound},
                           {"bounds", {p.lower, p.upper}},
                           {"at_bound", at_bound}});
-    // (in engineers' units, from the unit suffix of the key it sets)
+    // (in engineers' units, from the unit suffix of the key it sets; the
+    // profile interval where there is one)
     const std::string& key = c.params[k].set.front();
     answer << "; " << p.name << " "
-           << describeValue(key.substr(key.find_last_of('.') + 1), best.parameters[k], parameters.back()["jacobian_95"])
+           << describeValue(key.substr(key.find_last_of('.') + 1), best.parameters[k],
+                            reportedInterval(parameters.back()))
            << (at_bound ? " (at its bound)" : "");
   }
   answer << "\n";
-  if (!no_intervals.empty()) answer << "  no 95 % intervals: " << no_intervals << "\n";
+  if (!no_intervals.empty())
+    answer << (c.profile ? "  no linearised 95 % intervals (the profile ones above): " : "  no 95 % intervals: ")
+           << no_intervals << (c.profile ? "" : " (\"uncertainty\": {\"profile\": true} gives profile-likelihood ones)")
+           << "\n";
 
   json law_json = bridge::toJson(laws);
   law_json["description"] = "Cell laws identified by `gabion run " + ctx.case_file.string() + "` (fit.macro)";
@@ -460,6 +480,7 @@ bridge::RunOutcome runCase(const bridge::JsonDocument& doc, const bridge::RunCon
   out.results["misfit"] = best.value;
   out.results["scenarios"] = scenarios;
   out.results["evaluations"] = best.evaluations;
+  out.results["profile_evaluations"] = profile_evaluations;
   out.results["failed_evaluations"] = best.failed_evaluations;
   out.results["infeasible_evaluations"] = best.infeasible_evaluations;
   out.results["failures"] = best.failures;

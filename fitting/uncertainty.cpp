@@ -133,7 +133,7 @@ namespace {
 
 // Misfit minimised over every parameter but `j`, which is held at `value`.
 // `others` (physical units) is the start and receives the minimiser.
-double profileMisfit(const CurveSet& set, const std::vector<Parameter>& params, std::size_t j, double value,
+double profileMisfit(const MisfitFunction& misfit, const std::vector<Parameter>& params, std::size_t j, double value,
                      std::vector<double>& others, const OptimizerSettings& settings, int& evaluations) {
   const auto full = [&](const std::vector<double>& o) {
     std::vector<double> theta;
@@ -143,7 +143,7 @@ double profileMisfit(const CurveSet& set, const std::vector<Parameter>& params, 
   if (params.size() == 1) {
     ++evaluations;
     try {
-      return misfit(set, full({}));
+      return misfit(full({}));
     } catch (const Infeasible&) {
       return std::numeric_limits<double>::infinity();
     }
@@ -157,7 +157,7 @@ double profileMisfit(const CurveSet& set, const std::vector<Parameter>& params, 
   s.local_max_evaluations = 400;
   s.xtol_rel = 1e-7;
   const auto r = minimise(
-      sub, [&](const std::vector<double>& o) { return misfit(set, full(o)); }, s, others);  // (Infeasible: a penalty)
+      sub, [&](const std::vector<double>& o) { return misfit(full(o)); }, s, others);  // (Infeasible: a penalty)
   evaluations += r.evaluations;
   others = r.parameters;
   return r.value >= settings.penalty ? std::numeric_limits<double>::infinity() : r.value;
@@ -171,9 +171,17 @@ std::vector<Interval> profileIntervals(const CurveSet& set, const std::vector<Pa
   // Likelihood ratio with the noise variance estimated on the original points
   // (see residualVariance): (S_prof - S_min) / s^2 ~ chi2_1. The floor keeps a
   // noise-free synthetic curve from dividing by zero.
-  const double s_min = misfit(set, theta);
   const double s2 = std::max(residualVariance(set, theta), 1e-16);
-  const auto statistic = [&](double s) { return std::max(0.0, s - s_min) / s2; };
+  return profileIntervals([&](const std::vector<double>& t) { return misfit(set, t); }, 1.0, s2, params, theta,
+                          initial_steps, settings, evaluations);
+}
+
+std::vector<Interval> profileIntervals(const MisfitFunction& misfit, double scale, double s2,
+                                       const std::vector<Parameter>& params, const std::vector<double>& theta,
+                                       const std::vector<double>& initial_steps, const OptimizerSettings& settings,
+                                       int& evaluations) {
+  const double s_min = misfit(theta);
+  const auto statistic = [&](double s) { return std::max(0.0, scale * (s - s_min)) / s2; };
   std::vector<Interval> out;
   for (std::size_t j = 0; j < params.size(); ++j) {
     std::vector<double> start;
@@ -193,7 +201,7 @@ std::vector<Interval> profileIntervals(const CurveSet& set, const std::vector<Pa
         double v = theta[j] + side * t;
         const bool clamped = side < 0 ? v <= bound : v >= bound;
         if (clamped) v = bound;
-        const double stat = statistic(profileMisfit(set, params, j, v, others, settings, evaluations));
+        const double stat = statistic(profileMisfit(misfit, params, j, v, others, settings, evaluations));
         if (stat > kChiSquare1_95) {
           outside = v;
           break;
@@ -210,7 +218,7 @@ std::vector<Interval> profileIntervals(const CurveSet& set, const std::vector<Pa
         std::vector<double> o2 = others;
         for (int k = 0; k < 30 && std::abs(outside - inside) > 1e-6 * std::max(std::abs(theta[j]), 1e-12); ++k) {
           const double mid = 0.5 * (inside + outside);
-          const double stat = statistic(profileMisfit(set, params, j, mid, o2, settings, evaluations));
+          const double stat = statistic(profileMisfit(misfit, params, j, mid, o2, settings, evaluations));
           (stat > kChiSquare1_95 ? outside : inside) = mid;
         }
         end = 0.5 * (inside + outside);

@@ -69,4 +69,18 @@ std::vector<Interval> profileIntervals(const CurveSet& set, const std::vector<Pa
                                        const std::vector<double>& theta, const std::vector<double>& initial_steps,
                                        const OptimizerSettings& settings, int& evaluations);
 
+/// A misfit as a function of the parameters (physical units; throws
+/// Infeasible outside the model's domain).
+using MisfitFunction = std::function<double(const std::vector<double>&)>;
+/// The same profile-likelihood intervals for any least-squares fit: the
+/// values of each parameter where (S_prof - S_min) / s2 = chi2_{1,0.95},
+/// S = `scale` x `misfit` (the misfit summed over the effective observations
+/// when it is given per observation), S_min at `theta`, `s2` the noise
+/// variance of the normalised residuals. An end that reaches a bound with
+/// the statistic still below the threshold is that bound, `at_bound` set.
+std::vector<Interval> profileIntervals(const MisfitFunction& misfit, double scale, double s2,
+                                       const std::vector<Parameter>& params, const std::vector<double>& theta,
+                                       const std::vector<double>& initial_steps, const OptimizerSettings& settings,
+                                       int& evaluations);
+
 }  // namespace gabion::fitting

@@ -197,6 +197,33 @@ TEST(FitMacro, AParameterTheHistoriesDoNotSeeIsNamed) {
   EXPECT_NE(res["intervals_note"].get<std::string>().find("mostly core peak"), std::string::npos)
       << res["intervals_note"];
   for (const auto& p : res["parameters"]) EXPECT_TRUE(p["jacobian_95"].is_null()) << p.dump();
+
+  // With profile-likelihood intervals asked for, every parameter has one:
+  // the two the histories see hold their truth, and the unseen one's reach
+  // both of its bounds (the misfit never grows along it).
+  fit["uncertainty"] = {{"profile", true}};
+  std::ofstream(dir / "fit.json") << fit.dump(2);
+  const auto rp = runGabion("run " + (dir / "fit.json").string() + " -o " + (dir / "out_profile").string());
+  ASSERT_EQ(rp.exit_code, 0) << rp.output;
+  EXPECT_NE(rp.output.find("no linearised 95 % intervals (the profile ones above)"), std::string::npos) << rp.output;
+  const json sp = json::parse(std::ifstream(dir / "out_profile" / "summary.json"));
+  const json& rs = sp.contains("results") ? sp["results"] : sp;
+  EXPECT_GT(rs["profile_evaluations"].get<int>(), 0);
+  const double truth[] = {6e4, 800.0};
+  for (std::size_t k = 0; k < 3; ++k) {
+    const json& p = rs["parameters"][k];
+    ASSERT_TRUE(p["profile_95"].is_array()) << p.dump();
+    const double lo = p["profile_95"][0].get<double>(), hi = p["profile_95"][1].get<double>();
+    if (k < 2) {
+      EXPECT_LE(lo, truth[k]) << p.dump();
+      EXPECT_GE(hi, truth[k]) << p.dump();
+      EXPECT_FALSE(p["profile_at_bound"].get<bool>()) << p.dump();
+    } else {
+      EXPECT_TRUE(p["profile_at_bound"].get<bool>()) << p.dump();
+      EXPECT_EQ(lo, 2e4) << p.dump();
+      EXPECT_EQ(hi, 2e5) << p.dump();
+    }
+  }
 }
 
 // Bad input exits 2 and names the fit case's key before anything runs.
