@@ -263,7 +263,8 @@ TEST(LawFile, AxialMomentumFluxReadsBackAndIsRefusedWhereItCannotHold) {
   laws.materials.at("front").axial.momentum_flux_growth_m = 0.05;
   const std::string path = ::testing::TempDir() + "law_flux.json";
   writeJsonAtomic(path, toJson(laws));
-  const auto& read = loadLawFile(path).materials.at("front").axial;
+  const LawFile file = loadLawFile(path);
+  const auto& read = file.materials.at("front").axial;
   EXPECT_DOUBLE_EQ(read.momentum_flux_kg_m, 1700.0);
   EXPECT_DOUBLE_EQ(read.momentum_flux_growth_m, 0.05);
   EXPECT_FALSE(toJson(sampleLaws())["materials"]["front"]["axial"].contains("momentum_flux_kg_m"));
