@@ -70,6 +70,7 @@ void writeSmallChain(const fs::path& dir) {
  "cell": "cell.json",
  "lab": {"cc": "cc.json", "uc": "uc.json", "uci": "uci.json", "shear": "shear.json"},
  "uci_velocities_m_s": [5, 8],
+ "cc_rate_velocities_m_s": [1.5],
  "structure": {"case": "wall.json", "material": "small", "velocities_m_s": [8, 12]},
  "sweep": "sweep.json", "capacity": "capacity.json", "design": "design.json"})");
 }
@@ -95,10 +96,10 @@ TEST(Pipeline, ReducedChainRunsEveryStageThenReusesThem) {
     EXPECT_EQ(readJson(d / "summary.json").at("status"), "ok") << d;
     EXPECT_TRUE(fs::exists(d / "stage.json")) << d;
   }
-  for (const char* f : {"1_cell/cell.h5", "2_cc/result.h5", "2_uc/result.h5", "2_uci/v5/result.h5",
-                        "2_uci/v8/result.h5", "2_shear/result.h5", "3_fit/law.json", "4_impact_8_m_s/result.h5",
-                        "4_sweep/sweep.csv", "figures/sweep_chart_penetration.png", "5_capacity/capacity.png",
-                        "6_design/capacity_vs_thickness.png", "law.json", "report.html"})
+  for (const char* f : {"1_cell/cell.h5", "2_cc/result.h5", "2_cc_rate_1.5_m_s/result.h5", "2_uc/result.h5",
+                        "2_uci/v5/result.h5", "2_uci/v8/result.h5", "2_shear/result.h5", "3_fit/law.json",
+                        "4_impact_8_m_s/result.h5", "4_sweep/sweep.csv", "figures/sweep_chart_penetration.png",
+                        "5_capacity/capacity.png", "6_design/capacity_vs_thickness.png", "law.json", "report.html"})
     EXPECT_TRUE(fs::exists(out / f)) << f;
   // Each lab test estimated its cost before it ran (the ETA's ground), and
   // none took more steps than estimated.
@@ -118,8 +119,19 @@ TEST(Pipeline, ReducedChainRunsEveryStageThenReusesThem) {
   // with its lock-up from the generated cell's porosity.
   const auto laws = gabion::bridge::loadLawFile(out / "law.json");
   const auto& m = laws.materials.at("small");
-  for (const char* law : {"axial", "lateral", "interface", "impact"})
+  for (const char* law : {"axial", "momentum_flux", "lateral", "interface", "impact"})
     EXPECT_TRUE(m.provenance.at("fitted").contains(law)) << law;
+  // The axial law's momentum flux from the compression at 1.5 m/s: its
+  // curve is the fit's input, at that plate speed, without unloading.
+  const auto& flux_inputs = m.provenance.at("fitted").at("momentum_flux").at("inputs");
+  ASSERT_EQ(flux_inputs.size(), 1u);
+  EXPECT_NEAR(flux_inputs[0].at("largest_rate_m_s").get<double>(), 1.5, 0.05);
+  const auto fast = readJson(out / "2_cc_rate_1.5_m_s" / "case.json");
+  EXPECT_EQ(fast.at("loading").at("velocity_m_s"), 1.5);
+  EXPECT_TRUE(fast.at("loading").at("unload_at_strain").empty());
+  EXPECT_EQ(fast.at("loading").at("strain"), readJson(out / "2_cc" / "case.json").at("loading").at("strain"));
+  EXPECT_GE(m.axial.momentum_flux_kg_m, 0.0);
+  EXPECT_TRUE(fs::exists(out / "3_fit" / "fit_momentum_flux.png"));
   EXPECT_EQ(m.provenance.at("lockup").at("from"), "porosity");
   EXPECT_DOUBLE_EQ(m.edge_m, 0.3);
 
@@ -250,4 +262,11 @@ TEST(Pipeline, BadInputNamesTheField) {
   r = runGabion("check " + (dir / "bad_stage.json").string());
   EXPECT_EQ(r.exit_code, 2) << r.output;
   EXPECT_NE(r.output.find("/stage_settings/ccc"), std::string::npos) << r.output;
+
+  j = readJson(dir / "pipeline.json");
+  j["cc_rate_velocities_m_s"] = {2, -1};
+  writeFile(dir / "bad_rate.json", j.dump());
+  r = runGabion("check " + (dir / "bad_rate.json").string());
+  EXPECT_EQ(r.exit_code, 2) << r.output;
+  EXPECT_NE(r.output.find("/cc_rate_velocities_m_s"), std::string::npos) << r.output;
 }
