@@ -110,6 +110,16 @@ AxialLawParams readAxialLaw(const JsonReader& r, double edge_m, int version, boo
              "stiffness_N_m = " +
                  std::to_string(first_yield) + " m");
   }
+  if (r.has("densification_unloading_stiffness_N_m")) {
+    if (!p.plastic_densification)
+      r.fail("densification_unloading_stiffness_N_m",
+             "only with \"densification\": \"plastic\" (the dense part's unloading of a compacted cell)");
+    p.densification_unloading_stiffness_N_m = r.number("densification_unloading_stiffness_N_m", Check::Positive);
+    if (p.densification_unloading_stiffness_N_m < p.densification_stiffness_N_m)
+      r.fail("densification_unloading_stiffness_N_m",
+             "must be at least densification_stiffness_N_m (" + std::to_string(p.densification_stiffness_N_m) +
+                 " N/m): a softer unloading than loading would give back more than the compaction took");
+  }
   return p;
 }
 
@@ -131,6 +141,8 @@ json toJson(const AxialLawParams& p) {
   if (p.rate_coefficient_N_s2_m2 > 0.0) j["rate_coefficient_N_s2_m2"] = p.rate_coefficient_N_s2_m2;
   if (p.rate_growth_m > 0.0) j["rate_growth_m"] = p.rate_growth_m;
   if (p.plastic_densification) j["densification"] = "plastic";
+  if (p.densification_unloading_stiffness_N_m > 0.0)
+    j["densification_unloading_stiffness_N_m"] = p.densification_unloading_stiffness_N_m;
   if (p.viscosity_N_s_m > 0.0) j["viscosity_N_s_m"] = p.viscosity_N_s_m;
   if (p.momentum_flux_kg_m > 0.0) j["momentum_flux_kg_m"] = p.momentum_flux_kg_m;
   if (p.momentum_flux_growth_m > 0.0) j["momentum_flux_growth_m"] = p.momentum_flux_growth_m;

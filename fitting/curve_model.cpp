@@ -70,6 +70,13 @@ std::vector<std::string> parameterNames(LawModel m) {
     case LawModel::Densifying:
       return {"stiffness_N_m", "yield_force_N", "hardening_stiffness_N_m", "densification_onset_m",
               "densification_stiffness_N_m"};
+    case LawModel::DensifyingPlastic:
+      return {"stiffness_N_m",
+              "yield_force_N",
+              "hardening_stiffness_N_m",
+              "densification_onset_m",
+              "densification_stiffness_N_m",
+              "densification_unloading_stiffness_N_m"};
     case LawModel::Softening:
       return {"stiffness_N_m", "yield_force_N", "softening_onset_m", "softening_stiffness_N_m", "residual_ratio"};
     case LawModel::SofteningRate:
@@ -95,6 +102,8 @@ std::string modelName(LawModel m) {
       return "bilinear";
     case LawModel::Densifying:
       return "densifying";
+    case LawModel::DensifyingPlastic:
+      return "densifying_plastic";
     case LawModel::Softening:
       return "softening";
     case LawModel::SofteningRate:
@@ -132,9 +141,9 @@ void evaluateSlider(double mu, double kt, const PathGrid& g, std::vector<double>
 
 bridge::AxialLawParams axialLaw(LawModel m, const std::vector<double>& theta, const Lockup& lockup) {
   bridge::AxialLawParams p;
-  p.model = m == LawModel::Bilinear                                    ? bridge::AxialModel::Bilinear
-            : m == LawModel::Densifying                                ? bridge::AxialModel::Densifying
-            : m == LawModel::Softening || m == LawModel::SofteningRate ? bridge::AxialModel::Softening
+  p.model = m == LawModel::Bilinear                                         ? bridge::AxialModel::Bilinear
+            : m == LawModel::Densifying || m == LawModel::DensifyingPlastic ? bridge::AxialModel::Densifying
+            : m == LawModel::Softening || m == LawModel::SofteningRate      ? bridge::AxialModel::Softening
                                                                        : bridge::AxialModel::ElasticPerfectlyPlastic;
   p.stiffness_N_m = theta[0];
   p.yield_force_N = theta[1];
@@ -152,10 +161,19 @@ bridge::AxialLawParams axialLaw(LawModel m, const std::vector<double>& theta, co
     p.hardening_stiffness_N_m = theta[2];
     if (!(theta[2] < theta[0])) throw Infeasible("hardening_stiffness_N_m must be below stiffness_N_m");
   }
-  if (m == LawModel::Densifying) {
+  if (m == LawModel::Densifying || m == LawModel::DensifyingPlastic) {
     p.densification_onset_m = theta[3];
     p.densification_stiffness_N_m = theta[4];
     if (!(theta[3] < lockup.shortening_m)) throw Infeasible("densification_onset_m must be below the lock-up");
+  }
+  if (m == LawModel::DensifyingPlastic) {
+    // (the law file's conditions: bridge/law_file.cpp)
+    p.plastic_densification = true;
+    p.densification_unloading_stiffness_N_m = theta[5];
+    if (!(theta[5] >= theta[4]))
+      throw Infeasible("densification_unloading_stiffness_N_m must be at least densification_stiffness_N_m");
+    if (!(theta[3] >= theta[1] / theta[0]))
+      throw Infeasible("plastic densification needs densification_onset_m at or past first yield");
   }
   p.lockup_shortening_m = lockup.shortening_m;
   p.lockup_stiffness_N_m = lockup.stiffness_ratio * bridge::looseStiffness(p);
@@ -169,6 +187,7 @@ void evaluateModel(LawModel m, const std::vector<double>& theta, const PathGrid&
     case LawModel::ElasticPerfectlyPlastic:
     case LawModel::Bilinear:
     case LawModel::Densifying:
+    case LawModel::DensifyingPlastic:
     case LawModel::Softening:
     case LawModel::SofteningRate: {
       const bridge::AxialLawParams p = axialLaw(m, theta, lockup);

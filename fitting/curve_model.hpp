@@ -40,6 +40,8 @@ enum class LawModel {
   ElasticPerfectlyPlastic,  ///< axial/impact: stiffness_N_m, yield_force_N
   Bilinear,                 ///< axial/impact: + hardening_stiffness_N_m
   Densifying,               ///< axial/impact: + densification_onset_m, densification_stiffness_N_m
+  DensifyingPlastic,        ///< axial: densifying with plastic densification, + densification_unloading_stiffness_N_m
+                            ///< (the dense part's unloading: a compacted cell keeps part of its compaction)
   Softening,       ///< impact: stiffness_N_m, yield_force_N (the peak), softening_onset_m, softening_stiffness_N_m,
                    ///< residual_ratio (F_r / F_y)
   SofteningRate,   ///< impact: softening's + rate_coefficient_N_s2_m2, rate_growth_m (the overstress

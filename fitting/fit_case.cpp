@@ -31,10 +31,11 @@ const std::vector<std::string> kTests = {"axial", "lateral", "interface", "impac
 /// at run time): the densifying model's beyond the bilinear ones, and the
 /// softening (and softening_rate) model's beyond the elastic-perfectly
 /// plastic ones.
-const char* const kDefaultedParameters[] = {
-    "densification_onset_m", "densification_stiffness_N_m", "softening_onset_m", "softening_stiffness_N_m",
-    "residual_ratio",        "rate_coefficient_N_s2_m2",    "rate_growth_m",     "momentum_flux_kg_m",
-    "momentum_flux_growth_m"};
+const char* const kDefaultedParameters[] = {"densification_onset_m",  "densification_stiffness_N_m",
+                                            "softening_onset_m",      "softening_stiffness_N_m",
+                                            "residual_ratio",         "rate_coefficient_N_s2_m2",
+                                            "rate_growth_m",          "momentum_flux_kg_m",
+                                            "momentum_flux_growth_m", "densification_unloading_stiffness_N_m"};
 
 // The largest x of the curves (the furthest shortening or indentation).
 double largestX(const std::vector<PathGrid>& grids) {
@@ -54,6 +55,12 @@ void defaultDensificationBounds(Bounds& b, const std::vector<PathGrid>& grids, d
   if (b.count("densification_stiffness_N_m") == 0) {
     const auto& k = b.at("stiffness_N_m");
     b["densification_stiffness_N_m"] = {0.01 * k.first, 10.0 * k.second};
+  }
+  // (the dense part's unloading: from the softest densification to ten
+  // times the stiffest; below the densification it is infeasible)
+  if (b.count("densification_unloading_stiffness_N_m") == 0) {
+    const auto& kd = b.at("densification_stiffness_N_m");
+    b["densification_unloading_stiffness_N_m"] = {kd.first, 10.0 * kd.second};
   }
 }
 
@@ -127,15 +134,19 @@ std::vector<LawModel> readModels(const JsonReader& t, const std::string& test) {
       out.push_back(LawModel::Bilinear);
     else if (s == "densifying")
       out.push_back(LawModel::Densifying);
+    else if (s == "densifying_plastic" && test == "axial")
+      out.push_back(LawModel::DensifyingPlastic);
     else if (s == "softening" && test == "impact")
       out.push_back(LawModel::Softening);
     else if (s == "softening_rate" && test == "impact")
       out.push_back(LawModel::SofteningRate);
     else if (s == "softening" || s == "softening_rate")
       t.fail("models", "'" + s + "' is a model of the impact law only");
+    else if (s == "densifying_plastic")
+      t.fail("models", "'densifying_plastic' is a model of the axial law only (plastic densification)");
     else
       t.fail("models", "unknown model '" + s + "' (elastic_perfectly_plastic, bilinear, densifying" +
-                           (test == "impact" ? ", softening, softening_rate)" : ")"));
+                           (test == "impact" ? ", softening, softening_rate)" : ", densifying_plastic)"));
   }
   return out;
 }

@@ -23,6 +23,9 @@ AxialLawParams seriesAxialLaw(const AxialLawParams& a, const AxialLawParams& b) 
     p.densification_onset_m = 0.5 * (a.densification_onset_m + b.densification_onset_m);
     p.densification_stiffness_N_m = series(a.densification_stiffness_N_m, b.densification_stiffness_N_m);
     p.plastic_densification = a.plastic_densification && b.plastic_densification;
+    // (a stiffness: in series; kept only where both halves have one)
+    const double ra = a.densification_unloading_stiffness_N_m, rb = b.densification_unloading_stiffness_N_m;
+    p.densification_unloading_stiffness_N_m = p.plastic_densification && ra > 0.0 && rb > 0.0 ? series(ra, rb) : 0.0;
   }
   p.lockup_shortening_m = 0.5 * (a.lockup_shortening_m + b.lockup_shortening_m);
   p.lockup_stiffness_N_m = series(a.lockup_stiffness_N_m, b.lockup_stiffness_N_m);
@@ -48,6 +51,7 @@ AxialLawParams cellLengthLaw(const AxialLawParams& a, double factor) {
   p.softening_onset_m *= factor;
   p.lockup_shortening_m *= factor;
   p.lockup_stiffness_N_m /= factor;
+  p.densification_unloading_stiffness_N_m /= factor;
   p.viscosity_N_s_m /= factor;              // (a viscosity per strain rate, as a stiffness per strain)
   p.momentum_flux_kg_m /= factor * factor;  // (a force that goes with the strain rate squared: c_m L^2)
   p.momentum_flux_growth_m *= factor;

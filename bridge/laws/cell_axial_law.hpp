@@ -89,6 +89,16 @@
 /// lies on or below that line, and reloading yields again exactly there);
 /// before it has yielded m <= F_y / k, below u_d (the law file checks
 /// u_d >= F_y / k), where G is zero.
+///
+/// A fitted unloading stiffness of the dense part (law files:
+/// "densification_unloading_stiffness_N_m" k_r >= k_d, with plastic
+/// densification): the densification alone unloads along k_r,
+/// F_d = max(0, k_d max(0, m - u_d) - k_r (m - u)), and the lock-up stays
+/// elastic beside it, k_L max(0, u - u_L). A cell keeps part of its
+/// compaction (a confined compression unloaded past the onset measures
+/// k_r: docs/resolved.md). It stores F_d^2 / (2 k_r) and dissipates
+/// D_r(m) = k_d a^2 / 2 - (k_d a)^2 / (2 k_r), a = max(0, m - u_d), which
+/// grows with m as long as k_r >= k_d. Without it k_u = k_d + k_L above.
 #include <cmath>
 #include <limits>
 
@@ -115,8 +125,9 @@ struct AxialLawParams {
   double rate_growth_m = 0.0;             ///< u_a >= 0: the overstress grows as min(1, u / u_a); 0: constant
   bool plastic_densification = false;     ///< densifying with a lock-up, axial only: compaction is kept (above)
   double viscosity_N_s_m = 0.0;           ///< eta >= 0: a dashpot in parallel while in contact, axial only (above)
-  double momentum_flux_kg_m = 0.0;        ///< c_m >= 0: the momentum flux c_m r^2 g(u), axial only (above)
-  double momentum_flux_growth_m = 0.0;    ///< u_a >= 0: g = min(1, u / u_a); 0: g = 1
+  double densification_unloading_stiffness_N_m = 0.0;  ///< k_r >= k_d with plastic densification; 0: k_d + k_L
+  double momentum_flux_kg_m = 0.0;                     ///< c_m >= 0: the momentum flux c_m r^2 g(u), axial only (above)
+  double momentum_flux_growth_m = 0.0;                 ///< u_a >= 0: g = min(1, u / u_a); 0: g = 1
 };
 
 /// What the fill's rate adds to an axial law's force `law_force_N` (N) at
@@ -141,8 +152,9 @@ inline bool sameLaw(const AxialLawParams& a, const AxialLawParams& b) {
          a.softening_stiffness_N_m == b.softening_stiffness_N_m && a.residual_force_N == b.residual_force_N &&
          a.softening_onset_m == b.softening_onset_m && a.rate_coefficient_N_s2_m2 == b.rate_coefficient_N_s2_m2 &&
          a.rate_growth_m == b.rate_growth_m && a.plastic_densification == b.plastic_densification &&
-         a.viscosity_N_s_m == b.viscosity_N_s_m && a.momentum_flux_kg_m == b.momentum_flux_kg_m &&
-         a.momentum_flux_growth_m == b.momentum_flux_growth_m;
+         a.viscosity_N_s_m == b.viscosity_N_s_m &&
+         a.densification_unloading_stiffness_N_m == b.densification_unloading_stiffness_N_m &&
+         a.momentum_flux_kg_m == b.momentum_flux_kg_m && a.momentum_flux_growth_m == b.momentum_flux_growth_m;
 }
 
 /// True for the models with a hardening tangent (bilinear, densifying).
@@ -180,10 +192,11 @@ struct CellSpring {
   double lockup_N_m = 0.0;                                    ///< k_L (N/m)
   double rate_N_s2_m2 = 0.0;                                  ///< c (N s^2/m^2)
   double rate_growth_m = 0.0;                                 ///< u_a (m)
-  double compaction_N_m = 0.0;   ///< k_u = k_d + k_L with plastic densification; 0: G is elastic
-  double viscosity_N_s_m = 0.0;  ///< eta (N s/m): the dashpot in parallel (the caller applies it, fillRateForce)
-  double flux_kg_m = 0.0;        ///< c_m (kg/m): the momentum flux (the caller applies it, fillRateForce)
-  double flux_growth_m = 0.0;    ///< u_a (m)
+  double compaction_N_m = 0.0;       ///< k_u = k_d + k_L with plastic densification; 0: G is elastic
+  double dense_unloading_N_m = 0.0;  ///< k_r: the densification alone unloads along it, the lock-up elastic (above)
+  double viscosity_N_s_m = 0.0;      ///< eta (N s/m): the dashpot in parallel (the caller applies it, fillRateForce)
+  double flux_kg_m = 0.0;            ///< c_m (kg/m): the momentum flux (the caller applies it, fillRateForce)
+  double flux_growth_m = 0.0;        ///< u_a (m)
   /// The fill's rate term at shortening u and rate r on top of the law's force F (fillRateForce).
   double rateForce(double u_m, double rate_m_s, double law_force_N) const {
     return fillRateForce(viscosity_N_s_m, flux_kg_m, flux_growth_m, u_m, rate_m_s, law_force_N);
@@ -201,6 +214,7 @@ inline CellSpring cellSpring(const AxialLawParams& p) {
           p.rate_coefficient_N_s2_m2,
           p.rate_growth_m,
           densifies && p.plastic_densification ? p.densification_stiffness_N_m + p.lockup_stiffness_N_m : 0.0,
+          densifies && p.plastic_densification ? p.densification_unloading_stiffness_N_m : 0.0,
           p.viscosity_N_s_m,
           p.momentum_flux_kg_m,
           p.momentum_flux_growth_m};
@@ -260,6 +274,17 @@ inline AxialResponse cellResponse(const CellSpring& c, double u_m, double plasti
       return up > 0.0 ? up + (e.yield_force_N + e.hardening_N_m * up) / e.stiffness_N_m : 0.0;
     };
     const double m_old = reached(plastic_m), m_new = reached(r.plastic_m), m = m_new > u_m ? m_new : u_m;
+    if (const double kr = c.dense_unloading_N_m; kr > 0.0) {  // the dense part along k_r, the lock-up elastic
+      const auto dense = [&](double x) { return c.densify_N_m * (x > c.onset_m ? x - c.onset_m : 0.0); };
+      const auto work = [&](double x) {
+        const double a = x > c.onset_m ? x - c.onset_m : 0.0, g = dense(x);
+        return 0.5 * c.densify_N_m * a * a - 0.5 * g * g / kr;
+      };
+      const double fr = dense(m) - kr * (m - u_m), f = fr > 0.0 ? fr : 0.0;
+      const double over = u_m > c.lockup_m ? u_m - c.lockup_m : 0.0, fl = c.lockup_N_m * over;
+      return {r.force_N + f + fl, r.plastic_m, r.plastic_work_J + work(m) - work(m_old),
+              elasticPlasticEnergy(e, r.force_N) + 0.5 * f * f / kr + 0.5 * fl * over};
+    }
     const double fd = denseForce(c, m) - c.compaction_N_m * (m - u_m);
     const double f = fd > 0.0 ? fd : 0.0;
     return {r.force_N + f, r.plastic_m, r.plastic_work_J + compactionWork(c, m) - compactionWork(c, m_old),
@@ -280,7 +305,8 @@ inline AxialResponse axialResponse(const AxialLawParams& p, double u_m, double p
 /// k + k_d + k_L (N/m): the one the critical time step must hold.
 inline double maxTangentStiffness(const AxialLawParams& p) {
   const CellSpring c = cellSpring(p);
-  return c.spring.stiffness_N_m + (std::isfinite(c.onset_m) ? c.densify_N_m : 0.0) +
+  const double dense = c.dense_unloading_N_m > c.densify_N_m ? c.dense_unloading_N_m : c.densify_N_m;
+  return c.spring.stiffness_N_m + (std::isfinite(c.onset_m) ? dense : 0.0) +
          (std::isfinite(c.lockup_m) ? c.lockup_N_m : 0.0);
 }
 

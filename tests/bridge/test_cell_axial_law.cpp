@@ -159,6 +159,60 @@ TEST(CellAxialLaw, PlasticDensificationKeepsTheCompaction) {
   EXPECT_DOUBLE_EQ(maxTangentStiffness(p), maxTangentStiffness(elastic));
 }
 
+// Plastic densification with the dense part's own unloading stiffness k_r:
+// along a path loaded past the onset, unloaded, reloaded and loaded past
+// the lock-up, the force is the elastic-plastic part plus
+// max(0, G_d(m) - k_r (m - u)) (G_d the densification alone, m the largest
+// shortening) plus the lock-up's k_L (u - u_L), elastic; first loading is
+// the elastic law's; the unloading tangent below the lock-up is k + k_r; the
+// work of the force is the plastic work plus the stored energy; the
+// stiffest tangent counts k_r.
+TEST(CellAxialLaw, TheDensePartUnloadsAlongItsOwnStiffness) {
+  AxialLawParams p{AxialModel::Densifying, 3e5, 1e3, 3e4};
+  p.densification_onset_m = 0.03;
+  p.densification_stiffness_N_m = 4e5;
+  p.lockup_shortening_m = 0.12;
+  p.lockup_stiffness_N_m = 4e6;
+  AxialLawParams elastic = p;
+  p.plastic_densification = true;
+  const double kr = 9e5;
+  p.densification_unloading_stiffness_N_m = kr;
+  const CellSpring law = cellSpring(p);
+  const auto Gd = [&](double m) { return 4e5 * std::max(0.0, m - 0.03); };
+  std::vector<double> path;
+  const auto go = [&](double to) {
+    const double from = path.empty() ? 0.0 : path.back();
+    const int n = static_cast<int>(std::lround(std::abs(to - from) / 1e-6));
+    for (int i = 1; i <= n; ++i) path.push_back(from + (to - from) * i / n);
+  };
+  for (double to : {0.08, 0.05, 0.1, 0.0, 0.13, 0.115}) go(to);
+  double up = 0.0, up_ref = 0.0, m_ref = 0.0, work = 0.0, plastic = 0.0, f_prev = 0.0, u_prev = 0.0;
+  double worst = 0.0, dissipated_min = 0.0;
+  AxialResponse r;
+  for (const double u : path) {
+    r = cellResponse(law, u, up);
+    const auto ep = elasticPlasticResponse(law.spring, u, up_ref);
+    up_ref = ep.plastic_m;
+    m_ref = std::max(m_ref, u);
+    const double ref = ep.force_N + std::max(0.0, Gd(m_ref) - kr * (m_ref - u)) + 4e6 * std::max(0.0, u - 0.12);
+    worst = std::max(worst, std::abs(r.force_N - ref) / std::max(1.0, ref));
+    dissipated_min = std::min(dissipated_min, r.plastic_work_J);
+    plastic += r.plastic_work_J;
+    work += 0.5 * (f_prev + r.force_N) * (u - u_prev);
+    f_prev = r.force_N, u_prev = u, up = r.plastic_m;
+  }
+  EXPECT_LT(worst, 1e-9);
+  EXPECT_GE(dissipated_min, -1e-12) << "no step gives back more than it took";
+  EXPECT_NEAR(work, plastic + r.elastic_J, 1e-6 * plastic);
+  // First loading: the elastic densification's; unloading from 0.08: k + k_r.
+  double u8 = 0.0;
+  for (int i = 1; i <= 80; ++i) u8 = cellResponse(law, 1e-3 * i, u8).plastic_m;
+  const double f8 = cellResponse(law, 0.08, u8).force_N, f8b = cellResponse(law, 0.08 - 1e-4, u8).force_N;
+  EXPECT_NEAR(f8, axialResponse(elastic, 0.08, 0.0).force_N, 1e-9 * f8);
+  EXPECT_NEAR((f8 - f8b) / 1e-4, 3e5 + kr, 1e-6 * kr);
+  EXPECT_DOUBLE_EQ(maxTangentStiffness(p), 3e5 + kr + 4e6);
+}
+
 // What the fill's rate adds to an axial law's force: the dashpot eta r and
 // the momentum flux c_m r^2 min(1, u / u_a), the flux only while the cell
 // shortens, nothing while it is out of contact, and never so much pull that

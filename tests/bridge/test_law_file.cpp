@@ -255,6 +255,34 @@ TEST(LawFile, AxialViscosityReadsBackAndIsRefusedOnTheImpactLaw) {
   }
 }
 
+// The dense part's unloading stiffness reads back with plastic
+// densification; without it, or below the densification stiffness, it is
+// refused by name.
+TEST(LawFile, TheDenseUnloadingStiffnessNeedsPlasticDensification) {
+  LawFile laws = sampleLaws();
+  auto& axial = laws.materials.at("front").axial;
+  axial = {AxialModel::Densifying, 2e6, 5e4, 1e5, 0.04, 2e6, 0.1, 3e7};
+  axial.plastic_densification = true;
+  axial.densification_unloading_stiffness_N_m = 5e6;
+  const std::string path = ::testing::TempDir() + "law_dense_unloading.json";
+  writeJsonAtomic(path, toJson(laws));
+  const LawFile read = loadLawFile(path);
+  EXPECT_DOUBLE_EQ(read.materials.at("front").axial.densification_unloading_stiffness_N_m, 5e6);
+  for (const auto& [edit, why] : {std::pair<std::string, std::string>{"elastic", "plastic"}, {"soft", "at least"}}) {
+    auto j = toJson(laws);
+    if (edit == "elastic") j["materials"]["front"]["axial"].erase("densification");
+    if (edit == "soft") j["materials"]["front"]["axial"]["densification_unloading_stiffness_N_m"] = 1e6;
+    writeJsonAtomic(path, j);
+    try {
+      loadLawFile(path);
+      ADD_FAILURE() << "no error for " << edit;
+    } catch (const InputError& e) {
+      EXPECT_EQ(e.pointer(), "/materials/front/axial/densification_unloading_stiffness_N_m") << e.what();
+      EXPECT_NE(std::string(e.what()).find(why), std::string::npos) << e.what();
+    }
+  }
+}
+
 // The axial momentum flux and its growth read back; on the impact law, as a
 // negative number, or a growth without a flux, they are refused by name.
 TEST(LawFile, AxialMomentumFluxReadsBackAndIsRefusedWhereItCannotHold) {

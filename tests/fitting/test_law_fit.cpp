@@ -310,6 +310,46 @@ TEST(LawFit, RateTermIsIdentifiedAcrossSpeeds) {
                bridge::InputError);
 }
 
+// A confined compression unloaded past the densification onset and
+// reloaded: where the cell keeps part of its compaction (plastic
+// densification, the dense part unloading along k_r) the model with it is
+// chosen and k_r recovered; where the densification is elastic, the plain
+// densifying model is chosen (the plastic one holds it, at k_r = k_d, with
+// one parameter more).
+TEST(LawFit, TheDenseUnloadingStiffnessIsIdentifiedOnACyclePastTheOnset) {
+  bridge::AxialLawParams elastic{bridge::AxialModel::Densifying, 3e5, 1e3, 3e4, 0.03, 4e5, 0.2, 4e6};
+  bridge::AxialLawParams kept = elastic;
+  kept.plastic_densification = true;
+  kept.densification_unloading_stiffness_N_m = 1.2e6;
+  Bounds b = {{"stiffness_N_m", {1e5, 1e6}},
+              {"yield_force_N", {1e2, 1e4}},
+              {"hardening_stiffness_N_m", {0, 1e5}},
+              {"densification_onset_m", {0.0, 0.07}},
+              {"densification_stiffness_N_m", {1e5, 1e6}},
+              {"densification_unloading_stiffness_N_m", {1e5, 1e7}}};
+  const std::vector<LawModel> both = {LawModel::Densifying, LawModel::DensifyingPlastic};
+  const Lockup lockup{0.2, 4e6 / (3e4 + 4e5)};
+  const auto grids = [&](const bridge::AxialLawParams& p) {
+    std::vector<PathGrid> out;
+    for (unsigned seed : {1u, 2u}) {
+      out.push_back(
+          resampleOnPath(testing::axialCurve(p, testing::cyclicPath(0.06, 0.045, 0.08, 200), 50.0, seed), 300));
+      out.back().replicate = "all";
+    }
+    return out;
+  };
+  LawFitSettings s;
+  s.lockup = lockup;
+  s.optimizer.global_max_evaluations = 2000;
+  const auto r = fitLaw(both, grids(kept), b, s);
+  ASSERT_EQ(r.best().model, LawModel::DensifyingPlastic);
+  ASSERT_EQ(r.parameters.size(), 6u);
+  EXPECT_EQ(r.parameters[5].name, "densification_unloading_stiffness_N_m");
+  EXPECT_NEAR(r.parameters[5].value, 1.2e6, 0.05 * 1.2e6);
+  EXPECT_NEAR(r.parameters[4].value, 4e5, 0.05 * 4e5);
+  EXPECT_EQ(fitLaw(both, grids(elastic), b, s).best().model, LawModel::Densifying);
+}
+
 // Confined compressions at 1 and 3 m/s, their curves with a time axis: the
 // momentum flux fitted on them with the law held recovers its coefficient
 // and growth; on curves without it, the flux found is negligible; a curve
