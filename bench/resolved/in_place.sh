@@ -23,7 +23,10 @@
 # the axial laws viscous (VISCOSITY). Where bench/resolved/cc_rate.sh has
 # run, the axial laws also get the momentum flux it identified on the cell
 # alone: the histories' law with it (hist_flux), and that law's impact law
-# fitted anew on the histories with it (fit_flux). Prints a table; draws
+# fitted anew on the histories with it (fit_flux); and, where cc_rate.sh
+# has fitted the axial law on a cycle past the densification onset, the
+# impact law fitted anew with that whole axial law (fit_cell: the cell's
+# compressions alone give the axial law). Prints a table; draws
 # DIR/in_place/figures/.
 set -euo pipefail
 here=$(cd "$(dirname "$0")" && pwd)
@@ -109,6 +112,13 @@ if os.path.isfile(cc):
     flux = {k: a[k] for k in ("momentum_flux_kg_m", "momentum_flux_growth_m") if k in a}
     json.dump(flux, open(f"{d}/flux.json", "w"))
     twin_with("flux", dict(flux, viscosity_N_s_m=0.0))
+# The axial law fitted on the CC cycle past the onset and the fast CCs (cc_rate.sh), whole.
+cell = f"{out}/cc_rate/fit_cycle/law.json"
+if os.path.isfile(cell):
+    axial = next(iter(json.load(open(cell))["materials"].values()))["axial"]
+    for m in law["materials"].values():
+        m["axial"] = {}
+    twin_with("cell", axial)
 imp = "laws.materials.front.impact."
 def p(name, key, lo, hi, scale="auto"):
     return {"name": name, "set": imp + key, "bounds": [lo, hi], "scale": scale}
@@ -132,6 +142,8 @@ json.dump(fit, open(f"{d}/fit_hist.json", "w"), indent=1)
 json.dump(dict(fit, macro_case="visc_twin.json"), open(f"{d}/fit_visc.json", "w"), indent=1)
 if os.path.isfile(cc):
     json.dump(dict(fit, macro_case="flux_twin.json"), open(f"{d}/fit_flux.json", "w"), indent=1)
+if os.path.isfile(cell):
+    json.dump(dict(fit, macro_case="cell_twin.json"), open(f"{d}/fit_cell.json", "w"), indent=1)
 PY
   run_case fit_hist
   for png in "$dir"/fit_hist/fit_macro_*.png; do cp "$png" "$dir/figures/in_place_hist_$(basename "$png" .png | sed 's/^fit_macro_//').png"; done
@@ -143,11 +155,12 @@ for m in l['materials'].values(): m['axial'].update(f)
 json.dump(l, open(sys.argv[3], 'w'), indent=1)" "$dir/fit_hist/law.json" "$dir/flux.json" "$dir/hist_flux_law.json"
     run_case fit_flux
   fi
+  [ -f "$dir/fit_cell.json" ] && run_case fit_cell
 fi
 for s in "$out"/centre_*_m_s "$out"/side_*_m_s; do
   [ -f "$s/summary.json" ] || continue
   name=$(basename "$s")
-  for fit in fit fit_rate fit_hist fit_visc hist_flux fit_flux; do
+  for fit in fit fit_rate fit_hist fit_visc hist_flux fit_flux fit_cell; do
     law_file=$dir/$fit/law.json
     [ "$fit" = hist_flux ] && law_file=$dir/hist_flux_law.json
     [ -f "$law_file" ] || continue

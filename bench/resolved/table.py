@@ -35,7 +35,8 @@ IN_PLACE = [("twin_", "impact law fitted in the wall at 10 m/s"),
             ("twin_hist_", "rate law fitted on the walls' histories at 6 and 10 m/s"),
             ("twin_visc_", "rate law fitted on the histories, axial laws viscous"),
             ("twin_hist_flux_", "rate law fitted on the histories, axial laws with the cell's momentum flux"),
-            ("twin_flux_", "rate law fitted on the histories with the cell's momentum flux")]
+            ("twin_flux_", "rate law fitted on the histories with the cell's momentum flux"),
+            ("twin_cell_", "rate law fitted on the histories with the axial law of the cell's compressions")]
 
 
 def summary(path):
@@ -126,8 +127,10 @@ def in_place_charts(out, curves, by_speed):
         for label in dict.fromkeys(label for rows in by_speed.values() for label, _ in rows):
             xy = sorted((v, s[key] * scale) for v, rows in by_speed.items() for lab, s in rows
                         if lab == label and s.get(key) is not None)
-            if xy:
-                series.append(label + "=" + ",".join(f"{x:g}:{y:.4g}" for x, y in xy))
+            if xy:  # (short legend entries: the chart is for the lines, the table for the words)
+                short = (label.replace("macro twin, ", "").replace("rate law fitted on the walls' histories", "histories' law")
+                         .replace("rate law fitted on the histories", "histories' law").replace(" at 6 and 10 m/s", ""))
+                series.append(short + "=" + ",".join(f"{x:g}:{y:.4g}" for x, y in xy))
         png = os.path.join(figures, f"in_place_vs_speed_{key}.png")
         subprocess.run([curves, "points", png, f"{title.rsplit(' ', 1)[0].capitalize()} against impact speed, "
                         "aimed at the centre", "impact speed (m/s)", title] + series, check=True)
@@ -140,7 +143,7 @@ def in_place(out, curves=None):
     bench_curves (`curves`), the charts of in_place_charts."""
     d = os.path.join(out, "in_place")
     by_speed = {}
-    for fit in ("fit", "fit_rate", "fit_hist", "fit_flux"):
+    for fit in ("fit", "fit_rate", "fit_hist", "fit_flux", "fit_cell"):
         law = os.path.join(d, fit, "law.json")
         if os.path.isfile(law):
             print(f"impact law of {fit}:", json.dumps(json.load(open(law))["materials"]["front"]["impact"]))
