@@ -555,7 +555,7 @@ bridge::RunOutcome runStages(const JsonDocument& doc, const bridge::RunContext& 
   // 2. The virtual lab tests on the cell(s).
   std::map<std::string, StageResult> lab;
   std::map<std::string, json> test_cases;
-  json cc_strain;  // the CC stage's strain, as it will run
+  json cc_loading = json::object();  // the CC stage's loading, as it will run
   for (const auto& t : kTests) {
     json tc = absolutePaths(loadJson(c.tests.at(t)), c.tests.at(t));
     if (cells.size() == 1) {
@@ -573,7 +573,7 @@ bridge::RunOutcome runStages(const JsonDocument& doc, const bridge::RunContext& 
     // What it will cost, for the ETA: nothing when it will be reused.
     const fs::path dir = out / ("2_" + t);
     const StagedCase staged = stageCase(tc, cells, settingsOf(t), dir, std::nullopt);
-    if (t == "cc") cc_strain = staged.value.at("loading").at("strain");
+    if (t == "cc") cc_loading = staged.value.value("loading", json::object());
     if (reusable(dir, staged.key)) continue;
     if (const auto e = findKind(kTestKind.at(t))->estimate(JsonDocument(staged.value, (dir / "case.json").string())))
       clock.estimated[t] = clock.pending[t] = e->body_steps;
@@ -585,7 +585,9 @@ bridge::RunOutcome runStages(const JsonDocument& doc, const bridge::RunContext& 
   std::vector<std::pair<std::string, json>> rate_cases;  // stage name, case
   for (double v : c.cc_rate_velocities_m_s) {
     json tc = test_cases.at("cc");
-    tc["loading"] = {{"velocity_m_s", v}, {"strain", cc_strain}, {"unload_at_strain", json::array()}};
+    tc["loading"] = cc_loading;  // (its strain, or the default where it gives none)
+    tc["loading"]["velocity_m_s"] = v;
+    tc["loading"]["unload_at_strain"] = json::array();
     tc["netting_mass_scale"] = 1;
     tc["description"] = "The CC test at " + fmt(v) + " m/s: the axial law's momentum flux (pipeline)";
     const std::string name = "cc at " + fmt(v) + " m/s";

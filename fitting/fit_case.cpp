@@ -496,7 +496,7 @@ bridge::RunOutcome runCase(const bridge::JsonDocument& doc, const bridge::RunCon
       const auto fast = loadGrids(t.rate_curves, c.grid_points);
       Bounds rb = bounds;
       if (rb.count("momentum_flux_kg_m") == 0) {
-        // from 0 to the coefficient whose overstress alone, at the curves'
+        // from 0 to the coefficient whose flux alone, at the curves'
         // largest rate, is twice their largest force
         double force = 0.0, speed = 0.0;
         for (const auto& g : fast) {
