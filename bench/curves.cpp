@@ -128,7 +128,11 @@ int at(char** argv) {
   std::vector<double> x = h.read(argv[3]), y = h.read(argv[4]);
   firstLoading(x, y);
   if (x.empty()) throw std::runtime_error(std::string(argv[2]) + ": empty curve");
-  std::printf("%.6g\n", interpolate(x, y, std::atof(argv[5])));
+  const double at_x = std::atof(argv[5]);
+  if (at_x < x.front() || at_x > x.back())  // (not the end value in place of a point the curve never reached)
+    throw std::runtime_error(std::string(argv[2]) + ": " + argv[5] + " is outside the first loading, " +
+                             std::to_string(x.front()) + " to " + std::to_string(x.back()));
+  std::printf("%.6g\n", interpolate(x, y, at_x));
   return 0;
 }
 
