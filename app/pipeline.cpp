@@ -582,7 +582,12 @@ bridge::RunOutcome runStages(const JsonDocument& doc, const bridge::RunContext& 
   // (the axial law's momentum flux): to the CC stage's strain, without
   // unloading, the netting's real mass (the fill's inertia is what they
   // measure).
-  std::vector<std::pair<std::string, json>> rate_cases;  // stage name, case
+  struct RateStage {
+    std::string name;
+    json value;
+    fs::path dir;
+  };
+  std::vector<RateStage> rate_cases;
   for (double v : c.cc_rate_velocities_m_s) {
     json tc = test_cases.at("cc");
     tc["loading"] = cc_loading;  // (its strain, or the default where it gives none)
@@ -591,8 +596,8 @@ bridge::RunOutcome runStages(const JsonDocument& doc, const bridge::RunContext& 
     tc["netting_mass_scale"] = 1;
     tc["description"] = "The CC test at " + fmt(v) + " m/s: the axial law's momentum flux (pipeline)";
     const std::string name = "cc at " + fmt(v) + " m/s";
-    rate_cases.emplace_back(name, tc);
     const fs::path dir = out / ("2_cc_rate_" + fmt(v) + "_m_s");
+    rate_cases.push_back({name, tc, dir});
     const StagedCase staged = stageCase(tc, cells, {}, dir, std::nullopt);
     if (reusable(dir, staged.key)) continue;
     if (const auto e = findKind("micro.cc")->estimate(JsonDocument(staged.value, (dir / "case.json").string())))
@@ -604,9 +609,8 @@ bridge::RunOutcome runStages(const JsonDocument& doc, const bridge::RunContext& 
     lab[t] = stages.back();
   }
   std::vector<StageResult> rate;
-  for (std::size_t k = 0; k < rate_cases.size(); ++k) {
-    stages.push_back(runStage(rate_cases[k].first, "micro.cc", rate_cases[k].second, cells, {}, ctx,
-                              out / ("2_cc_rate_" + fmt(c.cc_rate_velocities_m_s[k]) + "_m_s"), clock));
+  for (const RateStage& r : rate_cases) {
+    stages.push_back(runStage(r.name, "micro.cc", r.value, cells, {}, ctx, r.dir, clock));
     rate.push_back(stages.back());
   }
   double mass_kg = num(cell_summary, "mass_kg");

@@ -45,6 +45,21 @@ double largestX(const std::vector<PathGrid>& grids) {
   return reach;
 }
 
+// The largest rate dx/dt of the curves (0 where none is positive or they
+// have no time axis), and their largest force (the normalisation scale):
+// what the upper bound of a rate-squared term is set from.
+double largestRate(const std::vector<PathGrid>& grids) {
+  double rate = 0.0;
+  for (const auto& g : grids)
+    for (double r : g.rate) rate = std::max(rate, r);
+  return rate;
+}
+double largestForce(const std::vector<PathGrid>& grids) {
+  double force = 0.0;
+  for (const auto& g : grids) force = std::max(force, g.scale);
+  return force;
+}
+
 // Bounds of the densification where the case gives none: the onset anywhere
 // from 0 to the largest shortening of the curves (an onset beyond them cannot
 // be seen) or the lock-up, whichever comes first; its stiffness from a
@@ -75,13 +90,10 @@ void defaultSofteningBounds(Bounds& b, const std::vector<PathGrid>& grids) {
   const auto& k = b.at("stiffness_N_m");
   if (b.count("softening_stiffness_N_m") == 0) b["softening_stiffness_N_m"] = {1e-3 * k.first, k.second};
   if (b.count("residual_ratio") == 0) b["residual_ratio"] = {0.0, 1.0};
-  double force = 0.0, rate = 0.0;
-  for (const auto& g : grids) {
-    force = std::max(force, g.scale);
-    for (double r : g.rate) rate = std::max(rate, r);
-  }
+  double rate = largestRate(grids);
   if (!(rate > 0.0)) rate = 1.0;  // (curves that never indent: any bound; the data cannot see the term)
-  if (b.count("rate_coefficient_N_s2_m2") == 0) b["rate_coefficient_N_s2_m2"] = {0.0, 2.0 * force / (rate * rate)};
+  if (b.count("rate_coefficient_N_s2_m2") == 0)
+    b["rate_coefficient_N_s2_m2"] = {0.0, 2.0 * largestForce(grids) / (rate * rate)};
   if (b.count("rate_growth_m") == 0) b["rate_growth_m"] = {0.0, largestX(grids)};
 }
 
@@ -341,7 +353,7 @@ void plotFit(const fs::path& file, const TestSpec& t, const std::vector<CurveSou
     if (rate && !g.rate.empty()) {  // (the plate speed: the largest rate of the curve)
       std::ostringstream c;
       c.precision(3);
-      c << *std::max_element(g.rate.begin(), g.rate.end()) << " m/s";
+      c << largestRate({g}) << " m/s";
       tag = c.str();
     }
     if (!d.condition_key.empty() && !rate) {
@@ -498,14 +510,10 @@ bridge::RunOutcome runCase(const bridge::JsonDocument& doc, const bridge::RunCon
       if (rb.count("momentum_flux_kg_m") == 0) {
         // from 0 to the coefficient whose flux alone, at the curves'
         // largest rate, is twice their largest force
-        double force = 0.0, speed = 0.0;
-        for (const auto& g : fast) {
-          force = std::max(force, g.scale);
-          for (double v : g.rate) speed = std::max(speed, v);
-        }
+        const double speed = largestRate(fast);
         if (!(speed > 0.0))
           throw bridge::InputError(doc.file(), t.pointer + "/rate_curves", "no curve is loaded at a positive rate");
-        rb["momentum_flux_kg_m"] = {0.0, 2.0 * force / (speed * speed)};
+        rb["momentum_flux_kg_m"] = {0.0, 2.0 * largestForce(fast) / (speed * speed)};
       }
       if (rb.count("momentum_flux_growth_m") == 0) rb["momentum_flux_growth_m"] = {0.0, largestX(fast)};
       LawFitSettings rate_settings = law_settings;
@@ -523,12 +531,10 @@ bridge::RunOutcome runCase(const bridge::JsonDocument& doc, const bridge::RunCon
       json rentry = toJson(rr, c.settings.criterion);
       json rin = json::array();
       for (std::size_t i = 0; i < t.rate_curves.size(); ++i) {
-        double speed = 0.0;
-        for (double v : fast[i].rate) speed = std::max(speed, v);
         rin.push_back({{"file", t.rate_curves[i].file.string()},
                        {"sha256", sha256File(t.rate_curves[i].file)},
                        {"points", fast[i].raw_points},
-                       {"largest_rate_m_s", speed}});
+                       {"largest_rate_m_s", largestRate({fast[i]})}});
       }
       rentry["inputs"] = rin;
       results["momentum_flux"] = rentry;

@@ -43,6 +43,16 @@ curves=${CURVES:-$root/build/bench/bench_curves}
 }
 mkdir -p "$out/cc_rate"
 dir=$(cd "$out/cc_rate" && pwd)
+# Runs gabion on CASE into DIR/NAME, its answer in DIR/NAME.log; on failure
+# shows the log's end and stops.
+run() {  # NAME CASE [gabion run options...]
+  local name=$1 case=$2
+  shift 2
+  "$gabion" run "$case" "$@" -q -o "$dir/$name" >"$dir/$name.log" 2>&1 || {
+    tail -n 3 "$dir/$name.log" >&2
+    exit 1
+  }
+}
 for v in $reference $speeds; do
   python3 - "$pipeline/2_cc/case.json" "$dir/cc_$v.json" "$v" <<'PY'
 import json, sys
@@ -53,10 +63,7 @@ case["loading"] = {"velocity_m_s": v, "strain": 0.1, "unload_at_strain": []}
 case["netting_mass_scale"] = 1
 json.dump(case, open(sys.argv[2], "w"), indent=1)
 PY
-  "$gabion" run "$dir/cc_$v.json" --threads 2 -q -o "$dir/cc_$v" >"$dir/cc_$v.log" 2>&1 || {
-    tail -n 3 "$dir/cc_$v.log" >&2
-    exit 1
-  }
+  run "cc_$v" "$dir/cc_$v.json" --threads 2
   echo "$v m/s: $(grep '^micro.cc' "$dir/cc_$v.log")"
 done
 if [ -x "$curves" ]; then
@@ -82,18 +89,11 @@ case["description"] = "The pipeline's fit case with the axial law's momentum flu
 case["axial"]["rate_curves"] = [{"file": f"{d}/cc_{v}/result.h5"} for v in sys.argv[4:]]
 json.dump(case, open(sys.argv[2], "w"), indent=1)
 PY
-"$gabion" run "$dir/fit.json" -q -o "$dir/fit" >"$dir/fit.log" 2>&1 || {
-  tail -n 3 "$dir/fit.log" >&2
-  exit 1
-}
+run fit "$dir/fit.json"
 grep -E '^fit: (axial|momentum_flux)' "$dir/fit.log"
 echo "law: $dir/fit/law.json; chart: $dir/fit/fit_momentum_flux.png"
 # The cycle past the onset, and the axial law fitted on it.
-"$gabion" run "$pipeline/2_cc/case.json" --set 'loading.unload_at_strain=[0.08]' --threads 2 -q -o "$dir/cc_cycle" \
-  >"$dir/cc_cycle.log" 2>&1 || {
-  tail -n 3 "$dir/cc_cycle.log" >&2
-  exit 1
-}
+run cc_cycle "$pipeline/2_cc/case.json" --set 'loading.unload_at_strain=[0.08]' --threads 2
 python3 - "$dir/fit.json" "$dir/fit_cycle.json" "$dir/cc_cycle/result.h5" <<'PY'
 import json, sys
 case = json.load(open(sys.argv[1]))
@@ -102,9 +102,6 @@ case["axial"]["curves"] = [{"file": sys.argv[3], "path": "cyclic"}]
 case["axial"]["models"] = ["densifying", "densifying_plastic"]
 json.dump(case, open(sys.argv[2], "w"), indent=1)
 PY
-"$gabion" run "$dir/fit_cycle.json" -q -o "$dir/fit_cycle" >"$dir/fit_cycle.log" 2>&1 || {
-  tail -n 3 "$dir/fit_cycle.log" >&2
-  exit 1
-}
+run fit_cycle "$dir/fit_cycle.json"
 grep -E '^fit: (axial|momentum_flux)' "$dir/fit_cycle.log"
 echo "law: $dir/fit_cycle/law.json"

@@ -130,6 +130,13 @@ struct AxialLawParams {
   double momentum_flux_growth_m = 0.0;                 ///< u_a >= 0: g = min(1, u / u_a); 0: g = 1
 };
 
+/// The growth g = min(1, u / u_a) of a rate term with the shortening or
+/// indentation u (u_a = 0: g = 1), the impact overstress's and the momentum
+/// flux's alike.
+inline double rateGrowth(double u_m, double growth_m) {
+  return growth_m > 0.0 && u_m < growth_m ? (u_m > 0.0 ? u_m : 0.0) / growth_m : 1.0;
+}
+
 /// What the fill's rate adds to an axial law's force `law_force_N` (N) at
 /// shortening `u_m` and shortening rate `rate_m_s`: the dashpot eta r and the
 /// momentum flux c_m max(r, 0)^2 min(1, u / u_a), while the cell is in
@@ -138,8 +145,7 @@ inline double fillRateForce(double eta_N_s_m, double flux_kg_m, double flux_grow
                             double law_force_N) {
   if (!(law_force_N > 0.0)) return 0.0;
   const double r_pos = rate_m_s > 0.0 ? rate_m_s : 0.0;
-  const double grown = flux_growth_m > 0.0 && u_m < flux_growth_m ? (u_m > 0.0 ? u_m : 0.0) / flux_growth_m : 1.0;
-  const double f = eta_N_s_m * rate_m_s + flux_kg_m * r_pos * r_pos * grown;
+  const double f = eta_N_s_m * rate_m_s + flux_kg_m * r_pos * r_pos * rateGrowth(u_m, flux_growth_m);
   return f > -law_force_N ? f : -law_force_N;
 }
 
@@ -259,8 +265,7 @@ inline AxialResponse cellResponse(const CellSpring& c, double u_m, double plasti
                                   double* overstress_N = nullptr) {
   ElasticPlasticParams spring = c.spring;
   const double r_pos = rate_m_s > 0.0 ? rate_m_s : 0.0;
-  const double grown = c.rate_growth_m > 0.0 && u_m < c.rate_growth_m ? (u_m > 0.0 ? u_m : 0.0) / c.rate_growth_m : 1.0;
-  const double overstress = c.rate_N_s2_m2 * r_pos * r_pos * grown;
+  const double overstress = c.rate_N_s2_m2 * r_pos * r_pos * rateGrowth(u_m, c.rate_growth_m);
   spring.yield_force_N += overstress;
   spring.residual_force_N += overstress;
   auto r = elasticPlasticResponse(spring, u_m, plastic_m);

@@ -4,11 +4,36 @@
 
 #include <algorithm>
 #include <cmath>
+#include <initializer_list>
 #include <vector>
 
 #include "bridge/laws/cell_axial_law.hpp"
 
 using namespace gabion::bridge;
+
+namespace {
+// The densifying cell of the densification tests: k 300 kN/m, F_y 1 kN,
+// k_h 30 kN/m, onset 30 mm, k_d 400 kN/m, lock-up at 120 mm with 4 MN/m.
+AxialLawParams densifyingCell() {
+  AxialLawParams p{AxialModel::Densifying, 3e5, 1e3, 3e4};
+  p.densification_onset_m = 0.03;
+  p.densification_stiffness_N_m = 4e5;
+  p.lockup_shortening_m = 0.12;
+  p.lockup_stiffness_N_m = 4e6;
+  return p;
+}
+
+// A shortening path from 0 through `ends`, in steps of at most 1e-6 m.
+std::vector<double> pathThrough(std::initializer_list<double> ends) {
+  std::vector<double> path;
+  for (const double to : ends) {
+    const double from = path.empty() ? 0.0 : path.back();
+    const int n = static_cast<int>(std::lround(std::abs(to - from) / 1e-6));
+    for (int i = 1; i <= n; ++i) path.push_back(from + (to - from) * i / n);
+  }
+  return path;
+}
+}  // namespace
 
 TEST(CellAxialLaw, ElasticPerfectlyPlasticCycle) {
   const AxialLawParams p{AxialModel::ElasticPerfectlyPlastic, 1e6, 1e4, 0.0};
@@ -108,23 +133,13 @@ TEST(CellAxialLaw, DensifyingAddsItsTermPastTheOnset) {
 // (the lock-up is elastic); unloading is stiffer than loading, k + k_u
 // against k_h + k_d, and the critical tangent is unchanged.
 TEST(CellAxialLaw, PlasticDensificationKeepsTheCompaction) {
-  AxialLawParams p{AxialModel::Densifying, 3e5, 1e3, 3e4};
-  p.densification_onset_m = 0.03;
-  p.densification_stiffness_N_m = 4e5;
-  p.lockup_shortening_m = 0.12;
-  p.lockup_stiffness_N_m = 4e6;
-  AxialLawParams elastic = p;
+  AxialLawParams p = densifyingCell();
+  const AxialLawParams elastic = p;
   p.plastic_densification = true;
   const double ku = 4e5 + 4e6;
   const auto G = [&](double m) { return 4e5 * std::max(0.0, m - 0.03) + 4e6 * std::max(0.0, m - 0.12); };
   const CellSpring law = cellSpring(p);
-  std::vector<double> path;
-  const auto go = [&](double to) {
-    const double from = path.empty() ? 0.0 : path.back();
-    const int n = static_cast<int>(std::lround(std::abs(to - from) / 1e-6));
-    for (int i = 1; i <= n; ++i) path.push_back(from + (to - from) * i / n);
-  };
-  for (double to : {0.08, 0.06, 0.1, 0.0, 0.13, 0.11}) go(to);
+  const std::vector<double> path = pathThrough({0.08, 0.06, 0.1, 0.0, 0.13, 0.11});
   double up = 0.0, up_ref = 0.0, m_ref = 0.0, work = 0.0, plastic = 0.0, f_prev = 0.0, u_prev = 0.0;
   double worst = 0.0;
   AxialResponse r;
@@ -168,24 +183,14 @@ TEST(CellAxialLaw, PlasticDensificationKeepsTheCompaction) {
 // work of the force is the plastic work plus the stored energy; the
 // stiffest tangent counts k_r.
 TEST(CellAxialLaw, TheDensePartUnloadsAlongItsOwnStiffness) {
-  AxialLawParams p{AxialModel::Densifying, 3e5, 1e3, 3e4};
-  p.densification_onset_m = 0.03;
-  p.densification_stiffness_N_m = 4e5;
-  p.lockup_shortening_m = 0.12;
-  p.lockup_stiffness_N_m = 4e6;
-  AxialLawParams elastic = p;
+  AxialLawParams p = densifyingCell();
+  const AxialLawParams elastic = p;
   p.plastic_densification = true;
   const double kr = 9e5;
   p.densification_unloading_stiffness_N_m = kr;
   const CellSpring law = cellSpring(p);
   const auto Gd = [&](double m) { return 4e5 * std::max(0.0, m - 0.03); };
-  std::vector<double> path;
-  const auto go = [&](double to) {
-    const double from = path.empty() ? 0.0 : path.back();
-    const int n = static_cast<int>(std::lround(std::abs(to - from) / 1e-6));
-    for (int i = 1; i <= n; ++i) path.push_back(from + (to - from) * i / n);
-  };
-  for (double to : {0.08, 0.05, 0.1, 0.0, 0.13, 0.115}) go(to);
+  const std::vector<double> path = pathThrough({0.08, 0.05, 0.1, 0.0, 0.13, 0.115});
   double up = 0.0, up_ref = 0.0, m_ref = 0.0, work = 0.0, plastic = 0.0, f_prev = 0.0, u_prev = 0.0;
   double worst = 0.0, dissipated_min = 0.0;
   AxialResponse r;

@@ -28,6 +28,20 @@ LawFile sampleLaws() {
   laws.materials["front"] = c;
   return laws;
 }
+
+// `j` written to `path` is refused, the error naming `pointer` (and, where
+// given, its message saying `why`).
+void expectRefused(const std::string& path, const nlohmann::json& j, const std::string& pointer,
+                   const std::string& why = "") {
+  writeJsonAtomic(path, j);
+  try {
+    loadLawFile(path);
+    ADD_FAILURE() << "no error for " << pointer << " in " << j.dump();
+  } catch (const InputError& e) {
+    EXPECT_EQ(e.pointer(), pointer) << e.what();
+    EXPECT_NE(std::string(e.what()).find(why), std::string::npos) << e.what();
+  }
+}
 }  // namespace
 
 TEST(LawFile, RoundTrip) {
@@ -149,15 +163,7 @@ TEST(LawFile, ASofteningImpactLawReadsBackAndIsRefusedElsewhere) {
   EXPECT_DOUBLE_EQ(back.yield_force_N, 8e4);
   EXPECT_DOUBLE_EQ(back.lockup_shortening_m, 0.25);
 
-  const auto refused = [&](nlohmann::json j, const std::string& pointer) {
-    writeJsonAtomic(path, j);
-    try {
-      loadLawFile(path);
-      ADD_FAILURE() << "no error for " << pointer;
-    } catch (const InputError& e) {
-      EXPECT_EQ(e.pointer(), pointer) << e.what();
-    }
-  };
+  const auto refused = [&](const nlohmann::json& j, const std::string& pointer) { expectRefused(path, j, pointer); };
   auto j = toJson(laws);
   j["materials"]["front"]["axial"] = j["materials"]["front"]["impact"];
   refused(j, "/materials/front/axial/model");
@@ -186,13 +192,7 @@ TEST(LawFile, TheImpactLawsRateTermReadsBackAndIsRefusedOnTheAxialLaw) {
     for (const auto& [law, value] : {std::pair<std::string, double>{"axial", 0.5}, {"impact", -1.0}}) {
       auto j = toJson(laws);
       j["materials"]["front"][law][key] = value;
-      writeJsonAtomic(path, j);
-      try {
-        loadLawFile(path);
-        ADD_FAILURE() << "no error for " << law << " " << key;
-      } catch (const InputError& e) {
-        EXPECT_EQ(e.pointer(), "/materials/front/" + law + "/" + key) << e.what();
-      }
+      expectRefused(path, j, "/materials/front/" + law + "/" + key);
     }
 }
 
@@ -210,15 +210,7 @@ TEST(LawFile, PlasticDensificationReadsBackAndIsRefusedWhereItCannotHold) {
   EXPECT_TRUE(loadLawFile(path).materials.at("front").axial.plastic_densification);
   EXPECT_EQ(toJson(laws)["materials"]["front"]["axial"]["densification"], "plastic");
   EXPECT_FALSE(toJson(sampleLaws())["materials"]["front"]["axial"].contains("densification"));
-  const auto refusedAt = [&](nlohmann::json j, const std::string& pointer) {
-    writeJsonAtomic(path, j);
-    try {
-      loadLawFile(path);
-      ADD_FAILURE() << "no error for " << pointer << " in " << j.dump();
-    } catch (const InputError& e) {
-      EXPECT_EQ(e.pointer(), pointer) << e.what();
-    }
-  };
+  const auto refusedAt = [&](const nlohmann::json& j, const std::string& pointer) { expectRefused(path, j, pointer); };
   auto j = toJson(laws);
   j["materials"]["front"]["impact"]["densification"] = "plastic";
   refusedAt(j, "/materials/front/impact/densification");
@@ -245,13 +237,7 @@ TEST(LawFile, AxialViscosityReadsBackAndIsRefusedOnTheImpactLaw) {
   for (const auto& [law, value] : {std::pair<std::string, double>{"impact", 1e4}, {"axial", -1.0}}) {
     auto j = toJson(laws);
     j["materials"]["front"][law]["viscosity_N_s_m"] = value;
-    writeJsonAtomic(path, j);
-    try {
-      loadLawFile(path);
-      ADD_FAILURE() << "no error for " << law;
-    } catch (const InputError& e) {
-      EXPECT_EQ(e.pointer(), "/materials/front/" + law + "/viscosity_N_s_m") << e.what();
-    }
+    expectRefused(path, j, "/materials/front/" + law + "/viscosity_N_s_m");
   }
 }
 
@@ -272,14 +258,7 @@ TEST(LawFile, TheDenseUnloadingStiffnessNeedsPlasticDensification) {
     auto j = toJson(laws);
     if (edit == "elastic") j["materials"]["front"]["axial"].erase("densification");
     if (edit == "soft") j["materials"]["front"]["axial"]["densification_unloading_stiffness_N_m"] = 1e6;
-    writeJsonAtomic(path, j);
-    try {
-      loadLawFile(path);
-      ADD_FAILURE() << "no error for " << edit;
-    } catch (const InputError& e) {
-      EXPECT_EQ(e.pointer(), "/materials/front/axial/densification_unloading_stiffness_N_m") << e.what();
-      EXPECT_NE(std::string(e.what()).find(why), std::string::npos) << e.what();
-    }
+    expectRefused(path, j, "/materials/front/axial/densification_unloading_stiffness_N_m", why);
   }
 }
 
@@ -304,21 +283,9 @@ TEST(LawFile, AxialMomentumFluxReadsBackAndIsRefusedWhereItCannotHold) {
                        Bad{"axial", "momentum_flux_kg_m", -1.0}, Bad{"axial", "momentum_flux_growth_m", -0.01}}) {
     auto j = toJson(laws);
     j["materials"]["front"][b.law][b.key] = b.value;
-    writeJsonAtomic(path, j);
-    try {
-      loadLawFile(path);
-      ADD_FAILURE() << "no error for " << b.law << " " << b.key;
-    } catch (const InputError& e) {
-      EXPECT_EQ(e.pointer(), "/materials/front/" + b.law + "/" + b.key) << e.what();
-    }
+    expectRefused(path, j, "/materials/front/" + b.law + "/" + b.key);
   }
   auto j = toJson(laws);
   j["materials"]["front"]["axial"].erase("momentum_flux_kg_m");
-  writeJsonAtomic(path, j);
-  try {
-    loadLawFile(path);
-    ADD_FAILURE() << "no error for a growth without a flux";
-  } catch (const InputError& e) {
-    EXPECT_EQ(e.pointer(), "/materials/front/axial/momentum_flux_growth_m") << e.what();
-  }
+  expectRefused(path, j, "/materials/front/axial/momentum_flux_growth_m", "needs momentum_flux_kg_m");
 }
