@@ -31,6 +31,7 @@ struct CellCase {
   double edge_m = 0.5;
   double target_porosity = 0.436;
   std::uint64_t seed = 1;
+  int threads = 1;  // the engine's, whatever the run's: with the seed, they define the cell
   Vec3 gravity = Vec3(0, 0, -9.81);
   Material rock, formwork;
   NettingInput netting;
@@ -84,6 +85,8 @@ CellCase parseCase(const bridge::JsonDocument& doc) {
   c.target_porosity = root.number("target_porosity", c.target_porosity, Check::Positive);
   if (c.target_porosity >= 1.0) root.fail("target_porosity", "must be below 1");
   c.seed = root.seed("seed", 1);
+  c.threads = static_cast<int>(root.integer("threads", c.threads, 1));
+  if (c.threads > 256) root.fail("threads", "must be at most 256");
   c.gravity = root.vec3("gravity_m_s2", c.gravity);
   if (!(c.gravity.z() < 0.0)) root.fail("gravity_m_s2", "a cell is filled under gravity: its z component must be < 0");
   c.rock = parseNamedMaterial("rock", root.object("rock"));
@@ -332,8 +335,14 @@ std::optional<bridge::Estimate> estimate(const bridge::JsonDocument& doc) {
   return sceneEstimate(s, dt);
 }
 
-bridge::RunOutcome run(const bridge::JsonDocument& doc, const bridge::RunContext& ctx) {
+bridge::RunOutcome run(const bridge::JsonDocument& doc, const bridge::RunContext& run_ctx) {
   const CellCase c = parseCase(doc);
+  // The cell's own thread count, not the run's: a granular fill is chaotic,
+  // and the order of the force sums changes with the threads, so the same
+  // seed on another thread count is another cell (docs/cell.md, Seed and
+  // threads).
+  bridge::RunContext ctx = run_ctx;
+  ctx.threads = c.threads;
   const std::string file = doc.file();
   const CellNetting n = makeNetting(c, file);
   const double e = c.edge_m, r = n.box.node_radius_m;
@@ -572,6 +581,8 @@ bridge::RunOutcome run(const bridge::JsonDocument& doc, const bridge::RunContext
   res["porosity_after_vibration"] = porosity_vibrated;
   res["target_porosity"] = c.target_porosity;
   res["blocks"] = fin.blocks.size();
+  res["seed"] = c.seed;
+  res["threads"] = c.threads;
   res["mass_kg"] = rock_mass;
   res["closing"] = {{"press_gap_m", press_gap},
                     {"press_force_N", press_force},

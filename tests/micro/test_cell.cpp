@@ -1,6 +1,7 @@
 // The micro.cell kind (micro/cell/cell_assembly.hpp): a small cell is filled,
 // vibrated, closed and left to stand end to end; each stage keeps its energy
-// ledger; the same seed gives the same cell; bad input names its field.
+// ledger; the same seed gives the same cell on any thread count; bad input
+// names its field.
 #include <gtest/gtest.h>
 
 #include <cmath>
@@ -85,12 +86,21 @@ TEST(MicroCell, SmallCellIsFilledVibratedClosedAndStoodWithItsLedgerClosed) {
     EXPECT_NEAR(z1 / count, z0 / count, 0.01) << "the basket's nodes sank by " << (z0 - z1) / count << " m";
   }
 
-  // The same seed (and thread count): the same cell, to the last bit.
-  const auto b = runGabion("run -q " + (dir / "cell.json").string() + " -o " + (dir / "b").string());
+  // The same seed: the same cell, to the last bit, whatever the run's thread
+  // count (the cell's own `threads`, 1 by default, runs its engine; on two
+  // threads the force sums go in another order, and this fill ends in
+  // another cell: c).
+  EXPECT_EQ(r["seed"], 3);
+  EXPECT_EQ(r["threads"], 1);
+  const auto b = runGabion("run -q --threads 2 " + (dir / "cell.json").string() + " -o " + (dir / "b").string());
   ASSERT_EQ(b.exit_code, 0) << b.output;
-  const gabion::bridge::H5Reader ha(dir / "a" / "cell.h5"), hb(dir / "b" / "cell.h5");
+  const auto c = runGabion("run -q " + (dir / "cell.json").string() + " --set threads=2 -o " + (dir / "c").string());
+  ASSERT_EQ(c.exit_code, 0) << c.output;
+  EXPECT_EQ(summaryOf(dir / "c")["threads"], 2);
+  const gabion::bridge::H5Reader ha(dir / "a" / "cell.h5"), hb(dir / "b" / "cell.h5"), hc(dir / "c" / "cell.h5");
   for (const char* d : {"/blocks/position_m", "/blocks/orientation", "/spheres/center_m", "/links/plastic_strain"})
     EXPECT_EQ(ha.read(d), hb.read(d)) << d;
+  EXPECT_NE(ha.read("/blocks/position_m"), hc.read("/blocks/position_m"));
 }
 
 // The same 0.3 m cell of about 75 blocks of 60-90 mm, run through its
@@ -150,6 +160,7 @@ TEST(MicroCell, BadInputIsNamed) {
   } cases[] = {
       {"porosity", smallCell(R"(, "target_porosity": 1.2)"), "/target_porosity"},
       {"edge", smallCell(R"(, "edge_m": 0.05)"), "/edge_m"},
+      {"threads", smallCell(R"(, "threads": 0)"), "/threads"},
       {"ratio", smallCell(R"(, "standing": {"kinetic_ratio": -1})"), "/standing/kinetic_ratio"},
       {"grading", smallCell(R"(, "porosity_spacing_m": 0.1)"), "/porosity_spacing_m"},
       {"unknown", smallCell(R"(, "vibration": {"frequency": 20})"), "/vibration/frequency"},
