@@ -529,6 +529,7 @@ bridge::RunOutcome runStages(const JsonDocument& doc, const bridge::RunContext& 
   // 1. The cell(s): generated from the micro.cell case (consecutive seeds for
   //    replicates), or the cell file given.
   std::vector<fs::path> cells;
+  std::vector<StageResult> cell_stages;  // (one per replicate; none for a cell file)
   double edge_m = 0.0, porosity = 0.0;
   json cell_summary;
   if (c.cell_is_file) {
@@ -546,6 +547,7 @@ bridge::RunOutcome runStages(const JsonDocument& doc, const bridge::RunContext& 
       const std::string name = c.replicates > 1 ? "1_cell_seed" + std::to_string(c.seed + k) : "1_cell";
       stages.push_back(runStage("cell" + (c.replicates > 1 ? " (seed " + std::to_string(c.seed + k) + ")" : ""),
                                 "micro.cell", one, {}, settingsOf("cell"), ctx, out / name, clock));
+      cell_stages.push_back(stages.back());
       cells.push_back(fs::absolute(out / name / "cell.h5"));
       if (k == 0) cell_summary = stages.back().summary;
     }
@@ -689,10 +691,30 @@ bridge::RunOutcome runStages(const JsonDocument& doc, const bridge::RunContext& 
              fmt(edge_m) + " m cell.");
     if (c.cell_is_file) {
       rep.text("Cell file: <code>" + html(c.cell.string()) + "</code>.");
+    } else if (cell_stages.size() == 1) {
+      const fs::path& d = cell_stages.front().dir;
+      rep.figure(d / "cell_view.png", "cell_view.png", "The generated cell: its blocks and netting");
+      rep.figure(d / "grading_0.png", "grading.png", "Grading of the blocks against its target");
+      rep.figure(d / "vibration.png", "vibration.png", "Porosity during filling and vibration");
     } else {
-      rep.figure(out / "1_cell" / "cell_view.png", "cell_view.png", "The generated cell: its blocks and netting");
-      rep.figure(out / "1_cell" / "grading_0.png", "grading.png", "Grading of the blocks against its target");
-      rep.figure(out / "1_cell" / "vibration.png", "vibration.png", "Porosity during filling and vibration");
+      // Replicates: each cell (the figures above are the first one's), and
+      // how far they are apart: what the laws' scatter between cells comes from.
+      std::vector<std::vector<std::string>> cell_rows;
+      for (std::size_t k = 0; k < cell_stages.size(); ++k) {
+        const json& cs = cell_stages[k].summary;
+        const std::string seed = std::to_string(c.seed + k);
+        cell_rows.push_back({seed, fmt(num(cs, "blocks")), fmt(num(cs, "mass_kg")), fmt(num(cs, "porosity"), 3),
+                             cs.contains("closing") ? fmt(num(cs.at("closing"), "levelled_blocks")) : "-"});
+      }
+      rep.table({"seed", "blocks", "mass (kg)", "porosity", "blocks taken off at closing"}, cell_rows);
+      for (std::size_t k = 0; k < cell_stages.size(); ++k) {
+        const std::string seed = std::to_string(c.seed + k);
+        rep.figure(cell_stages[k].dir / "cell_view.png", "cell_view_seed" + seed + ".png",
+                   "The cell of seed " + seed + ": its blocks and netting");
+      }
+      const fs::path& d = cell_stages.front().dir;
+      rep.figure(d / "grading_0.png", "grading.png", "Grading of the blocks against its target (first cell)");
+      rep.figure(d / "vibration.png", "vibration.png", "Porosity during filling and vibration (first cell)");
     }
   }
 
@@ -713,9 +735,18 @@ bridge::RunOutcome runStages(const JsonDocument& doc, const bridge::RunContext& 
     rows.push_back({st.name, "micro.cc", fmt(labMax(st, "peak_force_N") / 1e3),
                     fmt(labMax(st, "kinetic_to_work_ratio"), 3), st.reused ? "reused" : "run", fmt(st.wall_time_s, 3)});
   rep.table({"test", "kind", "peak force (kN; shear: tangential)", "kinetic / work", "stage", "wall time (s)"}, rows);
-  rep.figure(out / "2_cc" / "cc_curve.png", "cc_curve.png", "CC: axial force against shortening");
-  rep.figure(out / "2_uc" / "uc_curve.png", "uc_curve.png", "UC: axial force against shortening");
-  rep.figure(out / "2_shear" / "shear_curve.png", "shear_curve.png", "Interface shear");
+  // (with replicates, each cell's run is in the test's replicate_<k> folder)
+  const auto labFigure = [&](const std::string& test, const std::string& png, const std::string& caption) {
+    if (cells.size() == 1) return rep.figure(out / ("2_" + test) / png, png, caption);
+    for (std::size_t k = 0; k < cells.size(); ++k) {
+      const std::string seed = std::to_string(c.seed + k);
+      rep.figure(out / ("2_" + test) / ("replicate_" + std::to_string(k)) / png,
+                 png.substr(0, png.size() - 4) + "_seed" + seed + ".png", caption + " (cell of seed " + seed + ")");
+    }
+  };
+  labFigure("cc", "cc_curve.png", "CC: axial force against shortening");
+  labFigure("uc", "uc_curve.png", "UC: axial force against shortening");
+  labFigure("shear", "shear_curve.png", "Interface shear");
 
   rep.heading("3. Fitted cell laws");
   rows.clear();
@@ -861,6 +892,9 @@ bridge::RunOutcome runStages(const JsonDocument& doc, const bridge::RunContext& 
   if (capacity) console << "pipeline: capacity: " << capacity->summary.at("answer").get<std::string>() << "\n";
   if (design) console << "pipeline: design: " << design->summary.at("answer").get<std::string>() << "\n";
   for (const auto& w : rep.warnings()) console << "pipeline: warning: " << w << "\n";
+  if (!c.cell_is_file && c.replicates == 1)
+    console << "pipeline: note: the laws are those of one cell, one draw of its packing; another can give others "
+               "(docs/pipeline.md, One cell is one draw): replicates > 1 fits them on several\n";
   console << "pipeline: report: " << (out / "report.html").string() << " (" << stages.size() << " stages, " << reused
           << " reused)\n";
   result.answer = console.str();

@@ -84,7 +84,8 @@ TEST(Pipeline, ReducedChainRunsEveryStageThenReusesThem) {
   auto r = runGabion("run " + (dir / "pipeline.json").string() + " --threads 2 -o " + out.string());
   ASSERT_EQ(r.exit_code, 0) << r.output;
   // The console's headline: fitted parameters with intervals, the answers, the report.
-  for (const char* line : {"fitted laws of 'small'", "pipeline: capacity:", "pipeline: design:", "report.html"})
+  for (const char* line :
+       {"fitted laws of 'small'", "pipeline: capacity:", "pipeline: design:", "report.html", "one draw of its packing"})
     EXPECT_NE(r.output.find(line), std::string::npos) << line << "\n" << r.output;
 
   const auto s = readJson(out / "summary.json");
@@ -227,7 +228,18 @@ TEST(Pipeline, ReplicateCellsGiveTheScatterOfTheFit) {
     }
   }
   EXPECT_NE(r.output.find("between replicates"), std::string::npos) << r.output;
+  EXPECT_EQ(r.output.find("one draw of its packing"), std::string::npos) << r.output;
   EXPECT_NE(readText(out / "report.html").find("interval of the mean over 2 cells"), std::string::npos);
+  // The report draws each cell and each cell's lab curves, from their
+  // replicate folders; none is missing.
+  for (const auto& w : s.at("warnings")) EXPECT_EQ(w.get<std::string>().find("figure missing"), std::string::npos) << w;
+  const auto figures = s.at("figures");
+  for (const char* f : {"figures/cell_view_seed3.png", "figures/cell_view_seed4.png", "figures/cc_curve_seed3.png",
+                        "figures/cc_curve_seed4.png", "figures/uc_curve_seed4.png", "figures/shear_curve_seed4.png"}) {
+    EXPECT_NE(std::find(figures.begin(), figures.end(), f), figures.end()) << f;
+    EXPECT_GT(fs::file_size(out / f), 1000u) << f;
+  }
+  EXPECT_NE(readText(out / "report.html").find("blocks taken off at closing"), std::string::npos);
 }
 
 TEST(Pipeline, BadInputNamesTheField) {
