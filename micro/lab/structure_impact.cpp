@@ -240,6 +240,7 @@ bridge::RunOutcome runOne(const StructureCase& c, const Sample& sample, const br
   const double mass = scene.spheres[boulder].mass_kg, v0 = c.velocity_m_s;
   struct Series {
     std::vector<double> time, force, penetration, indentation, velocity, front, back;
+    std::vector<double> front_fine, back_fine, front_macro, back_macro;  // (a hybrid's parts apart)
   } sr;
   // The struck cell (the front cell the aim point is on): the boulder's
   // penetration less that cell's own move is its indentation.
@@ -275,6 +276,8 @@ bridge::RunOutcome runOne(const StructureCase& c, const Sample& sample, const br
     for (const std::size_t k : layout.back_cells) back = std::max(back, now[k].x() - cell0[k].x());
     if (part && part->faces_moved) {
       const auto [macro_front, macro_back] = part->faces_moved();
+      sr.front_fine.push_back(front), sr.back_fine.push_back(back);
+      sr.front_macro.push_back(macro_front), sr.back_macro.push_back(macro_back);
       front = std::max(front, macro_front), back = std::max(back, macro_back);
     }
     if (part && part->record) part->record(e);
@@ -308,6 +311,8 @@ bridge::RunOutcome runOne(const StructureCase& c, const Sample& sample, const br
   hooks.archive = [&](bridge::StateArchive& a) {
     a("time_s", sr.time), a("force_N", sr.force), a("penetration_m", sr.penetration), a("velocity_m_s", sr.velocity);
     a("front_m", sr.front), a("back_m", sr.back);
+    a("front_fine_m", sr.front_fine), a("back_fine_m", sr.back_fine);
+    a("front_macro_m", sr.front_macro), a("back_macro_m", sr.back_macro);
     a("x_contact", x_contact), a("t_contact", t_contact), a("peak", peak), a("t_last_force", t_last_force);
     a("cell0", cell0), a("max_cell_x", max_cell_x), a("max_cell_across", max_cell_across);
     a("indentation_m", sr.indentation), a("struck0", struck0);
@@ -325,6 +330,12 @@ bridge::RunOutcome runOne(const StructureCase& c, const Sample& sample, const br
     h5.write("/curves/impact/boulder_velocity_m_s", sr.velocity, "m/s");
     h5.write("/curves/impact/front_face_displacement_m", sr.front, "m");
     h5.write("/curves/impact/back_face_displacement_m", sr.back, "m");
+    if (!sr.back_fine.empty()) {
+      h5.write("/curves/impact/front_face_displacement_fine_m", sr.front_fine, "m");
+      h5.write("/curves/impact/back_face_displacement_fine_m", sr.back_fine, "m");
+      h5.write("/curves/impact/front_face_displacement_macro_m", sr.front_macro, "m");
+      h5.write("/curves/impact/back_face_displacement_macro_m", sr.back_macro, "m");
+    }
   };
   bridge::RunOutcome out = runScene(std::move(scene), file, ctx, hooks);
   nlohmann::json& r = out.results;
@@ -358,6 +369,12 @@ bridge::RunOutcome runOne(const StructureCase& c, const Sample& sample, const br
   r["rebound_velocity_m_s"] = rebound;
   r["max_front_face_displacement_m"] = max_front;
   r["max_back_face_displacement_m"] = max_back;
+  if (!sr.back_fine.empty()) {  // which part moved the faces most: the resolved cells or the macro nodes
+    const auto largest = [](const std::vector<double>& v) { return *std::max_element(v.begin(), v.end()); };
+    r["max_face_displacement_by_part_m"] = {
+        {"front", {{"fine", largest(sr.front_fine)}, {"macro", largest(sr.front_macro)}}},
+        {"back", {{"fine", largest(sr.back_fine)}, {"macro", largest(sr.back_macro)}}}};
+  }
   if (!sr.indentation.empty()) r["max_indentation_m"] = *std::max_element(sr.indentation.begin(), sr.indentation.end());
   r["max_cell_displacement_x_m"] = max_cell_x;
   r["max_cell_displacement_across_m"] = max_cell_across;

@@ -160,6 +160,16 @@ TEST(HybridStructure, StruckCellResolvedTheCellBehindAMacroNode) {
   EXPECT_NEAR(h["work_on_fine_part_J"].get<double>(), -to_macro, 1e-9 * to_macro);
   EXPECT_LT(std::fabs(h["balance_rel_error"].get<double>()), 0.02);
   EXPECT_GT(s["max_back_face_displacement_m"].get<double>(), 0.0) << "the macro node moved";
+  // Each part's faces apart, the summary's the larger of the two: the
+  // resolved cell is the front one, the back cell the macro node.
+  ASSERT_TRUE(s.contains("max_face_displacement_by_part_m"));
+  const nlohmann::json& parts = s["max_face_displacement_by_part_m"];
+  for (const char* face : {"front", "back"})
+    EXPECT_EQ(s[std::string("max_") + face + "_face_displacement_m"].get<double>(),
+              std::max(parts[face]["fine"].get<double>(), parts[face]["macro"].get<double>()))
+        << face;
+  EXPECT_EQ(parts["back"]["macro"], s["max_back_face_displacement_m"]) << "the back cell is the macro node";
+  EXPECT_EQ(parts["back"]["fine"].get<double>(), 0.0) << "no resolved cell on the back face";
   EXPECT_TRUE(s["touched"].get<bool>());
   expectMomentumIsImpulse(dir / "out", s["boulder_mass_kg"].get<double>(), 8.0);
   // Bad input, named before anything runs.
