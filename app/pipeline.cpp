@@ -697,8 +697,9 @@ bridge::RunOutcome runStages(const JsonDocument& doc, const bridge::RunContext& 
       rep.figure(d / "grading_0.png", "grading.png", "Grading of the blocks against its target");
       rep.figure(d / "vibration.png", "vibration.png", "Porosity during filling and vibration");
     } else {
-      // Replicates: each cell (the figures above are the first one's), and
-      // how far they are apart: what the laws' scatter between cells comes from.
+      // Replicates: a row and a view per cell (how far they are apart is
+      // what the laws' scatter between cells comes from), then the first
+      // cell's grading and vibration.
       std::vector<std::vector<std::string>> cell_rows;
       for (std::size_t k = 0; k < cell_stages.size(); ++k) {
         const json& cs = cell_stages[k].summary;
