@@ -686,7 +686,10 @@ bridge::RunOutcome runStages(const JsonDocument& doc, const bridge::RunContext& 
 
   rep.heading("1. The virtual cell");
   {
-    rep.text(fmt(num(cell_summary, "blocks")) + " blocks, mass " + fmt(num(cell_summary, "mass_kg")) +
+    rep.text((cell_stages.size() > 1 ? "The first of " + std::to_string(cell_stages.size()) + " cells (seed " +
+                                           std::to_string(c.seed) + "; each below): "
+                                     : std::string()) +
+             fmt(num(cell_summary, "blocks")) + " blocks, mass " + fmt(num(cell_summary, "mass_kg")) +
              " kg, porosity " + fmt(porosity, 3) + " (target " + fmt(num(cell_summary, "target_porosity"), 3) + "), " +
              fmt(edge_m) + " m cell.");
     if (c.cell_is_file) {

@@ -240,6 +240,7 @@ TEST(Pipeline, ReplicateCellsGiveTheScatterOfTheFit) {
     EXPECT_GT(fs::file_size(out / f), 1000u) << f;
   }
   EXPECT_NE(readText(out / "report.html").find("blocks taken off at closing"), std::string::npos);
+  EXPECT_NE(readText(out / "report.html").find("The first of 2 cells (seed 3"), std::string::npos);
 }
 
 TEST(Pipeline, BadInputNamesTheField) {
