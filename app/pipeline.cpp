@@ -739,13 +739,17 @@ bridge::RunOutcome runStages(const JsonDocument& doc, const bridge::RunContext& 
     rows.push_back({st.name, "micro.cc", fmt(labMax(st, "peak_force_N") / 1e3),
                     fmt(labMax(st, "kinetic_to_work_ratio"), 3), st.reused ? "reused" : "run", fmt(st.wall_time_s, 3)});
   rep.table({"test", "kind", "peak force (kN; shear: tangential)", "kinetic / work", "stage", "wall time (s)"}, rows);
-  // (with replicates, each cell's run is in the test's replicate_<k> folder)
+  // Each run's figure from its own folder (labResults: the test's runs, one
+  // per cell); with replicates, named by its cell's seed.
   const auto labFigure = [&](const std::string& test, const std::string& png, const std::string& caption) {
-    if (cells.size() == 1) return rep.figure(out / ("2_" + test) / png, png, caption);
-    for (std::size_t k = 0; k < cells.size(); ++k) {
-      const std::string seed = std::to_string(c.seed + k);
-      rep.figure(out / ("2_" + test) / ("replicate_" + std::to_string(k)) / png,
-                 png.substr(0, png.size() - 4) + "_seed" + seed + ".png", caption + " (cell of seed " + seed + ")");
+    for (const auto& [result, replicate] : labResults(lab.at(test))) {
+      if (cells.size() == 1) {
+        rep.figure(result.parent_path() / png, png, caption);
+        continue;
+      }
+      const std::string seed = std::to_string(c.seed + std::stoul(replicate));
+      rep.figure(result.parent_path() / png, png.substr(0, png.size() - 4) + "_seed" + seed + ".png",
+                 caption + " (cell of seed " + seed + ")");
     }
   };
   labFigure("cc", "cc_curve.png", "CC: axial force against shortening");
