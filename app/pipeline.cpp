@@ -119,6 +119,7 @@ struct StageResult {
   json summary;
   bool reused = false;
   double wall_time_s = 0.0;
+  json dropped_runs = json::array();  ///< failed runs the stage went on without ({folder, message})
 };
 
 std::string fmt(double x, int digits = 4) {
@@ -223,9 +224,16 @@ StagedCase stageCase(json case_value, const std::vector<fs::path>& inputs, const
   return {std::move(case_value), key};
 }
 
-/// The summary and wall time of the stage in `dir` when it ran with `key`
-/// and ended ok; nullopt when it must run (again).
-std::optional<std::pair<json, double>> reusable(const fs::path& dir, const std::string& key) {
+/// A stage's record from an earlier run.
+struct Reused {
+  json summary;
+  double wall_time_s = 0.0;
+  json dropped_runs;
+};
+
+/// The summary, wall time and left-out runs of the stage in `dir` when it
+/// ran with `key` and was accepted; nullopt when it must run (again).
+std::optional<Reused> reusable(const fs::path& dir, const std::string& key) {
   if (!fs::exists(dir / "stage.json") || !fs::exists(dir / "summary.json")) return std::nullopt;
   try {
     std::ifstream in(dir / "stage.json");
@@ -234,13 +242,42 @@ std::optional<std::pair<json, double>> reusable(const fs::path& dir, const std::
     json summary = json::parse(sin);
     // (and the stage's folder was committed whole: its manifest lists its
     // files as they are; adopting them lists them in the pipeline's)
-    if (st.value("key", "") == key && summary.value("status", "") == "ok" && bridge::adoptManifest(dir))
-      return std::make_pair(std::move(summary), st.value("wall_time_s", 0.0));
+    // (a lab stage that went on without its failed runs says so in its record)
+    const bool accepted = summary.value("status", "") == "ok" || st.contains("dropped_runs");
+    if (st.value("key", "") == key && accepted && bridge::adoptManifest(dir))
+      return Reused{std::move(summary), st.value("wall_time_s", 0.0), st.value("dropped_runs", json::array())};
   } catch (const std::exception&) {
     // A damaged record: run the stage again.
   }
   return std::nullopt;
 }
+
+/// The failed runs of a lab stage on several cells that the pipeline can go
+/// on without: every failure numerical (not an input or write error, not an
+/// interruption), and every variant (UCI velocity) keeping a run that ended
+/// ok on some cell. Each as {folder, message}; null when the stage cannot go
+/// on.
+json droppableRuns(const json& summary) {
+  if (summary.value("status", "") != "numerical_failure" || !summary.contains("runs")) return nullptr;
+  json dropped = json::array();
+  std::map<std::string, int> ok_per_variant;
+  for (const auto& r : summary.at("runs")) {
+    const std::string status = r.value("status", "");
+    const std::string variant = r.value("variant", "");
+    ok_per_variant[variant] += status == "ok" ? 1 : 0;
+    if (status == "ok") continue;
+    if (status != "numerical_failure") return nullptr;
+    dropped.push_back({{"folder", r.value("folder", "")}, {"message", r.value("message", "")}});
+  }
+  for (const auto& [variant, n] : ok_per_variant)
+    if (n == 0) return nullptr;
+  return dropped.empty() ? json(nullptr) : dropped;
+}
+
+/// Whether a stage that failed in some of its runs stops the pipeline, or
+/// goes on without them where droppableRuns allows (lab stages on several
+/// cells: the fit uses the other cells' runs, and the report says so).
+enum class FailedRuns { Stop, LeaveOut };
 
 /// Runs one stage through its kind's public CaseKind, in its own folder:
 /// the case written to `dir/case.json`, the summary beside it, and
@@ -249,7 +286,7 @@ std::optional<std::pair<json, double>> reusable(const fs::path& dir, const std::
 StageResult runStage(const std::string& name, const std::string& kind, json case_value,
                      const std::vector<fs::path>& inputs, const std::vector<std::string>& settings,
                      const bridge::RunContext& parent, const fs::path& dir, StageClock& clock,
-                     const std::optional<fs::path>& law = std::nullopt) {
+                     const std::optional<fs::path>& law = std::nullopt, FailedRuns failed_runs = FailedRuns::Stop) {
   if (bridge::interrupted())
     throw StageFailure(std::string("interrupted by ") + bridge::signalName(bridge::interruptSignal()) +
                        " before stage '" + name + "'");
@@ -262,9 +299,10 @@ StageResult runStage(const std::string& name, const std::string& kind, json case
   const std::string& key = staged.key;
   clock.begin(name);
   if (auto done = reusable(dir, key)) {
-    out.summary = std::move(done->first);
+    out.summary = std::move(done->summary);
     out.reused = true;
-    out.wall_time_s = done->second;
+    out.wall_time_s = done->wall_time_s;
+    out.dropped_runs = std::move(done->dropped_runs);
     if (parent.progress)
       std::printf("%s %s: unchanged, reused (%s)\n", clock.prefix().c_str(), name.c_str(), dir.c_str());
     clock.end(name, false, out.wall_time_s);
@@ -277,11 +315,22 @@ StageResult runStage(const std::string& name, const std::string& kind, json case
   SubCase ran =
       runSubCase(case_value, kind, parent, dir, [&clock](double run_eta_s) { return clock.prefix(run_eta_s); });
   out.wall_time_s = ran.wall_time_s;
+  json record = {{"key", key}, {"wall_time_s", out.wall_time_s}};
   if (ran.status != bridge::RunOutcome::Status::Ok) {
-    bridge::writeManifest(dir, bridge::statusName(ran.status));
-    throw StageFailure("pipeline stage '" + name + "' (" + dir.string() + "): " + ran.message);
+    const json dropped =
+        failed_runs == FailedRuns::LeaveOut && !bridge::interrupted() ? droppableRuns(ran.summary) : json(nullptr);
+    if (dropped.is_null()) {
+      bridge::writeManifest(dir, bridge::statusName(ran.status));
+      throw StageFailure("pipeline stage '" + name + "' (" + dir.string() + "): " + ran.message);
+    }
+    // Loud, at once: the stage goes on without these runs.
+    for (const auto& d : dropped)
+      std::fprintf(stderr, "pipeline: warning: stage '%s': run %s failed and is left out of the fit: %s\n",
+                   name.c_str(), d.at("folder").get<std::string>().c_str(), d.at("message").get<std::string>().c_str());
+    record["dropped_runs"] = dropped;
+    out.dropped_runs = dropped;
   }
-  bridge::writeJsonAtomic(dir / "stage.json", {{"key", key}, {"wall_time_s", out.wall_time_s}});
+  bridge::writeJsonAtomic(dir / "stage.json", record);
   bridge::writeManifest(dir, "ok");
   out.summary = std::move(ran.summary);
   if (parent.progress) std::printf("%s %s done in %.1f s\n", clock.prefix().c_str(), name.c_str(), out.wall_time_s);
@@ -302,8 +351,9 @@ std::vector<std::pair<fs::path, std::string>> labResults(const StageResult& s) {
     return out;
   }
   for (const auto& r : s.summary.at("runs"))
-    out.emplace_back(s.dir / r.at("folder").get<std::string>() / "result.h5",
-                     std::to_string(r.at("replicate").get<int>()));
+    if (r.value("status", "ok") == "ok")  // (failed runs the stage went on without are left out)
+      out.emplace_back(s.dir / r.at("folder").get<std::string>() / "result.h5",
+                       std::to_string(r.at("replicate").get<int>()));
   return out;
 }
 
@@ -606,13 +656,14 @@ bridge::RunOutcome runStages(const JsonDocument& doc, const bridge::RunContext& 
       clock.estimated[name] = clock.pending[name] = e->body_steps;
   }
   for (const auto& t : kTests) {
-    stages.push_back(
-        runStage(t, kTestKind.at(t), test_cases.at(t), cells, settingsOf(t), ctx, out / ("2_" + t), clock));
+    stages.push_back(runStage(t, kTestKind.at(t), test_cases.at(t), cells, settingsOf(t), ctx, out / ("2_" + t), clock,
+                              std::nullopt, cells.size() > 1 ? FailedRuns::LeaveOut : FailedRuns::Stop));
     lab[t] = stages.back();
   }
   std::vector<StageResult> rate;
   for (const RateStage& r : rate_cases) {
-    stages.push_back(runStage(r.name, "micro.cc", r.value, cells, {}, ctx, r.dir, clock));
+    stages.push_back(runStage(r.name, "micro.cc", r.value, cells, {}, ctx, r.dir, clock, std::nullopt,
+                              cells.size() > 1 ? FailedRuns::LeaveOut : FailedRuns::Stop));
     rate.push_back(stages.back());
   }
   double mass_kg = num(cell_summary, "mass_kg");
@@ -735,6 +786,21 @@ bridge::RunOutcome runStages(const JsonDocument& doc, const bridge::RunContext& 
       rep.warning(t + ": the test left its quasi-static range (kinetic energy over work above the limit)");
   }
   // (the compressions at other plate speeds are dynamic on purpose: no warning)
+  // Runs a stage went on without (replicate cells: the fit has the others').
+  json dropped_runs = json::array();
+  const auto noteDropped = [&](const std::string& stage, const StageResult& st) {
+    const std::size_t n = st.summary.contains("runs") ? st.summary.at("runs").size() : 0;
+    for (const auto& d : st.dropped_runs) {
+      dropped_runs.push_back({{"stage", stage},
+                              {"folder", (st.dir / d.at("folder").get<std::string>()).string()},
+                              {"message", d.at("message")}});
+      rep.warning(stage + ": run " + d.at("folder").get<std::string>() + " failed (" +
+                  d.at("message").get<std::string>() + "); the fit has the other " +
+                  std::to_string(n - st.dropped_runs.size()) + " of its " + std::to_string(n) + " runs");
+    }
+  };
+  for (const auto& t : kTests) noteDropped(t, lab.at(t));
+  for (const StageResult& st : rate) noteDropped(st.name, st);
   for (const StageResult& st : rate)
     rows.push_back({st.name, "micro.cc", fmt(labMax(st, "peak_force_N") / 1e3),
                     fmt(labMax(st, "kinetic_to_work_ratio"), 3), st.reused ? "reused" : "run", fmt(st.wall_time_s, 3)});
@@ -891,6 +957,7 @@ bridge::RunOutcome runStages(const JsonDocument& doc, const bridge::RunContext& 
   res["report"] = "report.html";
   res["figures"] = rep.figures();
   res["warnings"] = rep.warnings();
+  res["dropped_runs"] = dropped_runs;
   res["pipeline_wall_time_s"] = std::chrono::duration<double>(std::chrono::steady_clock::now() - t_start).count();
 
   std::ostringstream console;

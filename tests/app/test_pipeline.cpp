@@ -7,12 +7,15 @@
 #include <gtest/gtest.h>
 
 #include <fstream>
+#include <functional>
 #include <regex>
 #include <set>
 #include <string>
 #include <vector>
 
 #include "bridge/law_file.hpp"
+#include "bridge/output.hpp"
+#include "micro/cell/cell_file.hpp"
 #include "tests/support/run_gabion.hpp"
 #include "tests/support/small_cell.hpp"
 
@@ -241,6 +244,63 @@ TEST(Pipeline, ReplicateCellsGiveTheScatterOfTheFit) {
   }
   EXPECT_NE(readText(out / "report.html").find("blocks taken off at closing"), std::string::npos);
   EXPECT_NE(readText(out / "report.html").find("The first of 2 cells (seed 3"), std::string::npos);
+  EXPECT_TRUE(s.at("dropped_runs").empty());
+
+  // One cell's runs fail (its second block moved onto its first: the
+  // overlap check stops each of its runs at once): the lab stages go on
+  // without them, loudly, and the fit has the other cell's curves.
+  {
+    const fs::path cell = out / "1_cell_seed4" / "cell.h5";
+    const std::string summary = gabion::bridge::H5Reader(cell).attribute("/", "summary");
+    gabion::micro::Scene scene;
+    gabion::micro::loadCellFile(cell, scene);
+    ASSERT_GE(scene.blocks.size(), 2u);
+    scene.blocks[1].position_m = scene.blocks[0].position_m;
+    const gabion::micro::Engine engine(scene, 1);
+    gabion::micro::writeCellFile(cell, scene, engine, nlohmann::json::parse(summary));
+  }
+  const auto again = runGabion("run " + (dir / "pipeline.json").string() + " -q --threads 2 -o " + out.string());
+  ASSERT_EQ(again.exit_code, 0) << again.output;
+  EXPECT_NE(again.output.find("warning: stage 'uci': run v8_replicate_1 failed and is left out of the fit"),
+            std::string::npos)
+      << again.output;
+  const auto d = readJson(out / "summary.json");
+  std::set<std::string> dropped;
+  for (const auto& run : d.at("dropped_runs")) {
+    dropped.insert(fs::path(run.at("folder").get<std::string>()).lexically_relative(out).generic_string());
+    EXPECT_NE(run.at("message").get<std::string>().find("overlap"), std::string::npos) << run;
+  }
+  EXPECT_EQ(dropped,
+            (std::set<std::string>{"2_cc/replicate_1", "2_uc/replicate_1", "2_uci/v5_replicate_1",
+                                   "2_uci/v8_replicate_1", "2_shear/replicate_1", "2_cc_rate_1.5_m_s/replicate_1"}));
+  // The fit reads the first cell's curves alone: no spread between cells.
+  std::size_t curves = 0;
+  const std::function<void(const nlohmann::json&)> onlyFirstCell = [&](const nlohmann::json& node) {
+    if (node.is_object() && node.contains("file") && node.contains("replicate")) {
+      ++curves;
+      EXPECT_EQ(node.at("replicate"), "0") << node;
+      EXPECT_EQ(node.at("file").get<std::string>().find("replicate_1"), std::string::npos) << node;
+    }
+    if (node.is_structured())
+      for (const auto& e : node) onlyFirstCell(e);
+  };
+  onlyFirstCell(readJson(out / "3_fit" / "case.json"));
+  EXPECT_GE(curves, 5u);
+  for (const char* law : {"axial", "lateral", "interface", "impact"})
+    EXPECT_FALSE(d.at("fit").at(law).contains("replicates")) << law;
+  bool warned = false;
+  for (const auto& w : d.at("warnings"))
+    warned = warned || w.get<std::string>().find("run v8_replicate_1 failed") != std::string::npos;
+  EXPECT_TRUE(warned) << d.at("warnings");
+  EXPECT_NE(readText(out / "report.html").find("the fit has the other 1 of its 2 runs"), std::string::npos);
+  EXPECT_EQ(readText(out / "report.html").find("cc_curve_seed4.png"), std::string::npos);
+  // A run after it reuses the stages that went on without their failed
+  // runs, and still says so.
+  const auto third = runGabion("run " + (dir / "pipeline.json").string() + " --threads 2 -o " + out.string());
+  ASSERT_EQ(third.exit_code, 0) << third.output;
+  EXPECT_NE(third.output.find("(9 stages, 9 reused)"), std::string::npos) << third.output;
+  EXPECT_NE(third.output.find("warning: uci: run v8_replicate_1 failed (step 0"), std::string::npos) << third.output;
+  EXPECT_EQ(readJson(out / "summary.json").at("dropped_runs").size(), 6u);
 }
 
 TEST(Pipeline, BadInputNamesTheField) {
