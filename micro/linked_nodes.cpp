@@ -63,10 +63,7 @@ SphereSums LinkedNodes::advance(const Links& links, int k, int substeps, double 
   // damped by the impulse's swing inside the step.
   const double held = k == 0 ? static_cast<double>(substeps) : 0.0;
   const std::size_t n = size();
-  for (std::size_t j = 0; j < n; ++j) {
-    const Vec3 f = links.nodeForce(j);
-    lfx_[j] = f.x(), lfy_[j] = f.y(), lfz_[j] = f.z();
-  }
+  links.nodeForces(lfx_.data(), lfy_.data(), lfz_.data());
   const HeldForces f{hfx_.data(), hfy_.data(), hfz_.data(), htx_.data(), hty_.data(),
                      htz_.data(), lfx_.data(), lfy_.data(), lfz_.data(), held};
   const SphereSums s = integrateHeld(n_, f, h, g, measure);

@@ -27,6 +27,16 @@ Links::Links(const std::vector<LinkSpec>& specs, std::size_t particles) : partic
   }
   for (const double L0 : wire_rest_) wire_inv_rest_.push_back(L0 > 0.0 ? 1.0 / L0 : 0.0);
   const std::size_t n = a_.size();
+  // Each wire's constants side by side, for the elastic pass (evaluate).
+  for (std::size_t l = 0; l < n; ++l) {
+    const bool wire = law_[l] == LinkSpec::Law::Wire;
+    const bridge::WireCurve* c = wire ? &wires_[law_index_[l]] : nullptr;
+    wire_elastic_.push_back(wire ? c->elasticForce() : 0.0);
+    wire_first_.push_back(wire ? c->strain()[0] : 0.0);
+    wire_rupture_.push_back(wire ? c->ruptureStrain() : 0.0);
+    general_.push_back(wire ? 0 : 1);
+  }
+  slow_.assign(n, 0);
   wire_state_.clear();
   for (const LinkSpec& s : specs) wire_state_.push_back(s.wire_state);
   broken_.assign(n, 0);
@@ -79,6 +89,57 @@ ExcludedPairs Links::excludedPairs() const {
   return out;
 }
 
+// One link's whole law at this sub-step: its force, or its rupture (event,
+// energy). A broken link keeps no force.
+void Links::evaluateOne(std::size_t l, const double* X, const double* Y, const double* Z, double time_s, bool measure,
+                        double& elastic, double& rupture, double& plastic, WorkerScratch& s) {
+  const bool wire = law_[l] == LinkSpec::Law::Wire;
+  // A wire's plastic work stays dissipated after it breaks.
+  if (measure && wire) plastic += bridge::wireDissipatedEnergy(wires_[law_index_[l]], wire_rest_[l], wire_state_[l]);
+  const std::uint32_t beam = beam_of_[l];
+  if (broken_[l]) {
+    fx_[l] = fy_[l] = fz_[l] = tension_[l] = 0.0;  // (the elastic pass may have written it)
+    return;
+  }
+  const double length = len_[l];
+  bridge::LinkResponse r;
+  if (wire) {
+    const bridge::WireCurve& c = wires_[law_index_[l]];
+    const double L0 = wire_rest_[l];
+    const bridge::WireResponse w = bridge::wireResponse(c, wire_state_[l], (length - L0) * wire_inv_rest_[l]);
+    // (it held the energy of its last point when it went)
+    const double held = w.breaks ? c.force().back() : w.force_N;
+    r = {w.force_N, measure || w.breaks ? bridge::wireElasticEnergy(c, L0, held) : 0.0, w.breaks};
+  } else {
+    r = bridge::linearLinkResponse(linear_[law_index_[l]], length);
+  }
+  if (r.breaks) {
+    // The energy the link held is lost with it.
+    if (wire) {
+      rupture += r.elastic_J;
+    } else {
+      bridge::LinearLinkParams intact = linear_[law_index_[l]];
+      intact.rupture_strain = std::numeric_limits<double>::infinity();
+      rupture += bridge::linearLinkResponse(intact, length).elastic_J;
+    }
+    broken_[l] = 1;
+    fx_[l] = fy_[l] = fz_[l] = tension_[l] = 0.0;
+    if (beam != kNoBeam) {
+      // Its bending goes with it.
+      rupture += bridge::wireBeamElasticEnergy(beams_[beam], beam_state_[beam], Vec3(ux_[l], uy_[l], uz_[l]));
+      beam_state_[beam].shear_N.setZero(), beam_state_[beam].moment_N_m.setZero();
+    }
+    const std::uint32_t i = ka_[l];
+    const double h = 0.5 * length;
+    s.link_events.push_back({time_s, l, Vec3(X[i] + h * ux_[l], Y[i] + h * uy_[l], Z[i] + h * uz_[l])});
+    return;
+  }
+  // Tension pulls a towards b.
+  fx_[l] = r.force_N * ux_[l], fy_[l] = r.force_N * uy_[l], fz_[l] = r.force_N * uz_[l];
+  tension_[l] = r.force_N;
+  if (measure) elastic += r.elastic_J;
+}
+
 void Links::evaluate(const double* X, const double* Y, const double* Z, std::size_t l0, std::size_t l1, double time_s,
                      bool measure, WorkerScratch& s) {
   double elastic = 0.0, rupture = 0.0, plastic = 0.0;
@@ -97,49 +158,37 @@ void Links::evaluate(const double* X, const double* Y, const double* Z, std::siz
       len[l] = length, ux[l] = ex * inv, uy[l] = ey * inv, uz[l] = ez * inv;
     }
   }
-  for (std::size_t l = l0; l < l1; ++l) {
-    const bool wire = law_[l] == LinkSpec::Law::Wire;
-    // A wire's plastic work stays dissipated after it breaks.
-    if (measure && wire) plastic += bridge::wireDissipatedEnergy(wires_[law_index_[l]], wire_rest_[l], wire_state_[l]);
-    const std::uint32_t beam = beam_of_[l];
-    if (broken_[l]) continue;
-    const double length = len_[l];
-    bridge::LinkResponse r;
-    if (wire) {
-      const bridge::WireCurve& c = wires_[law_index_[l]];
-      const double L0 = wire_rest_[l];
-      const bridge::WireResponse w = bridge::wireResponse(c, wire_state_[l], (length - L0) * wire_inv_rest_[l]);
-      // (it held the energy of its last point when it went)
-      const double held = w.breaks ? c.force().back() : w.force_N;
-      r = {w.force_N, measure || w.breaks ? bridge::wireElasticEnergy(c, L0, held) : 0.0, w.breaks};
-    } else {
-      r = bridge::linearLinkResponse(linear_[law_index_[l]], length);
+  // The laws. Between the measuring steps, a first vectorised pass gives
+  // every wire the force of its elastic line, F = max(0, E A (eps - eps_p)):
+  // the law's answer for a wire below its backbone and rupture
+  // (bridge::wireResponse), which is nearly every wire at nearly every
+  // sub-step. The links it cannot answer (one reaching its backbone or
+  // breaking, a broken link, a linear spring) then take the whole law, in
+  // link order, as do all links on a measuring step (their energies are
+  // summed in link order).
+  if (measure) {
+    for (std::size_t l = l0; l < l1; ++l) evaluateOne(l, X, Y, Z, time_s, measure, elastic, rupture, plastic, s);
+  } else {
+    const double *len = len_.data(), *ux = ux_.data(), *uy = uy_.data(), *uz = uz_.data();
+    const double *IR = wire_inv_rest_.data(), *L0 = wire_rest_.data(), *E = wire_elastic_.data();
+    const double *FIRST = wire_first_.data(), *RUP = wire_rupture_.data();
+    const bridge::WireState* WS = wire_state_.data();
+    const std::uint8_t *GEN = general_.data(), *BROKEN = broken_.data();
+    double *FX = fx_.data(), *FY = fy_.data(), *FZ = fz_.data(), *T = tension_.data();
+    std::uint8_t* slow = slow_.data();
+#pragma omp simd
+    for (std::size_t l = l0; l < l1; ++l) {
+      const double eps = (len[l] - L0[l]) * IR[l];
+      const double trial = E[l] * (eps - WS[l].plastic_strain);
+      const double f = 0.0 < trial ? trial : 0.0;  // (std::max(0.0, trial), as the law writes it)
+      const double reached = WS[l].reached_strain, first = FIRST[l];
+      const double backbone = reached < first ? first : reached;
+      slow[l] = (GEN[l] | BROKEN[l] | (eps > RUP[l] ? 1 : 0) | (eps > backbone ? 1 : 0)) != 0 ? 1 : 0;
+      FX[l] = f * ux[l], FY[l] = f * uy[l], FZ[l] = f * uz[l];
+      T[l] = f;
     }
-    if (r.breaks) {
-      // The energy the link held is lost with it.
-      if (wire) {
-        rupture += r.elastic_J;
-      } else {
-        bridge::LinearLinkParams intact = linear_[law_index_[l]];
-        intact.rupture_strain = std::numeric_limits<double>::infinity();
-        rupture += bridge::linearLinkResponse(intact, length).elastic_J;
-      }
-      broken_[l] = 1;
-      fx_[l] = fy_[l] = fz_[l] = tension_[l] = 0.0;
-      if (beam != kNoBeam) {
-        // Its bending goes with it.
-        rupture += bridge::wireBeamElasticEnergy(beams_[beam], beam_state_[beam], Vec3(ux_[l], uy_[l], uz_[l]));
-        beam_state_[beam].shear_N.setZero(), beam_state_[beam].moment_N_m.setZero();
-      }
-      const std::uint32_t i = ka_[l];
-      const double h = 0.5 * length;
-      s.link_events.push_back({time_s, l, Vec3(X[i] + h * ux_[l], Y[i] + h * uy_[l], Z[i] + h * uz_[l])});
-      continue;
-    }
-    // Tension pulls a towards b.
-    fx_[l] = r.force_N * ux_[l], fy_[l] = r.force_N * uy_[l], fz_[l] = r.force_N * uz_[l];
-    tension_[l] = r.force_N;
-    if (measure) elastic += r.elastic_J;
+    for (std::size_t l = l0; l < l1; ++l)
+      if (slow[l]) evaluateOne(l, X, Y, Z, time_s, measure, elastic, rupture, plastic, s);
   }
   s.link_elastic += elastic;
   s.link_rupture += rupture;
@@ -193,14 +242,18 @@ Vec3 Links::nodeBeamTorque(std::size_t k) const {
   return t;
 }
 
-Vec3 Links::nodeForce(std::size_t k) const {
-  double fx = 0.0, fy = 0.0, fz = 0.0;
-  for (std::uint32_t q = node_begin_[k]; q < node_begin_[k + 1]; ++q) {
-    const std::uint32_t l = node_link_[q];
-    const double sg = node_sign_[q];
-    fx += sg * fx_[l], fy += sg * fy_[l], fz += sg * fz_[l];
+void Links::nodeForces(double* FX, double* FY, double* FZ) const {
+  const std::uint32_t *begin = node_begin_.data(), *link = node_link_.data();
+  const double *sign = node_sign_.data(), *fx = fx_.data(), *fy = fy_.data(), *fz = fz_.data();
+  for (std::size_t k = 0; k < nodeCount(); ++k) {
+    double sx = 0.0, sy = 0.0, sz = 0.0;
+    for (std::uint32_t q = begin[k]; q < begin[k + 1]; ++q) {
+      const std::uint32_t l = link[q];
+      const double sg = sign[q];
+      sx += sg * fx[l], sy += sg * fy[l], sz += sg * fz[l];
+    }
+    FX[k] = sx, FY[k] = sy, FZ[k] = sz;
   }
-  return {fx, fy, fz};
 }
 
 void Links::archive(bridge::StateArchive& a) {

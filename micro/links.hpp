@@ -49,8 +49,9 @@ class Links {
   /// plastic work so far into s.link_plastic, when `measure`.
   void evaluate(const double* X, const double* Y, const double* Z, std::size_t l0, std::size_t l1, double time_s,
                 bool measure, WorkerScratch& s);
-  /// Pass 2: the axial force of its links on node k (N), summed in link order.
-  Vec3 nodeForce(std::size_t k) const;
+  /// Pass 2: the axial force of its links on each node (N), summed in link
+  /// order, into FX, FY, FZ (indexed by node).
+  void nodeForces(double* FX, double* FY, double* FZ) const;
 
   /// Whether any link bends (bridge/laws/wire_beam.hpp).
   bool hasBeams() const { return !beams_.empty(); }
@@ -83,6 +84,8 @@ class Links {
   void archive(bridge::StateArchive& a);
 
  private:
+  void evaluateOne(std::size_t l, const double* X, const double* Y, const double* Z, double time_s, bool measure,
+                   double& elastic, double& rupture, double& plastic, WorkerScratch& s);
   std::size_t particles_ = 0;
   std::vector<std::uint32_t> a_, b_;    // stable ids
   std::vector<std::uint32_t> ka_, kb_;  // their node indices
@@ -94,6 +97,11 @@ class Links {
   std::vector<bridge::WireCurve> wires_;
   std::vector<double> wire_rest_, wire_inv_rest_;
   std::vector<bridge::WireState> wire_state_;
+  // Each link's wire constants for the elastic pass (E A, first and rupture
+  // strains of its curve), whether it always takes the whole law (a linear
+  // spring), and whether it took it at this sub-step.
+  std::vector<double> wire_elastic_, wire_first_, wire_rupture_;
+  std::vector<std::uint8_t> general_, slow_;
   std::vector<std::uint8_t> broken_;
   std::vector<double> fx_, fy_, fz_, tension_;  // force on a (N) at this step; -f on b
   std::vector<double> len_, ux_, uy_, uz_;      // length and unit vector a -> b at this step
