@@ -224,7 +224,7 @@ StepStatus Engine::step(bool measure) {
   using S = StageProfile;
   failure_.clear();
   status_ = StepStatus::Ok;
-  lap_ = std::chrono::steady_clock::now();
+  lap_ = TickClock::now();
   updateNeighbours();
   lap(S::kNeighbours);
   computeContactForces(measure);
@@ -251,12 +251,20 @@ const char* StageProfile::name(int stage) {
 }
 
 void Engine::lap(StageProfile::Stage stage) {
-  const auto now = std::chrono::steady_clock::now();
-  const double s = std::chrono::duration<double>(now - lap_).count();
-  profile_.wall_s[stage] += s;
-  // One worker: its partition was busy for the whole stage (no clock reads of its own).
-  if (scratch_.size() == 1) profile_.partition_busy_s[0][stage] += s;
+  const std::uint64_t now = TickClock::now();
+  ticks_[stage] += now - lap_;
   lap_ = now;
+}
+
+StageProfile Engine::profile() const {
+  StageProfile p = profile_;
+  const double s = clock_.secondsPerTick();
+  for (int k = 0; k < StageProfile::kStageCount; ++k) {
+    p.wall_s[k] = s * static_cast<double>(ticks_[k]);
+    // One worker: its partition was busy for the whole stage (no clock reads of its own).
+    if (scratch_.size() == 1) p.partition_busy_s[0][k] = p.wall_s[k];
+  }
+  return p;
 }
 
 template <class Job>

@@ -29,6 +29,7 @@
 #include "micro/particles.hpp"
 #include "micro/scene.hpp"
 #include "micro/step_status.hpp"
+#include "micro/tick_clock.hpp"
 #include "micro/walls.hpp"
 #include "micro/worker_pool.hpp"
 #include "micro/worker_scratch.hpp"
@@ -156,7 +157,8 @@ class Engine {
   void archive(bridge::StateArchive& a);
 
   std::size_t contactCount() const { return contacts_; }
-  const StageProfile& profile() const { return profile_; }
+  /// Where the steps' time went, stage by stage (seconds).
+  StageProfile profile() const;
   std::size_t neighbourRebuilds() const { return rebuilds_; }
   /// Size classes of the neighbour search (micro/neighbour_grid.hpp).
   int sizeClassCount() const { return grid_.classCount(); }
@@ -249,8 +251,10 @@ class Engine {
   std::vector<std::uint32_t> wall_part_;   // particle ranges per worker with equal wall candidates
   std::string failure_;
   StepStatus status_ = StepStatus::Ok;
-  StageProfile profile_;
-  std::chrono::steady_clock::time_point lap_;
+  StageProfile profile_;  // (wall_s, and one worker's busy time, are in ticks_ until profile())
+  TickClock clock_;
+  std::array<std::uint64_t, StageProfile::kStageCount> ticks_{};
+  std::uint64_t lap_ = 0;
 };
 
 }  // namespace gabion::micro
