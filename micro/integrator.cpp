@@ -40,6 +40,7 @@ SphereSums sphereLoop(Particles& p, std::size_t b, std::size_t e, double dt, con
   const double* __restrict TX = kHeld ? held->tx : p.tx.data(), * __restrict TY = kHeld ? held->ty : p.ty.data(), * __restrict TZ = kHeld ? held->tz : p.tz.data();
   const double* __restrict LX = kHeld ? held->lx : nullptr, * __restrict LY = kHeld ? held->ly : nullptr, * __restrict LZ = kHeld ? held->lz : nullptr;
   const double extra = kHeld ? held->held - 1.0 : 0.0, spin = kHeld ? held->held : 1.0;
+  double* __restrict RX = kHeld ? held->rx : nullptr, * __restrict RY = kHeld ? held->ry : nullptr, * __restrict RZ = kHeld ? held->rz : nullptr;
   const double *__restrict M = p.mass.data(), *__restrict IM = p.inv_mass.data(), *__restrict II = p.inv_inertia.data(),
                *__restrict AL = p.alpha.data();
   const double* __restrict X0 = p.x0.data(), * __restrict Y0 = p.y0.data(), * __restrict Z0 = p.z0.data();
@@ -77,6 +78,7 @@ SphereSums sphereLoop(Particles& p, std::size_t b, std::size_t e, double dt, con
                 (ii > 0.0 ? 0.5 * (wx * wx + wy * wy + wz * wz) / ii : 0.0);
     }
     VX[i] = vx, VY[i] = vy, VZ[i] = vz, WX[i] = wx, WY[i] = wy, WZ[i] = wz;
+    if constexpr (kHeld) RX[i] += dt * wx, RY[i] += dt * wy, RZ[i] += dt * wz;
     X[i] = x1, Y[i] = y1, Z[i] = z1;
     finite += x1 + y1 + z1 + vx + vy + vz + wx + wy + wz;
     const double ex = x1 - X0[i], ey = y1 - Y0[i], ez = z1 - Z0[i];

@@ -44,6 +44,7 @@ SphereSums integrateSpheres(Particles& p, std::size_t b, std::size_t e, double d
 struct HeldForces {
   const double *hx, *hy, *hz, *tx, *ty, *tz, *lx, *ly, *lz;
   double held;
+  double *rx, *ry, *rz;  ///< each node's turn over the step so far (rad): the sub-step adds h times its new spin
 };
 
 /// Advances the link nodes' own store `n` by one sub-step h, as

@@ -62,12 +62,10 @@ SphereSums LinkedNodes::advance(const Links& links, int k, int substeps, double 
   // sub-step the physical force (held + links): a node in equilibrium is not
   // damped by the impulse's swing inside the step.
   const double held = k == 0 ? static_cast<double>(substeps) : 0.0;
-  const std::size_t n = size();
   links.nodeForces(lfx_.data(), lfy_.data(), lfz_.data());
-  const HeldForces f{hfx_.data(), hfy_.data(), hfz_.data(), htx_.data(), hty_.data(),
-                     htz_.data(), lfx_.data(), lfy_.data(), lfz_.data(), held};
+  const HeldForces f{hfx_.data(), hfy_.data(), hfz_.data(), htx_.data(), hty_.data(), htz_.data(), lfx_.data(),
+                     lfy_.data(), lfz_.data(), held,        rx_.data(),  ry_.data(),  rz_.data()};
   const SphereSums s = integrateHeld(n_, f, h, g, measure);
-  for (std::size_t j = 0; j < n; ++j) rx_[j] += h * n_.wx[j], ry_[j] += h * n_.wy[j], rz_[j] += h * n_.wz[j];
   // A driven node keeps its velocity: the work it did on the rest over h.
   for (const std::uint32_t j : driven_)
     driven_work -= h * ((held * hfx_[j] + lfx_[j]) * n_.vx[j] + (held * hfy_[j] + lfy_[j]) * n_.vy[j] +

@@ -45,7 +45,7 @@ class LinkedNodes {
   void hold(const Particles& p, bool rebuilt);
   /// Sub-step k of `substeps` (each h long): the link forces are in `links`
   /// (evaluated on x(), y(), z()); sub-step 0 adds the held impulse. Kicks and
-  /// drifts every node by h. Returns the free-sphere sums (energies when
+  /// drifts every node by h, and turns it (its turn over the step). Returns the free-sphere sums (energies when
   /// `measure`), and adds the work of the driven nodes to `driven_work`.
   SphereSums advance(const Links& links, int k, int substeps, double h, const Vec3& g, bool measure,
                      double& driven_work);
