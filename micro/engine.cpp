@@ -979,6 +979,7 @@ void Engine::setWallProgram(std::size_t w, const WallProgram& program) {
   walls_[w].program = program;
 }
 Vec3 Engine::sphereForce(std::size_t s) const {
+  if (const auto node = nodes_.force(static_cast<std::uint32_t>(s))) return *node;  // (a link node keeps its own)
   const std::uint32_t i = p_.slot[s];
   return {p_.fx[i], p_.fy[i], p_.fz[i]};
 }

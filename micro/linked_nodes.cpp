@@ -76,28 +76,26 @@ SphereSums LinkedNodes::advance(const Links& links, int k, int substeps, double 
 void LinkedNodes::store(Particles& p, double dt) const {
   const double inv = 1.0 / dt;
   const std::uint32_t *id = n_.id.data(), *slot = p.slot.data();
-  // Positions, mean velocities over the step; mean spins, then forces.
-  {
-    double* __restrict X = p.x.data(), * __restrict Y = p.y.data(), * __restrict Z = p.z.data();
-    double* __restrict VX = p.vx.data(), * __restrict VY = p.vy.data(), * __restrict VZ = p.vz.data();
-    const double *x = n_.x.data(), *y = n_.y.data(), *z = n_.z.data();
-    const double *sx = sx_.data(), *sy = sy_.data(), *sz = sz_.data();
-    for (std::size_t k = 0; k < size(); ++k) {
-      const std::uint32_t i = slot[id[k]];
-      X[i] = x[k], Y[i] = y[k], Z[i] = z[k];
-      VX[i] = (x[k] - sx[k]) * inv, VY[i] = (y[k] - sy[k]) * inv, VZ[i] = (z[k] - sz[k]) * inv;
-    }
+  // Positions, mean velocities and mean spins over the step.
+  double* __restrict X = p.x.data(), * __restrict Y = p.y.data(), * __restrict Z = p.z.data();
+  double* __restrict VX = p.vx.data(), * __restrict VY = p.vy.data(), * __restrict VZ = p.vz.data();
+  double* __restrict WX = p.wx.data(), * __restrict WY = p.wy.data(), * __restrict WZ = p.wz.data();
+  const double *x = n_.x.data(), *y = n_.y.data(), *z = n_.z.data();
+  const double *sx = sx_.data(), *sy = sy_.data(), *sz = sz_.data();
+  const double *rx = rx_.data(), *ry = ry_.data(), *rz = rz_.data();
+  for (std::size_t k = 0; k < size(); ++k) {
+    const std::uint32_t i = slot[id[k]];
+    X[i] = x[k], Y[i] = y[k], Z[i] = z[k];
+    VX[i] = (x[k] - sx[k]) * inv, VY[i] = (y[k] - sy[k]) * inv, VZ[i] = (z[k] - sz[k]) * inv;
+    WX[i] = rx[k] * inv, WY[i] = ry[k] * inv, WZ[i] = rz[k] * inv;
   }
-  {
-    double* __restrict WX = p.wx.data(), * __restrict WY = p.wy.data(), * __restrict WZ = p.wz.data();
-    double* __restrict FX = p.fx.data(), * __restrict FY = p.fy.data(), * __restrict FZ = p.fz.data();
-    const double *rx = rx_.data(), *ry = ry_.data(), *rz = rz_.data();
-    for (std::size_t k = 0; k < size(); ++k) {
-      const std::uint32_t i = slot[id[k]];
-      WX[i] = rx[k] * inv, WY[i] = ry[k] * inv, WZ[i] = rz[k] * inv;
-      FX[i] = hfx_[k] + lfx_[k], FY[i] = hfy_[k] + lfy_[k], FZ[i] = hfz_[k] + lfz_[k];
-    }
-  }
+}
+
+std::optional<Vec3> LinkedNodes::force(std::uint32_t id) const {
+  const auto it = std::lower_bound(n_.id.begin(), n_.id.end(), id);  // (ids increase with the node index)
+  if (it == n_.id.end() || *it != id) return std::nullopt;
+  const auto k = static_cast<std::size_t>(it - n_.id.begin());
+  return Vec3(hfx_[k] + lfx_[k], hfy_[k] + lfy_[k], hfz_[k] + lfz_[k]);
 }
 
 double criticalLinkStep(const Scene& scene) {

@@ -19,6 +19,7 @@
 /// like Links); the engine's store keeps a copy for contact detection, with
 /// no mass, so that its free-sphere pass leaves them to this stage.
 #include <cstdint>
+#include <optional>
 #include <vector>
 
 #include "micro/links.hpp"
@@ -49,11 +50,16 @@ class LinkedNodes {
   /// `measure`), and adds the work of the driven nodes to `driven_work`.
   SphereSums advance(const Links& links, int k, int substeps, double h, const Vec3& g, bool measure,
                      double& driven_work);
-  /// Writes the nodes' positions, and their force (the held contact and wall
-  /// forces plus the links' of the last sub-step), into the store, with as velocity the mean over the step of length dt
-  /// (its displacement / dt), and as spin the mean over the step (its turn / dt): the contacts' shear increments then
-  /// follow the node's real path over the step, whatever the sub-steps did inside it.
+  /// Writes the nodes' positions into the store, with as velocity the mean
+  /// over the step of length dt (its displacement / dt), and as spin the
+  /// mean over the step (its turn / dt): the contacts' shear increments then
+  /// follow the node's real path over the step, whatever the sub-steps did
+  /// inside it. (Their force stays here: force().)
   void store(Particles& p, double dt) const;
+  /// The force on the node of stable id `id` at the last step (the held
+  /// contact and wall forces plus the links' of its last sub-step; N), or
+  /// nullopt when `id` is not a link node.
+  std::optional<Vec3> force(std::uint32_t id) const;
 
   /// The beams' force and torque (Links::evaluateBeams, at the step's start,
   /// before hold) join the held forces: bending wires are soft beside their
