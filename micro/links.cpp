@@ -70,6 +70,21 @@ Links::Links(const std::vector<LinkSpec>& specs, std::size_t particles) : partic
       node_link_.push_back(link[q]), node_sign_.push_back(sign[q]);
     node_begin_.push_back(static_cast<std::uint32_t>(node_link_.size()));
   }
+  // The same incidence padded to the largest number of links at a node
+  // (a padding entry: the node's first link with sign 0, adding +0 to the
+  // sum), so that nodeForces runs the same count at every node.
+  for (std::size_t k = 0; k + 1 < node_begin_.size(); ++k)
+    node_degree_ = std::max<std::size_t>(node_degree_, node_begin_[k + 1] - node_begin_[k]);
+  const std::size_t nodes = node_id_.size();
+  padded_link_.assign(nodes * node_degree_, 0);
+  padded_sign_.assign(nodes * node_degree_, 0.0);
+  for (std::size_t k = 0; k < nodes; ++k)
+    for (std::size_t q = 0; q < node_degree_; ++q) {
+      const std::uint32_t at = node_begin_[k] + static_cast<std::uint32_t>(q);
+      const bool real = at < node_begin_[k + 1];
+      padded_link_[k * node_degree_ + q] = node_link_[real ? at : node_begin_[k]];
+      padded_sign_[k * node_degree_ + q] = real ? node_sign_[at] : 0.0;
+    }
   std::vector<std::uint32_t> node_of(particles, 0);
   for (std::size_t k = 0; k < node_id_.size(); ++k) node_of[node_id_[k]] = static_cast<std::uint32_t>(k);
   for (std::size_t l = 0; l < n; ++l) ka_.push_back(node_of[a_[l]]), kb_.push_back(node_of[b_[l]]);
@@ -243,11 +258,14 @@ Vec3 Links::nodeBeamTorque(std::size_t k) const {
 }
 
 void Links::nodeForces(double* FX, double* FY, double* FZ) const {
-  const std::uint32_t *begin = node_begin_.data(), *link = node_link_.data();
-  const double *sign = node_sign_.data(), *fx = fx_.data(), *fy = fy_.data(), *fz = fz_.data();
+  // (each node's links in link order, then its padding: a sum that starts
+  // at +0 is never -0, and adding +-0 leaves it as it is)
+  const std::size_t D = node_degree_;
+  const std::uint32_t* link = padded_link_.data();
+  const double *sign = padded_sign_.data(), *fx = fx_.data(), *fy = fy_.data(), *fz = fz_.data();
   for (std::size_t k = 0; k < nodeCount(); ++k) {
     double sx = 0.0, sy = 0.0, sz = 0.0;
-    for (std::uint32_t q = begin[k]; q < begin[k + 1]; ++q) {
+    for (std::size_t q = k * D; q < (k + 1) * D; ++q) {
       const std::uint32_t l = link[q];
       const double sg = sign[q];
       sx += sg * fx[l], sy += sg * fy[l], sz += sg * fz[l];

@@ -109,6 +109,10 @@ class Links {
   // node_link_[node_begin_[k] .. node_begin_[k + 1]), with the sign of the force on it
   std::vector<std::uint32_t> node_id_, node_begin_, node_link_;
   std::vector<double> node_sign_;
+  // The same, padded to node_degree_ entries a node (nodeForces).
+  std::size_t node_degree_ = 0;
+  std::vector<std::uint32_t> padded_link_;
+  std::vector<double> padded_sign_;
   // Beams: link l bends if beam_of_[l] != kNoBeam; its parameters, state,
   // chord at the last evaluation, and actions at this step.
   static constexpr std::uint32_t kNoBeam = 0xffffffffu;
