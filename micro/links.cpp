@@ -194,11 +194,9 @@ void Links::evaluate(const double* X, const double* Y, const double* Z, std::siz
 #pragma omp simd
     for (std::size_t l = l0; l < l1; ++l) {
       const double eps = (len[l] - L0[l]) * IR[l];
-      const double trial = E[l] * (eps - WS[l].plastic_strain);
-      const double f = 0.0 < trial ? trial : 0.0;  // (std::max(0.0, trial), as the law writes it)
-      const double reached = WS[l].reached_strain, first = FIRST[l];
-      const double backbone = reached < first ? first : reached;
-      slow[l] = (GEN[l] | BROKEN[l] | (eps > RUP[l] ? 1 : 0) | (eps > backbone ? 1 : 0)) != 0 ? 1 : 0;
+      const double f = bridge::wireElasticLineForce(E[l], eps, WS[l].plastic_strain);
+      const bool off = bridge::wireLeavesElasticLine(eps, WS[l].reached_strain, FIRST[l], RUP[l]);
+      slow[l] = (GEN[l] | BROKEN[l] | (off ? 1 : 0)) != 0 ? 1 : 0;
       FX[l] = f * ux[l], FY[l] = f * uy[l], FZ[l] = f * uz[l];
       T[l] = f;
     }

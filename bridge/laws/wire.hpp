@@ -206,6 +206,23 @@ struct WireResponse {
   bool breaks = false;   ///< strain beyond the last point: the wire stops acting
 };
 
+/// The wire's elastic line, F = max(0, E A (eps - eps_p)) (N): its force
+/// wherever it is below its backbone (loading again, unloading, slack).
+/// Branch-free: the link stage evaluates it in SIMD lanes.
+inline double wireElasticLineForce(double elastic_force_N, double eps, double plastic_strain) {
+  const double f = elastic_force_N * (eps - plastic_strain);
+  return 0.0 < f ? f : 0.0;  // (std::max(0.0, f): 0 for a NaN strain too)
+}
+
+/// Whether strain eps takes a wire off its elastic line: past the largest
+/// strain it reached on the backbone (at least the curve's first point), or
+/// past rupture. Where it does not, wireResponse gives wireElasticLineForce
+/// and leaves the state as it is.
+inline bool wireLeavesElasticLine(double eps, double reached_strain, double first_strain, double rupture_strain) {
+  const double backbone = reached_strain < first_strain ? first_strain : reached_strain;  // (std::max)
+  return eps > rupture_strain || eps > backbone;
+}
+
 /// Advances the state to strain eps = (L - L0) / L0 and returns the force. A
 /// wire that breaks leaves its state at the last point of the curve (the
 /// energy it held then: wireElasticEnergy of its last force).
@@ -217,7 +234,7 @@ inline WireResponse wireResponse(const WireCurve& c, WireState& s, double eps) {
     out.breaks = true;
     return out;
   }
-  double f = std::max(0.0, c.elasticForce() * (eps - s.plastic_strain));
+  double f = wireElasticLineForce(c.elasticForce(), eps, s.plastic_strain);
   if (eps > std::max(s.reached_strain, c.strain()[0])) {
     // Beyond the largest strain reached: on the backbone (its slopes never
     // exceed E, so the elastic trial is never below it there).

@@ -139,3 +139,40 @@ TEST(WireLaw, BadTablesAreNamed) {
   t.stress_Pa.pop_back();
   EXPECT_FALSE(checkWireTable(t).message.empty());
 }
+
+// The link stage answers most wires with the elastic line alone
+// (micro/links.cpp): wherever wireLeavesElasticLine says a strain stays on
+// it, wireResponse must give wireElasticLineForce to the last bit and leave
+// the state as it was; wherever it says the strain leaves it, wireResponse
+// must change the state or break. Checked over states along a loading path
+// and strains across the whole curve, slack and rupture included.
+TEST(WireLaw, TheElasticLineIsTheLawWhereverItSaysSo) {
+  const WireCurve c = wireCurve(defaultWireTable(), kD);
+  const double rupture = c.ruptureStrain(), first = c.strain()[0];
+  int on = 0, off = 0;
+  for (const double reached : {0.0, 0.5 * first, first, 0.01, 0.1, 0.2, 0.34}) {
+    WireState state;
+    if (reached > 0.0) wireResponse(c, state, reached);  // (to that point of the backbone)
+    for (int k = -20; k <= 420; ++k) {
+      const double eps = 1e-3 * k;  // -2 % .. 42 %
+      WireState s = state;
+      const WireResponse r = wireResponse(c, s, eps);
+      if (wireLeavesElasticLine(eps, state.reached_strain, first, rupture)) {
+        ++off;
+        EXPECT_TRUE(r.breaks || s.reached_strain != state.reached_strain) << reached << " " << eps;
+      } else {
+        ++on;
+        EXPECT_FALSE(r.breaks) << eps;
+        EXPECT_EQ(r.force_N, wireElasticLineForce(c.elasticForce(), eps, state.plastic_strain))
+            << reached << " " << eps;
+        EXPECT_EQ(s.plastic_strain, state.plastic_strain);
+        EXPECT_EQ(s.reached_strain, state.reached_strain);
+      }
+    }
+  }
+  EXPECT_GT(on, 500);
+  EXPECT_GT(off, 500);
+  // A NaN strain stays on the line with no force (as std::max(0, NaN)).
+  EXPECT_FALSE(wireLeavesElasticLine(std::nan(""), 0.0, first, rupture));
+  EXPECT_EQ(wireElasticLineForce(c.elasticForce(), std::nan(""), 0.0), 0.0);
+}
