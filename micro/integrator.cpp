@@ -100,8 +100,9 @@ SphereSums integrateSpheres(Particles& p, std::size_t b, std::size_t e, double d
   return measure ? sphereLoop<true, false>(p, b, e, dt, g, nullptr) : sphereLoop<false, false>(p, b, e, dt, g, nullptr);
 }
 
-SphereSums integrateHeld(Particles& n, const HeldForces& f, double h, const Vec3& g, bool measure) {
-  return measure ? sphereLoop<true, true>(n, 0, n.size(), h, g, &f) : sphereLoop<false, true>(n, 0, n.size(), h, g, &f);
+SphereSums integrateHeld(Particles& n, const HeldForces& f, std::size_t b, std::size_t e, double h, const Vec3& g,
+                         bool measure) {
+  return measure ? sphereLoop<true, true>(n, b, e, h, g, &f) : sphereLoop<false, true>(n, b, e, h, g, &f);
 }
 
 SphereSums integrateBlock(RigidBlock& b, Particles& p, double dt, const Vec3& g, bool measure) {

@@ -47,9 +47,10 @@ struct HeldForces {
   double *rx, *ry, *rz;  ///< each node's turn over the step so far (rad): the sub-step adds h times its new spin
 };
 
-/// Advances the link nodes' own store `n` by one sub-step h, as
-/// integrateSpheres does the free spheres.
-SphereSums integrateHeld(Particles& n, const HeldForces& f, double h, const Vec3& g, bool measure);
+/// Advances the link nodes [b, e) of their own store `n` by one sub-step h,
+/// as integrateSpheres does the free spheres.
+SphereSums integrateHeld(Particles& n, const HeldForces& f, std::size_t b, std::size_t e, double h, const Vec3& g,
+                         bool measure);
 
 /// Advances one block by one step (forces and torques of its members in
 /// `p`) and places its members; the same sums as integrateSpheres.

@@ -56,21 +56,24 @@ void LinkedNodes::addBeams(const Links& links) {
 }
 
 SphereSums LinkedNodes::advance(const Links& links, int k, int substeps, double h, const Vec3& g, bool measure,
-                                double& driven_work) {
+                                std::size_t k0, std::size_t k1) {
   // The held forces' impulse over the whole step comes in the first kick;
   // local damping, a force against the unbalanced force, sees in every
   // sub-step the physical force (held + links): a node in equilibrium is not
   // damped by the impulse's swing inside the step.
   const double held = k == 0 ? static_cast<double>(substeps) : 0.0;
-  links.nodeForces(lfx_.data(), lfy_.data(), lfz_.data());
+  links.nodeForces(lfx_.data(), lfy_.data(), lfz_.data(), k0, k1);
   const HeldForces f{hfx_.data(), hfy_.data(), hfz_.data(), htx_.data(), hty_.data(), htz_.data(), lfx_.data(),
                      lfy_.data(), lfz_.data(), held,        rx_.data(),  ry_.data(),  rz_.data()};
-  const SphereSums s = integrateHeld(n_, f, h, g, measure);
+  return integrateHeld(n_, f, k0, k1, h, g, measure);
+}
+
+void LinkedNodes::addDrivenWork(int k, int substeps, double h, double& driven_work) const {
   // A driven node keeps its velocity: the work it did on the rest over h.
+  const double held = k == 0 ? static_cast<double>(substeps) : 0.0;
   for (const std::uint32_t j : driven_)
     driven_work -= h * ((held * hfx_[j] + lfx_[j]) * n_.vx[j] + (held * hfy_[j] + lfy_[j]) * n_.vy[j] +
                         (held * hfz_[j] + lfz_[j]) * n_.vz[j]);
-  return s;
 }
 
 void LinkedNodes::store(Particles& p, double dt) const {

@@ -44,12 +44,17 @@ class LinkedNodes {
   /// (the neighbour list was built since the last call) also their positions
   /// at that build. Their turn starts again from zero.
   void hold(const Particles& p, bool rebuilt);
-  /// Sub-step k of `substeps` (each h long): the link forces are in `links`
-  /// (evaluated on x(), y(), z()); sub-step 0 adds the held impulse. Kicks and
-  /// drifts every node by h, and turns it (its turn over the step). Returns the free-sphere sums (energies when
-  /// `measure`), and adds the work of the driven nodes to `driven_work`.
-  SphereSums advance(const Links& links, int k, int substeps, double h, const Vec3& g, bool measure,
-                     double& driven_work);
+  /// Sub-step k of `substeps` (each h long) for nodes [k0, k1): the link
+  /// forces are in `links` (evaluated on x(), y(), z()); sub-step 0 adds the
+  /// held impulse. Kicks and drifts every node by h, and turns it (its turn
+  /// over the step). Returns the free-sphere sums (energies when
+  /// `measure`). Each node's arithmetic is its own: ranges may advance in
+  /// parallel.
+  SphereSums advance(const Links& links, int k, int substeps, double h, const Vec3& g, bool measure, std::size_t k0,
+                     std::size_t k1);
+  /// After advance of every node: adds the work the driven nodes did over
+  /// sub-step k to `driven_work`.
+  void addDrivenWork(int k, int substeps, double h, double& driven_work) const;
   /// Writes the nodes' positions into the store, with as velocity the mean
   /// over the step of length dt (its displacement / dt), and as spin the
   /// mean over the step (its turn / dt): the contacts' shear increments then

@@ -255,13 +255,13 @@ Vec3 Links::nodeBeamTorque(std::size_t k) const {
   return t;
 }
 
-void Links::nodeForces(double* FX, double* FY, double* FZ) const {
+void Links::nodeForces(double* FX, double* FY, double* FZ, std::size_t k0, std::size_t k1) const {
   // (each node's links in link order, then its padding: a sum that starts
   // at +0 is never -0, and adding +-0 leaves it as it is)
   const std::size_t D = node_degree_;
   const std::uint32_t* link = padded_link_.data();
   const double *sign = padded_sign_.data(), *fx = fx_.data(), *fy = fy_.data(), *fz = fz_.data();
-  for (std::size_t k = 0; k < nodeCount(); ++k) {
+  for (std::size_t k = k0; k < k1; ++k) {
     double sx = 0.0, sy = 0.0, sz = 0.0;
     for (std::size_t q = k * D; q < (k + 1) * D; ++q) {
       const std::uint32_t l = link[q];

@@ -49,9 +49,9 @@ class Links {
   /// plastic work so far into s.link_plastic, when `measure`.
   void evaluate(const double* X, const double* Y, const double* Z, std::size_t l0, std::size_t l1, double time_s,
                 bool measure, WorkerScratch& s);
-  /// Pass 2: the axial force of its links on each node (N), summed in link
-  /// order, into FX, FY, FZ (indexed by node).
-  void nodeForces(double* FX, double* FY, double* FZ) const;
+  /// Pass 2, nodes [k0, k1): the axial force of its links on each node (N),
+  /// summed in link order, into FX, FY, FZ (indexed by node).
+  void nodeForces(double* FX, double* FY, double* FZ, std::size_t k0, std::size_t k1) const;
 
   /// Whether any link bends (bridge/laws/wire_beam.hpp).
   bool hasBeams() const { return !beams_.empty(); }
