@@ -728,9 +728,16 @@ void Engine::integrate(bool measure) {
     energy_.driven_work -= dt_ * (p_.fx[i] * p_.vx[i] + p_.fy[i] * p_.vy[i] + p_.fz[i] * p_.vz[i]);
   }
   if (!blocks_.empty()) {
-    std::vector<SphereSums> per_block(blocks_.size());
-    forBlocks(StageProfile::kIntegrate, blocks_.size(),
-              [&](std::size_t b) { per_block[b] = integrateBlock(blocks_[b], p_, dt_, gravity_, measure); });
+    // Each worker a contiguous range of blocks (blocks cost alike: a shared
+    // counter handing them out one by one cost more than it balanced).
+    std::vector<SphereSums>& per_block = block_sums_;
+    per_block.resize(blocks_.size());
+    const std::size_t nb = blocks_.size();
+    parallel(StageProfile::kIntegrate, [&](int task) {
+      const auto t = static_cast<std::size_t>(task);
+      for (std::size_t b = nb * t / workers; b < nb * (t + 1) / workers; ++b)
+        per_block[b] = integrateBlock(blocks_[b], p_, dt_, gravity_, measure);
+    });
     for (const SphereSums& s : per_block) sum.add(s);
   }
 }

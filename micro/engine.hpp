@@ -251,7 +251,8 @@ class Engine {
   std::vector<std::uint32_t> wall_part_;   // particle ranges per worker with equal wall candidates
   std::string failure_;
   StepStatus status_ = StepStatus::Ok;
-  StageProfile profile_;  // (wall_s, and one worker's busy time, are in ticks_ until profile())
+  std::vector<SphereSums> block_sums_;  // integrate(): each block's sums, added in block order
+  StageProfile profile_;                // (wall_s, and one worker's busy time, are in ticks_ until profile())
   TickClock clock_;
   std::array<std::uint64_t, StageProfile::kStageCount> ticks_{};
   std::uint64_t lap_ = 0;
