@@ -18,10 +18,12 @@ namespace gabion::bridge {
 constexpr double kMicroSecondsPerBodyStep = 3.5e-8;
 constexpr double kMicroBytesPerBody = 1000.0;
 constexpr double kMicroSnapshotBytesPerBody = 100.0;
-/// Fine DEM: seconds per link per sub-step of the link nodes, on top of the
-/// body-steps (the links' stage runs on one thread: a cell's 1,578 links at
-/// 8 sub-steps took 0.31 ms a step, half of the step, in the one-cell
-/// hybrid of docs/resolved.md).
+/// Fine DEM: seconds per link per sub-step of the link nodes, on one thread,
+/// on top of the body-steps. Measured on the one-cell hybrid of
+/// docs/resolved.md (a cell's 1,578 links at 8 sub-steps: 0.31 ms a step),
+/// it runs high for the links alone; with the body-steps' rate, which runs
+/// low for a wall of a hundred thousand spheres, the resolved wall's
+/// estimate comes within 12 % of its time on one thread.
 constexpr double kMicroSecondsPerLinkSubstep = 2.5e-8;
 /// Structure scale: seconds per cell-step (a 1,000-cell impact, 525 steps,
 /// 9.4 ms) and bytes per cell (measured on 1e6 cells).
