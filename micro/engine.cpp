@@ -568,7 +568,8 @@ void Engine::advanceLinkedNodes(bool measure) {
   // (each node's arithmetic is its own; the ranges' energy sums add in
   // range order).
   const std::size_t nn = nodes_.size(), node_parts = nn < kSerialNodes ? 1 : scratch_.size();
-  std::vector<SphereSums> part_sums(node_parts);
+  std::vector<SphereSums>& part_sums = node_sums_;
+  part_sums.resize(node_parts);
   const auto overLinks = [&](const auto& job) {  // job(scratch, first link, end)
     for (WorkerScratch& s : scratch_) s.link_elastic = s.link_rupture = s.link_plastic = 0.0, s.link_events.clear();
     const auto part = [&](int task) {

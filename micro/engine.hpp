@@ -252,6 +252,7 @@ class Engine {
   std::string failure_;
   StepStatus status_ = StepStatus::Ok;
   std::vector<SphereSums> block_sums_;  // integrate(): each block's sums, added in block order
+  std::vector<SphereSums> node_sums_;   // advanceLinkedNodes(): each range of nodes' sums, added in order
   StageProfile profile_;                // (wall_s, and one worker's busy time, are in ticks_ until profile())
   TickClock clock_;
   std::array<std::uint64_t, StageProfile::kStageCount> ticks_{};
