@@ -30,6 +30,7 @@ struct Plan {
   macro::ImpactCase c;
   macro::Structure structure;  ///< the macro part: no node for a resolved cell
   double within_m = 0.0;
+  bool whole_depth = false;  ///< `resolve.depth` "whole": every cell behind a resolved front cell too
   std::vector<int> resolved;
   std::vector<StructurePart::Face> faces;
   json micro_case;
@@ -54,6 +55,7 @@ Plan plan(const JsonDocument& doc) {
   p.c = macro::readImpactCase(doc, false);
   const JsonReader rs = root.object("resolve");
   p.within_m = rs.number("within_m", 0.0, Check::NonNegative);
+  p.whole_depth = rs.choice("depth", {"reach", "whole"}, "reach") == "whole";
   const fs::path cell_file = absoluteFrom(doc, rs.string("cell"));
   if (p.c.impacts.size() != 1)
     root.fail("impacts", "a hybrid run takes one impact (the fine part is struck once): give `boulder`");
@@ -67,7 +69,8 @@ Plan plan(const JsonDocument& doc) {
   for (const int off : p.c.structure.front_offset_cells)
     if (off != 0) root.fail("structure", "a hybrid structure has a plane front face (no front_offset_cells)");
 
-  // The aim, on the whole structure; then which cells are within reach.
+  // The aim, on the whole structure; then which cells are within reach
+  // (with depth "whole": which columns, by their front cell).
   const macro::Structure whole = macro::buildCaseStructure(doc, p.c);
   macro::resolveAims(doc, p.c, whole);
   const int nx = whole.nx, ny = whole.ny, nz = whole.nz;
@@ -75,7 +78,8 @@ Plan plan(const JsonDocument& doc) {
   for (int k = 0; k < nz; ++k)
     for (int j = 0; j < ny; ++j)
       for (int i = 0; i < nx; ++i)
-        if (distanceToCell(i, j, k, e, b.aim_y_m, b.aim_z_m) <= p.within_m) p.resolved.push_back(i + nx * (j + ny * k));
+        if (distanceToCell(p.whole_depth ? 0 : i, j, k, e, b.aim_y_m, b.aim_z_m) <= p.within_m)
+          p.resolved.push_back(i + nx * (j + ny * k));
   if (p.resolved.empty()) {  // (an aim on the face's edge is within 0 of a cell: never empty)
     rs.fail("within_m", "no cell is within reach of the aim point");
   }
@@ -118,7 +122,7 @@ Plan plan(const JsonDocument& doc) {
       {"boulder", boulder},
       {"rebound_restitution", p.c.run.rebound_restitution}};
   for (const auto& [key, value] : root.raw("resolve").items()) {
-    if (key == "cell" || key == "within_m") continue;
+    if (key == "cell" || key == "within_m" || key == "depth") continue;
     if (key == "structure" || key == "boulder")
       rs.fail(key, "the hybrid's structure and boulder are the macro case's: give them there");
     p.micro_case[key] = value;
@@ -289,6 +293,7 @@ bridge::RunOutcome run(const JsonDocument& doc, const bridge::RunContext& ctx) {
   const double energy = r.value("impact_energy_J", 0.0);
   json h = coupler->report(energy);
   h["within_m"] = p.within_m;
+  h["depth"] = p.whole_depth ? "whole" : "reach";
   json cells = json::array(), faces = json::array();
   const int nx = p.structure.nx, ny = p.structure.ny;
   for (const int c : p.resolved) cells.push_back({c % nx, (c / nx) % ny, c / (nx * ny)});
@@ -310,9 +315,10 @@ bridge::RunOutcome run(const JsonDocument& doc, const bridge::RunContext& ctx) {
   std::ostringstream a;
   a.precision(3);
   a << "hybrid: " << p.resolved.size() << " of " << p.structure.nx * p.structure.ny * p.structure.nz
-    << " cells resolved (within " << p.within_m << " m of the aim), " << p.faces.size()
-    << " interface plates; energy balance of both parts " << h["balance_rel_error"].get<double>()
-    << ", interface mismatch " << h["interface_mismatch_J"].get<double>() << " J\n";
+    << " cells resolved (within " << p.within_m << " m of the aim" << (p.whole_depth ? ", through the depth" : "")
+    << "), " << p.faces.size() << " interface plates; energy balance of both parts "
+    << h["balance_rel_error"].get<double>() << ", interface mismatch " << h["interface_mismatch_J"].get<double>()
+    << " J\n";
   out.answer = a.str() + out.answer;
   return out;
 }

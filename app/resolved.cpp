@@ -35,7 +35,8 @@ struct Plan {
   json twin, resolved;
   std::vector<json> hybrids;  ///< macro.impact cases with "resolve", one per `hybrid/within_m`
   std::vector<double> within_m;
-  double law_edge_m = 0.0;  ///< the laws' cell edge (0: not known)
+  std::string depth = "reach";  ///< `hybrid/depth`: "whole" resolves every cell behind a front one within reach
+  double law_edge_m = 0.0;      ///< the laws' cell edge (0: not known)
 };
 
 fs::path absoluteFrom(const JsonDocument& doc, const std::string& path) {
@@ -96,9 +97,10 @@ Plan plan(const JsonDocument& doc) {
   // resolved structure's are (the same cell, the same micro keys).
   if (const auto h = root.optionalObject("hybrid")) {
     p.within_m = h->numbers("within_m", Check::NonNegative, 1);
+    p.depth = h->choice("depth", {"reach", "whole"}, "reach");
     for (const double w : p.within_m) {
       json c = p.twin;
-      json resolve = {{"cell", cell.string()}, {"within_m", w}};
+      json resolve = {{"cell", cell.string()}, {"within_m", w}, {"depth", p.depth}};
       for (const auto& [key, value] : p.resolved.items())
         if (key != "format" && key != "kind" && key != "cell" && key != "structure" && key != "boulder")
           resolve[key] = value;
@@ -208,7 +210,7 @@ bridge::RunOutcome run(const JsonDocument& doc, const bridge::RunContext& ctx) {
   json hybrids = json::array();
   for (std::size_t k = 0; k < hp.size(); ++k) {
     const json& h = hp[k].summary;
-    json row = {{"within_m", p.within_m[k]}, {"folder", "hybrid_" + std::to_string(k)}};
+    json row = {{"within_m", p.within_m[k]}, {"depth", p.depth}, {"folder", "hybrid_" + std::to_string(k)}};
     if (hp[k].status != bridge::RunOutcome::Status::Ok) {
       row["status"] = "failed";
       row["message"] = hp[k].message;
@@ -260,7 +262,8 @@ bridge::RunOutcome run(const JsonDocument& doc, const bridge::RunContext& ctx) {
       const bridge::H5Reader h(ctx.outdir / ("hybrid_" + std::to_string(k)) / "result.h5");
       std::ostringstream label;
       const std::size_t n = hybrids[k]["resolved_cells"].get<std::size_t>();
-      label << "hybrid, within " << p.within_m[k] << " m (" << n << (n == 1 ? " cell" : " cells") << " resolved)";
+      label << "hybrid, within " << p.within_m[k] << " m" << (p.depth == "whole" ? " through the depth" : "") << " ("
+            << n << (n == 1 ? " cell" : " cells") << " resolved)";
       plot.series.push_back(history(label.str(), h.read("/curves/impact/time_s"), h.read("/curves/impact/force_N")));
     }
     bridge::writePlotPng(ctx.outdir / "resolved_vs_macro.png", plot);
@@ -279,7 +282,8 @@ bridge::RunOutcome run(const JsonDocument& doc, const bridge::RunContext& ctx) {
     << " macro\n  wall time: " << res_wall << " s resolved, " << twin_wall << " s macro (the macro twin "
     << res_wall / twin_wall << " times faster)\n";
   for (const json& h : hybrids) {
-    a << "  hybrid within " << h["within_m"].get<double>() << " m: ";
+    a << "  hybrid within " << h["within_m"].get<double>() << " m" << (p.depth == "whole" ? " through the depth" : "")
+      << ": ";
     if (h["status"] != "ok") {
       a << "failed: " << h["message"].get<std::string>() << "\n";
       continue;

@@ -183,6 +183,30 @@ TEST(HybridStructure, StruckCellResolvedTheCellBehindAMacroNode) {
   bad["resolve"]["within_m"] = 5.0;
   refused(bad, "/resolve/within_m");  // (the whole structure: larger than it)
   bad = c;
+  bad["resolve"]["depth"] = "whole";  // (the struck cell and the one behind it: the whole 2 x 1 x 1 wall)
+  refused(bad, "/resolve/within_m");
+  bad = c;
+  bad["resolve"]["depth"] = "all";
+  refused(bad, "/resolve/depth");
+  // Through the depth: on a 2 x 2 x 1 wall struck on a front cell, the
+  // cell behind it is resolved too, so the fine part holds twice the
+  // bodies, the boulder once (2 of 4 cells, against 1).
+  const auto bodies = [&](const nlohmann::json& cs) {
+    writeFile(dir / "wide.json", cs.dump());
+    const auto out = runGabion("check " + (dir / "wide.json").string());
+    EXPECT_EQ(out.exit_code, 0) << out.output;
+    const auto at = out.output.find(" bodies");
+    const auto from = out.output.rfind(' ', at - 1);
+    return at == std::string::npos || from == std::string::npos ? 0.0
+                                                                : std::stod(out.output.substr(from + 1, at - from - 1));
+  };
+  nlohmann::json wide = c;
+  wide["structure"]["cells"] = {2, 2, 1};
+  const double reach = bodies(wide);
+  wide["resolve"]["depth"] = "whole";
+  EXPECT_GT(reach, 0.0);
+  EXPECT_DOUBLE_EQ(bodies(wide) - 1.0, 2.0 * (reach - 1.0));
+  bad = c;
   bad["run"] = {{"kinematics", "3d"}};
   refused(bad, "/run");
   bad = c;
