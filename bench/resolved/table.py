@@ -4,7 +4,8 @@ bench/resolved/in_place.sh. run.sh's: for each scenario, the resolved wall,
 its macro twin and its hybrids on the compared keys, with the relative errors
 against the resolved wall and the wall times (Python standard library); and,
 with bench_curves (argument 2), a chart per scenario of each model's error
-against its wall time, OUT/figures/<scenario>_error_vs_time.png."""
+against its wall time, OUT/figures/<scenario>_error_vs_time.png. With --wide
+OUT, the table and chart of bench/resolved/wide.sh."""
 import json
 import math
 import os
@@ -176,8 +177,71 @@ def in_place(out, curves=None):
         in_place_charts(out, curves, by_speed)
 
 
+def wide(out, curves=None):
+    """The table of bench/resolved/wide.sh: per wall, the resolved wall, its
+    macro twin and every hybrid, errors against that wall and how many times
+    faster than it; with bench_curves (`curves`), each hybrid's largest error
+    over the compared keys against that speed-up,
+    OUT/figures/wide_error_vs_speed_up.png."""
+    head = ["wall", "model"] + [title for _, title, _ in KEYS] + ["outcome", "wall s", "x faster"]
+    print("| " + " | ".join(head) + " |")
+    print("|" + "---|" * len(head))
+    series = []
+    for n in (54, 210):
+        path = os.path.join(out, f"wall_{n}", "summary.json")
+        if not os.path.isfile(path):
+            continue
+        r = summary(path)
+        ref_wall = r.get("wall_time_s_resolved")
+        rows = [(f"resolved ({r.get('resolved', {}).get('bodies', 0):,} bodies)", r, None, ref_wall)]
+        rows.append(("macro twin", r.get("macro_twin", {}), r, r.get("macro_twin", {}).get("wall_time_s")))
+        hybrids = []
+        for k, h in enumerate(r.get("hybrids", [])):
+            folder = os.path.join(out, f"wall_{n}", f"hybrid_{k}")
+            hybrids.append((h.get("within_m"), h.get("depth", "reach"), folder))
+        more = os.path.join(out, f"wall_{n}_more")
+        if os.path.isdir(more):
+            for name in sorted(os.listdir(more)):
+                folder = os.path.join(more, name)
+                if os.path.isdir(folder):
+                    hybrids.append((None, None, folder))
+        for within, depth, folder in hybrids:
+            f = os.path.join(folder, "summary.json")
+            if not os.path.isfile(f):
+                continue
+            h = summary(f)
+            info = h.get("hybrid", {})
+            within = info.get("within_m", within)
+            depth = info.get("depth", depth)
+            cells = len(info.get("resolved_cells", []))
+            what = f"hybrid within {within:g} m" + (" through the depth" if depth == "whole" else "") + f" ({cells} cells)"
+            rows.append((what, h, r, h.get("wall_time_s")))
+        points = []
+        for model, s, ref, wall in rows:
+            errors = [None] * len(KEYS) if ref is None else relative(s, ref)
+            cells = [cell(s.get(k), scale) + ("" if e is None else f" ({100 * e:+.1f} %)")
+                     for (k, _, scale), e in zip(KEYS, errors)]
+            fast = ref_wall / wall if ref_wall and wall else None
+            wall_s = "-" if wall is None else (f"{wall:.3g}" if wall >= 0.01 else f"{wall:.2g}")
+            print("| " + " | ".join([f"{n} cells", model] + cells +
+                                    [str(s.get("outcome")), wall_s, "-" if fast is None else f"{fast:.3g}"]) + " |")
+            if model.startswith("hybrid") and fast and None not in errors:
+                points.append((math.log10(fast), 100 * max(abs(e) for e in errors)))
+        if points:
+            series.append(f"{n}-cell wall's hybrids=" + ",".join(f"{x:.4f}:{y:.3f}" for x, y in sorted(points)))
+    if curves and series:
+        os.makedirs(os.path.join(out, "figures"), exist_ok=True)
+        series.append("target: within 5 % at a tenth of the time or less=1:0,1:5,2:5")
+        subprocess.run([curves, "points", os.path.join(out, "figures", "wide_error_vs_speed_up.png"),
+                        "The hybrid on wide walls: largest error against speed-up, 10 m/s on the centre",
+                        "times faster than the resolved wall, log10", "largest |error| of the four keys (%)"] + series,
+                       check=True)
+
+
 if __name__ == "__main__":
-    if len(sys.argv) > 1 and sys.argv[1] == "--in-place":
+    if len(sys.argv) > 1 and sys.argv[1] == "--wide":
+        wide(sys.argv[2] if len(sys.argv) > 2 else "results/wide", sys.argv[3] if len(sys.argv) > 3 else None)
+    elif len(sys.argv) > 1 and sys.argv[1] == "--in-place":
         in_place(sys.argv[2] if len(sys.argv) > 2 else "results/speed_error", sys.argv[3] if len(sys.argv) > 3 else None)
     else:
         main(sys.argv[1] if len(sys.argv) > 1 else "results/speed_error", sys.argv[2] if len(sys.argv) > 2 else None)

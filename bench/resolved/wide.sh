@@ -1,0 +1,60 @@
+#!/usr/bin/env bash
+# The hybrid on walls wider than the default one (docs/resolved.md,
+# Targets): the hybrid's time goes with its resolved cells, the resolved
+# wall's with all of them. Struck at 10 m/s on the centre of the face:
+#   wall_54   2 x 9 x 3 cells: resolved, macro twin, and hybrids within
+#             0.25 and 0.5 m of the aim, and within 0.25 and 0.36 m
+#             through the depth (resolve.depth "whole");
+#   wall_210  2 x 15 x 7 cells: resolved, macro twin, and hybrids within
+#             0.25 and 0.36 m through the depth;
+# then one table, and a chart of each hybrid's largest error against how
+# many times faster than its resolved wall it ran (OUT/figures/wide_error_vs_speed_up.png).
+#   bench/resolved/wide.sh [--out DIR] [--threads N] [--walls "54 210"]
+# About 20 minutes for wall_54 and an hour for wall_210 on 2 cores.
+# Needs the pipeline's cell and laws (README, command 1: results/pipeline).
+# A run whose summary.json exists is not run again (delete it to rerun).
+set -euo pipefail
+here=$(cd "$(dirname "$0")" && pwd)
+root=$(cd "$here/../.." && pwd)
+out=$root/results/wide threads=2 walls="54 210"
+while [ $# -gt 0 ]; do
+  case $1 in
+    --out) out=$2; shift 2 ;;
+    --threads) threads=$2; shift 2 ;;
+    --walls) walls=$2; shift 2 ;;
+    *) echo "unknown option $1" >&2; exit 2 ;;
+  esac
+done
+gabion=${GABION:-$root/build/gabion}
+curves=${CURVES:-$root/build/bench/bench_curves}
+[ -x "$gabion" ] && [ -x "$curves" ] || { echo "build first (scripts/build.sh)" >&2; exit 2; }
+[ -f "$root/results/pipeline/law.json" ] || { echo "run the pipeline first (README, command 1)" >&2; exit 2; }
+mkdir -p "$out"
+# run NAME CASE ARGS...: one gabion run into OUT/NAME, unless it is there.
+run() {
+  local name=$1 case=$2; shift 2
+  [ -f "$out/$name/summary.json" ] && return 0
+  echo "== $name" >&2
+  mkdir -p "$(dirname "$out/$name")"
+  "$gabion" run "$case" --threads "$threads" -q -o "$out/$name" "$@" >"$out/$name.log" 2>&1 ||
+    echo "   $name failed: $(tail -n 1 "$out/$name.log")" >&2
+}
+for w in $walls; do
+  case $w in
+    54)
+      run wall_54 "$root/cases/macro_resolved.json" --set 'structure.cells=[2,9,3]' --set 'hybrid.within_m=[0.25]'
+      h=$out/wall_54/hybrid_0/case.json
+      if [ -f "$h" ]; then
+        run wall_54_more/reach_0.5 "$h" --set resolve.within_m=0.5
+        run wall_54_more/whole_0.25 "$h" --set resolve.depth=whole
+        run wall_54_more/whole_0.36 "$h" --set resolve.depth=whole --set resolve.within_m=0.36
+      fi
+      ;;
+    210)
+      run wall_210 "$root/cases/macro_resolved.json" --set 'structure.cells=[2,15,7]' \
+        --set 'hybrid.within_m=[0.25,0.36]' --set hybrid.depth=whole
+      ;;
+    *) echo "unknown wall $w (54 or 210)" >&2; exit 2 ;;
+  esac
+done
+python3 "$here/table.py" --wide "$out" "$curves"
