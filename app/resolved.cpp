@@ -238,6 +238,15 @@ bridge::RunOutcome run(const JsonDocument& doc, const bridge::RunContext& ctx) {
   if (!hp.empty()) r["hybrids"] = hybrids;
   json warnings = json::array();
   if (const auto w = cellSizeMismatch(p.law_edge_m, res, "the macro twin")) warnings.push_back(*w);
+  // (the twin stands at rest: a resolved wall still coming down is not the structure it stands for)
+  if (!res.value("settled", true)) {
+    std::ostringstream w;
+    w.precision(3);
+    w << "the resolved wall was struck before it came to rest (its centre of mass coming down at "
+      << 1e3 * res.value("settle", json::object()).value("descent_speed_m_s", NAN)
+      << " mm/s, resolved/summary.json): the comparison includes its slump; lengthen resolved.settle.duration_s";
+    warnings.push_back(w.str());
+  }
   r["warnings"] = warnings;
   r["resolved"] = {
       {"cells", res.value("cells", json())},
