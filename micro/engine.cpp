@@ -15,6 +15,14 @@
 namespace gabion::micro {
 
 namespace {
+/// Part t of [0, n) split evenly into `parts` contiguous ranges: [first, end).
+struct Range {
+  std::size_t first, end;
+};
+Range evenPart(std::size_t n, std::size_t t, std::size_t parts) {
+  return {n * t / parts, n * (t + 1) / parts};
+}
+
 // Blocks of the same shape and density (a wall of copies of one cell, each
 // block a copy of its cell's) share one computation: the key is the exact
 // bytes of the shape, so each block gets what it would get alone.
@@ -574,7 +582,8 @@ void Engine::advanceLinkedNodes(bool measure) {
     for (WorkerScratch& s : scratch_) s.link_elastic = s.link_rupture = s.link_plastic = 0.0, s.link_events.clear();
     const auto part = [&](int task) {
       const auto t = static_cast<std::size_t>(task);
-      job(scratch_[t], nl * t / parts, nl * (t + 1) / parts);
+      const Range r = evenPart(nl, t, parts);
+      job(scratch_[t], r.first, r.end);
     };
     if (parts == 1)
       part(0);
@@ -611,8 +620,8 @@ void Engine::advanceLinkedNodes(bool measure) {
     } else {
       parallel(StageProfile::kLinks, [&](int task) {
         const auto t = static_cast<std::size_t>(task);
-        part_sums[t] =
-            nodes_.advance(links_, k, substeps_, h, gravity_, m, nn * t / node_parts, nn * (t + 1) / node_parts);
+        const Range r = evenPart(nn, t, node_parts);
+        part_sums[t] = nodes_.advance(links_, k, substeps_, h, gravity_, m, r.first, r.end);
       });
       for (const SphereSums& p : part_sums) s.add(p);  // (in part order)
     }
@@ -703,7 +712,8 @@ void Engine::integrate(bool measure) {
   const std::size_t workers = scratch_.size(), n = p_.size();
   parallel(StageProfile::kIntegrate, [&](int task) {
     const auto t = static_cast<std::size_t>(task);
-    const std::size_t b = n * t / workers, e = n * (t + 1) / workers;
+    const Range r = evenPart(n, t, workers);
+    const std::size_t b = r.first, e = r.end;
     addForceBuffers(b, e);
     if (all_loose_) {
       scratch_[t].spheres = integrateSpheres(p_, b, e, dt_, gravity_, measure);
@@ -735,8 +745,8 @@ void Engine::integrate(bool measure) {
     per_block.resize(blocks_.size());
     const std::size_t nb = blocks_.size();
     parallel(StageProfile::kIntegrate, [&](int task) {
-      const auto t = static_cast<std::size_t>(task);
-      for (std::size_t b = nb * t / workers; b < nb * (t + 1) / workers; ++b)
+      const Range r = evenPart(nb, static_cast<std::size_t>(task), workers);
+      for (std::size_t b = r.first; b < r.end; ++b)
         per_block[b] = integrateBlock(blocks_[b], p_, dt_, gravity_, measure);
     });
     for (const SphereSums& s : per_block) sum.add(s);

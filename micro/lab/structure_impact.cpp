@@ -226,6 +226,8 @@ bridge::RunOutcome runOne(const StructureCase& c, const Sample& sample, const br
   Layout layout = buildLayout(c, sample, part);
   checkAim(c, layout, file);
   const Vec3 aim = aimPoint(c, layout);
+  // (the cells laid out: the whole structure's, or a hybrid's resolved ones)
+  const std::size_t laid_out = layout.blocks_per_cell > 0 ? layout.scene.blocks.size() / layout.blocks_per_cell : 0;
   nlohmann::json settle_results;
 
   // 1. The stack settles under its weight (the cells were made standing alone).
@@ -254,10 +256,7 @@ bridge::RunOutcome runOne(const StructureCase& c, const Sample& sample, const br
     // the file: a resumed settling's series is whole.
     const bridge::H5Reader h(sub.outdir / "result.h5");
     const std::vector<double> t = h.read("/series/time_s"), u = h.read("/series/gravity_potential_J");
-    const double weight =
-        sample.mass_kg *
-        static_cast<double>(layout.scene.blocks.size() / std::max<std::size_t>(1, layout.blocks_per_cell)) *
-        layout.scene.gravity_m_s2.norm();
+    const double weight = sample.mass_kg * static_cast<double>(laid_out) * layout.scene.gravity_m_s2.norm();
     double descent = 0.0;
     if (t.size() >= 2 && t.size() == u.size() && weight > 0.0) {
       const std::size_t k = std::min(t.size() - 2, (4 * t.size()) / 5);
@@ -288,7 +287,6 @@ bridge::RunOutcome runOne(const StructureCase& c, const Sample& sample, const br
   // moves of one along x and across it (the macro model's x-only assumption).
   std::vector<Vec3> cell0, now;
   double max_cell_x = 0.0, max_cell_across = 0.0;
-  const std::size_t laid_out = bpc > 0 ? layout.scene.blocks.size() / bpc : 0;
   SceneRunHooks hooks;
   hooks.label = "micro.structure";
   hooks.record = [&](const Engine& e, double) {
