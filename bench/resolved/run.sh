@@ -19,17 +19,10 @@ while [ $# -gt 0 ]; do
     *) echo "unknown option $1" >&2; exit 2 ;;
   esac
 done
-gabion=${GABION:-$root/build/gabion}
-curves=${CURVES:-$root/build/bench/bench_curves}
-[ -x "$gabion" ] && [ -x "$curves" ] || { echo "build first (scripts/build.sh)" >&2; exit 2; }
-[ -f "$root/results/pipeline/law.json" ] || { echo "run the pipeline first (README, command 1)" >&2; exit 2; }
-mkdir -p "$out"
+. "$here/common.sh"
 run() {
   local name=$1; shift
-  [ -f "$out/$name/summary.json" ] && return 0
-  echo "== $name" >&2
-  "$gabion" run "$root/cases/macro_resolved.json" --threads "$threads" -q -o "$out/$name" "$@" >"$out/$name.log" 2>&1 ||
-    echo "   $name failed: $(tail -n 1 "$out/$name.log")" >&2
+  run_once "$name" "$root/cases/macro_resolved.json" "$@"
 }
 for v in $speeds; do
   run "centre_${v}_m_s" --set boulder.velocity_m_s="$v"

@@ -213,8 +213,8 @@ def wide(out, curves=None):
             info = h.get("hybrid", {})
             within = info.get("within_m", within)
             depth = info.get("depth", depth)
-            cells = len(info.get("resolved_cells", []))
-            what = f"hybrid within {within:g} m" + (" through the depth" if depth == "whole" else "") + f" ({cells} cells)"
+            resolved = len(info.get("resolved_cells", []))
+            what = f"hybrid within {within:g} m" + (" through the depth" if depth == "whole" else "") + f" ({resolved} cells)"
             rows.append((what, h, r, h.get("wall_time_s")))
         points = []
         for model, s, ref, wall in rows:

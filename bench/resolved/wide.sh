@@ -25,33 +25,20 @@ while [ $# -gt 0 ]; do
     *) echo "unknown option $1" >&2; exit 2 ;;
   esac
 done
-gabion=${GABION:-$root/build/gabion}
-curves=${CURVES:-$root/build/bench/bench_curves}
-[ -x "$gabion" ] && [ -x "$curves" ] || { echo "build first (scripts/build.sh)" >&2; exit 2; }
-[ -f "$root/results/pipeline/law.json" ] || { echo "run the pipeline first (README, command 1)" >&2; exit 2; }
-mkdir -p "$out"
-# run NAME CASE ARGS...: one gabion run into OUT/NAME, unless it is there.
-run() {
-  local name=$1 case=$2; shift 2
-  [ -f "$out/$name/summary.json" ] && return 0
-  echo "== $name" >&2
-  mkdir -p "$(dirname "$out/$name")"
-  "$gabion" run "$case" --threads "$threads" -q -o "$out/$name" "$@" >"$out/$name.log" 2>&1 ||
-    echo "   $name failed: $(tail -n 1 "$out/$name.log")" >&2
-}
+. "$here/common.sh"
 for w in $walls; do
   case $w in
     54)
-      run wall_54 "$root/cases/macro_resolved.json" --set 'structure.cells=[2,9,3]' --set 'hybrid.within_m=[0.25]'
+      run_once wall_54 "$root/cases/macro_resolved.json" --set 'structure.cells=[2,9,3]' --set 'hybrid.within_m=[0.25]'
       h=$out/wall_54/hybrid_0/case.json
       if [ -f "$h" ]; then
-        run wall_54_more/reach_0.5 "$h" --set resolve.within_m=0.5
-        run wall_54_more/whole_0.25 "$h" --set resolve.depth=whole
-        run wall_54_more/whole_0.36 "$h" --set resolve.depth=whole --set resolve.within_m=0.36
+        run_once wall_54_more/reach_0.5 "$h" --set resolve.within_m=0.5
+        run_once wall_54_more/whole_0.25 "$h" --set resolve.depth=whole
+        run_once wall_54_more/whole_0.36 "$h" --set resolve.depth=whole --set resolve.within_m=0.36
       fi
       ;;
     210)
-      run wall_210 "$root/cases/macro_resolved.json" --set 'structure.cells=[2,15,7]' \
+      run_once wall_210 "$root/cases/macro_resolved.json" --set 'structure.cells=[2,15,7]' \
         --set 'hybrid.within_m=[0.25,0.36]' --set hybrid.depth=whole
       ;;
     *) echo "unknown wall $w (54 or 210)" >&2; exit 2 ;;
