@@ -24,8 +24,17 @@ constexpr int kBoulderGroup = 2;  // (rock 0, netting 1)
 constexpr long long kMaxCells = kMaxResolvedCells;
 /// A stack whose centre of mass still comes down faster than this (m/s) at
 /// the end of its settling has not come to rest: 1.5 mm over an impact of
-/// 0.15 s, against penetrations of tenths of a metre.
+/// 0.15 s, against penetrations of tenths of a metre (settle.at_rest_m_s).
 constexpr double kSettledDescentSpeed = 0.01;
+
+/// How fast the centre of mass of a stack of weight `weight` came down over
+/// the last fifth of the samples (t, gravity potential u) so far: the
+/// potential's fall over the weight and that time (0 with under two samples).
+double descentSpeed(const std::vector<double>& t, const std::vector<double>& u, double weight) {
+  if (t.size() < 2 || t.size() != u.size() || weight <= 0.0) return 0.0;
+  const std::size_t k = std::min(t.size() - 2, (4 * t.size()) / 5);
+  return (u[k] - u.back()) / (weight * (t.back() - t[k]));
+}
 
 struct StructureCase {
   LabSetup setup;
@@ -36,8 +45,14 @@ struct StructureCase {
   std::optional<std::array<double, 2>> aim;  // [y, z] on the front face (m); default: the middle front cell's centre
   std::optional<std::array<double, 2>> aim_fraction;  // or [y, z] as fractions of the face's width and height
   double gap_m = 0.002;                               // between the boulder and the front face at the start
-  double settle_s = 0.05;                             // the stack settling under its weight before the boulder comes
-  double rebound_restitution = 0.05;                  // as macro.impact's run.rebound_restitution
+  // The stack settling under its weight before the boulder comes: until its
+  // centre of mass comes down slower than at_rest_m_s, for settle_s at least
+  // and longest_s at most; or for settle_s exactly (until_at_rest false).
+  double settle_s = 0.05;
+  bool until_at_rest = true;
+  double settle_longest_s = 1.0;
+  double at_rest_m_s = kSettledDescentSpeed;
+  double rebound_restitution = 0.05;  // as macro.impact's run.rebound_restitution
 };
 
 /// `whole`: the structure is resolved whole (a part checks its own cell count).
@@ -73,13 +88,24 @@ StructureCase parseCase(const bridge::JsonDocument& doc, bool whole = true) {
   }
   c.gap_m = b.number("initial_gap_m", c.gap_m, Check::NonNegative);
   if (const auto m = b.optionalObject("contact")) c.boulder = parseMaterialChange("boulder", *m);
-  if (const auto s = root.optionalObject("settle"))
+  if (const auto s = root.optionalObject("settle")) {
     c.settle_s = s->number("duration_s", c.settle_s, Check::NonNegative);
+    c.until_at_rest = s->boolean("until_at_rest", c.until_at_rest);
+    c.settle_longest_s = s->number("longest_s", c.settle_longest_s, Check::Positive);
+    c.at_rest_m_s = s->number("at_rest_m_s", c.at_rest_m_s, Check::Positive);
+    if (c.until_at_rest && c.settle_longest_s < c.settle_s)
+      s->fail("longest_s", "the longest settling is shorter than duration_s, the shortest");
+  }
   c.rebound_restitution = root.number("rebound_restitution", c.rebound_restitution, Check::Fraction);
   // An impact lasts tens of milliseconds; the series every 0.1 ms; no mass
   // scaling (the test is dynamic).
   c.setup = parseLabSetup(root, 1.0, 0.1, 1e-4);
   return c;
+}
+
+/// The longest the settling may take (what a run's estimate counts).
+double settleLongest(const StructureCase& c) {
+  return c.settle_s > 0.0 && c.until_at_rest ? c.settle_longest_s : c.settle_s;
 }
 
 /// The structure as it stands: the cells, their base and back support, and
@@ -230,19 +256,34 @@ bridge::RunOutcome runOne(const StructureCase& c, const Sample& sample, const br
   const std::size_t laid_out = layout.blocks_per_cell > 0 ? layout.scene.blocks.size() / layout.blocks_per_cell : 0;
   nlohmann::json settle_results;
 
-  // 1. The stack settles under its weight (the cells were made standing alone).
+  // 1. The stack settles under its weight (the cells were made standing
+  // alone): until it is at rest (its centre of mass comes down slower than
+  // at_rest_m_s over the settling's last fifth), or for a set time.
   Scene standing = layout.scene;
   if (c.settle_s > 0.0) {
+    const double longest = c.until_at_rest ? c.settle_longest_s : c.settle_s;
     Scene s = layout.scene;
-    s.run.duration_s = c.settle_s;
-    s.run.output_interval_s = c.settle_s / 5.0;
+    s.run.duration_s = longest;
+    s.run.output_interval_s = longest / 5.0;
     s.run.series_interval_s = std::min(s.run.series_interval_s, c.settle_s / 10.0);
     bridge::RunContext sub = ctx;
     sub.outdir = ctx.outdir / "settle";
     std::filesystem::create_directories(sub.outdir);
+    const double weight = sample.mass_kg * static_cast<double>(laid_out) * layout.scene.gravity_m_s2.norm();
+    std::vector<double> t, u;  // (the samples' times and gravity potentials)
     SceneRunHooks hooks;
     hooks.label = "micro.structure settle";
-    hooks.end = [&](const Engine& e, const Scene& in) { standing = stateScene(in, e); };
+    hooks.record = [&](const Engine& e, double time) {
+      t.push_back(time);
+      u.push_back(e.energy().gravity_potential_J);
+    };
+    if (c.until_at_rest)
+      hooks.done = [&](const Engine& e) {
+        return e.time() >= c.settle_s && descentSpeed(t, u, weight) <= c.at_rest_m_s;
+      };
+    hooks.archive = [&](bridge::StateArchive& a) { a("time_s", t), a("gravity_potential_J", u); };
+    double settled_at = NAN;
+    hooks.end = [&](const Engine& e, const Scene& in) { standing = stateScene(in, e), settled_at = e.time(); };
     bridge::RunOutcome settled = runScene(std::move(s), file, sub, hooks);
     if (settled.status != bridge::RunOutcome::Status::Ok) {
       settled.message = "settling the structure: " + settled.message;
@@ -251,18 +292,11 @@ bridge::RunOutcome runOne(const StructureCase& c, const Sample& sample, const br
     settle_results = settled.results;
     standing.run = layout.scene.run;  // (the state keeps the settling's run)
     // Was the stack at rest when the boulder came? How fast its centre of
-    // mass came down over the settling's last fifth: the weight's work
-    // (the gravity potential's fall) over its weight and that time. From
-    // the file: a resumed settling's series is whole.
-    const bridge::H5Reader h(sub.outdir / "result.h5");
-    const std::vector<double> t = h.read("/series/time_s"), u = h.read("/series/gravity_potential_J");
-    const double weight = sample.mass_kg * static_cast<double>(laid_out) * layout.scene.gravity_m_s2.norm();
-    double descent = 0.0;
-    if (t.size() >= 2 && t.size() == u.size() && weight > 0.0) {
-      const std::size_t k = std::min(t.size() - 2, (4 * t.size()) / 5);
-      descent = (u[k] - u.back()) / (weight * (t.back() - t[k]));
-    }
-    settle_results["descent_speed_m_s"] = descent;
+    // mass came down over the settling's last fifth (the samples are whole
+    // in a resumed settling: they are in its checkpoint).
+    settle_results["descent_speed_m_s"] = descentSpeed(t, u, weight);
+    settle_results["duration_s"] = settled_at;
+    settle_results["until_at_rest"] = c.until_at_rest;
   }
 
   // 2. The impact.
@@ -422,13 +456,15 @@ bridge::RunOutcome runOne(const StructureCase& c, const Sample& sample, const br
     warnings.push_back("the impact was not over at the end of run.duration_s: lengthen it");
   if (!settle_results.is_null()) {
     const double descent = settle_results["descent_speed_m_s"].get<double>();
-    r["settled"] = descent <= kSettledDescentSpeed;
-    if (descent > kSettledDescentSpeed) {
+    r["settled"] = descent <= c.at_rest_m_s;
+    if (descent > c.at_rest_m_s) {
       std::ostringstream m;
       m.precision(3);
-      m << "the structure was still settling when the boulder came: at the end of settle.duration_s (" << c.settle_s
-        << " s) its centre of mass was coming down at " << 1e3 * descent << " mm/s (at rest: below "
-        << 1e3 * kSettledDescentSpeed << " mm/s); the boulder struck a structure in motion: lengthen settle.duration_s";
+      m << "the structure was still settling when the boulder came: at the end of its settling ("
+        << settle_results["duration_s"].get<double>() << " s) its centre of mass was coming down at " << 1e3 * descent
+        << " mm/s (at rest: below " << 1e3 * c.at_rest_m_s << " mm/s, settle.at_rest_m_s); the boulder struck a "
+        << "structure in motion: "
+        << (c.until_at_rest ? "lengthen settle.longest_s" : "lengthen settle.duration_s, or set settle.until_at_rest");
       warnings.push_back(m.str());
     }
   }
@@ -495,7 +531,7 @@ std::optional<bridge::Estimate> estimate(const bridge::JsonDocument& doc) {
     const Layout l = buildLayout(c, s);
     std::size_t boulder = 0;
     Scene scene = impactScene(c, l.scene, s, aimPoint(c, l), doc.file(), boulder);
-    scene.run.duration_s += c.settle_s;  // (the settling runs the same bodies, less one)
+    scene.run.duration_s += settleLongest(c);  // (the settling runs the same bodies, less one)
     return scene;
   });
 }
@@ -539,7 +575,7 @@ std::optional<bridge::Estimate> estimateStructurePart(const bridge::JsonDocument
     const Layout l = buildLayout(c, s, &part);
     std::size_t boulder = 0;
     Scene scene = impactScene(c, l.scene, s, aimPoint(c, l), doc.file(), boulder);
-    scene.run.duration_s += c.settle_s;
+    scene.run.duration_s += settleLongest(c);
     return scene;
   });
 }

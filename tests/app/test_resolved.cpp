@@ -38,7 +38,7 @@ void expectMomentumIsImpulse(const std::filesystem::path& dir, double mass, doub
 
 const char* kStructure = R"({"format": "gabion.case/1", "kind": "micro.structure", "cell": "cell/cell.h5",
  "structure": {"cells": [2, 1, 1]}, "boulder": {"diameter_m": 0.25, "velocity_m_s": 8},
- "settle": {"duration_s": 0.01}, "run": {"duration_s": 0.03}})";
+ "settle": {"duration_s": 0.01, "until_at_rest": false}, "run": {"duration_s": 0.03}})";
 
 TEST(ResolvedStructure, TwoCellsStruckBeforeTheirMacroTwin) {
   const auto dir = scratchDir("resolved");
@@ -60,8 +60,9 @@ TEST(ResolvedStructure, TwoCellsStruckBeforeTheirMacroTwin) {
   EXPECT_TRUE(s.contains("settle"));
   // Cells made standing alone, stacked, slump under their weight at first
   // (their nettings take the fill's push the generation box took): after
-  // 0.01 s the stack still comes down, and the run says it was struck in
-  // motion (46 mm/s at the test's writing, against the 10 mm/s of at rest).
+  // 0.01 s (a set time: until_at_rest false) the stack still comes down,
+  // and the run says it was struck in motion (46 mm/s at the test's
+  // writing, against the 10 mm/s of at rest).
   EXPECT_GT(s["settle"]["descent_speed_m_s"].get<double>(), 0.01);
   EXPECT_FALSE(s["settled"].get<bool>());
   ASSERT_FALSE(s["warnings"].empty());
@@ -94,7 +95,7 @@ TEST(ResolvedStructure, TwoCellsStruckBeforeTheirMacroTwin) {
                                        R"(/cases/laws/illustrative.json", "cell": "cell/cell.h5",
  "structure": {"cells": [2, 1, 1], "material": {"front": "front", "core": "core", "front_depth_cells": 1}},
  "boulder": {"diameter_m": 0.25, "velocity_m_s": 8},
- "resolved": {"settle": {"duration_s": 0.01}, "run": {"duration_s": 0.03}},
+ "resolved": {"settle": {"duration_s": 0.01, "until_at_rest": false}, "run": {"duration_s": 0.03}},
  "hybrid": {"within_m": [0]}})");
   const auto both = runGabion("run " + (dir / "resolved.json").string() + " -o " + (dir / "both").string());
   ASSERT_EQ(both.exit_code, 0) << both.output;
@@ -126,6 +127,75 @@ TEST(ResolvedStructure, TwoCellsStruckBeforeTheirMacroTwin) {
   }
   EXPECT_GT(h["speed_up"].get<double>(), 0.0);
   EXPECT_NE(both.output.find("hybrid within 0 m"), std::string::npos) << both.output;
+}
+
+// By default the stack settles until it is at rest: the settling ends at the
+// first sample, past settle.duration_s, where the centre of mass came down
+// slower than 10 mm/s over the settling's last fifth, as its own series
+// (the gravity potential's fall over weight and time) shows. Killed in the
+// settling and resumed, the run settles and strikes the same wall: the
+// samples the criterion reads are part of the checkpoint.
+TEST(ResolvedStructure, SettlesUntilAtRestAndResumesToTheSameWall) {
+  const auto dir = scratchDir("resolved_at_rest");
+  writeFile(dir / "cell.json", gabion::testing::smallCellCase());
+  ASSERT_EQ(runGabion("run -q " + (dir / "cell.json").string() + " -o " + (dir / "cell").string()).exit_code, 0);
+  nlohmann::json c = nlohmann::json::parse(kStructure);
+  c["settle"] = {{"duration_s", 0.05}};
+  c["run"]["duration_s"] = 0.005;
+  writeFile(dir / "structure.json", c.dump());
+  const std::string args = "run -q " + (dir / "structure.json").string() + " -o ";
+  const auto r = runGabion(args + (dir / "whole").string());
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  const nlohmann::json s = summaryOf(dir / "whole");
+  const nlohmann::json& settle = s["settle"];
+  EXPECT_EQ(settle["ended_by"], "test") << "at rest before settle.longest_s (1 s)";
+  EXPECT_TRUE(settle["until_at_rest"].get<bool>());
+  const double at = settle["duration_s"].get<double>(), descent = settle["descent_speed_m_s"].get<double>();
+  EXPECT_GE(at, 0.05);
+  EXPECT_LT(at, 1.0);
+  EXPECT_LE(descent, 0.01);
+  EXPECT_TRUE(s["settled"].get<bool>());
+  EXPECT_EQ(s["warnings"].dump().find("still settling"), std::string::npos) << s["warnings"].dump();
+  {
+    // The criterion from the settling's own series: met at its last sample
+    // and at no earlier one past the shortest time.
+    const gabion::bridge::H5Reader h(dir / "whole" / "settle" / "result.h5");
+    const auto t = h.read("/series/time_s"), u = h.read("/series/gravity_potential_J");
+    const double weight = 2.0 * summaryOf(dir / "whole")["cell_mass_kg"].get<double>() * 9.81;
+    const auto speed = [&](std::size_t n) {  // (over the first n samples' last fifth)
+      const std::size_t k = std::min(n - 2, (4 * n) / 5);
+      return (u[k] - u[n - 1]) / (weight * (t[n - 1] - t[k]));
+    };
+    ASSERT_GT(t.size(), 10u);
+    EXPECT_NEAR(speed(t.size()), descent, 1e-9);
+    for (std::size_t n = 2; n + 1 < t.size(); ++n)
+      if (t[n - 1] + 1e-4 >= 0.05) ASSERT_GT(speed(n), 0.01) << "at rest already at t = " << t[n - 1];
+  }
+  // Killed in the settling (after its first checkpoint), resumed.
+  const auto killed = dir / "killed";
+  const std::string out =
+      gabion::testing::signalWhenThere(args + killed.string() + " --set run.checkpoint_every_s=0.05",
+                                       killed / "settle" / "checkpoint" / "state.h5", "KILL");
+  ASSERT_NE(out.find("exit=137"), std::string::npos) << out;
+  const auto resumed = runGabion("run --resume " + killed.string());
+  ASSERT_EQ(resumed.exit_code, 0) << resumed.output;
+  EXPECT_NE(resumed.output.find("micro.structure settle: continuing from the checkpoint"), std::string::npos)
+      << resumed.output;
+  const nlohmann::json k = summaryOf(killed);
+  EXPECT_EQ(k["settle"]["duration_s"], settle["duration_s"]);
+  EXPECT_EQ(k["settle"]["descent_speed_m_s"], settle["descent_speed_m_s"]);
+  for (const char* key : {"peak_force_N", "max_penetration_m", "max_back_face_displacement_m"})
+    EXPECT_EQ(k[key], s[key]) << key;
+  const gabion::bridge::H5Reader a(dir / "whole" / "result.h5"), b(killed / "result.h5");
+  for (const char* name : {"/bodies/position_m", "/curves/impact/force_N"})
+    EXPECT_EQ(a.read(name), b.read(name)) << name;
+
+  // A longest settling shorter than the shortest is refused, named.
+  c["settle"] = {{"duration_s", 0.2}, {"longest_s", 0.1}};
+  writeFile(dir / "bad.json", c.dump());
+  const auto bad = runGabion("check " + (dir / "bad.json").string());
+  EXPECT_EQ(bad.exit_code, 2) << bad.output;
+  EXPECT_NE(bad.output.find("/settle/longest_s"), std::string::npos) << bad.output;
 }
 
 // The hybrid: a macro.impact case with "resolve". The struck front cell is
