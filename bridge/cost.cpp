@@ -23,11 +23,12 @@ Estimate oneRun(double bodies, double steps, double snapshots) {
 }
 }  // namespace
 
-Estimate microRun(double bodies, double steps, double snapshots, double series, double link_substeps) {
+Estimate microRun(double bodies, double steps, double snapshots, double snapshot_records, double series,
+                  double link_substeps) {
   Estimate e = oneRun(bodies, steps, snapshots);
   e.memory_bytes = kBaseBytes + kMicroBytesPerBody * bodies;
   // (the series: about 40 columns of doubles)
-  e.output_bytes = kMicroSnapshotBytesPerBody * bodies * snapshots + 40.0 * 8.0 * series;
+  e.output_bytes = kMicroSnapshotBytesPerBody * snapshot_records * snapshots + 40.0 * 8.0 * series;
   e.wall_time_s = kMicroSecondsPerBodyStep * e.body_steps + kMicroSecondsPerLinkSubstep * link_substeps * steps;
   return e;
 }

@@ -14,7 +14,7 @@ namespace gabion::bridge {
 /// Fine DEM: seconds per body-step on one thread (the default pipeline's
 /// four lab tests measured 2.4e-8 to 4.9e-8), bytes of memory per body
 /// (27,000 spheres: 19 MB above the process's base), bytes per body per
-/// snapshot in result.h5 (position, velocity, angular velocity).
+/// snapshot record in result.h5 (position, velocity, angular velocity).
 constexpr double kMicroSecondsPerBodyStep = 3.5e-8;
 constexpr double kMicroBytesPerBody = 1000.0;
 constexpr double kMicroSnapshotBytesPerBody = 100.0;
@@ -32,10 +32,13 @@ constexpr double kMacroBytesPerCell = 450.0;
 /// The process itself (libraries, the case).
 constexpr double kBaseBytes = 20e6;
 
-/// One fine DEM run of `bodies` bodies, `steps` steps, `snapshots` body
-/// snapshots and `series` samples of the scalar series; `link_substeps`:
-/// links times the link nodes' sub-steps per step.
-Estimate microRun(double bodies, double steps, double snapshots, double series, double link_substeps = 0.0);
+/// One fine DEM run of `bodies` bodies (block members one by one: what
+/// the time goes with), `steps` steps, `snapshots` snapshots of
+/// `snapshot_records` records each (a block is one record), and `series`
+/// samples of the scalar series; `link_substeps`: links times the link
+/// nodes' sub-steps per step.
+Estimate microRun(double bodies, double steps, double snapshots, double snapshot_records, double series,
+                  double link_substeps = 0.0);
 /// One structure impact on `cells` cells, at most `steps` steps, recording
 /// `samples` samples of its 14 series.
 Estimate macroRun(double cells, double steps, double samples);

@@ -82,8 +82,10 @@ bridge::Estimate sceneEstimate(const Scene& scene, double dt) {
   const double link_substeps = scene.links.empty() ? 0.0
                                                    : static_cast<double>(scene.links.size()) *
                                                          linkSubsteps(dt, rs.dt_safety, criticalLinkStep(scene));
+  // (a snapshot holds each sphere and each block once)
+  const double records = static_cast<double>(scene.spheres.size() + scene.blocks.size());
   return bridge::microRun(
-      bodies, steps, rs.output_interval_s > 0.0 ? std::floor(rs.duration_s / rs.output_interval_s) + 1 : 101.0,
+      bodies, steps, rs.output_interval_s > 0.0 ? std::floor(rs.duration_s / rs.output_interval_s) + 1 : 101.0, records,
       rs.series_interval_s > 0.0 ? std::floor(rs.duration_s / rs.series_interval_s) + 1 : 101.0, link_substeps);
 }
 

@@ -103,11 +103,6 @@ StructureCase parseCase(const bridge::JsonDocument& doc, bool whole = true) {
   return c;
 }
 
-/// The longest the settling may take (what a run's estimate counts).
-double settleLongest(const StructureCase& c) {
-  return c.settle_s > 0.0 && c.until_at_rest ? c.settle_longest_s : c.settle_s;
-}
-
 /// The structure as it stands: the cells, their base and back support, and
 /// where each cell's blocks are.
 struct Layout {
@@ -189,6 +184,17 @@ Layout buildLayout(const StructureCase& c, const Sample& sample, const Structure
   return out;
 }
 
+/// The settling's scene (c.settle_s > 0): the laid-out structure for the
+/// longest the settling may take, five snapshots, its series at least ten.
+Scene settleScene(const StructureCase& c, const Layout& l) {
+  const double longest = c.until_at_rest ? c.settle_longest_s : c.settle_s;
+  Scene s = l.scene;
+  s.run.duration_s = longest;
+  s.run.output_interval_s = longest / 5.0;
+  s.run.series_interval_s = std::min(s.run.series_interval_s, c.settle_s / 10.0);
+  return s;
+}
+
 /// Where the boulder's path meets the front face (y, z), as the case gives
 /// it or the middle front cell's centre (cell ny/2, nz/2: centred for odd counts).
 Vec3 aimPoint(const StructureCase& c, const Layout& l) {
@@ -261,11 +267,7 @@ bridge::RunOutcome runOne(const StructureCase& c, const Sample& sample, const br
   // at_rest_m_s over the settling's last fifth), or for a set time.
   Scene standing = layout.scene;
   if (c.settle_s > 0.0) {
-    const double longest = c.until_at_rest ? c.settle_longest_s : c.settle_s;
-    Scene s = layout.scene;
-    s.run.duration_s = longest;
-    s.run.output_interval_s = longest / 5.0;
-    s.run.series_interval_s = std::min(s.run.series_interval_s, c.settle_s / 10.0);
+    Scene s = settleScene(c, layout);
     bridge::RunContext sub = ctx;
     sub.outdir = ctx.outdir / "settle";
     std::filesystem::create_directories(sub.outdir);
@@ -525,15 +527,19 @@ void check(const bridge::JsonDocument& doc) {
   chooseDt(s, criticalTimeStep(s), doc.file());
 }
 
-std::optional<bridge::Estimate> estimate(const bridge::JsonDocument& doc) {
-  const StructureCase c = parseCase(doc);
-  return estimateReplicates(c.setup, 1, [&](const Sample& s, std::size_t) {
-    const Layout l = buildLayout(c, s);
+/// What the structure (or a part of it) costs: its settling, at most
+/// settle.longest_s, then the impact, each with its own step and outputs.
+std::optional<bridge::Estimate> estimateRuns(const StructureCase& c, const std::string& file,
+                                             const StructurePart* part = nullptr) {
+  return estimateReplicates(c.setup, c.settle_s > 0.0 ? 2 : 1, [&](const Sample& s, std::size_t run) {
+    const Layout l = buildLayout(c, s, part);
     std::size_t boulder = 0;
-    Scene scene = impactScene(c, l.scene, s, aimPoint(c, l), doc.file(), boulder);
-    scene.run.duration_s += settleLongest(c);  // (the settling runs the same bodies, less one)
-    return scene;
+    return run == 1 ? settleScene(c, l) : impactScene(c, l.scene, s, aimPoint(c, l), file, boulder);
   });
+}
+
+std::optional<bridge::Estimate> estimate(const bridge::JsonDocument& doc) {
+  return estimateRuns(parseCase(doc), doc.file());
 }
 
 std::shared_ptr<const Replicates> replicates(const bridge::JsonDocument& doc) {
@@ -570,14 +576,7 @@ bridge::RunOutcome runStructurePart(const bridge::JsonDocument& doc, const Struc
 }
 
 std::optional<bridge::Estimate> estimateStructurePart(const bridge::JsonDocument& doc, const StructurePart& part) {
-  const StructureCase c = parseCase(doc, false);
-  return estimateReplicates(c.setup, 1, [&](const Sample& s, std::size_t) {
-    const Layout l = buildLayout(c, s, &part);
-    std::size_t boulder = 0;
-    Scene scene = impactScene(c, l.scene, s, aimPoint(c, l), doc.file(), boulder);
-    scene.run.duration_s += settleLongest(c);
-    return scene;
-  });
+  return estimateRuns(parseCase(doc, false), doc.file(), &part);
 }
 
 bridge::CaseKind structureImpactKind() {

@@ -157,6 +157,19 @@ TEST(ResolvedStructure, SettlesUntilAtRestAndResumesToTheSameWall) {
   EXPECT_TRUE(s["settled"].get<bool>());
   EXPECT_EQ(s["warnings"].dump().find("still settling"), std::string::npos) << s["warnings"].dump();
   {
+    // Its cost, estimated before it ran: the settling (at most longest_s)
+    // and the impact, each with its own outputs; no fewer steps than it
+    // took, files within a few times what it wrote (the settling written
+    // as the settling, not at the impact's snapshot interval).
+    const nlohmann::json& e = s["estimate"];
+    EXPECT_EQ(e["runs"], 2);
+    EXPECT_GE(e["steps"].get<double>(), settle["steps"].get<double>() + s["steps"].get<double>());
+    const double written = static_cast<double>(std::filesystem::file_size(dir / "whole" / "result.h5") +
+                                               std::filesystem::file_size(dir / "whole" / "settle" / "result.h5"));
+    EXPECT_GE(e["output_bytes"].get<double>(), 0.5 * written);
+    EXPECT_LE(e["output_bytes"].get<double>(), 4.0 * written);
+  }
+  {
     // The criterion from the settling's own series: met at its last sample
     // and at no earlier one past the shortest time.
     const gabion::bridge::H5Reader h(dir / "whole" / "settle" / "result.h5");
