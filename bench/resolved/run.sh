@@ -4,25 +4,29 @@
 # the pipeline's cell, hybrids within 0, 0.25 and 0.5 m of the aim) at
 # several boulder speeds and one off-centre aim, and the resolved wall once
 # more at a step 5 % shorter (the floor of any error), then one table.
-#   bench/resolved/run.sh [--out DIR] [--threads N] [--speeds "6 10 13"]
+#   bench/resolved/run.sh [--out DIR] [--threads N] [--speeds "6 10 13"] [--set KEY=VALUE ...]
+# (--set: passed on to every scenario's macro.resolved case, e.g.
+# resolved.settle.until_at_rest=false to strike the walls after a set
+# settling, as the runs of results/speed_error_moving in docs/resolved.md)
 # Needs the pipeline's cell and laws (README, command 1: results/pipeline).
 # A scenario whose summary.json exists is not run again (delete it to rerun).
 set -euo pipefail
 here=$(cd "$(dirname "$0")" && pwd)
 root=$(cd "$here/../.." && pwd)
-out=$root/results/speed_error threads=2 speeds="6 10 13"
+out=$root/results/speed_error threads=2 speeds="6 10 13" sets=()
 while [ $# -gt 0 ]; do
   case $1 in
     --out) out=$2; shift 2 ;;
     --threads) threads=$2; shift 2 ;;
     --speeds) speeds=$2; shift 2 ;;
+    --set) sets+=(--set "$2"); shift 2 ;;
     *) echo "unknown option $1" >&2; exit 2 ;;
   esac
 done
 . "$here/common.sh"
 run() {
   local name=$1; shift
-  run_once "$name" "$root/cases/macro_resolved.json" "$@"
+  run_once "$name" "$root/cases/macro_resolved.json" ${sets[@]+"${sets[@]}"} "$@"
 }
 for v in $speeds; do
   run "centre_${v}_m_s" --set boulder.velocity_m_s="$v"

@@ -72,6 +72,9 @@ def main(out, curves=None):
         speed = case.get("boulder", {}).get("velocity_m_s")
         aim = case.get("boulder", {}).get("aim_point_m", "centre")
         label = f"{name} ({speed} m/s, aim {aim})"
+        if s.get("status") != "ok":  # (the scenario failed: its message is in NAME.log)
+            rows.append((label, "resolved", [None] * 4, [None] * 4, "failed", None, None, None))
+            continue
         rows.append((label, "resolved", [r.get(k) for k, _, _ in KEYS], [None] * 4, r.get("outcome"),
                      r.get("wall_time_s_resolved"), 1.0, r.get("resolved", {}).get("energy_balance_rel_error")))
         t = r.get("macro_twin", {})
