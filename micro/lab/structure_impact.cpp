@@ -261,6 +261,13 @@ bridge::RunOutcome runOne(const StructureCase& c, const Sample& sample, const br
   // (the cells laid out: the whole structure's, or a hybrid's resolved ones)
   const std::size_t laid_out = layout.blocks_per_cell > 0 ? layout.scene.blocks.size() / layout.blocks_per_cell : 0;
   nlohmann::json settle_results;
+  // The struck cell (the front cell the aim point is on, laid out): the
+  // boulder's penetration less that cell's own move is its indentation.
+  const int struck = [&] {
+    const auto at = [](double p, double pitch, int n) { return std::clamp(static_cast<int>(p / pitch), 0, n - 1); };
+    const int j = at(aim.y(), layout.pitch.y(), c.ny), k = at(aim.z(), layout.pitch.z(), c.nz);
+    return layout.slot_of[static_cast<std::size_t>(c.nx * (j + c.ny * k))];
+  }();
 
   // 1. The stack settles under its weight (the cells were made standing
   // alone): until it is at rest (its centre of mass comes down slower than
@@ -299,6 +306,20 @@ bridge::RunOutcome runOne(const StructureCase& c, const Sample& sample, const br
     settle_results["descent_speed_m_s"] = descentSpeed(t, u, weight);
     settle_results["duration_s"] = settled_at;
     settle_results["until_at_rest"] = c.until_at_rest;
+    // How far the stack came down, and the struck cell's blocks: the aim,
+    // set on the laid-out wall, meets the settled cell this far above its
+    // blocks' mean height.
+    if (!u.empty()) settle_results["centre_of_mass_drop_m"] = (u.front() - u.back()) / weight;
+    if (struck >= 0 && layout.blocks_per_cell > 0) {
+      const auto mean_z = [&](const Scene& sc) {
+        double z = 0.0;
+        const std::size_t first = static_cast<std::size_t>(struck) * layout.blocks_per_cell;
+        for (std::size_t b = first; b < first + layout.blocks_per_cell; ++b) z += sc.blocks[b].position_m.z();
+        return z / static_cast<double>(layout.blocks_per_cell);
+      };
+      settle_results["struck_cell_drop_m"] = mean_z(layout.scene) - mean_z(standing);
+      settle_results["aim_above_struck_cell_m"] = aim.z() - mean_z(standing);
+    }
   }
 
   // 2. The impact.
@@ -310,13 +331,6 @@ bridge::RunOutcome runOne(const StructureCase& c, const Sample& sample, const br
     std::vector<double> time, force, penetration, indentation, velocity, front, back;
     std::vector<double> front_fine, back_fine, front_macro, back_macro;  // (a hybrid's parts apart)
   } sr;
-  // The struck cell (the front cell the aim point is on): the boulder's
-  // penetration less that cell's own move is its indentation.
-  const int struck = [&] {
-    const auto at = [](double p, double pitch, int n) { return std::clamp(static_cast<int>(p / pitch), 0, n - 1); };
-    const int j = at(aim.y(), layout.pitch.y(), c.ny), k = at(aim.z(), layout.pitch.z(), c.nz);
-    return layout.slot_of[static_cast<std::size_t>(c.nx * (j + c.ny * k))];
-  }();
   double struck0 = NAN;
   double x_contact = NAN, t_contact = NAN, peak = 0.0, t_last_force = NAN;
   // Every cell's mean block position at the start and now, and the largest

@@ -181,6 +181,13 @@ TEST(ResolvedStructure, SettlesUntilAtRestAndResumesToTheSameWall) {
     };
     ASSERT_GT(t.size(), 10u);
     EXPECT_NEAR(speed(t.size()), descent, 1e-9);
+    // (how far the stack came down: the potential's fall over the weight)
+    EXPECT_NEAR(settle["centre_of_mass_drop_m"].get<double>(), (u.front() - u.back()) / weight, 1e-9);
+    EXPECT_GT(settle["centre_of_mass_drop_m"].get<double>(), 0.0);
+    // (the struck cell, on the base, came down a little: the aim, its laid-out
+    // mid-height by default, is that much higher above its blocks)
+    EXPECT_LT(std::fabs(settle["struck_cell_drop_m"].get<double>()), 0.02);
+    EXPECT_TRUE(std::isfinite(settle["aim_above_struck_cell_m"].get<double>()));
     for (std::size_t n = 2; n + 1 < t.size(); ++n)
       if (t[n - 1] + 1e-4 >= 0.05) ASSERT_GT(speed(n), 0.01) << "at rest already at t = " << t[n - 1];
   }
