@@ -159,6 +159,8 @@ def in_place(out, curves=None):
         if not (name.startswith("centre_") or name.startswith("side_")) or not os.path.isfile(path):
             continue
         r = summary(path)
+        if "macro_twin" not in r:  # (the scenario failed: no wall to compare with)
+            continue
         rows = [("resolved", r, None), ("macro twin, UCI impact law", r["macro_twin"], r)]
         for prefix, what in IN_PLACE:
             twin = os.path.join(d, prefix + name)

@@ -188,8 +188,11 @@ TEST(ResolvedStructure, SettlesUntilAtRestAndResumesToTheSameWall) {
     // mid-height by default, is that much higher above its blocks)
     EXPECT_LT(std::fabs(settle["struck_cell_drop_m"].get<double>()), 0.02);
     EXPECT_TRUE(std::isfinite(settle["aim_above_struck_cell_m"].get<double>()));
-    for (std::size_t n = 2; n + 1 < t.size(); ++n)
-      if (t[n - 1] + 1e-4 >= 0.05) ASSERT_GT(speed(n), 0.01) << "at rest already at t = " << t[n - 1];
+    for (std::size_t n = 2; n + 1 < t.size(); ++n) {
+      if (t[n - 1] + 1e-4 >= 0.05) {
+        ASSERT_GT(speed(n), 0.01) << "at rest already at t = " << t[n - 1];
+      }
+    }
   }
   // Killed in the settling (after its first checkpoint), resumed.
   const auto killed = dir / "killed";
