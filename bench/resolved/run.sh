@@ -4,7 +4,7 @@
 # the pipeline's cell, hybrids within 0, 0.25 and 0.5 m of the aim) at
 # several boulder speeds and one off-centre aim, and the resolved wall once
 # more at a step 5 % shorter (the floor of any error), then one table.
-#   bench/resolved/run.sh [--out DIR] [--threads N] [--speeds "6 10 13"] [--set KEY=VALUE ...]
+#   bench/resolved/run.sh [--out DIR] [--threads N] [--speeds "6 8 10 13"] [--set KEY=VALUE ...]
 # (--set: passed on to every scenario's macro.resolved case, e.g.
 # resolved.settle.until_at_rest=false to strike the walls after a set
 # settling, as the runs of results/speed_error_moving in docs/resolved.md)
@@ -13,7 +13,7 @@
 set -euo pipefail
 here=$(cd "$(dirname "$0")" && pwd)
 root=$(cd "$here/../.." && pwd)
-out=$root/results/speed_error threads=2 speeds="6 10 13" sets=()
+out=$root/results/speed_error threads=2 speeds="6 8 10 13" sets=()
 while [ $# -gt 0 ]; do
   case $1 in
     --out) out=$2; shift 2 ;;
