@@ -240,11 +240,13 @@ bridge::RunOutcome run(const JsonDocument& doc, const bridge::RunContext& ctx) {
   if (const auto w = cellSizeMismatch(p.law_edge_m, res, "the macro twin")) warnings.push_back(*w);
   // (the twin stands at rest: a resolved wall still coming down is not the structure it stands for)
   if (!res.value("settled", true)) {
+    const json settle = res.value("settle", json::object());
     std::ostringstream w;
     w.precision(3);
     w << "the resolved wall was struck before it came to rest (its centre of mass coming down at "
-      << 1e3 * res.value("settle", json::object()).value("descent_speed_m_s", NAN)
-      << " mm/s, resolved/summary.json): the comparison includes its slump; lengthen resolved.settle.duration_s";
+      << 1e3 * settle.value("descent_speed_m_s", NAN)
+      << " mm/s, resolved/summary.json): the comparison includes its slump; lengthen resolved.settle."
+      << (settle.value("until_at_rest", false) ? "longest_s" : "duration_s");
     warnings.push_back(w.str());
   }
   r["warnings"] = warnings;

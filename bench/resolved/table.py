@@ -158,9 +158,10 @@ def in_place(out, curves=None):
         path = os.path.join(out, name, "summary.json")
         if not (name.startswith("centre_") or name.startswith("side_")) or not os.path.isfile(path):
             continue
-        r = summary(path)
-        if "macro_twin" not in r:  # (the scenario failed: no wall to compare with)
+        doc = json.load(open(path))
+        if doc.get("status") != "ok":  # (the scenario failed: no wall to compare with)
             continue
+        r = doc.get("results", doc)
         rows = [("resolved", r, None), ("macro twin, UCI impact law", r["macro_twin"], r)]
         for prefix, what in IN_PLACE:
             twin = os.path.join(d, prefix + name)
@@ -169,7 +170,7 @@ def in_place(out, curves=None):
             elif os.path.isfile(twin + ".log"):
                 log = open(twin + ".log").read().strip().splitlines()
                 rows.append(("macro twin, " + what, {"outcome": "failed: " + (log[-1] if log else "")}, r))
-        speed = json.load(open(path)).get("case", {}).get("boulder", {}).get("velocity_m_s")
+        speed = doc.get("case", {}).get("boulder", {}).get("velocity_m_s")
         if name.startswith("centre_") and speed is not None:
             by_speed[speed] = [(label, s) for label, s, _ in rows if "failed" not in str(s.get("outcome"))]
         for label, s, ref in rows:
