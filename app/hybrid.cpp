@@ -31,6 +31,7 @@ struct Plan {
   macro::Structure structure;  ///< the macro part: no node for a resolved cell
   double within_m = 0.0;
   bool whole_depth = false;  ///< `resolve.depth` "whole": every cell behind a resolved front cell too
+  bool cells_below = false;  ///< `resolve.below` "cells": every cell under a resolved one too, down to the base
   std::vector<int> resolved;
   std::vector<StructurePart::Face> faces;
   json micro_case;
@@ -56,6 +57,7 @@ Plan plan(const JsonDocument& doc) {
   const JsonReader rs = root.object("resolve");
   p.within_m = rs.number("within_m", 0.0, Check::NonNegative);
   p.whole_depth = rs.choice("depth", {"reach", "whole"}, "reach") == "whole";
+  p.cells_below = rs.choice("below", {"plates", "cells"}, "plates") == "cells";
   const fs::path cell_file = absoluteFrom(doc, rs.string("cell"));
   if (p.c.impacts.size() != 1)
     root.fail("impacts", "a hybrid run takes one impact (the fine part is struck once): give `boulder`");
@@ -80,6 +82,19 @@ Plan plan(const JsonDocument& doc) {
       for (int i = 0; i < nx; ++i)
         if (distanceToCell(p.whole_depth ? 0 : i, j, k, e, b.aim_y_m, b.aim_z_m) <= p.within_m)
           p.resolved.push_back(i + nx * (j + ny * k));
+  // With below "cells", a resolved cell stands on resolved cells down to
+  // the base, as in the wall, not on the plate of a macro cell that does
+  // not come down under its weight.
+  if (p.cells_below) {
+    std::vector<char> in(static_cast<std::size_t>(nx) * ny * nz, 0);
+    for (const int cell : p.resolved) in[static_cast<std::size_t>(cell)] = 1;
+    for (int k = nz - 1; k > 0; --k)
+      for (int q = 0; q < nx * ny; ++q)
+        if (in[static_cast<std::size_t>(q + nx * ny * k)]) in[static_cast<std::size_t>(q + nx * ny * (k - 1))] = 1;
+    p.resolved.clear();
+    for (int cell = 0; cell < nx * ny * nz; ++cell)
+      if (in[static_cast<std::size_t>(cell)]) p.resolved.push_back(cell);
+  }
   if (p.resolved.empty()) {  // (an aim on the face's edge is within 0 of a cell: never empty)
     rs.fail("within_m", "no cell is within reach of the aim point");
   }
@@ -122,7 +137,7 @@ Plan plan(const JsonDocument& doc) {
       {"boulder", boulder},
       {"rebound_restitution", p.c.run.rebound_restitution}};
   for (const auto& [key, value] : root.raw("resolve").items()) {
-    if (key == "cell" || key == "within_m" || key == "depth") continue;
+    if (key == "cell" || key == "within_m" || key == "depth" || key == "below") continue;
     if (key == "structure" || key == "boulder")
       rs.fail(key, "the hybrid's structure and boulder are the macro case's: give them there");
     p.micro_case[key] = value;
@@ -294,6 +309,7 @@ bridge::RunOutcome run(const JsonDocument& doc, const bridge::RunContext& ctx) {
   json h = coupler->report(energy);
   h["within_m"] = p.within_m;
   h["depth"] = p.whole_depth ? "whole" : "reach";
+  h["below"] = p.cells_below ? "cells" : "plates";
   json cells = json::array(), faces = json::array();
   const int nx = p.structure.nx, ny = p.structure.ny;
   for (const int c : p.resolved) cells.push_back({c % nx, (c / nx) % ny, c / (nx * ny)});
@@ -316,7 +332,7 @@ bridge::RunOutcome run(const JsonDocument& doc, const bridge::RunContext& ctx) {
   a.precision(3);
   a << "hybrid: " << p.resolved.size() << " of " << p.structure.nx * p.structure.ny * p.structure.nz
     << " cells resolved (within " << p.within_m << " m of the aim" << (p.whole_depth ? ", through the depth" : "")
-    << "), " << p.faces.size() << " interface plates; energy balance of both parts "
+    << (p.cells_below ? ", and the cells below them" : "") << "), " << p.faces.size() << " interface plates; energy balance of both parts "
     << h["balance_rel_error"].get<double>() << ", interface mismatch " << h["interface_mismatch_J"].get<double>()
     << " J\n";
   out.answer = a.str() + out.answer;

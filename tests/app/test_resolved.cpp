@@ -253,6 +253,7 @@ TEST(HybridStructure, StruckCellResolvedTheCellBehindAMacroNode) {
   EXPECT_NE(r.output.find("1 of 2 cells resolved"), std::string::npos) << r.output;
   const nlohmann::json s = summaryOf(dir / "out");
   const nlohmann::json& h = s["hybrid"];
+  EXPECT_EQ(h["below"], "plates");
   EXPECT_EQ(h["resolved_cells"], nlohmann::json::parse("[[0, 0, 0]]"));
   ASSERT_EQ(h["interfaces"].size(), 1u);
   EXPECT_EQ(h["interfaces"][0]["axis"], "x");
@@ -309,6 +310,19 @@ TEST(HybridStructure, StruckCellResolvedTheCellBehindAMacroNode) {
   wide["resolve"]["depth"] = "whole";
   EXPECT_GT(reach, 0.0);
   EXPECT_DOUBLE_EQ(bodies(wide) - 1.0, 2.0 * (reach - 1.0));
+  // Below: on a 2 x 1 x 2 wall struck on its upper front cell, the cell under
+  // it is resolved too (2 cells, against 1); on a wall one cell high,
+  // nothing is below.
+  nlohmann::json column = c;
+  column["structure"]["cells"] = {2, 1, 2};
+  const double alone = bodies(column);
+  column["resolve"]["below"] = "cells";
+  EXPECT_DOUBLE_EQ(bodies(column) - 1.0, 2.0 * (alone - 1.0));
+  wide["resolve"]["below"] = "cells";
+  EXPECT_DOUBLE_EQ(bodies(wide) - 1.0, 2.0 * (reach - 1.0));
+  bad = c;
+  bad["resolve"]["below"] = "all";
+  refused(bad, "/resolve/below");
   bad = c;
   bad["run"] = {{"kinematics", "3d"}};
   refused(bad, "/run");
