@@ -332,9 +332,9 @@ bridge::RunOutcome run(const JsonDocument& doc, const bridge::RunContext& ctx) {
   a.precision(3);
   a << "hybrid: " << p.resolved.size() << " of " << p.structure.nx * p.structure.ny * p.structure.nz
     << " cells resolved (within " << p.within_m << " m of the aim" << (p.whole_depth ? ", through the depth" : "")
-    << (p.cells_below ? ", and the cells below them" : "") << "), " << p.faces.size() << " interface plates; energy balance of both parts "
-    << h["balance_rel_error"].get<double>() << ", interface mismatch " << h["interface_mismatch_J"].get<double>()
-    << " J\n";
+    << (p.cells_below ? ", and the cells below them" : "") << "), " << p.faces.size()
+    << " interface plates; energy balance of both parts " << h["balance_rel_error"].get<double>()
+    << ", interface mismatch " << h["interface_mismatch_J"].get<double>() << " J\n";
   out.answer = a.str() + out.answer;
   return out;
 }

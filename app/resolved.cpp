@@ -35,9 +35,9 @@ struct Plan {
   json twin, resolved;
   std::vector<json> hybrids;  ///< macro.impact cases with "resolve", one per `hybrid/within_m`
   std::vector<double> within_m;
-  std::string depth = "reach";  ///< `hybrid/depth`: "whole" resolves every cell behind a front one within reach
+  std::string depth = "reach";   ///< `hybrid/depth`: "whole" resolves every cell behind a front one within reach
   std::string below = "plates";  ///< `hybrid/below`: "cells" resolves every cell under a resolved one too
-  double law_edge_m = 0.0;      ///< the laws' cell edge (0: not known)
+  double law_edge_m = 0.0;       ///< the laws' cell edge (0: not known)
 };
 
 fs::path absoluteFrom(const JsonDocument& doc, const std::string& path) {
@@ -212,10 +212,8 @@ bridge::RunOutcome run(const JsonDocument& doc, const bridge::RunContext& ctx) {
   json hybrids = json::array();
   for (std::size_t k = 0; k < hp.size(); ++k) {
     const json& h = hp[k].summary;
-    json row = {{"within_m", p.within_m[k]},
-                {"depth", p.depth},
-                {"below", p.below},
-                {"folder", "hybrid_" + std::to_string(k)}};
+    json row = {
+        {"within_m", p.within_m[k]}, {"depth", p.depth}, {"below", p.below}, {"folder", "hybrid_" + std::to_string(k)}};
     if (hp[k].status != bridge::RunOutcome::Status::Ok) {
       row["status"] = "failed";
       row["message"] = hp[k].message;
@@ -279,8 +277,7 @@ bridge::RunOutcome run(const JsonDocument& doc, const bridge::RunContext& ctx) {
       std::ostringstream label;
       const std::size_t n = hybrids[k]["resolved_cells"].get<std::size_t>();
       label << "hybrid, within " << p.within_m[k] << " m" << (p.depth == "whole" ? " through the depth" : "")
-            << (p.below == "cells" ? " and below" : "") << " ("
-            << n << (n == 1 ? " cell" : " cells") << " resolved)";
+            << (p.below == "cells" ? " and below" : "") << " (" << n << (n == 1 ? " cell" : " cells") << " resolved)";
       plot.series.push_back(history(label.str(), h.read("/curves/impact/time_s"), h.read("/curves/impact/force_N")));
     }
     bridge::writePlotPng(ctx.outdir / "resolved_vs_macro.png", plot);
