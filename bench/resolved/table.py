@@ -5,7 +5,8 @@ its macro twin and its hybrids on the compared keys, with the relative errors
 against the resolved wall and the wall times (Python standard library); and,
 with bench_curves (argument 2), a chart per scenario of each model's error
 against its wall time, OUT/figures/<scenario>_error_vs_time.png. With --wide
-OUT, the table and chart of bench/resolved/wide.sh."""
+OUT, the table and chart of bench/resolved/wide.sh; with --hybrids OUT, the
+hybrid variants of bench/resolved/hybrids.sh."""
 import json
 import math
 import os
@@ -121,6 +122,46 @@ def main(out, curves=None):
         print("| " + " | ".join([label, model] + cells + [str(outcome), wall_s, fast, bal]) + " |")
 
 
+def hybrid_more(out):
+    """The table of the hybrid's variants run by hand (docs/resolved.md,
+    What the hybrids buy): OUT/below/<scenario> (resolve.below "cells") and
+    OUT/hybrid_more/<run> (the centred 10 m/s scenario's 4-cell hybrid
+    changed), each against its scenario's resolved wall, next to the
+    scenario's 4-cell hybrid as macro.resolved ran it."""
+    head = ["scenario", "hybrid"] + [title for _, title, _ in KEYS] + ["outcome"]
+    print("| " + " | ".join(head) + " |")
+    print("|" + "---|" * len(head))
+    runs = []
+    for name in sorted(os.listdir(os.path.join(out, "below"))) if os.path.isdir(os.path.join(out, "below")) else []:
+        runs.append((name, os.path.join(out, "below", name)))
+    more = os.path.join(out, "hybrid_more")
+    for name in sorted(os.listdir(more)) if os.path.isdir(more) else []:
+        runs.append(("centre_10_m_s", os.path.join(more, name)))
+    shown = set()
+    for scenario, folder in runs:
+        f = os.path.join(folder, "summary.json")
+        ref_file = os.path.join(out, scenario, "summary.json")
+        if not os.path.isfile(f) or not os.path.isfile(ref_file):
+            continue
+        r = summary(ref_file)
+        if scenario not in shown:  # (the scenario's own hybrid, within 0.25 m, first)
+            shown.add(scenario)
+            for k, h in enumerate(r.get("hybrids", [])):
+                if h.get("within_m") == 0.25 and h.get("status") == "ok":
+                    print("| " + " | ".join([scenario, f"within 0.25 m ({h['resolved_cells']} cells, hybrid_{k})"] + [
+                        cell(h.get(key), scale) + f" ({err(h.get('relative_error', {}).get(key))})"
+                        for key, _, scale in KEYS] + [str(h.get("outcome"))]) + " |")
+        h = summary(f)
+        info = h.get("hybrid", {})
+        what = f"within {info.get('within_m')} m" + (" through the depth" if info.get("depth") == "whole" else "")
+        what += " and below" if info.get("below") == "cells" else ""
+        what += f" ({len(info.get('resolved_cells', []))} cells, {os.path.relpath(folder, out)})"
+        errors = relative(h, r)
+        print("| " + " | ".join([scenario, what] + [cell(h.get(key), scale) + f" ({err(e)})"
+                                                    for (key, _, scale), e in zip(KEYS, errors)] +
+                                [str(h.get("outcome"))]) + " |")
+
+
 def in_place_charts(out, curves, by_speed):
     """Peak force and penetration against the impact speed, one line per
     model, the centre scenarios: OUT/in_place/figures/in_place_vs_speed_<key>.png."""
@@ -220,7 +261,8 @@ def wide(out, curves=None):
             within = info.get("within_m", within)
             depth = info.get("depth", depth)
             resolved = len(info.get("resolved_cells", []))
-            what = f"hybrid within {within:g} m" + (" through the depth" if depth == "whole" else "") + f" ({resolved} cells)"
+            what = (f"hybrid within {within:g} m" + (" through the depth" if depth == "whole" else "") +
+                    (" and below" if info.get("below") == "cells" else "") + f" ({resolved} cells)")
             rows.append((what, h, r, h.get("wall_time_s")))
         points = []
         for model, s, ref, wall in rows:
@@ -245,7 +287,9 @@ def wide(out, curves=None):
 
 
 if __name__ == "__main__":
-    if len(sys.argv) > 1 and sys.argv[1] == "--wide":
+    if len(sys.argv) > 1 and sys.argv[1] == "--hybrids":
+        hybrid_more(sys.argv[2] if len(sys.argv) > 2 else "results/speed_error")
+    elif len(sys.argv) > 1 and sys.argv[1] == "--wide":
         wide(sys.argv[2] if len(sys.argv) > 2 else "results/wide", sys.argv[3] if len(sys.argv) > 3 else None)
     elif len(sys.argv) > 1 and sys.argv[1] == "--in-place":
         in_place(sys.argv[2] if len(sys.argv) > 2 else "results/speed_error", sys.argv[3] if len(sys.argv) > 3 else None)
