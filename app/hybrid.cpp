@@ -32,6 +32,9 @@ struct Plan {
   double within_m = 0.0;
   bool whole_depth = false;  ///< `resolve.depth` "whole": every cell behind a resolved front cell too
   bool cells_below = false;  ///< `resolve.below` "cells": every cell under a resolved one too, down to the base
+  bool beside_follow =
+      false;                  ///< `resolve.beside` "follow": the plates beside come down with their cell while settling
+  bool weight_above = false;  ///< `resolve.above` "weight": an upper plate presses with the cells above while settling
   std::vector<int> resolved;
   std::vector<StructurePart::Face> faces;
   json micro_case;
@@ -58,6 +61,8 @@ Plan plan(const JsonDocument& doc) {
   p.within_m = rs.number("within_m", 0.0, Check::NonNegative);
   p.whole_depth = rs.choice("depth", {"reach", "whole"}, "reach") == "whole";
   p.cells_below = rs.choice("below", {"plates", "cells"}, "plates") == "cells";
+  p.weight_above = rs.choice("above", {"fixed", "weight"}, "fixed") == "weight";
+  p.beside_follow = rs.choice("beside", {"fixed", "follow"}, "fixed") == "follow";
   const fs::path cell_file = absoluteFrom(doc, rs.string("cell"));
   if (p.c.impacts.size() != 1)
     root.fail("impacts", "a hybrid run takes one impact (the fine part is struck once): give `boulder`");
@@ -118,7 +123,10 @@ Plan plan(const JsonDocument& doc) {
         int o[3] = {ijk[0], ijk[1], ijk[2]};
         o[axis] += side;
         if (o[axis] < 0 || o[axis] >= n[axis] || isResolved(o[0], o[1], o[2])) continue;
-        p.faces.push_back({cell, axis, side, o[0] + nx * (o[1] + ny * o[2])});
+        // (an upper face: the cells stacked on it, their weight on the
+        // resolved cell while it settles, with above "weight")
+        const int above = axis == 2 && side > 0 && p.weight_above ? nz - 1 - ijk[2] : 0;
+        p.faces.push_back({cell, axis, side, o[0] + nx * (o[1] + ny * o[2]), above});
       }
   }
   p.c.structure.resolved_cells = p.resolved;
@@ -137,7 +145,8 @@ Plan plan(const JsonDocument& doc) {
       {"boulder", boulder},
       {"rebound_restitution", p.c.run.rebound_restitution}};
   for (const auto& [key, value] : root.raw("resolve").items()) {
-    if (key == "cell" || key == "within_m" || key == "depth" || key == "below") continue;
+    if (key == "cell" || key == "within_m" || key == "depth" || key == "below" || key == "above" || key == "beside")
+      continue;
     if (key == "structure" || key == "boulder")
       rs.fail(key, "the hybrid's structure and boulder are the macro case's: give them there");
     p.micro_case[key] = value;
@@ -274,6 +283,7 @@ StructurePart partOf(const Plan& p, Coupler* coupler) {
   StructurePart part;
   part.cells = p.resolved;
   part.faces = p.faces;
+  part.beside_follow = p.beside_follow;
   if (coupler) {
     part.drive = [coupler](double t, double dt, const std::vector<Vec3>& f, std::vector<Vec3>& d) {
       coupler->drive(t, dt, f, d);
@@ -310,6 +320,8 @@ bridge::RunOutcome run(const JsonDocument& doc, const bridge::RunContext& ctx) {
   h["within_m"] = p.within_m;
   h["depth"] = p.whole_depth ? "whole" : "reach";
   h["below"] = p.cells_below ? "cells" : "plates";
+  h["above"] = p.weight_above ? "weight" : "fixed";
+  h["beside"] = p.beside_follow ? "follow" : "fixed";
   json cells = json::array(), faces = json::array();
   const int nx = p.structure.nx, ny = p.structure.ny;
   for (const int c : p.resolved) cells.push_back({c % nx, (c / nx) % ny, c / (nx * ny)});
@@ -332,7 +344,9 @@ bridge::RunOutcome run(const JsonDocument& doc, const bridge::RunContext& ctx) {
   a.precision(3);
   a << "hybrid: " << p.resolved.size() << " of " << p.structure.nx * p.structure.ny * p.structure.nz
     << " cells resolved (within " << p.within_m << " m of the aim" << (p.whole_depth ? ", through the depth" : "")
-    << (p.cells_below ? ", and the cells below them" : "") << "), " << p.faces.size()
+    << (p.cells_below ? ", and the cells below them" : "")
+    << (p.weight_above ? ", the weight of the cells above on them" : "")
+    << (p.beside_follow ? ", the plates beside coming down with them" : "") << "), " << p.faces.size()
     << " interface plates; energy balance of both parts " << h["balance_rel_error"].get<double>()
     << ", interface mismatch " << h["interface_mismatch_J"].get<double>() << " J\n";
   out.answer = a.str() + out.answer;

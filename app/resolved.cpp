@@ -37,6 +37,8 @@ struct Plan {
   std::vector<double> within_m;
   std::string depth = "reach";   ///< `hybrid/depth`: "whole" resolves every cell behind a front one within reach
   std::string below = "plates";  ///< `hybrid/below`: "cells" resolves every cell under a resolved one too
+  std::string above = "fixed";   ///< `hybrid/above`: "weight" presses the cells above onto the resolved ones
+  std::string beside = "fixed";  ///< `hybrid/beside`: "follow" brings the plates beside down with their cells
   double law_edge_m = 0.0;       ///< the laws' cell edge (0: not known)
 };
 
@@ -100,9 +102,12 @@ Plan plan(const JsonDocument& doc) {
     p.within_m = h->numbers("within_m", Check::NonNegative, 1);
     p.depth = h->choice("depth", {"reach", "whole"}, "reach");
     p.below = h->choice("below", {"plates", "cells"}, "plates");
+    p.above = h->choice("above", {"fixed", "weight"}, "fixed");
+    p.beside = h->choice("beside", {"fixed", "follow"}, "fixed");
     for (const double w : p.within_m) {
       json c = p.twin;
-      json resolve = {{"cell", cell.string()}, {"within_m", w}, {"depth", p.depth}, {"below", p.below}};
+      json resolve = {{"cell", cell.string()}, {"within_m", w},    {"depth", p.depth},
+                      {"below", p.below},      {"above", p.above}, {"beside", p.beside}};
       for (const auto& [key, value] : p.resolved.items())
         if (key != "format" && key != "kind" && key != "cell" && key != "structure" && key != "boulder")
           resolve[key] = value;
@@ -212,8 +217,8 @@ bridge::RunOutcome run(const JsonDocument& doc, const bridge::RunContext& ctx) {
   json hybrids = json::array();
   for (std::size_t k = 0; k < hp.size(); ++k) {
     const json& h = hp[k].summary;
-    json row = {
-        {"within_m", p.within_m[k]}, {"depth", p.depth}, {"below", p.below}, {"folder", "hybrid_" + std::to_string(k)}};
+    json row = {{"within_m", p.within_m[k]}, {"depth", p.depth},   {"below", p.below},
+                {"above", p.above},          {"beside", p.beside}, {"folder", "hybrid_" + std::to_string(k)}};
     if (hp[k].status != bridge::RunOutcome::Status::Ok) {
       row["status"] = "failed";
       row["message"] = hp[k].message;
@@ -277,7 +282,9 @@ bridge::RunOutcome run(const JsonDocument& doc, const bridge::RunContext& ctx) {
       std::ostringstream label;
       const std::size_t n = hybrids[k]["resolved_cells"].get<std::size_t>();
       label << "hybrid, within " << p.within_m[k] << " m" << (p.depth == "whole" ? " through the depth" : "")
-            << (p.below == "cells" ? " and below" : "") << " (" << n << (n == 1 ? " cell" : " cells") << " resolved)";
+            << (p.below == "cells" ? " and below" : "") << (p.above == "weight" ? ", weight above" : "")
+            << (p.beside == "follow" ? ", plates beside following" : "") << " (" << n << (n == 1 ? " cell" : " cells")
+            << " resolved)";
       plot.series.push_back(history(label.str(), h.read("/curves/impact/time_s"), h.read("/curves/impact/force_N")));
     }
     bridge::writePlotPng(ctx.outdir / "resolved_vs_macro.png", plot);
@@ -297,7 +304,8 @@ bridge::RunOutcome run(const JsonDocument& doc, const bridge::RunContext& ctx) {
     << res_wall / twin_wall << " times faster)\n";
   for (const json& h : hybrids) {
     a << "  hybrid within " << h["within_m"].get<double>() << " m" << (p.depth == "whole" ? " through the depth" : "")
-      << (p.below == "cells" ? " and below" : "") << ": ";
+      << (p.below == "cells" ? " and below" : "") << (p.above == "weight" ? ", weight above" : "")
+      << (p.beside == "follow" ? ", plates beside following" : "") << ": ";
     if (h["status"] != "ok") {
       a << "failed: " << h["message"].get<std::string>() << "\n";
       continue;

@@ -155,6 +155,8 @@ def hybrid_more(out):
         info = h.get("hybrid", {})
         what = f"within {info.get('within_m')} m" + (" through the depth" if info.get("depth") == "whole" else "")
         what += " and below" if info.get("below") == "cells" else ""
+        what += ", weight above" if info.get("above") == "weight" else ""
+        what += ", plates beside following" if info.get("beside") == "follow" else ""
         what += f" ({len(info.get('resolved_cells', []))} cells, {os.path.relpath(folder, out)})"
         errors = relative(h, r)
         print("| " + " | ".join([scenario, what] + [cell(h.get(key), scale) + f" ({err(e)})"
@@ -262,7 +264,9 @@ def wide(out, curves=None):
             depth = info.get("depth", depth)
             resolved = len(info.get("resolved_cells", []))
             what = (f"hybrid within {within:g} m" + (" through the depth" if depth == "whole" else "") +
-                    (" and below" if info.get("below") == "cells" else "") + f" ({resolved} cells)")
+                    (" and below" if info.get("below") == "cells" else "") +
+                    (", weight above" if info.get("above") == "weight" else "") +
+                    (", plates beside following" if info.get("beside") == "follow" else "") + f" ({resolved} cells)")
             rows.append((what, h, r, h.get("wall_time_s")))
         points = []
         for model, s, ref, wall in rows:

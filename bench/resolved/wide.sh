@@ -6,7 +6,9 @@
 #             0.25 and 0.5 m of the aim, within 0.25 and 0.36 m through
 #             the depth (resolve.depth "whole"), and within 0.25 m with
 #             the cells below (resolve.below "cells"), on the face and
-#             through the depth;
+#             through the depth, and within 0.25 m with the weight of the
+#             cells above (resolve.above "weight") or the plates beside
+#             coming down with their cells (resolve.beside "follow");
 #   wall_210  2 x 15 x 7 cells: resolved, macro twin, and hybrids within
 #             0.25 and 0.36 m through the depth;
 # then one table, and a chart of each hybrid's largest error against how
@@ -41,6 +43,8 @@ for w in $walls; do
         run_once wall_54_more/whole_0.36 "$h" --set resolve.depth=whole --set resolve.within_m=0.36
         run_once wall_54_more/below_0.25 "$h" --set resolve.below=cells
         run_once wall_54_more/whole_below_0.25 "$h" --set resolve.below=cells --set resolve.depth=whole
+        run_once wall_54_more/weight_0.25 "$h" --set resolve.above=weight
+        run_once wall_54_more/follow_0.25 "$h" --set resolve.beside=follow
       fi
       ;;
     210)

@@ -186,9 +186,25 @@ Layout buildLayout(const StructureCase& c, const Sample& sample, const Structure
 
 /// The settling's scene (c.settle_s > 0): the laid-out structure for the
 /// longest the settling may take, five snapshots, its series at least ten.
-Scene settleScene(const StructureCase& c, const Layout& l) {
+/// A part's plate under cells stacked above its resolved cell presses on it
+/// with their weight: a servo along its normal, at most 0.5 m/s (the
+/// stack's own descent is a few tenths of a metre a second at first), its
+/// gain that speed at a force error of that weight.
+Scene settleScene(const StructureCase& c, const Layout& l, const Sample& sample, const StructurePart* part) {
   const double longest = c.until_at_rest ? c.settle_longest_s : c.settle_s;
   Scene s = l.scene;
+  if (part) {
+    const std::size_t first = s.walls.size() - part->faces.size();
+    for (std::size_t k = 0; k < part->faces.size(); ++k) {
+      const StructurePart::Face& f = part->faces[k];
+      if (f.cells_above <= 0) continue;
+      WallProgram& p = s.walls[first + k].program;
+      p.kind = WallProgram::Kind::Servo;
+      p.target_force_N = f.cells_above * sample.mass_kg * s.gravity_m_s2.norm();
+      p.max_speed_m_s = 0.5;
+      p.gain_m_s_N = p.max_speed_m_s / p.target_force_N;
+    }
+  }
   s.run.duration_s = longest;
   s.run.output_interval_s = longest / 5.0;
   s.run.series_interval_s = std::min(s.run.series_interval_s, c.settle_s / 10.0);
@@ -274,7 +290,7 @@ bridge::RunOutcome runOne(const StructureCase& c, const Sample& sample, const br
   // at_rest_m_s over the settling's last fifth), or for a set time.
   Scene standing = layout.scene;
   if (c.settle_s > 0.0) {
-    Scene s = settleScene(c, layout);
+    Scene s = settleScene(c, layout, sample, part);
     bridge::RunContext sub = ctx;
     sub.outdir = ctx.outdir / "settle";
     std::filesystem::create_directories(sub.outdir);
@@ -291,6 +307,40 @@ bridge::RunOutcome runOne(const StructureCase& c, const Sample& sample, const br
         return e.time() >= c.settle_s && descentSpeed(t, u, weight) <= c.at_rest_m_s;
       };
     hooks.archive = [&](bridge::StateArchive& a) { a("time_s", t), a("gravity_potential_J", u); };
+    // The plates beside the part's cells come down with them (each step the
+    // plate's height offset is set to its cell's blocks' mean descent so
+    // far: no state of its own, the same after a resume).
+    std::vector<std::size_t> driven;  // the part's faces whose plates are driven here, in wall order
+    std::vector<double> z0, wz0;      // their cells' blocks' mean height and their plates' height, laid out
+    const std::size_t n_spheres = s.spheres.size();
+    if (part && part->beside_follow) {
+      const std::size_t first = s.walls.size() - part->faces.size();
+      for (std::size_t k = 0; k < part->faces.size(); ++k)
+        if (s.walls[first + k].program.kind == WallProgram::Kind::Driven) driven.push_back(k);
+      const auto blocksOf = [&](int cell) {
+        return static_cast<std::size_t>(layout.slot_of[static_cast<std::size_t>(cell)]) * layout.blocks_per_cell;
+      };
+      for (const std::size_t k : driven) {
+        double z = 0.0;
+        const std::size_t b0 = blocksOf(part->faces[k].cell);
+        for (std::size_t b = b0; b < b0 + layout.blocks_per_cell; ++b) z += s.blocks[b].position_m.z();
+        z0.push_back(z / static_cast<double>(layout.blocks_per_cell));
+        wz0.push_back(s.walls[first + k].point_m.z());
+      }
+      hooks.start = [&, first, n_spheres, blocksOf](Engine& e) {
+        e.setWallDriver([&, first, n_spheres, blocksOf](double, double, const std::vector<Vec3>&,
+                                                        std::vector<Vec3>& moves) {
+          for (std::size_t q = 0; q < driven.size(); ++q) {
+            const StructurePart::Face& f = part->faces[driven[q]];
+            moves[q].setZero();
+            if (f.axis == 2) continue;  // (a plate under or over the cell stands still)
+            const std::size_t w = first + driven[q];
+            const double sink = meanBlockPosition(e, n_spheres, blocksOf(f.cell), layout.blocks_per_cell).z() - z0[q];
+            moves[q].z() = sink - (e.wallPosition(w).z() - wz0[q]);
+          }
+        });
+      };
+    }
     double settled_at = NAN;
     hooks.end = [&](const Engine& e, const Scene& in) { standing = stateScene(in, e), settled_at = e.time(); };
     bridge::RunOutcome settled = runScene(std::move(s), file, sub, hooks);
@@ -300,6 +350,9 @@ bridge::RunOutcome runOne(const StructureCase& c, const Sample& sample, const br
     }
     settle_results = settled.results;
     standing.run = layout.scene.run;  // (the state keeps the settling's run)
+    // (the plates that pressed with the weight above are driven again, from
+    // where the settling left them)
+    for (std::size_t w = 0; w < standing.walls.size(); ++w) standing.walls[w].program = layout.scene.walls[w].program;
     // Was the stack at rest when the boulder came? How fast its centre of
     // mass came down over the settling's last fifth (the samples are whole
     // in a resumed settling: they are in its checkpoint).
@@ -548,7 +601,7 @@ std::optional<bridge::Estimate> estimateRuns(const StructureCase& c, const std::
   return estimateReplicates(c.setup, c.settle_s > 0.0 ? 2 : 1, [&](const Sample& s, std::size_t run) {
     const Layout l = buildLayout(c, s, part);
     std::size_t boulder = 0;
-    return run == 1 ? settleScene(c, l) : impactScene(c, l.scene, s, aimPoint(c, l), file, boulder);
+    return run == 1 ? settleScene(c, l, s, part) : impactScene(c, l.scene, s, aimPoint(c, l), file, boulder);
   });
 }
 

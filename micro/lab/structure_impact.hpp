@@ -40,12 +40,22 @@ struct StructurePart {
     int axis = 0;   ///< 0: x, 1: y, 2: z
     int side = 1;   ///< +1: its face at the upper end along the axis; -1: the lower
     int other = 0;  ///< the grid index of the cell across the face
+    /// Cells stacked on this face (an upper face, axis 2 and side +1): while
+    /// the part settles its plate presses on the resolved cell with their
+    /// weight (the cell file's mass each), a servo along z; 0: it stands
+    /// still. In the impact it is driven as every plate.
+    int cells_above = 0;
   };
   std::vector<Face> faces;
+  /// While the part settles, the plates beside its cells (x and y faces)
+  /// come down with the cell they touch (its blocks' mean height), as the
+  /// macro cell they stand for would sink beside it; false: they stand still.
+  bool beside_follow = false;
   /// The faces' plates in this order are the engine's Driven walls: each
   /// step, the forces the bodies exert on them (N) in, their displacements
   /// over the step (m) out (Engine::WallDriver). Called in the impact only
-  /// (the plates stand still while the part settles).
+  /// (while the part settles the plates stand still, but for those that
+  /// carry the weight of cells above: Face::cells_above).
   Engine::WallDriver drive;
   /// The largest front and back face displacements (m) of the cells not
   /// resolved, read at each series sample (the summary's face keys take the

@@ -324,6 +324,59 @@ TEST(HybridStructure, StruckCellResolvedTheCellBehindAMacroNode) {
   bad["resolve"]["below"] = "all";
   refused(bad, "/resolve/below");
   bad = c;
+  bad["resolve"]["above"] = "heavy";
+  refused(bad, "/resolve/above");
+  // Above: on a 1 x 1 x 2 column struck on its lower cell, the plate over
+  // it stands for the macro cell above; with above "weight" it presses on
+  // the settling cell with that cell's weight (a servo: within 10 % after
+  // 0.05 s, six of its time constants on this cell), standing still it
+  // carries less than half of it (the cell comes down from it).
+  const double weight = summaryOf(dir / "cell")["mass_kg"].get<double>() * 9.81;
+  const auto upperPlateForce = [&](const std::string& above) {
+    nlohmann::json col = c;
+    col["structure"]["cells"] = {1, 1, 2};
+    col["boulder"]["aim_point_m"] = {0.15, 0.15};
+    col["resolve"]["above"] = above;
+    col["resolve"]["settle"] = {{"duration_s", 0.05}, {"until_at_rest", false}};
+    col["resolve"]["run"] = {{"duration_s", 0.002}};
+    writeFile(dir / "column.json", col.dump());
+    const auto run =
+        runGabion("run -q " + (dir / "column.json").string() + " -o " + (dir / ("column_" + above)).string());
+    EXPECT_EQ(run.exit_code, 0) << run.output;
+    const nlohmann::json h = summaryOf(dir / ("column_" + above))["hybrid"];
+    EXPECT_EQ(h["above"], above);
+    for (const nlohmann::json& f : h["interfaces"])
+      if (f["axis"] == "z" && f["side"] == 1) return f["force_settled_N"][2].get<double>();
+    ADD_FAILURE() << "no upper plate: " << h.dump();
+    return 0.0;
+  };
+  EXPECT_NEAR(upperPlateForce("weight"), weight, 0.1 * weight);
+  EXPECT_LT(upperPlateForce("fixed"), 0.5 * weight);
+  // Beside: the plate behind the struck cell (it stands for the macro cell
+  // there) comes down with the cell's blocks while they settle, by what
+  // they came down (settle/struck_cell_drop_m); standing still, it stays.
+  const auto plateDescent = [&](const std::string& beside, double& drop) {
+    nlohmann::json side = c;
+    side["resolve"]["beside"] = beside;
+    side["resolve"]["settle"] = {{"duration_s", 0.05}, {"until_at_rest", false}};
+    side["resolve"]["run"] = {{"duration_s", 0.002}};
+    writeFile(dir / "side.json", side.dump());
+    const auto out = dir / ("side_" + beside);
+    const auto run = runGabion("run -q " + (dir / "side.json").string() + " -o " + out.string());
+    EXPECT_EQ(run.exit_code, 0) << run.output;
+    const nlohmann::json s = summaryOf(out);
+    EXPECT_EQ(s["hybrid"]["beside"], beside);
+    drop = s["settle"]["struck_cell_drop_m"].get<double>();
+    const std::vector<double> p =
+        gabion::bridge::H5Reader(out / "settle" / "result.h5").read("/series/walls/interface_0_x_plus/position_m");
+    return p.size() >= 6 ? p[2] - p[p.size() - 1] : NAN;
+  };
+  double drop = 0.0;
+  EXPECT_EQ(plateDescent("fixed", drop), 0.0);
+  const double descent = plateDescent("follow", drop);
+  EXPECT_GT(drop, 1e-4) << "the cell came down";
+  EXPECT_NEAR(descent, drop, 1e-3 * drop);
+  bad = c;
   bad["run"] = {{"kinematics", "3d"}};
   refused(bad, "/run");
   bad = c;
