@@ -343,11 +343,11 @@ TEST(HybridStructure, StruckCellResolvedTheCellBehindAMacroNode) {
     const auto run =
         runGabion("run -q " + (dir / "column.json").string() + " -o " + (dir / ("column_" + above)).string());
     EXPECT_EQ(run.exit_code, 0) << run.output;
-    const nlohmann::json h = summaryOf(dir / ("column_" + above))["hybrid"];
-    EXPECT_EQ(h["above"], above);
-    for (const nlohmann::json& f : h["interfaces"])
+    const nlohmann::json hc = summaryOf(dir / ("column_" + above))["hybrid"];
+    EXPECT_EQ(hc["above"], above);
+    for (const nlohmann::json& f : hc["interfaces"])
       if (f["axis"] == "z" && f["side"] == 1) return f["force_settled_N"][2].get<double>();
-    ADD_FAILURE() << "no upper plate: " << h.dump();
+    ADD_FAILURE() << "no upper plate: " << hc.dump();
     return 0.0;
   };
   EXPECT_NEAR(upperPlateForce("weight"), weight, 0.1 * weight);
@@ -364,9 +364,9 @@ TEST(HybridStructure, StruckCellResolvedTheCellBehindAMacroNode) {
     const auto out = dir / ("side_" + beside);
     const auto run = runGabion("run -q " + (dir / "side.json").string() + " -o " + out.string());
     EXPECT_EQ(run.exit_code, 0) << run.output;
-    const nlohmann::json s = summaryOf(out);
-    EXPECT_EQ(s["hybrid"]["beside"], beside);
-    drop = s["settle"]["struck_cell_drop_m"].get<double>();
+    const nlohmann::json ss = summaryOf(out);
+    EXPECT_EQ(ss["hybrid"]["beside"], beside);
+    drop = ss["settle"]["struck_cell_drop_m"].get<double>();
     const std::vector<double> p =
         gabion::bridge::H5Reader(out / "settle" / "result.h5").read("/series/walls/interface_0_x_plus/position_m");
     return p.size() >= 6 ? p[2] - p[p.size() - 1] : NAN;
