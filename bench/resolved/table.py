@@ -266,7 +266,9 @@ def wide(out, curves=None):
             what = (f"hybrid within {within:g} m" + (" through the depth" if depth == "whole" else "") +
                     (" and below" if info.get("below") == "cells" else "") +
                     (", weight above" if info.get("above") == "weight" else "") +
-                    (", plates beside following" if info.get("beside") == "follow" else "") + f" ({resolved} cells)")
+                    (", plates beside following" if info.get("beside") == "follow" else "") +
+                    (f", settled {h['settle']['duration_s']:.2g} s" if h.get("settle", {}).get("until_at_rest") is False
+                     else "") + f" ({resolved} cells)")
             rows.append((what, h, r, h.get("wall_time_s")))
         points = []
         for model, s, ref, wall in rows:

@@ -8,7 +8,9 @@
 #             the cells below (resolve.below "cells"), on the face and
 #             through the depth, and within 0.25 m with the weight of the
 #             cells above (resolve.above "weight") or the plates beside
-#             coming down with their cells (resolve.beside "follow");
+#             coming down with their cells (resolve.beside "follow"),
+#             and settled for the wall's 1 s, as it is and with below
+#             "cells" and beside "follow";
 #   wall_210  2 x 15 x 7 cells: resolved, macro twin, and hybrids within
 #             0.25 and 0.36 m through the depth;
 # then one table, and a chart of each hybrid's largest error against how
@@ -45,6 +47,10 @@ for w in $walls; do
         run_once wall_54_more/whole_below_0.25 "$h" --set resolve.below=cells --set resolve.depth=whole
         run_once wall_54_more/weight_0.25 "$h" --set resolve.above=weight
         run_once wall_54_more/follow_0.25 "$h" --set resolve.beside=follow
+        # (settled for the wall's 1 s, not until at rest)
+        run_once wall_54_more/settle_1s_0.25 "$h" --set resolve.settle.until_at_rest=false --set resolve.settle.duration_s=1
+        run_once wall_54_more/below_follow_1s_0.25 "$h" --set resolve.below=cells --set resolve.beside=follow \
+          --set resolve.settle.until_at_rest=false --set resolve.settle.duration_s=1
       fi
       ;;
     210)
