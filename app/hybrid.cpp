@@ -30,11 +30,10 @@ struct Plan {
   macro::ImpactCase c;
   macro::Structure structure;  ///< the macro part: no node for a resolved cell
   double within_m = 0.0;
-  bool whole_depth = false;  ///< `resolve.depth` "whole": every cell behind a resolved front cell too
-  bool cells_below = false;  ///< `resolve.below` "cells": every cell under a resolved one too, down to the base
-  bool beside_follow =
-      false;                  ///< `resolve.beside` "follow": the plates beside come down with their cell while settling
-  bool weight_above = false;  ///< `resolve.above` "weight": an upper plate presses with the cells above while settling
+  bool whole_depth = false;    ///< `resolve.depth` "whole": every cell behind a resolved front cell too
+  bool cells_below = false;    ///< `resolve.below` "cells": every cell under a resolved one too, down to the base
+  bool weight_above = false;   ///< `resolve.above` "weight": an upper plate presses with the cells above, settling
+  bool beside_follow = false;  ///< `resolve.beside` "follow": the plates beside come down with their cell, settling
   std::vector<int> resolved;
   std::vector<StructurePart::Face> faces;
   json micro_case;

@@ -55,7 +55,8 @@ struct StructurePart {
   /// step, the forces the bodies exert on them (N) in, their displacements
   /// over the step (m) out (Engine::WallDriver). Called in the impact only
   /// (while the part settles the plates stand still, but for those that
-  /// carry the weight of cells above: Face::cells_above).
+  /// carry the weight of cells above, Face::cells_above, and with
+  /// beside_follow those beside the cells).
   Engine::WallDriver drive;
   /// The largest front and back face displacements (m) of the cells not
   /// resolved, read at each series sample (the summary's face keys take the
