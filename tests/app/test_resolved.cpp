@@ -326,6 +326,21 @@ TEST(HybridStructure, StruckCellResolvedTheCellBehindAMacroNode) {
   bad = c;
   bad["resolve"]["above"] = "heavy";
   refused(bad, "/resolve/above");
+  // (a hybrid whose part settles for a set 0.05 s and is struck for 2 ms,
+  // with resolve/KEY VALUE, into dir/NAME_VALUE: its folder and summary)
+  const auto settledVariant = [&](nlohmann::json cs, const std::string& key, const std::string& value,
+                                  const std::string& name) {
+    cs["resolve"][key] = value;
+    cs["resolve"]["settle"] = {{"duration_s", 0.05}, {"until_at_rest", false}};
+    cs["resolve"]["run"] = {{"duration_s", 0.002}};
+    writeFile(dir / (name + ".json"), cs.dump());
+    const auto out = dir / (name + "_" + value);
+    const auto run = runGabion("run -q " + (dir / (name + ".json")).string() + " -o " + out.string());
+    EXPECT_EQ(run.exit_code, 0) << run.output;
+    const nlohmann::json sm = summaryOf(out);
+    EXPECT_EQ(sm["hybrid"][key], value);
+    return std::make_pair(out, sm);
+  };
   // Above: on a 1 x 1 x 2 column struck on its lower cell, the plate over
   // it stands for the macro cell above. With above "weight" it is a servo
   // pressing with that cell's weight W: its speed down is 0.5 m/s x (W -
@@ -339,15 +354,7 @@ TEST(HybridStructure, StruckCellResolvedTheCellBehindAMacroNode) {
     nlohmann::json col = c;
     col["structure"]["cells"] = {1, 1, 2};
     col["boulder"]["aim_point_m"] = {0.15, 0.15};
-    col["resolve"]["above"] = above;
-    col["resolve"]["settle"] = {{"duration_s", 0.05}, {"until_at_rest", false}};
-    col["resolve"]["run"] = {{"duration_s", 0.002}};
-    writeFile(dir / "column.json", col.dump());
-    const auto out = dir / ("column_" + above);
-    const auto run = runGabion("run -q " + (dir / "column.json").string() + " -o " + out.string());
-    EXPECT_EQ(run.exit_code, 0) << run.output;
-    const nlohmann::json sc = summaryOf(out);
-    EXPECT_EQ(sc["hybrid"]["above"], above);
+    const auto [out, sc] = settledVariant(col, "above", above, "column");
     weight = sc["cell_mass_kg"].get<double>() * 9.81;
     const gabion::bridge::H5Reader h5(out / "settle" / "result.h5");
     const std::vector<double> t = h5.read("/series/time_s"), f = h5.read("/series/walls/interface_0_z_plus/force_N"),
@@ -373,16 +380,7 @@ TEST(HybridStructure, StruckCellResolvedTheCellBehindAMacroNode) {
   // there) comes down with the cell's blocks while they settle, by what
   // they came down (settle/struck_cell_drop_m); standing still, it stays.
   const auto plateDescent = [&](const std::string& beside, double& drop) {
-    nlohmann::json side = c;
-    side["resolve"]["beside"] = beside;
-    side["resolve"]["settle"] = {{"duration_s", 0.05}, {"until_at_rest", false}};
-    side["resolve"]["run"] = {{"duration_s", 0.002}};
-    writeFile(dir / "side.json", side.dump());
-    const auto out = dir / ("side_" + beside);
-    const auto run = runGabion("run -q " + (dir / "side.json").string() + " -o " + out.string());
-    EXPECT_EQ(run.exit_code, 0) << run.output;
-    const nlohmann::json ss = summaryOf(out);
-    EXPECT_EQ(ss["hybrid"]["beside"], beside);
+    const auto [out, ss] = settledVariant(c, "beside", beside, "side");
     drop = ss["settle"]["struck_cell_drop_m"].get<double>();
     const std::vector<double> p =
         gabion::bridge::H5Reader(out / "settle" / "result.h5").read("/series/walls/interface_0_x_plus/position_m");
