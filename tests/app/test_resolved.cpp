@@ -326,6 +326,9 @@ TEST(HybridStructure, StruckCellResolvedTheCellBehindAMacroNode) {
   bad = c;
   bad["resolve"]["above"] = "heavy";
   refused(bad, "/resolve/above");
+  bad = c;
+  bad["resolve"]["beside"] = "slide";
+  refused(bad, "/resolve/beside");
   // (a hybrid whose part settles for a set 0.05 s and is struck for 2 ms,
   // with resolve/KEY VALUE, into dir/NAME_VALUE: its folder and summary)
   const auto settledVariant = [&](nlohmann::json cs, const std::string& key, const std::string& value,
