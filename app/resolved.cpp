@@ -42,6 +42,15 @@ struct Plan {
   double law_edge_m = 0.0;       ///< the laws' cell edge (0: not known)
 };
 
+/// The hybrids' settings other than their reach, in words (" through the depth and below", ...).
+std::string hybridSettings(const Plan& p) {
+  std::string w = p.depth == "whole" ? " through the depth" : "";
+  if (p.below == "cells") w += " and below";
+  if (p.above == "weight") w += ", weight above";
+  if (p.beside == "follow") w += ", plates beside following";
+  return w;
+}
+
 fs::path absoluteFrom(const JsonDocument& doc, const std::string& path) {
   const fs::path p(path);
   return p.is_absolute() ? p : fs::absolute(fs::path(doc.file()).parent_path() / p);
@@ -281,10 +290,8 @@ bridge::RunOutcome run(const JsonDocument& doc, const bridge::RunContext& ctx) {
       const bridge::H5Reader h(ctx.outdir / ("hybrid_" + std::to_string(k)) / "result.h5");
       std::ostringstream label;
       const std::size_t n = hybrids[k]["resolved_cells"].get<std::size_t>();
-      label << "hybrid, within " << p.within_m[k] << " m" << (p.depth == "whole" ? " through the depth" : "")
-            << (p.below == "cells" ? " and below" : "") << (p.above == "weight" ? ", weight above" : "")
-            << (p.beside == "follow" ? ", plates beside following" : "") << " (" << n << (n == 1 ? " cell" : " cells")
-            << " resolved)";
+      label << "hybrid, within " << p.within_m[k] << " m" << hybridSettings(p) << " (" << n
+            << (n == 1 ? " cell" : " cells") << " resolved)";
       plot.series.push_back(history(label.str(), h.read("/curves/impact/time_s"), h.read("/curves/impact/force_N")));
     }
     bridge::writePlotPng(ctx.outdir / "resolved_vs_macro.png", plot);
@@ -303,9 +310,7 @@ bridge::RunOutcome run(const JsonDocument& doc, const bridge::RunContext& ctx) {
     << " macro\n  wall time: " << res_wall << " s resolved, " << twin_wall << " s macro (the macro twin "
     << res_wall / twin_wall << " times faster)\n";
   for (const json& h : hybrids) {
-    a << "  hybrid within " << h["within_m"].get<double>() << " m" << (p.depth == "whole" ? " through the depth" : "")
-      << (p.below == "cells" ? " and below" : "") << (p.above == "weight" ? ", weight above" : "")
-      << (p.beside == "follow" ? ", plates beside following" : "") << ": ";
+    a << "  hybrid within " << h["within_m"].get<double>() << " m" << hybridSettings(p) << ": ";
     if (h["status"] != "ok") {
       a << "failed: " << h["message"].get<std::string>() << "\n";
       continue;

@@ -263,6 +263,13 @@ Scene impactScene(const StructureCase& c, Scene structure, const Sample& sample,
   return structure;
 }
 
+/// The mean height of blocks first .. first + count - 1 of a scene (a cell's, laid out or settled).
+double meanBlockHeight(const Scene& sc, std::size_t first, std::size_t count) {
+  double z = 0.0;
+  for (std::size_t b = first; b < first + count; ++b) z += sc.blocks[b].position_m.z();
+  return count > 0 ? z / static_cast<double>(count) : z;
+}
+
 Vec3 meanBlockPosition(const Engine& e, std::size_t spheres, std::size_t first, std::size_t count) {
   Vec3 x = Vec3::Zero();
   for (std::size_t b = first; b < first + count; ++b) x += e.body(spheres + b).position_m;
@@ -321,10 +328,7 @@ bridge::RunOutcome runOne(const StructureCase& c, const Sample& sample, const br
         return static_cast<std::size_t>(layout.slot_of[static_cast<std::size_t>(cell)]) * layout.blocks_per_cell;
       };
       for (const std::size_t k : driven) {
-        double z = 0.0;
-        const std::size_t b0 = blocksOf(part->faces[k].cell);
-        for (std::size_t b = b0; b < b0 + layout.blocks_per_cell; ++b) z += s.blocks[b].position_m.z();
-        z0.push_back(z / static_cast<double>(layout.blocks_per_cell));
+        z0.push_back(meanBlockHeight(s, blocksOf(part->faces[k].cell), layout.blocks_per_cell));
         wz0.push_back(s.walls[first + k].point_m.z());
       }
       hooks.start = [&, first, n_spheres, blocksOf](Engine& e) {
@@ -364,14 +368,10 @@ bridge::RunOutcome runOne(const StructureCase& c, const Sample& sample, const br
     // blocks' mean height.
     if (!u.empty()) settle_results["centre_of_mass_drop_m"] = (u.front() - u.back()) / weight;
     if (struck >= 0 && layout.blocks_per_cell > 0) {
-      const auto mean_z = [&](const Scene& sc) {
-        double z = 0.0;
-        const std::size_t first = static_cast<std::size_t>(struck) * layout.blocks_per_cell;
-        for (std::size_t b = first; b < first + layout.blocks_per_cell; ++b) z += sc.blocks[b].position_m.z();
-        return z / static_cast<double>(layout.blocks_per_cell);
-      };
-      settle_results["struck_cell_drop_m"] = mean_z(layout.scene) - mean_z(standing);
-      settle_results["aim_above_struck_cell_m"] = aim.z() - mean_z(standing);
+      const std::size_t first = static_cast<std::size_t>(struck) * layout.blocks_per_cell;
+      const double settled_z = meanBlockHeight(standing, first, layout.blocks_per_cell);
+      settle_results["struck_cell_drop_m"] = meanBlockHeight(layout.scene, first, layout.blocks_per_cell) - settled_z;
+      settle_results["aim_above_struck_cell_m"] = aim.z() - settled_z;
     }
   }
 
