@@ -41,6 +41,15 @@ IN_PLACE = [("twin_", "impact law fitted in the wall at 10 m/s"),
             ("twin_cell_", "rate law fitted on the histories with the axial law of the cell's compressions")]
 
 
+def settings(depth, info):
+    """A hybrid's settings other than its reach, in words, from its summary's
+    `hybrid` object (`info`) and its depth."""
+    return ((" through the depth" if depth == "whole" else "") +
+            (" and below" if info.get("below") == "cells" else "") +
+            (", weight above" if info.get("above") == "weight" else "") +
+            (", plates beside following" if info.get("beside") == "follow" else ""))
+
+
 def summary(path):
     s = json.load(open(path))
     return s.get("results", s)
@@ -153,10 +162,7 @@ def hybrid_more(out):
                         for key, _, scale in KEYS] + [str(h.get("outcome"))]) + " |")
         h = summary(f)
         info = h.get("hybrid", {})
-        what = f"within {info.get('within_m')} m" + (" through the depth" if info.get("depth") == "whole" else "")
-        what += " and below" if info.get("below") == "cells" else ""
-        what += ", weight above" if info.get("above") == "weight" else ""
-        what += ", plates beside following" if info.get("beside") == "follow" else ""
+        what = f"within {info.get('within_m')} m" + settings(info.get("depth"), info)
         what += f" ({len(info.get('resolved_cells', []))} cells, {os.path.relpath(folder, out)})"
         errors = relative(h, r)
         print("| " + " | ".join([scenario, what] + [cell(h.get(key), scale) + f" ({err(e)})"
@@ -263,10 +269,7 @@ def wide(out, curves=None):
             within = info.get("within_m", within)
             depth = info.get("depth", depth)
             resolved = len(info.get("resolved_cells", []))
-            what = (f"hybrid within {within:g} m" + (" through the depth" if depth == "whole" else "") +
-                    (" and below" if info.get("below") == "cells" else "") +
-                    (", weight above" if info.get("above") == "weight" else "") +
-                    (", plates beside following" if info.get("beside") == "follow" else "") +
+            what = (f"hybrid within {within:g} m" + settings(depth, info) +
                     (f", settled {h['settle']['duration_s']:.2g} s" if h.get("settle", {}).get("until_at_rest") is False
                      else "") + f" ({resolved} cells)")
             rows.append((what, h, r, h.get("wall_time_s")))
