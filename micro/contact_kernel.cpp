@@ -54,8 +54,8 @@ struct KernelOut {
 };
 
 template <bool kMeasure, bool kViscous, bool kPlastic, bool kUniform>
-void touchingPairs(const KernelIn& in, const std::uint32_t* ci, const std::uint32_t* ck, std::size_t nq,
-                   KernelHistory& h, KernelOut& out) {
+void touchingPairs(const KernelIn& in, const std::uint32_t* ci, const std::uint32_t* ck, const double* cex,
+                   const double* cey, const double* cez, std::size_t nq, KernelHistory& h, KernelOut& out) {
   const Particles& P = in.p;
   const double* __restrict X = P.x.data(), * __restrict Y = P.y.data(), * __restrict Z = P.z.data(), * __restrict R = P.r.data();
   const double* __restrict VX = P.vx.data(), * __restrict VY = P.vy.data(), * __restrict VZ = P.vz.data();
@@ -68,12 +68,14 @@ void touchingPairs(const KernelIn& in, const std::uint32_t* ci, const std::uint3
                *__restrict MU_KS = laws.mu_ks.data(), *__restrict ZETA = laws.zeta.data();
   const std::size_t nmat = laws.nmat, law0 = laws.law0;
   const double dt = in.dt, ratio = in.ratio;
-  alignas(64) double bfx[kChunk], bfy[kChunk], bfz[kChunk];
-  alignas(64) double bix[kChunk], biy[kChunk], biz[kChunk];
-  alignas(64) double bjx[kChunk], bjy[kChunk], bjz[kChunk];
-  alignas(64) double bon[kChunk];  // 1 for a pair that touches
-  // per-pair history: the last step's on entry (zero for a new contact), this step's on exit
-  alignas(64) double hux[kChunk], huy[kChunk], huz[kChunk], hpl[kChunk], hvi[kChunk];
+  // Per-pair buffers, one row each, addressed from one base (so that the
+  // scalar loops keep their pointers in registers), rows padded by 64 bytes
+  // so that they do not alias modulo 4 KiB (false store-to-load
+  // dependencies): the force on i, the torques on i and on j, 1 for a pair
+  // that touches, and the history: the last step's on entry (zero for a new
+  // contact), this step's on exit.
+  enum { kFx, kFy, kFz, kIx, kIy, kIz, kJx, kJy, kJz, kOn, kUx, kUy, kUz, kPl, kVi, kRows };
+  alignas(64) double b[kRows][kChunk + 8];
   double friction = 0.0, plastic_w = 0.0, viscous_w = 0.0, elastic = 0.0;
   {
     const ContactSet& last = *h.last;
@@ -82,13 +84,13 @@ void touchingPairs(const KernelIn& in, const std::uint32_t* ci, const std::uint3
       const std::uint32_t k = ck[q];
       while (p < last.n && last.k[p] < k) ++p;
       if (p < last.n && last.k[p] == k) {
-        hux[q] = last.ux[p], huy[q] = last.uy[p], huz[q] = last.uz[p];
-        if constexpr (kPlastic) hpl[q] = last.plastic[p];
-        if constexpr (kViscous) hvi[q] = last.viscous[p];
+        b[kUx][q] = last.ux[p], b[kUy][q] = last.uy[p], b[kUz][q] = last.uz[p];
+        if constexpr (kPlastic) b[kPl][q] = last.plastic[p];
+        if constexpr (kViscous) b[kVi][q] = last.viscous[p];
       } else {
-        hux[q] = huy[q] = huz[q] = 0.0;
-        if constexpr (kPlastic) hpl[q] = 0.0;
-        if constexpr (kViscous) hvi[q] = 0.0;
+        b[kUx][q] = b[kUy][q] = b[kUz][q] = 0.0;
+        if constexpr (kPlastic) b[kPl][q] = 0.0;
+        if constexpr (kViscous) b[kVi][q] = 0.0;
       }
     }
     h.cursor = p;
@@ -100,7 +102,7 @@ void touchingPairs(const KernelIn& in, const std::uint32_t* ci, const std::uint3
 #pragma omp simd reduction(+ : friction, plastic_w, viscous_w, elastic, active_n, bad)
     for (std::size_t q = 0; q < nq; ++q) {
       const std::uint32_t i = ci[q], j = NBR[ck[q]];
-      const double ex = X[j] - X[i], ey = Y[j] - Y[i], ez = Z[j] - Z[i];
+      const double ex = cex[q], ey = cey[q], ez = cez[q];
       const double d = std::sqrt(ex * ex + ey * ey + ez * ez);
       const double ri = R[i], rj = R[j];
       const double overlap = ri + rj - d;
@@ -118,9 +120,9 @@ void touchingPairs(const KernelIn& in, const std::uint32_t* ci, const std::uint3
                    vz = VZ[j] - VZ[i] - (ax * ny - ay * nx);
       const std::size_t L = kUniform ? law0 : MAT[i] * nmat + MAT[j];
       const double ks = KS[L];
-      double ux = hux[q], uy = huy[q], uz = huz[q], pl = 0.0, vi = 0.0;
-      if constexpr (kPlastic) pl = hpl[q];
-      if constexpr (kViscous) vi = hvi[q];
+      double ux = b[kUx][q], uy = b[kUy][q], uz = b[kUz][q], pl = 0.0, vi = 0.0;
+      if constexpr (kPlastic) pl = b[kPl][q];
+      if constexpr (kViscous) vi = b[kVi][q];
       const LaneContact c = laneContact<kMeasure, kViscous, kPlastic>(
           nx, ny, nz, overlap, vx, vy, vz, KN[L], ks, MU_KS[L], kPlastic ? FLIM[L] : 0.0, kViscous ? ZETA[L] : 0.0,
           IM[i] + IM[j], dt, ux, uy, uz, pl, vi);
@@ -129,15 +131,15 @@ void touchingPairs(const KernelIn& in, const std::uint32_t* ci, const std::uint3
       friction += act ? c.friction_J : 0.0;
       if constexpr (kMeasure) elastic += act ? c.elastic_J : 0.0;
       // (a pair that does not touch is not appended to the contact set below)
-      hux[q] = ux, huy[q] = uy, huz[q] = uz;
-      if constexpr (kPlastic) hpl[q] = pl;
-      if constexpr (kViscous) hvi[q] = vi;
+      b[kUx][q] = ux, b[kUy][q] = uy, b[kUz][q] = uz;
+      if constexpr (kPlastic) b[kPl][q] = pl;
+      if constexpr (kViscous) b[kVi][q] = vi;
       const double fx = on * c.fx, fy = on * c.fy, fz = on * c.fz;
       const double cx = ny * fz - nz * fy, cy = nz * fx - nx * fz, cz = nx * fy - ny * fx;
-      bfx[q] = fx, bfy[q] = fy, bfz[q] = fz;
-      bix[q] = li * cx, biy[q] = li * cy, biz[q] = li * cz;
-      bjx[q] = lj * cx, bjy[q] = lj * cy, bjz[q] = lj * cz;
-      bon[q] = on;
+      b[kFx][q] = fx, b[kFy][q] = fy, b[kFz][q] = fz;
+      b[kIx][q] = li * cx, b[kIy][q] = li * cy, b[kIz][q] = li * cz;
+      b[kJx][q] = lj * cx, b[kJy][q] = lj * cy, b[kJz][q] = lj * cz;
+      b[kOn][q] = on;
       active_n += on;
     }
     double* __restrict FX = out.FX, * __restrict FY = out.FY, * __restrict FZ = out.FZ;
@@ -159,37 +161,45 @@ void touchingPairs(const KernelIn& in, const std::uint32_t* ci, const std::uint3
       const std::size_t n = std::min<std::size_t>(8, nq - q);
       const auto valid = static_cast<__mmask8>((1u << n) - 1u);
       const __mmask8 on =
-          _mm512_mask_cmp_pd_mask(valid, _mm512_maskz_load_pd(valid, bon + q), _mm512_setzero_pd(), _CMP_GT_OQ);
+          _mm512_mask_cmp_pd_mask(valid, _mm512_maskz_load_pd(valid, b[kOn] + q), _mm512_setzero_pd(), _CMP_GT_OQ);
       _mm256_storeu_si256(reinterpret_cast<__m256i*>(NK + nn),
                           _mm256_maskz_compress_epi32(on, _mm256_maskz_loadu_epi32(valid, ck + q)));
-      _mm512_storeu_pd(NUX + nn, _mm512_maskz_compress_pd(on, _mm512_maskz_load_pd(valid, hux + q)));
-      _mm512_storeu_pd(NUY + nn, _mm512_maskz_compress_pd(on, _mm512_maskz_load_pd(valid, huy + q)));
-      _mm512_storeu_pd(NUZ + nn, _mm512_maskz_compress_pd(on, _mm512_maskz_load_pd(valid, huz + q)));
+      _mm512_storeu_pd(NUX + nn, _mm512_maskz_compress_pd(on, _mm512_maskz_load_pd(valid, b[kUx] + q)));
+      _mm512_storeu_pd(NUY + nn, _mm512_maskz_compress_pd(on, _mm512_maskz_load_pd(valid, b[kUy] + q)));
+      _mm512_storeu_pd(NUZ + nn, _mm512_maskz_compress_pd(on, _mm512_maskz_load_pd(valid, b[kUz] + q)));
       if constexpr (kPlastic)
-        _mm512_storeu_pd(NPL + nn, _mm512_maskz_compress_pd(on, _mm512_maskz_load_pd(valid, hpl + q)));
+        _mm512_storeu_pd(NPL + nn, _mm512_maskz_compress_pd(on, _mm512_maskz_load_pd(valid, b[kPl] + q)));
       if constexpr (kViscous)
-        _mm512_storeu_pd(NVI + nn, _mm512_maskz_compress_pd(on, _mm512_maskz_load_pd(valid, hvi + q)));
+        _mm512_storeu_pd(NVI + nn, _mm512_maskz_compress_pd(on, _mm512_maskz_load_pd(valid, b[kVi] + q)));
       nn += static_cast<std::size_t>(__builtin_popcount(on));
     }
 #else
     for (std::size_t q = 0; q < nq; ++q) {
       // (overwritten by the next pair if this one does not touch)
-      NK[nn] = ck[q], NUX[nn] = hux[q], NUY[nn] = huy[q], NUZ[nn] = huz[q];
-      if constexpr (kPlastic) NPL[nn] = hpl[q];
-      if constexpr (kViscous) NVI[nn] = hvi[q];
-      nn += bon[q] > 0.0 ? 1 : 0;
+      NK[nn] = ck[q], NUX[nn] = b[kUx][q], NUY[nn] = b[kUy][q], NUZ[nn] = b[kUz][q];
+      if constexpr (kPlastic) NPL[nn] = b[kPl][q];
+      if constexpr (kViscous) NVI[nn] = b[kVi][q];
+      nn += b[kOn][q] > 0.0 ? 1 : 0;
     }
 #endif
+    // The forces, added in pair order. A partner beyond the partition's own
+    // rows goes to its buffer: a branch, not a select of pointers, so the
+    // common case (the partner is the partition's own) keeps its pointers
+    // in registers.
+    double* __restrict BFX = out.BFX, * __restrict BFY = out.BFY, * __restrict BFZ = out.BFZ;
+    double* __restrict BTX = out.BTX, * __restrict BTY = out.BTY, * __restrict BTZ = out.BTZ;
     for (std::size_t q = 0; q < nq; ++q) {
       const std::uint32_t i = ci[q], j = NBR[ck[q]];
-      const bool mine = j < own_end;
-      hi = mine ? hi : std::max(hi, j);
-      double *fjx = mine ? FX : out.BFX, *fjy = mine ? FY : out.BFY, *fjz = mine ? FZ : out.BFZ;
-      double *tjx = mine ? TX : out.BTX, *tjy = mine ? TY : out.BTY, *tjz = mine ? TZ : out.BTZ;
-      FX[i] += bfx[q], FY[i] += bfy[q], FZ[i] += bfz[q];
-      fjx[j] -= bfx[q], fjy[j] -= bfy[q], fjz[j] -= bfz[q];
-      TX[i] += bix[q], TY[i] += biy[q], TZ[i] += biz[q];
-      tjx[j] += bjx[q], tjy[j] += bjy[q], tjz[j] += bjz[q];
+      FX[i] += b[kFx][q], FY[i] += b[kFy][q], FZ[i] += b[kFz][q];
+      TX[i] += b[kIx][q], TY[i] += b[kIy][q], TZ[i] += b[kIz][q];
+      if (j < own_end) {
+        FX[j] -= b[kFx][q], FY[j] -= b[kFy][q], FZ[j] -= b[kFz][q];
+        TX[j] += b[kJx][q], TY[j] += b[kJy][q], TZ[j] += b[kJz][q];
+      } else {
+        hi = std::max(hi, j);
+        BFX[j] -= b[kFx][q], BFY[j] -= b[kFy][q], BFZ[j] -= b[kFz][q];
+        BTX[j] += b[kJx][q], BTY[j] += b[kJy][q], BTZ[j] += b[kJz][q];
+      }
     }
     next.n = nn;
     out.hi = hi;
@@ -214,8 +224,8 @@ void touchingPairs(const KernelIn& in, const std::uint32_t* ci, const std::uint3
   out.energy->elastic_J += elastic;
 }
 
-using TouchingPairsFn = void (*)(const KernelIn&, const std::uint32_t*, const std::uint32_t*, std::size_t,
-                                 KernelHistory&, KernelOut&);
+using TouchingPairsFn = void (*)(const KernelIn&, const std::uint32_t*, const std::uint32_t*, const double*,
+                                 const double*, const double*, std::size_t, KernelHistory&, KernelOut&);
 template <bool kMeasure, bool kViscous>
 constexpr TouchingPairsFn kPlasticUniform[4] = {
     touchingPairs<kMeasure, kViscous, false, false>, touchingPairs<kMeasure, kViscous, false, true>,
@@ -259,13 +269,19 @@ void contactPartition(Particles& p, const NeighbourList& list, const MaterialLaw
   const TouchingPairsFn law = touchingPairsFor(measure, laws.any_viscous, laws.any_plastic, laws.uniform);
   std::uint32_t* __restrict const ti = s.touch_i.data();
   std::uint32_t* __restrict const tk = s.touch_k.data();
+  double* __restrict const tx = s.touch_ex.data();
+  double* __restrict const ty = s.touch_ey.data();
+  double* __restrict const tz = s.touch_ez.data();
   std::size_t m = 0;
   // Evaluates the first nq collected pairs and keeps the rest for the next chunk.
   const auto flush = [&](std::size_t nq) {
     next.ensure(next.n + nq + 8, laws.any_plastic, laws.any_viscous);  // (+ 8: whole-vector stores)
-    law(in, ti, tk, nq, hist, out);
+    law(in, ti, tk, tx, ty, tz, nq, hist, out);
     std::copy(ti + nq, ti + m, ti);
     std::copy(tk + nq, tk + m, tk);
+    std::copy(tx + nq, tx + m, tx);
+    std::copy(ty + nq, ty + m, ty);
+    std::copy(tz + nq, tz + m, tz);
     m -= nq;
   };
   const std::uint32_t* __restrict const NBR = list.nbr.data();
@@ -278,6 +294,7 @@ void contactPartition(Particles& p, const NeighbourList& list, const MaterialLaw
       const double ex = X[j] - xi, ey = Y[j] - yi, ez = Z[j] - zi, rs = ri + R[j];
       ti[m] = i;
       tk[m] = k;
+      tx[m] = ex, ty[m] = ey, tz[m] = ez;
       m += (ex * ex + ey * ey + ez * ez < rs * rs) ? 1 : 0;
     }
     while (m >= kChunk) flush(kChunk);  // leaves fewer than kChunk, so the next row fits

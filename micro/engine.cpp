@@ -354,6 +354,7 @@ void Engine::sizeTouchBuffers() {
   for (auto& sc : scratch_) {
     sc.touch_i.resize(kChunk + longest_row);
     sc.touch_k.resize(kChunk + longest_row);
+    for (auto* v : {&sc.touch_ex, &sc.touch_ey, &sc.touch_ez}) v->resize(kChunk + longest_row);
   }
 }
 

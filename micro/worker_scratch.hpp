@@ -66,6 +66,7 @@ struct WorkerScratch {
   std::uint32_t lo = 0, hi = 0;
   ContactSet sets[2];
   std::vector<std::uint32_t> touch_i, touch_k;
+  std::vector<double> touch_ex, touch_ey, touch_ez;  // x_j - x_i of the collected pairs
   ContactEnergy energy;
   std::size_t contacts = 0;
   bool failed = false;
