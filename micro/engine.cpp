@@ -150,6 +150,7 @@ Engine::Engine(const Scene& scene, int threads) {
   for (std::size_t s = 0; s < sphere_count_; ++s)
     if (!linked[s]) loose_.push_back(static_cast<std::uint32_t>(s));
   all_loose_ = loose_.size() == members + sphere_count_;
+  any_local_damping_ = std::any_of(p_.alpha.begin(), p_.alpha.end(), [](double a) { return a != 0.0; });
   std::size_t next = sphere_count_;
   const std::vector<MassProperties> block_props = blockMassProperties(scene);
   for (std::size_t bi = 0; bi < scene.blocks.size(); ++bi) {
@@ -717,7 +718,7 @@ void Engine::integrate(bool measure) {
     const std::size_t b = r.first, e = r.end;
     addForceBuffers(b, e);
     if (all_loose_) {
-      scratch_[t].spheres = integrateSpheres(p_, b, e, dt_, gravity_, measure);
+      scratch_[t].spheres = integrateSpheres(p_, b, e, dt_, gravity_, measure, any_local_damping_);
       return;
     }
     // Blocks and link nodes move in their own passes: only the loose spheres
@@ -728,7 +729,7 @@ void Engine::integrate(bool measure) {
     for (const std::uint32_t id : loose_) {
       const std::size_t i = p_.slot[id];
       if (i < b || i >= e) continue;
-      sum.add(integrateSpheres(p_, i, i + 1, dt_, gravity_, measure));
+      sum.add(integrateSpheres(p_, i, i + 1, dt_, gravity_, measure, any_local_damping_));
     }
   });
   SphereSums& sum = sums_;

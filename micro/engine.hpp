@@ -213,6 +213,7 @@ class Engine {
   // the store's ranges, vectorised
   std::vector<std::uint32_t> loose_;
   bool all_loose_ = true;
+  bool any_local_damping_ = true;  ///< a sphere has local damping (alpha never changes)
   std::vector<RigidBlock> blocks_;
   std::vector<Wall> walls_;
   Links links_;

@@ -88,12 +88,13 @@ SphereSums sphereLoop(Particles& p, std::size_t b, std::size_t e, double dt, con
 }
 }  // namespace
 
-SphereSums integrateSpheres(Particles& p, std::size_t b, std::size_t e, double dt, const Vec3& g, bool measure) {
+SphereSums integrateSpheres(Particles& p, std::size_t b, std::size_t e, double dt, const Vec3& g, bool measure,
+                            bool maybe_damped) {
   // Without local damping on the range (every alpha 0, as in dynamic runs)
   // the kick is the force alone: the selects and the damping work of
   // dampedKick drop out, a fifth of the loop's time on the settling benchmark.
   const auto* alpha = p.alpha.data();
-  const bool damped = std::any_of(alpha + b, alpha + e, [](double a) { return a != 0.0; });
+  const bool damped = maybe_damped && std::any_of(alpha + b, alpha + e, [](double a) { return a != 0.0; });
   if (!damped)
     return measure ? sphereLoop<true, false, false>(p, b, e, dt, g, nullptr)
                    : sphereLoop<false, false, false>(p, b, e, dt, g, nullptr);

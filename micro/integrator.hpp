@@ -33,8 +33,10 @@ struct RigidBlock {
 /// Advances the free spheres [b, e) of `p` by one step under gravity g.
 /// Also sums the kinetic and potential energy (kMeasure), the local damping
 /// work, a finiteness probe and the largest squared displacement since the
-/// last list build.
-SphereSums integrateSpheres(Particles& p, std::size_t b, std::size_t e, double dt, const Vec3& g, bool measure);
+/// last list build. `maybe_damped`: whether any particle of `p` may have
+/// local damping (false skips the test of the range's coefficients).
+SphereSums integrateSpheres(Particles& p, std::size_t b, std::size_t e, double dt, const Vec3& g, bool measure,
+                            bool maybe_damped);
 
 /// The forces of a link-node sub-step (micro/linked_nodes.hpp): the step's
 /// held contact and wall force and torque (h*, t*) and the links' force of
