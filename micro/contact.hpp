@@ -65,7 +65,10 @@ struct LaneContact {
 /// kernel (micro/walls.cpp), and evaluateContact for the scalar path.
 /// n: unit normal from i to j; overlap (> 0 for a contact that acts); v*:
 /// velocity of j's contact point relative to i's; kn, ks, mu_ks = friction /
-/// ks, flim, zeta: the pair's law; inv_mass_sum: 1/m_i + 1/m_j; ux, uy, uz,
+/// ks, flim: the pair's law; damping: the pair's dashpot coefficient
+/// (bridge::dashpotCoefficient of its damping ratio, kn and 1/m_i + 1/m_j,
+/// N s/m: constant for a pair, so a kernel may compute it once per pair and
+/// keep it); ux, uy, uz,
 /// plastic, viscous: the contact history, updated. F_lim, viscous damping and
 /// the stored energy are compile-time switches (a case pays only for what it
 /// uses; without F_lim the spring has no cap and no plastic memory, without
@@ -76,9 +79,8 @@ struct LaneContact {
 template <bool kMeasure, bool kViscous, bool kPlastic>
 [[gnu::always_inline]] inline LaneContact laneContact(double nx, double ny, double nz, double overlap, double vx,
                                                       double vy, double vz, double kn, double ks, double mu_ks,
-                                                      double flim, double zeta, double inv_mass_sum, double dt,
-                                                      double& ux, double& uy, double& uz, double& plastic,
-                                                      double& viscous) {
+                                                      double flim, double damping, double dt, double& ux, double& uy,
+                                                      double& uz, double& plastic, double& viscous) {
   const bridge::Xyz n{nx, ny, nz}, v{vx, vy, vz};
   const bridge::NormalContactParams normal_law{kn, kPlastic ? flim : std::numeric_limits<double>::infinity()};
   const bridge::ShearSpring shear{ks, mu_ks};
@@ -90,7 +92,7 @@ template <bool kMeasure, bool kViscous, bool kPlastic>
   }
   double fn = normal.force_N;
   if constexpr (kViscous) {
-    const auto dashpot = bridge::viscousNormalDashpot({zeta}, kn, inv_mass_sum, -bridge::dot(v, n), dt, viscous);
+    const auto dashpot = bridge::dashpotStep(damping, -bridge::dot(v, n), dt, viscous);
     viscous = dashpot.force_N;
     out.viscous_J = dashpot.work_J;
     fn += dashpot.force_N;
@@ -122,8 +124,9 @@ template <bool kMeasure, bool kViscous, bool kPlastic>
   const auto lane = [&](auto measuring) {
     return laneContact<decltype(measuring)::value, true, true>(
         n[0], n[1], n[2], overlap_m, vrel_m_s[0], vrel_m_s[1], vrel_m_s[2], law.normal.stiffness_N_m,
-        law.tangential.stiffness_N_m, mu_ks, law.normal.force_limit_N, law.damping_ratio, inv_reduced_mass, dt_s,
-        u_m[0], u_m[1], u_m[2], plastic_m, viscous_N);
+        law.tangential.stiffness_N_m, mu_ks, law.normal.force_limit_N,
+        bridge::dashpotCoefficient({law.damping_ratio}, law.normal.stiffness_N_m, inv_reduced_mass), dt_s, u_m[0],
+        u_m[1], u_m[2], plastic_m, viscous_N);
   };
   const LaneContact c = measure ? lane(std::true_type{}) : lane(std::false_type{});
   f[0] = c.fx, f[1] = c.fy, f[2] = c.fz;

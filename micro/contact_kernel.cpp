@@ -22,7 +22,8 @@ namespace gabion::micro {
 // touching pairs to this step's contact set. History is read and written
 // sequentially: no gathers or scatters on arrays as long as the list. The
 // rare features (F_lim, viscous damping), the stored energy and a single
-// material are compile-time switches, so a case pays only for what it uses.
+// material (and body mass) are compile-time switches, so a case pays only
+// for what it uses.
 
 namespace {
 /// What the kernel reads: the particles, the list's partners, the laws.
@@ -53,7 +54,9 @@ struct KernelOut {
   double fail_ratio = 0.0;
 };
 
-template <bool kMeasure, bool kViscous, bool kPlastic, bool kUniform>
+// kUniform: 0, a law per pair of materials; 1, one material (law0); 2, one
+// material and one body mass (and so one dashpot coefficient).
+template <bool kMeasure, bool kViscous, bool kPlastic, int kUniform>
 void touchingPairs(const KernelIn& in, const std::uint32_t* ci, const std::uint32_t* ck, const double* cex,
                    const double* cey, const double* cez, std::size_t nq, KernelHistory& h, KernelOut& out) {
   const Particles& P = in.p;
@@ -67,7 +70,7 @@ void touchingPairs(const KernelIn& in, const std::uint32_t* ci, const std::uint3
   const double *__restrict KN = laws.kn.data(), *__restrict FLIM = laws.flim.data(), *__restrict KS = laws.ks.data(),
                *__restrict MU_KS = laws.mu_ks.data(), *__restrict ZETA = laws.zeta.data();
   const std::size_t nmat = laws.nmat, law0 = laws.law0;
-  const double dt = in.dt, ratio = in.ratio;
+  const double dt = in.dt, ratio = in.ratio, uniform_damping = laws.uniform_damping;
   // Per-pair buffers, one row each, addressed from one base (so that the
   // scalar loops keep their pointers in registers), rows padded by 64 bytes
   // so that they do not alias modulo 4 KiB (false store-to-load
@@ -118,14 +121,17 @@ void touchingPairs(const KernelIn& in, const std::uint32_t* ci, const std::uint3
       const double ax = lj * WX[j] + li * WX[i], ay = lj * WY[j] + li * WY[i], az = lj * WZ[j] + li * WZ[i];
       const double vx = VX[j] - VX[i] - (ay * nz - az * ny), vy = VY[j] - VY[i] - (az * nx - ax * nz),
                    vz = VZ[j] - VZ[i] - (ax * ny - ay * nx);
-      const std::size_t L = kUniform ? law0 : MAT[i] * nmat + MAT[j];
+      const std::size_t L = kUniform > 0 ? law0 : MAT[i] * nmat + MAT[j];
       const double ks = KS[L];
       double ux = b[kUx][q], uy = b[kUy][q], uz = b[kUz][q], pl = 0.0, vi = 0.0;
       if constexpr (kPlastic) pl = b[kPl][q];
       if constexpr (kViscous) vi = b[kVi][q];
       const LaneContact c = laneContact<kMeasure, kViscous, kPlastic>(
-          nx, ny, nz, overlap, vx, vy, vz, KN[L], ks, MU_KS[L], kPlastic ? FLIM[L] : 0.0, kViscous ? ZETA[L] : 0.0,
-          IM[i] + IM[j], dt, ux, uy, uz, pl, vi);
+          nx, ny, nz, overlap, vx, vy, vz, KN[L], ks, MU_KS[L], kPlastic ? FLIM[L] : 0.0,
+          !kViscous       ? 0.0
+          : kUniform == 2 ? uniform_damping
+                          : bridge::dashpotCoefficient({ZETA[L]}, KN[L], IM[i] + IM[j]),
+          dt, ux, uy, uz, pl, vi);
       if constexpr (kPlastic) plastic_w += act ? c.plastic_J : 0.0;
       if constexpr (kViscous) viscous_w += act ? c.viscous_J : 0.0;
       friction += act ? c.friction_J : 0.0;
@@ -227,13 +233,14 @@ void touchingPairs(const KernelIn& in, const std::uint32_t* ci, const std::uint3
 using TouchingPairsFn = void (*)(const KernelIn&, const std::uint32_t*, const std::uint32_t*, const double*,
                                  const double*, const double*, std::size_t, KernelHistory&, KernelOut&);
 template <bool kMeasure, bool kViscous>
-constexpr TouchingPairsFn kPlasticUniform[4] = {
-    touchingPairs<kMeasure, kViscous, false, false>, touchingPairs<kMeasure, kViscous, false, true>,
-    touchingPairs<kMeasure, kViscous, true, false>, touchingPairs<kMeasure, kViscous, true, true>};
-TouchingPairsFn touchingPairsFor(bool measure, bool viscous, bool plastic, bool uniform) {
-  const int v = (plastic ? 2 : 0) + (uniform ? 1 : 0);
-  if (measure) return viscous ? kPlasticUniform<true, true>[v] : kPlasticUniform<true, false>[v];
-  return viscous ? kPlasticUniform<false, true>[v] : kPlasticUniform<false, false>[v];
+constexpr TouchingPairsFn kPlasticUniform[6] = {
+    touchingPairs<kMeasure, kViscous, false, 0>, touchingPairs<kMeasure, kViscous, false, 1>,
+    touchingPairs<kMeasure, kViscous, false, 2>, touchingPairs<kMeasure, kViscous, true, 0>,
+    touchingPairs<kMeasure, kViscous, true, 1>,  touchingPairs<kMeasure, kViscous, true, 2>};
+TouchingPairsFn touchingPairsFor(bool measure, const MaterialLaws& laws) {
+  const int v = (laws.any_plastic ? 3 : 0) + (laws.uniform_mass ? 2 : laws.uniform ? 1 : 0);
+  if (measure) return laws.any_viscous ? kPlasticUniform<true, true>[v] : kPlasticUniform<true, false>[v];
+  return laws.any_viscous ? kPlasticUniform<false, true>[v] : kPlasticUniform<false, false>[v];
 }
 }  // namespace
 
@@ -266,7 +273,7 @@ void contactPartition(Particles& p, const NeighbourList& list, const MaterialLaw
   ContactSet& next = s.sets[hcur ^ 1];
   next.n = 0;
   KernelHistory hist{&s.sets[hcur], 0, &next};
-  const TouchingPairsFn law = touchingPairsFor(measure, laws.any_viscous, laws.any_plastic, laws.uniform);
+  const TouchingPairsFn law = touchingPairsFor(measure, laws);
   std::uint32_t* __restrict const ti = s.touch_i.data();
   std::uint32_t* __restrict const tk = s.touch_k.data();
   double* __restrict const tx = s.touch_ex.data();

@@ -200,6 +200,10 @@ Engine::Engine(const Scene& scene, int threads) {
 
   const bool one_material = std::all_of(p_.mat.begin(), p_.mat.end(), [&](std::uint32_t m) { return m == p_.mat[0]; });
   laws_.setUniform(one_material, p_.mat[0]);
+  const double im0 = p_.inv_body_mass.empty() ? 0.0 : p_.inv_body_mass[0];
+  laws_.setUniformMass(
+      im0 > 0.0 && std::all_of(p_.inv_body_mass.begin(), p_.inv_body_mass.end(), [&](double m) { return m == im0; }),
+      im0);
 
   // Size classes; the skin is a fraction of the smallest class's mean radius.
   grid_.assignClasses(p_);

@@ -56,10 +56,22 @@ struct MaterialLaws {
       any_viscous = any_viscous || l.damping_ratio > 0.0;
     }
   }
+  /// Every particle also has one body mass: each pair's dashpot coefficient
+  /// is then `uniform_damping`, taken once (the kernel gathers no masses and
+  /// takes no square root for it).
+  bool uniform_mass = false;
+  double uniform_damping = 0.0;  ///< N s/m
+
   /// Marks the scene as one of a single material m.
   void setUniform(bool one_material, std::uint32_t m) {
     uniform = one_material;
     law0 = one_material ? m * static_cast<std::uint32_t>(nmat + 1) : 0;
+  }
+  /// Marks every particle (after setUniform) as one of body mass 1 / inv_mass
+  /// (one_mass) or not.
+  void setUniformMass(bool one_mass, double inv_mass) {
+    uniform_mass = uniform && one_mass;
+    uniform_damping = uniform_mass ? bridge::dashpotCoefficient({zeta[law0]}, kn[law0], inv_mass + inv_mass) : 0.0;
   }
 };
 

@@ -251,7 +251,7 @@ WallSums wallLanes(const WallLanes& a, const Wall& w, std::size_t k0, std::size_
     const std::size_t L = MAT[i] * laws.nmat + a.wall_mat;
     const LaneContact c = laneContact<kMeasure, kViscous, kPlastic>(
         nx, ny, nz, overlap, vx, vy, vz, laws.kn[L], laws.ks[L], laws.mu_ks[L], kPlastic ? laws.flim[L] : 0.0,
-        kViscous ? laws.zeta[L] : 0.0, IM[i], dt, ux, uy, uz, pl, vi);
+        kViscous ? bridge::dashpotCoefficient({laws.zeta[L]}, laws.kn[L], IM[i]) : 0.0, dt, ux, uy, uz, pl, vi);
     HUX[k] = act ? ux : HUX[k], HUY[k] = act ? uy : HUY[k], HUZ[k] = act ? uz : HUZ[k];
     if constexpr (kPlastic) HPL[k] = act ? pl : HPL[k];
     if constexpr (kViscous) HVI[k] = act ? vi : HVI[k];

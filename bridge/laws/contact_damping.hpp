@@ -37,20 +37,32 @@ struct DashpotResponse {
   double work_J;   ///< work it dissipated over the step (J)
 };
 
-/// The dashpot of a contact of normal stiffness k_n with the bodies'
-/// 1/m_i + 1/m_j = `inv_mass_sum_1_kg` (1/kg; 0 for two immovable bodies),
-/// at overlap rate d(delta)/dt (m/s), over a step dt. Its work over the
-/// step takes the mean of the previous force `previous_force_N` (the
-/// history) and the current one, times the overlap increment: the work the
-/// staggered explicit scheme does on the bodies.
+/// The dashpot coefficient c (N s/m) of a contact of normal stiffness k_n
+/// between bodies with 1/m_i + 1/m_j = `inv_mass_sum_1_kg` (1/kg; 0 for two
+/// immovable bodies); 0 without a dashpot (computed for every input and
+/// selected: without a dashpot c may be 0 * inf). It depends only on the
+/// pair, so a kernel may compute it once per pair and keep it.
+inline double dashpotCoefficient(const ViscousDampingParams& p, double stiffness_N_m, double inv_mass_sum_1_kg) {
+  const double c = normalDampingCoefficient(p.ratio, stiffness_N_m, 1.0 / inv_mass_sum_1_kg);
+  return p.ratio > 0.0 ? c : 0.0;
+}
+
+/// One step of a dashpot of coefficient c (dashpotCoefficient) at overlap
+/// rate d(delta)/dt (m/s), over a step dt. Its work over the step takes the
+/// mean of the previous force `previous_force_N` (the history) and the
+/// current one, times the overlap increment: the work the staggered explicit
+/// scheme does on the bodies.
+inline DashpotResponse dashpotStep(double coefficient_N_s_m, double overlap_rate_m_s, double dt_s,
+                                   double previous_force_N) {
+  const double f = coefficient_N_s_m * overlap_rate_m_s;
+  return {f, 0.5 * (f + previous_force_N) * overlap_rate_m_s * dt_s};
+}
+
+/// The dashpot of a contact (dashpotCoefficient, then dashpotStep).
 inline DashpotResponse viscousNormalDashpot(const ViscousDampingParams& p, double stiffness_N_m,
                                             double inv_mass_sum_1_kg, double overlap_rate_m_s, double dt_s,
                                             double previous_force_N) {
-  const bool on = p.ratio > 0.0;
-  // Computed for every input and selected: without a dashpot c may be 0 * inf.
-  const double c = normalDampingCoefficient(p.ratio, stiffness_N_m, 1.0 / inv_mass_sum_1_kg);
-  const double f = c * overlap_rate_m_s;
-  return {on ? f : 0.0, on ? 0.5 * (f + previous_force_N) * overlap_rate_m_s * dt_s : 0.0};
+  return dashpotStep(dashpotCoefficient(p, stiffness_N_m, inv_mass_sum_1_kg), overlap_rate_m_s, dt_s, previous_force_N);
 }
 
 /// Parameters of local damping.

@@ -102,8 +102,9 @@ TEST_P(ContactRestitution, MatchesTheSpringDashpotSolution) {
     double f = 0.0;
     if (overlap > 0.0) {
       touched = true;
-      const auto c = micro::laneContact<false, true, false>(1, 0, 0, overlap, v2 - v1, 0, 0, kn, 1e4, 0.0, 0.0, zeta,
-                                                            inv_mass_sum, dt, ux, uy, uz, plastic, viscous);
+      const auto c = micro::laneContact<false, true, false>(1, 0, 0, overlap, v2 - v1, 0, 0, kn, 1e4, 0.0, 0.0,
+                                                            bridge::dashpotCoefficient({zeta}, kn, inv_mass_sum), dt,
+                                                            ux, uy, uz, plastic, viscous);
       f = c.fx;  // force on i
     }
     v1 += dt * f / m1, v2 -= dt * f / m2;
@@ -127,8 +128,8 @@ TEST(ContactTangentialLaw, SteadySlidingAtTheCoulombLimit) {
   double ux = 0.0, uy = 0.0, uz = 0.0, plastic = 0.0, viscous = 0.0;
   micro::LaneContact c{};
   for (int step = 0; step < 1000; ++step)  // 2 mm of slip: well past the spring's reach of 0.8 mm
-    c = micro::laneContact<true, false, false>(0, 0, 1, overlap, vt, 0, 0, kn, ks, f / ks, 0.0, 0.0, 1.0, dt, ux, uy,
-                                               uz, plastic, viscous);
+    c = micro::laneContact<true, false, false>(0, 0, 1, overlap, vt, 0, 0, kn, ks, f / ks, 0.0, 0.0, dt, ux, uy, uz,
+                                               plastic, viscous);
   EXPECT_NEAR(c.fx, f * fn, 1e-12 * f * fn);  // drags i along with the partner
   EXPECT_EQ(c.fy, 0.0);
   EXPECT_DOUBLE_EQ(c.fz, -fn);
@@ -144,8 +145,8 @@ TEST(ContactNormalLaw, ForceLimitPlateauThroughLaneContact) {
   double ux = 0.0, uy = 0.0, uz = 0.0, plastic = 0.0, viscous = 0.0, work = 0.0;
   for (int k = 1; k <= 1000; ++k) {
     const double d = dmax * k / 1000;
-    const auto c = micro::laneContact<false, false, true>(0, 0, 1, d, 0, 0, 0, kn, 1e4, 0.0, flim, 0.0, 1.0, 1e-5, ux,
-                                                          uy, uz, plastic, viscous);
+    const auto c = micro::laneContact<false, false, true>(0, 0, 1, d, 0, 0, 0, kn, 1e4, 0.0, flim, 0.0, 1e-5, ux, uy,
+                                                          uz, plastic, viscous);
     work += c.plastic_J;
     if (kn * d > flim) {
       EXPECT_EQ(c.elastic_normal_N, flim) << d;
@@ -156,7 +157,7 @@ TEST(ContactNormalLaw, ForceLimitPlateauThroughLaneContact) {
   EXPECT_NEAR(plastic, dmax - flim / kn, 1e-18);
   EXPECT_NEAR(work, flim * (dmax - flim / kn), 1e-12 * flim * dmax);
   const auto back = micro::laneContact<false, false, true>(0, 0, 1, plastic + 1e-4, 0, 0, 0, kn, 1e4, 0.0, flim, 0.0,
-                                                           1.0, 1e-5, ux, uy, uz, plastic, viscous);
+                                                           1e-5, ux, uy, uz, plastic, viscous);
   EXPECT_NEAR(back.elastic_normal_N, 10.0, 1e-9);
   EXPECT_EQ(back.plastic_J, 0.0);
 }

@@ -158,9 +158,9 @@ Out fromLane(const micro::LaneContact& c, const double u[3], double plastic, dou
 // 2. laneContact on one contact, kept out of line so that it is scalar code.
 [[gnu::noinline]] Out viaLaneScalar(const Row& r) {
   double u[3] = {r.u[0], r.u[1], r.u[2]}, plastic = r.plastic, viscous = r.viscous;
-  const auto c = micro::laneContact<true, true, true>(r.n[0], r.n[1], r.n[2], r.overlap, r.v[0], r.v[1], r.v[2], r.kn,
-                                                      r.ks, muKs(r), r.flim, r.zeta, r.inv_mass_sum, r.dt, u[0], u[1],
-                                                      u[2], plastic, viscous);
+  const auto c = micro::laneContact<true, true, true>(
+      r.n[0], r.n[1], r.n[2], r.overlap, r.v[0], r.v[1], r.v[2], r.kn, r.ks, muKs(r), r.flim,
+      bridge::dashpotCoefficient({r.zeta}, r.kn, r.inv_mass_sum), r.dt, u[0], u[1], u[2], plastic, viscous);
   return fromLane(c, u, plastic, viscous);
 }
 
@@ -201,9 +201,9 @@ std::vector<Out> viaLaneSimd(const std::vector<Row>& rows) {
 #pragma omp simd
   for (std::size_t k = 0; k < m; ++k) {
     double ux = hux[k], uy = huy[k], uz = huz[k], pl = hpl[k], vi = hvi[k];
-    const micro::LaneContact c =
-        micro::laneContact<kMeasure, kViscous, kPlastic>(nx[k], ny[k], nz[k], ov[k], vx[k], vy[k], vz[k], kn[k], ks[k],
-                                                         mu[k], fl[k], ze[k], im[k], dt[k], ux, uy, uz, pl, vi);
+    const micro::LaneContact c = micro::laneContact<kMeasure, kViscous, kPlastic>(
+        nx[k], ny[k], nz[k], ov[k], vx[k], vy[k], vz[k], kn[k], ks[k], mu[k], fl[k],
+        bridge::dashpotCoefficient({ze[k]}, kn[k], im[k]), dt[k], ux, uy, uz, pl, vi);
     hux[k] = ux, huy[k] = uy, huz[k] = uz, hpl[k] = pl, hvi[k] = vi;
     fx[k] = c.fx, fy[k] = c.fy, fz[k] = c.fz, fe[k] = c.elastic_normal_N;
     wf[k] = c.friction_J, wp[k] = c.plastic_J, wv[k] = c.viscous_J, we[k] = c.elastic_J;
