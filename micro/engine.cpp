@@ -343,6 +343,7 @@ void Engine::updateNeighbours() {
   grid_.buildList(p_, skin_m_, excluded_, rebuildBlocks(), neighbourBlocks(), list_);
   sizeTouchBuffers();
   wallCandidates(p_, walls_, skin_m_, rebuildBlocks(), neighbourBlocks());
+  if (laws_.any_viscous) wallDamping(p_, walls_, laws_);
   partitionWallCandidates();
   restoreContacts(saved);
   p_.x0 = p_.x, p_.y0 = p_.y, p_.z0 = p_.z;  // reference for the displacement test
@@ -950,6 +951,7 @@ void Engine::archive(bridge::StateArchive& a) {
   p_.forEachScratchField([&](const char*, const auto& v) { sizes_ok = sizes_ok && v.size() == n; });
   if (!sizes_ok) throw std::invalid_argument("checkpoint: a state of another scene or number of threads");
   if (listed) sizeTouchBuffers();
+  if (listed && laws_.any_viscous) wallDamping(p_, walls_, laws_);
 }
 
 // ---------------------------------------------------------------------------

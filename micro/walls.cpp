@@ -165,6 +165,17 @@ void wallCandidates(const Particles& p, std::vector<Wall>& walls, double skin, s
   }
 }
 
+void wallDamping(const Particles& p, std::vector<Wall>& walls, const MaterialLaws& laws) {
+  for (Wall& w : walls) {
+    w.cand_damping.resize(w.cand.size());
+    for (std::size_t k = 0; k < w.cand.size(); ++k) {
+      const std::uint32_t i = w.cand[k];
+      const std::size_t L = p.mat[i] * laws.nmat + static_cast<std::size_t>(w.mat);
+      w.cand_damping[k] = bridge::dashpotCoefficient({laws.zeta[L]}, laws.kn[L], p.inv_body_mass[i]);
+    }
+  }
+}
+
 namespace {
 /// One wall's contacts with the candidates [k0, k1) of its list, one SIMD
 /// lane per candidate (a particle is at most once in a wall's list, so the
@@ -191,6 +202,7 @@ WallSums wallLanes(const WallLanes& a, const Wall& w, std::size_t k0, std::size_
   double *__restrict HUX = h.ux.data(), *__restrict HUY = h.uy.data(), *__restrict HUZ = h.uz.data(),
          *__restrict HPL = h.plastic.data(), *__restrict HVI = h.viscous.data();
   std::int64_t* __restrict STAMP = h.stamp.data();
+  const double* __restrict DW = w.cand_damping.data();
   // A bounded wall acts on a particle whose centre is in front of it and
   // over its rectangle; an infinite one on every candidate (a particle
   // behind it has tunnelled: its overlap stops the run).
@@ -201,8 +213,7 @@ WallSums wallLanes(const WallLanes& a, const Wall& w, std::size_t k0, std::size_
   Particles& P = a.p;
   const double* __restrict X = P.x.data(), * __restrict Y = P.y.data(), * __restrict Z = P.z.data(), * __restrict R = P.r.data();
   const double* __restrict VX = P.vx.data(), * __restrict VY = P.vy.data(), * __restrict VZ = P.vz.data();
-  const double *__restrict WX = P.wx.data(), *__restrict WY = P.wy.data(), *__restrict WZ = P.wz.data(),
-               *__restrict IM = P.inv_body_mass.data();
+  const double* __restrict WX = P.wx.data(), * __restrict WY = P.wy.data(), * __restrict WZ = P.wz.data();
   const std::uint32_t* __restrict MAT = P.mat.data();
   double* __restrict FX = P.fx.data(), * __restrict FY = P.fy.data(), * __restrict FZ = P.fz.data();
   double* __restrict TX = P.tx.data(), * __restrict TY = P.ty.data(), * __restrict TZ = P.tz.data();
@@ -251,7 +262,7 @@ WallSums wallLanes(const WallLanes& a, const Wall& w, std::size_t k0, std::size_
     const std::size_t L = MAT[i] * laws.nmat + a.wall_mat;
     const LaneContact c = laneContact<kMeasure, kViscous, kPlastic>(
         nx, ny, nz, overlap, vx, vy, vz, laws.kn[L], laws.ks[L], laws.mu_ks[L], kPlastic ? laws.flim[L] : 0.0,
-        kViscous ? bridge::dashpotCoefficient({laws.zeta[L]}, laws.kn[L], IM[i]) : 0.0, dt, ux, uy, uz, pl, vi);
+        kViscous ? DW[k] : 0.0, dt, ux, uy, uz, pl, vi);
     HUX[k] = act ? ux : HUX[k], HUY[k] = act ? uy : HUY[k], HUZ[k] = act ? uz : HUZ[k];
     if constexpr (kPlastic) HPL[k] = act ? pl : HPL[k];
     if constexpr (kViscous) HVI[k] = act ? vi : HVI[k];

@@ -64,6 +64,9 @@ struct Wall {
 
   std::vector<std::uint32_t> cand;  ///< particles within reach at the last build, in index order
   StampedHistory hist;              ///< aligned with cand
+  /// Aligned with cand: each candidate's dashpot coefficient against the
+  /// wall (N s/m; with a viscous law only; wallDamping).
+  std::vector<double> cand_damping;
 
   explicit Wall(const WallSpec& spec);
   /// Sets the motion of the step [t, t + dt]: from the program, or for a
@@ -77,6 +80,12 @@ struct Wall {
   /// their history), into or out of a checkpoint.
   void archive(bridge::StateArchive& a);
 };
+
+/// Each wall candidate's dashpot coefficient (bridge::dashpotCoefficient of
+/// the law of its material against the wall's and of its body mass): it does
+/// not change while the candidate list lasts, so the wall kernel reads it
+/// instead of taking a division and a square root per candidate and step.
+void wallDamping(const Particles& p, std::vector<Wall>& walls, const MaterialLaws& laws);
 
 /// Lists each wall's candidates: particles that move, within reach of the
 /// plane (radius + skin) and, for a bounded wall, over its rectangle (with a
