@@ -326,6 +326,20 @@ TEST(MicroEngine, ParallelDepositionIsRepeatableAndProfiled) {
   }
 }
 
+// A floor and four side walls: an open box L x L (m) with a corner at the origin.
+void addOpenBox(Scene& s, double L) {
+  for (const auto& [p, n] : std::vector<std::pair<Vec3, Vec3>>{{Vec3(0, 0, 0), Vec3(0, 0, 1)},
+                                                               {Vec3(0, 0, 0), Vec3(1, 0, 0)},
+                                                               {Vec3(L, 0, 0), Vec3(-1, 0, 0)},
+                                                               {Vec3(0, 0, 0), Vec3(0, 1, 0)},
+                                                               {Vec3(0, L, 0), Vec3(0, -1, 0)}}) {
+    WallSpec w;
+    w.point_m = p;
+    w.normal = n;
+    s.walls.push_back(w);
+  }
+}
+
 DepositionResult deposition(double f, double zeta, double alpha, int threads, double duration_s) {
   Scene s;
   s.materials = {material(1e5, 2.5e4, f, zeta, alpha)};
@@ -339,17 +353,7 @@ DepositionResult deposition(double f, double zeta, double alpha, int threads, do
     sp.velocity_m_s = Vec3(jitter(rng), jitter(rng), jitter(rng)) * 100.0;
     s.spheres.push_back(sp);
   }
-  const double L = 0.3;
-  for (const auto& [p, n] : std::vector<std::pair<Vec3, Vec3>>{{Vec3(0, 0, 0), Vec3(0, 0, 1)},
-                                                               {Vec3(0, 0, 0), Vec3(1, 0, 0)},
-                                                               {Vec3(L, 0, 0), Vec3(-1, 0, 0)},
-                                                               {Vec3(0, 0, 0), Vec3(0, 1, 0)},
-                                                               {Vec3(0, L, 0), Vec3(0, -1, 0)}}) {
-    WallSpec w;
-    w.point_m = p;
-    w.normal = n;
-    s.walls.push_back(w);
-  }
+  addOpenBox(s, 0.3);
   Engine e(s, threads);
   e.setDt(0.2 * e.criticalDt());
   const int steps = static_cast<int>(duration_s / e.dt());
@@ -388,17 +392,7 @@ std::vector<Vec3> settledPositions(bool two_materials, bool equal_spheres) {
     sp.velocity_m_s = Vec3(jitter(rng), jitter(rng), jitter(rng)) * 100.0;
     s.spheres.push_back(sp);
   }
-  const double L = 0.18;
-  for (const auto& [p, n] : std::vector<std::pair<Vec3, Vec3>>{{Vec3(0, 0, 0), Vec3(0, 0, 1)},
-                                                               {Vec3(0, 0, 0), Vec3(1, 0, 0)},
-                                                               {Vec3(L, 0, 0), Vec3(-1, 0, 0)},
-                                                               {Vec3(0, 0, 0), Vec3(0, 1, 0)},
-                                                               {Vec3(0, L, 0), Vec3(0, -1, 0)}}) {
-    WallSpec w;
-    w.point_m = p;
-    w.normal = n;
-    s.walls.push_back(w);
-  }
+  addOpenBox(s, 0.18);
   Engine e(s, 1);
   e.setDt(0.2 * e.criticalDt());
   const int steps = static_cast<int>(0.5 / e.dt());
