@@ -87,12 +87,12 @@ SphereSums sphereLoop(Particles& p, std::size_t b, std::size_t e, double dt, con
   return {local, ke_t, ke_r, pe, finite, max_d2, ke_now};
 }
 
-// The free spheres without local damping (sphereLoop<kMeasure, false,
-// false>'s arithmetic) in two passes, translation then rotation: each pass
-// streams 15 or 9 arrays where one pass streams 24, which the prefetchers
-// follow better (the settling benchmark's integration 10 to 20 % faster, the
-// same arrays bit for bit). The damping work is zero; the finiteness probe
-// and the kinetic energy "now" add the two passes' sums.
+// The free spheres without local damping (sphereLoop's arithmetic, the kick
+// alone) in two passes, translation then rotation: each pass streams 15 or 9
+// arrays where one pass would stream 24 (the settling benchmark's
+// integration 10 to 20 % faster, the same arrays bit for bit). The damping
+// work is zero; the finiteness probe and the kinetic energy "now" add the
+// two passes' sums.
 template <bool kMeasure>
 SphereSums sphereLoopUndamped(Particles& p, std::size_t b, std::size_t e, double dt, const Vec3& g) {
   double* __restrict X = p.x.data(), * __restrict Y = p.y.data(), * __restrict Z = p.z.data();
