@@ -30,6 +30,13 @@ template <bool kDamped>
   return v1;
 }
 
+// (1/2) (a . b) / inv_m: a kinetic energy of inertial mass 1 / inv_m (J),
+// 0 for an immovable body (inv_m 0).
+[[gnu::always_inline]] inline double halfDotOverInv(double ax, double ay, double az, double bx, double by, double bz,
+                                                    double inv_m) {
+  return inv_m > 0.0 ? 0.5 * (ax * bx + ay * by + az * bz) / inv_m : 0.0;
+}
+
 // kHeld: the link nodes' arrays (HeldForces), else the store's forces.
 template <bool kMeasure, bool kHeld>
 SphereSums sphereLoop(Particles& p, std::size_t b, std::size_t e, double dt, const Vec3& g, const HeldForces* held) {
@@ -71,11 +78,10 @@ SphereSums sphereLoop(Particles& p, std::size_t b, std::size_t e, double dt, con
       // ke_now is (1/2) m v+^2: how fast the bodies move now, what the
       // stages' stop criteria read. (m g is the weight; the kinetic energy is
       // that of the inertial mass 1 / im: mass scaling.)
-      ke_t += im > 0.0 ? 0.5 * (VX[i] * vx + VY[i] * vy + VZ[i] * vz) / im : 0.0;
+      ke_t += halfDotOverInv(VX[i], VY[i], VZ[i], vx, vy, vz, im);
       pe -= m * (gx * x0 + gy * y0 + gz * z0);
-      ke_r += ii > 0.0 ? 0.5 * (WX[i] * wx + WY[i] * wy + WZ[i] * wz) / ii : 0.0;
-      ke_now += (im > 0.0 ? 0.5 * (vx * vx + vy * vy + vz * vz) / im : 0.0) +
-                (ii > 0.0 ? 0.5 * (wx * wx + wy * wy + wz * wz) / ii : 0.0);
+      ke_r += halfDotOverInv(WX[i], WY[i], WZ[i], wx, wy, wz, ii);
+      ke_now += halfDotOverInv(vx, vy, vz, vx, vy, vz, im) + halfDotOverInv(wx, wy, wz, wx, wy, wz, ii);
     }
     VX[i] = vx, VY[i] = vy, VZ[i] = vz, WX[i] = wx, WY[i] = wy, WZ[i] = wz;
     if constexpr (kHeld) RX[i] += dt * wx, RY[i] += dt * wy, RZ[i] += dt * wz;
@@ -112,9 +118,9 @@ SphereSums sphereLoopUndamped(Particles& p, std::size_t b, std::size_t e, double
     const double x0 = X[i], y0 = Y[i], z0 = Z[i];
     const double x1 = x0 + dt * vx, y1 = y0 + dt * vy, z1 = z0 + dt * vz;
     if (kMeasure) {  // (as in sphereLoop)
-      ke_t += im > 0.0 ? 0.5 * (VX[i] * vx + VY[i] * vy + VZ[i] * vz) / im : 0.0;
+      ke_t += halfDotOverInv(VX[i], VY[i], VZ[i], vx, vy, vz, im);
       pe -= m * (gx * x0 + gy * y0 + gz * z0);
-      ke_now_t += im > 0.0 ? 0.5 * (vx * vx + vy * vy + vz * vz) / im : 0.0;
+      ke_now_t += halfDotOverInv(vx, vy, vz, vx, vy, vz, im);
     }
     VX[i] = vx, VY[i] = vy, VZ[i] = vz;
     X[i] = x1, Y[i] = y1, Z[i] = z1;
@@ -134,8 +140,8 @@ SphereSums sphereLoopUndamped(Particles& p, std::size_t b, std::size_t e, double
     const double wy = dampedKick<false>(0.0, TY[i], WY[i], ii, 0.0, dt, none);
     const double wz = dampedKick<false>(0.0, TZ[i], WZ[i], ii, 0.0, dt, none);
     if (kMeasure) {
-      ke_r += ii > 0.0 ? 0.5 * (WX[i] * wx + WY[i] * wy + WZ[i] * wz) / ii : 0.0;
-      ke_now_r += ii > 0.0 ? 0.5 * (wx * wx + wy * wy + wz * wz) / ii : 0.0;
+      ke_r += halfDotOverInv(WX[i], WY[i], WZ[i], wx, wy, wz, ii);
+      ke_now_r += halfDotOverInv(wx, wy, wz, wx, wy, wz, ii);
     }
     WX[i] = wx, WY[i] = wy, WZ[i] = wz;
     finite_r += wx + wy + wz;
