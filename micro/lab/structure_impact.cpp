@@ -111,7 +111,8 @@ struct Layout {
   std::size_t blocks_per_cell = 0;
   /// Cells of the front (i = 0) and back (i = nx - 1) layers, by index (i + nx (j + ny k)).
   std::vector<std::size_t> front_cells, back_cells;
-  std::vector<int> slot_of;  ///< grid index -> place among the cells laid out (-1: not laid out)
+  std::vector<int> slot_of;     ///< grid index -> place among the cells laid out (-1: not laid out)
+  std::size_t first_plate = 0;  ///< the scene's wall of a part's first face (StructurePart::faces, in order)
 };
 
 /// The plate on a face of a resolved cell (StructurePart::Face), driven by
@@ -179,6 +180,7 @@ Layout buildLayout(const StructureCase& c, const Sample& sample, const Structure
   s.walls.push_back(fixedWall("base", Vec3::Zero(), Vec3::UnitZ(), sample.plate_material));
   if (c.fixed_back)
     s.walls.push_back(fixedWall("back", Vec3(c.nx * out.pitch.x(), 0, 0), -Vec3::UnitX(), sample.plate_material));
+  out.first_plate = s.walls.size();
   if (part)
     for (const StructurePart::Face& f : part->faces) s.walls.push_back(facePlate(f, c, out, sample));
   return out;
@@ -194,11 +196,10 @@ Scene settleScene(const StructureCase& c, const Layout& l, const Sample& sample,
   const double longest = c.until_at_rest ? c.settle_longest_s : c.settle_s;
   Scene s = l.scene;
   if (part) {
-    const std::size_t first = s.walls.size() - part->faces.size();
     for (std::size_t k = 0; k < part->faces.size(); ++k) {
       const StructurePart::Face& f = part->faces[k];
       if (f.cells_above <= 0) continue;
-      WallProgram& p = s.walls[first + k].program;
+      WallProgram& p = s.walls[l.first_plate + k].program;
       p.kind = WallProgram::Kind::Servo;
       p.target_force_N = f.cells_above * sample.mass_kg * s.gravity_m_s2.norm();
       p.max_speed_m_s = 0.5;
@@ -321,7 +322,7 @@ bridge::RunOutcome runOne(const StructureCase& c, const Sample& sample, const br
     std::vector<double> z0, wz0;      // their cells' blocks' mean height and their plates' height, laid out
     const std::size_t n_spheres = s.spheres.size();
     if (part && part->beside_follow) {
-      const std::size_t first = s.walls.size() - part->faces.size();
+      const std::size_t first = layout.first_plate;
       for (std::size_t k = 0; k < part->faces.size(); ++k)
         if (s.walls[first + k].program.kind == WallProgram::Kind::Driven) driven.push_back(k);
       const auto blocksOf = [&](int cell) {
