@@ -55,7 +55,8 @@ struct KernelOut {
 };
 
 // kUniform: 0, a law per pair of materials; 1, one material (law0); 2, one
-// material and one body mass (and so one dashpot coefficient).
+// material and one body mass (and so one dashpot coefficient); 3, as 2 and
+// one radius (no radii gathered).
 template <bool kMeasure, bool kViscous, bool kPlastic, int kUniform>
 void touchingPairs(const KernelIn& in, const std::uint32_t* ci, const std::uint32_t* ck, const double* cex,
                    const double* cey, const double* cez, std::size_t nq, KernelHistory& h, KernelOut& out) {
@@ -70,7 +71,7 @@ void touchingPairs(const KernelIn& in, const std::uint32_t* ci, const std::uint3
   const double *__restrict KN = laws.kn.data(), *__restrict FLIM = laws.flim.data(), *__restrict KS = laws.ks.data(),
                *__restrict MU_KS = laws.mu_ks.data(), *__restrict ZETA = laws.zeta.data();
   const std::size_t nmat = laws.nmat, law0 = laws.law0;
-  const double dt = in.dt, ratio = in.ratio, uniform_damping = laws.uniform_damping;
+  const double dt = in.dt, ratio = in.ratio, uniform_damping = laws.uniform_damping, r0 = laws.uniform_radius_m;
   // Per-pair buffers, one row each, addressed from one base (so that the
   // scalar loops keep their pointers in registers), rows padded by 64 bytes
   // so that they do not alias modulo 4 KiB (false store-to-load
@@ -107,7 +108,7 @@ void touchingPairs(const KernelIn& in, const std::uint32_t* ci, const std::uint3
       const std::uint32_t i = ci[q], j = NBR[ck[q]];
       const double ex = cex[q], ey = cey[q], ez = cez[q];
       const double d = std::sqrt(ex * ex + ey * ey + ez * ez);
-      const double ri = R[i], rj = R[j];
+      const double ri = kUniform == 3 ? r0 : R[i], rj = kUniform == 3 ? r0 : R[j];
       const double overlap = ri + rj - d;
       // Pass 1 found d < ri + rj; rounding may still give overlap <= 0: such a
       // pair does nothing (no force, history stamp unchanged).
@@ -129,7 +130,7 @@ void touchingPairs(const KernelIn& in, const std::uint32_t* ci, const std::uint3
       const LaneContact c = laneContact<kMeasure, kViscous, kPlastic>(
           nx, ny, nz, overlap, vx, vy, vz, KN[L], ks, MU_KS[L], kPlastic ? FLIM[L] : 0.0,
           !kViscous       ? 0.0
-          : kUniform == 2 ? uniform_damping
+          : kUniform >= 2 ? uniform_damping
                           : bridge::dashpotCoefficient({ZETA[L]}, KN[L], IM[i] + IM[j]),
           dt, ux, uy, uz, pl, vi);
       if constexpr (kPlastic) plastic_w += act ? c.plastic_J : 0.0;
@@ -233,12 +234,13 @@ void touchingPairs(const KernelIn& in, const std::uint32_t* ci, const std::uint3
 using TouchingPairsFn = void (*)(const KernelIn&, const std::uint32_t*, const std::uint32_t*, const double*,
                                  const double*, const double*, std::size_t, KernelHistory&, KernelOut&);
 template <bool kMeasure, bool kViscous>
-constexpr TouchingPairsFn kPlasticUniform[6] = {
+constexpr TouchingPairsFn kPlasticUniform[8] = {
     touchingPairs<kMeasure, kViscous, false, 0>, touchingPairs<kMeasure, kViscous, false, 1>,
-    touchingPairs<kMeasure, kViscous, false, 2>, touchingPairs<kMeasure, kViscous, true, 0>,
-    touchingPairs<kMeasure, kViscous, true, 1>,  touchingPairs<kMeasure, kViscous, true, 2>};
+    touchingPairs<kMeasure, kViscous, false, 2>, touchingPairs<kMeasure, kViscous, false, 3>,
+    touchingPairs<kMeasure, kViscous, true, 0>,  touchingPairs<kMeasure, kViscous, true, 1>,
+    touchingPairs<kMeasure, kViscous, true, 2>,  touchingPairs<kMeasure, kViscous, true, 3>};
 TouchingPairsFn touchingPairsFor(bool measure, const MaterialLaws& laws) {
-  const int v = (laws.any_plastic ? 3 : 0) + (laws.uniform_mass ? 2 : laws.uniform ? 1 : 0);
+  const int v = (laws.any_plastic ? 4 : 0) + (laws.uniform_radius ? 3 : laws.uniform_mass ? 2 : laws.uniform ? 1 : 0);
   if (measure) return laws.any_viscous ? kPlasticUniform<true, true>[v] : kPlasticUniform<true, false>[v];
   return laws.any_viscous ? kPlasticUniform<false, true>[v] : kPlasticUniform<false, false>[v];
 }

@@ -204,6 +204,8 @@ Engine::Engine(const Scene& scene, int threads) {
   laws_.setUniformMass(
       im0 > 0.0 && std::all_of(p_.inv_body_mass.begin(), p_.inv_body_mass.end(), [&](double m) { return m == im0; }),
       im0);
+  const double r0 = p_.r.empty() ? 0.0 : p_.r[0];
+  laws_.setUniformRadius(std::all_of(p_.r.begin(), p_.r.end(), [&](double r) { return r == r0; }), r0);
 
   // Size classes; the skin is a fraction of the smallest class's mean radius.
   grid_.assignClasses(p_);

@@ -61,6 +61,10 @@ struct MaterialLaws {
   /// takes no square root for it).
   bool uniform_mass = false;
   double uniform_damping = 0.0;  ///< N s/m
+  /// Every particle also has one radius (with uniform_mass): the kernel
+  /// takes `uniform_radius_m` instead of gathering two radii per pair.
+  bool uniform_radius = false;
+  double uniform_radius_m = 0.0;
 
   /// Marks the scene as one of a single material m.
   void setUniform(bool one_material, std::uint32_t m) {
@@ -72,6 +76,11 @@ struct MaterialLaws {
   void setUniformMass(bool one_mass, double inv_mass) {
     uniform_mass = uniform && one_mass;
     uniform_damping = uniform_mass ? bridge::dashpotCoefficient({zeta[law0]}, kn[law0], inv_mass + inv_mass) : 0.0;
+  }
+  /// Marks every particle (after setUniformMass) as one of radius r (one_radius) or not.
+  void setUniformRadius(bool one_radius, double r) {
+    uniform_radius = uniform_mass && one_radius;
+    uniform_radius_m = uniform_radius ? r : 0.0;
   }
 };
 

@@ -186,6 +186,7 @@ struct WallLanes {
   const MaterialLaws& laws;
   std::size_t wall_mat;
   double dt, ratio;
+  std::size_t one_law = 0;  // the law of the wall's material with the particles' one material
 };
 struct WallSums {
   double fx = 0.0, fy = 0.0, fz = 0.0, work = 0.0;  // force on the wall (N), work of its motion (J)
@@ -193,7 +194,9 @@ struct WallSums {
 };
 /// The shape a wall's contacts see.
 enum Shape { kInfinite, kBounded, kRounded };
-template <bool kMeasure, bool kViscous, bool kPlastic, int kShape>
+// kOne: 0, each candidate's law gathered by its material; 1, the particles'
+// one material (one law per wall); 2, as 1 and one radius (no radii gathered).
+template <bool kMeasure, bool kViscous, bool kPlastic, int kShape, int kOne>
 WallSums wallLanes(const WallLanes& a, const Wall& w, std::size_t k0, std::size_t k1, std::int64_t step,
                    StampedHistory& h) {
   const std::uint32_t* __restrict cand = w.cand.data();
@@ -218,6 +221,8 @@ WallSums wallLanes(const WallLanes& a, const Wall& w, std::size_t k0, std::size_
   double* __restrict FX = P.fx.data(), * __restrict FY = P.fy.data(), * __restrict FZ = P.fz.data();
   double* __restrict TX = P.tx.data(), * __restrict TY = P.ty.data(), * __restrict TZ = P.tz.data();
   const MaterialLaws& laws = a.laws;
+  const std::size_t L1 = a.one_law;
+  const double r1 = laws.uniform_radius_m;
   const double px = point.x(), py = point.y(), pz = point.z();
   const double wnx = normal.x(), wny = normal.y(), wnz = normal.z();
   const double nx0 = -wnx, ny0 = -wny, nz0 = -wnz;  // from the particle to the wall
@@ -227,6 +232,7 @@ WallSums wallLanes(const WallLanes& a, const Wall& w, std::size_t k0, std::size_
 #pragma omp simd reduction(+ : sfx, sfy, sfz, work, fr, pw, vw, el, on_n, bad)
   for (std::size_t k = k0; k < k1; ++k) {
     const std::uint32_t i = cand[k];
+    const double ri = kOne == 2 ? r1 : R[i];
     const double ex = X[i] - px, ey = Y[i] - py, ez = Z[i] - pz;
     double dist = ex * wnx + ey * wny + ez * wnz;
     // the normal, from the particle to the wall (for a rounded plate's edge, to its nearest point)
@@ -241,16 +247,16 @@ WallSums wallLanes(const WallLanes& a, const Wall& w, std::size_t k0, std::size_
       dist = std::sqrt(rx * rx + ry * ry + rz * rz);
       const double inv = dist > 0.0 ? 1.0 / dist : 0.0;
       nx = -rx * inv, ny = -ry * inv, nz = -rz * inv;
-      act = R[i] - dist > 0.0;
+      act = ri - dist > 0.0;
     } else {
-      act = R[i] - dist > 0.0;
+      act = ri - dist > 0.0;
     }
-    const double overlap = R[i] - dist;
+    const double overlap = ri - dist;
     if constexpr (kShape == kBounded) {
       const double du = ex * ux_ + ey * uy_ + ez * uz_, dv = ex * vx_ + ey * vy_ + ez * vz_;
       act = act && dist > min_dist && std::fabs(du) <= lim_u && std::fabs(dv) <= lim_v;
     }
-    bad += act && overlap > ratio * R[i] ? 1.0 : 0.0;
+    bad += act && overlap > ratio * ri ? 1.0 : 0.0;
     const double li = dist;
     // velocity of the wall's contact point relative to the particle's
     const double vx = wvx - VX[i] - li * (WY[i] * nz - WZ[i] * ny), vy = wvy - VY[i] - li * (WZ[i] * nx - WX[i] * nz),
@@ -259,7 +265,7 @@ WallSums wallLanes(const WallLanes& a, const Wall& w, std::size_t k0, std::size_
     double ux = had ? HUX[k] : 0.0, uy = had ? HUY[k] : 0.0, uz = had ? HUZ[k] : 0.0, pl = 0.0, vi = 0.0;
     if constexpr (kPlastic) pl = had ? HPL[k] : 0.0;
     if constexpr (kViscous) vi = had ? HVI[k] : 0.0;
-    const std::size_t L = MAT[i] * laws.nmat + a.wall_mat;
+    const std::size_t L = kOne > 0 ? L1 : MAT[i] * laws.nmat + a.wall_mat;
     const LaneContact c = laneContact<kMeasure, kViscous, kPlastic>(
         nx, ny, nz, overlap, vx, vy, vz, laws.kn[L], laws.ks[L], laws.mu_ks[L], kPlastic ? laws.flim[L] : 0.0,
         kViscous ? DW[k] : 0.0, dt, ux, uy, uz, pl, vi);
@@ -282,13 +288,22 @@ WallSums wallLanes(const WallLanes& a, const Wall& w, std::size_t k0, std::size_
 }
 using WallLanesFn = WallSums (*)(const WallLanes&, const Wall&, std::size_t, std::size_t, std::int64_t,
                                  StampedHistory&);
-template <int kShape>
+template <int kShape, int kOne>
 WallLanesFn wallLanesFor(bool measure, bool viscous, bool plastic) {
-  static constexpr WallLanesFn fns[8] = {wallLanes<false, false, false, kShape>, wallLanes<false, false, true, kShape>,
-                                         wallLanes<false, true, false, kShape>,  wallLanes<false, true, true, kShape>,
-                                         wallLanes<true, false, false, kShape>,  wallLanes<true, false, true, kShape>,
-                                         wallLanes<true, true, false, kShape>,   wallLanes<true, true, true, kShape>};
+  static constexpr WallLanesFn fns[8] = {
+      wallLanes<false, false, false, kShape, kOne>, wallLanes<false, false, true, kShape, kOne>,
+      wallLanes<false, true, false, kShape, kOne>,  wallLanes<false, true, true, kShape, kOne>,
+      wallLanes<true, false, false, kShape, kOne>,  wallLanes<true, false, true, kShape, kOne>,
+      wallLanes<true, true, false, kShape, kOne>,   wallLanes<true, true, true, kShape, kOne>};
   return fns[(measure ? 4 : 0) + (viscous ? 2 : 0) + (plastic ? 1 : 0)];
+}
+/// The kernel of a wall's shape, for the scene's materials and radii.
+template <int kShape>
+WallLanesFn wallLanesFor(bool measure, const MaterialLaws& laws) {
+  const bool v = laws.any_viscous, pl = laws.any_plastic;
+  if (laws.uniform_radius) return wallLanesFor<kShape, 2>(measure, v, pl);
+  if (laws.uniform) return wallLanesFor<kShape, 1>(measure, v, pl);
+  return wallLanesFor<kShape, 0>(measure, v, pl);
 }
 }  // namespace
 
@@ -301,13 +316,14 @@ void wallPartition(Particles& p, std::vector<Wall>& walls, const MaterialLaws& l
   s.wall_contacts = 0;
   s.wall_failed = false;
   // (an infinite wall skips the rectangle test: a compile-time switch)
-  const WallLanesFn infinite = wallLanesFor<kInfinite>(measure, laws.any_viscous, laws.any_plastic);
-  const WallLanesFn bounded = wallLanesFor<kBounded>(measure, laws.any_viscous, laws.any_plastic);
-  const WallLanesFn rounded = wallLanesFor<kRounded>(measure, laws.any_viscous, laws.any_plastic);
+  const WallLanesFn infinite = wallLanesFor<kInfinite>(measure, laws);
+  const WallLanesFn bounded = wallLanesFor<kBounded>(measure, laws);
+  const WallLanesFn rounded = wallLanesFor<kRounded>(measure, laws);
   WallLanes in{p, laws, 0, dt, max_overlap_ratio};
   for (std::size_t wi = 0; wi < walls.size(); ++wi) {
     Wall& w = walls[wi];
     in.wall_mat = static_cast<std::size_t>(w.mat);
+    in.one_law = laws.uniform ? static_cast<std::size_t>(p.mat.empty() ? 0 : p.mat[0]) * laws.nmat + in.wall_mat : 0;
     // candidates are in particle order
     const auto k0 = static_cast<std::size_t>(std::lower_bound(w.cand.begin(), w.cand.end(), b) - w.cand.begin());
     const auto k1 = static_cast<std::size_t>(std::lower_bound(w.cand.begin(), w.cand.end(), e) - w.cand.begin());

@@ -371,13 +371,16 @@ DepositionResult deposition(double f, double zeta, double alpha, int threads, do
   return r;
 }
 
-// The contact kernel has three forms of the same law: a law per pair of
-// materials (gathered), one material for every sphere (law0), and one
-// material and one body mass (a single dashpot coefficient, taken once). A
-// deposition with two identical materials takes the first form; with one,
-// the second (polydisperse) or the third (equal spheres): the arrays must be
-// the same bit for bit.
-std::vector<Vec3> settledPositions(bool two_materials, bool equal_spheres) {
+// The contact kernels have four forms of the same law: a law per pair of
+// materials (gathered), one material for every sphere (law0), one material
+// and one body mass (a single dashpot coefficient, taken once), and these
+// with one radius (no radii gathered). A deposition with two identical
+// materials takes the first form; with one, the second (polydisperse), the
+// third (polydisperse spheres given one mass) or the fourth (equal
+// spheres): the arrays must be the same bit for bit.
+enum class Spheres { kEqual, kPolydisperse, kPolydisperseOneMass };
+std::vector<Vec3> settledPositions(bool two_materials, Spheres kind) {
+  const bool equal_spheres = kind == Spheres::kEqual;
   Scene s;
   const Material m = material(1e5, 2.5e4, 0.5, 0.2);
   s.materials = two_materials ? std::vector<Material>{m, m} : std::vector<Material>{m};
@@ -386,6 +389,7 @@ std::vector<Vec3> settledPositions(bool two_materials, bool equal_spheres) {
   for (int k = 0; k < 300; ++k) {
     SphereSpec sp;
     sp.radius_m = equal_spheres ? 0.01 : radius(rng);
+    if (kind == Spheres::kPolydisperseOneMass) sp.mass_kg = sphereMass(0.01);
     sp.material = two_materials ? k % 2 : 0;
     sp.center_m =
         Vec3(0.015 + 0.03 * (k % 6) + jitter(rng), 0.015 + 0.03 * ((k / 6) % 6) + jitter(rng), 0.015 + 0.03 * (k / 36));
@@ -407,9 +411,9 @@ std::vector<Vec3> settledPositions(bool two_materials, bool equal_spheres) {
   return out;
 }
 
-TEST(MicroEngine, TheKernelsOneMaterialAndOneMassFormsMatchThePerPairForm) {
-  EXPECT_TRUE(settledPositions(false, true) == settledPositions(true, true)) << "equal spheres";
-  EXPECT_TRUE(settledPositions(false, false) == settledPositions(true, false)) << "polydisperse";
+TEST(MicroEngine, TheKernelsOneMaterialOneMassAndOneRadiusFormsMatchThePerPairForm) {
+  for (const Spheres kind : {Spheres::kEqual, Spheres::kPolydisperse, Spheres::kPolydisperseOneMass})
+    EXPECT_TRUE(settledPositions(false, kind) == settledPositions(true, kind)) << static_cast<int>(kind);
 }
 
 // An F_lim contact in the engine: a sphere pressed into the floor by gravity
