@@ -32,6 +32,7 @@ struct Plan {
   double within_m = 0.0;
   bool whole_depth = false;    ///< `resolve.depth` "whole": every cell behind a resolved front cell too
   bool cells_below = false;    ///< `resolve.below` "cells": every cell under a resolved one too, down to the base
+  bool below_gives = false;    ///< `resolve.below` "gives": a plate over a macro cell gives as its top would, settling
   bool weight_above = false;   ///< `resolve.above` "weight": an upper plate presses with the cells above, settling
   bool beside_follow = false;  ///< `resolve.beside` "follow": the plates beside come down with their cell, settling
   std::vector<int> resolved;
@@ -59,7 +60,9 @@ Plan plan(const JsonDocument& doc) {
   const JsonReader rs = root.object("resolve");
   p.within_m = rs.number("within_m", 0.0, Check::NonNegative);
   p.whole_depth = rs.choice("depth", {"reach", "whole"}, "reach") == "whole";
-  p.cells_below = rs.choice("below", {"plates", "cells"}, "plates") == "cells";
+  const std::string below = rs.choice("below", {"plates", "cells", "gives"}, "plates");
+  p.cells_below = below == "cells";
+  p.below_gives = below == "gives";
   p.weight_above = rs.choice("above", {"fixed", "weight"}, "fixed") == "weight";
   p.beside_follow = rs.choice("beside", {"fixed", "follow"}, "fixed") == "follow";
   const fs::path cell_file = absoluteFrom(doc, rs.string("cell"));
@@ -125,11 +128,21 @@ Plan plan(const JsonDocument& doc) {
         // (an upper face: the cells stacked on it, their weight on the
         // resolved cell while it settles, with above "weight")
         const int above = axis == 2 && side > 0 && p.weight_above ? nz - 1 - ijk[2] : 0;
-        p.faces.push_back({cell, axis, side, o[0] + nx * (o[1] + ny * o[2]), above});
+        p.faces.push_back({cell, axis, side, o[0] + nx * (o[1] + ny * o[2]), above, false, {}});
       }
   }
   p.c.structure.resolved_cells = p.resolved;
   p.structure = macro::buildCaseStructure(doc, p.c);
+  // With below "gives", the plate under a resolved cell, the top of the
+  // macro cell below, gives along that cell's axial law while the part settles.
+  if (p.below_gives)
+    for (StructurePart::Face& f : p.faces)
+      if (f.axis == 2 && f.side < 0) {
+        const int node = p.structure.node_of[static_cast<std::size_t>(f.other)];
+        f.gives = true;
+        f.law =
+            p.structure.materials[static_cast<std::size_t>(p.structure.material[static_cast<std::size_t>(node)])].axial;
+      }
 
   // The fine part: micro.structure's keys, the structure's size, back
   // support and boulder, and the aim as the same fraction of the face.
@@ -318,7 +331,7 @@ bridge::RunOutcome run(const JsonDocument& doc, const bridge::RunContext& ctx) {
   json h = coupler->report(energy);
   h["within_m"] = p.within_m;
   h["depth"] = p.whole_depth ? "whole" : "reach";
-  h["below"] = p.cells_below ? "cells" : "plates";
+  h["below"] = p.cells_below ? "cells" : p.below_gives ? "gives" : "plates";
   h["above"] = p.weight_above ? "weight" : "fixed";
   h["beside"] = p.beside_follow ? "follow" : "fixed";
   json cells = json::array(), faces = json::array();
@@ -343,7 +356,7 @@ bridge::RunOutcome run(const JsonDocument& doc, const bridge::RunContext& ctx) {
   a.precision(3);
   a << "hybrid: " << p.resolved.size() << " of " << p.structure.nx * p.structure.ny * p.structure.nz
     << " cells resolved (within " << p.within_m << " m of the aim" << (p.whole_depth ? ", through the depth" : "")
-    << (p.cells_below ? ", and the cells below them" : "")
+    << (p.cells_below ? ", and the cells below them" : "") << (p.below_gives ? ", the plates under them giving" : "")
     << (p.weight_above ? ", the weight of the cells above on them" : "")
     << (p.beside_follow ? ", the plates beside coming down with them" : "") << "), " << p.faces.size()
     << " interface plates; energy balance of both parts " << h["balance_rel_error"].get<double>()

@@ -35,8 +35,9 @@ struct Plan {
   json twin, resolved;
   std::vector<json> hybrids;  ///< macro.impact cases with "resolve", one per `hybrid/within_m`
   std::vector<double> within_m;
-  std::string depth = "reach";   ///< `hybrid/depth`: "whole" resolves every cell behind a front one within reach
-  std::string below = "plates";  ///< `hybrid/below`: "cells" resolves every cell under a resolved one too
+  std::string depth = "reach";  ///< `hybrid/depth`: "whole" resolves every cell behind a front one within reach
+  std::string below =
+      "plates";  ///< `hybrid/below`: "cells" resolves every cell under a resolved one too; "gives" (above)
   std::string above = "fixed";   ///< `hybrid/above`: "weight" presses the cells above onto the resolved ones
   std::string beside = "fixed";  ///< `hybrid/beside`: "follow" brings the plates beside down with their cells
   double law_edge_m = 0.0;       ///< the laws' cell edge (0: not known)
@@ -46,6 +47,7 @@ struct Plan {
 std::string hybridSettings(const Plan& p) {
   std::string w = p.depth == "whole" ? " through the depth" : "";
   if (p.below == "cells") w += " and below";
+  if (p.below == "gives") w += ", plates below giving";
   if (p.above == "weight") w += ", weight above";
   if (p.beside == "follow") w += ", plates beside following";
   return w;
@@ -110,7 +112,7 @@ Plan plan(const JsonDocument& doc) {
   if (const auto h = root.optionalObject("hybrid")) {
     p.within_m = h->numbers("within_m", Check::NonNegative, 1);
     p.depth = h->choice("depth", {"reach", "whole"}, "reach");
-    p.below = h->choice("below", {"plates", "cells"}, "plates");
+    p.below = h->choice("below", {"plates", "cells", "gives"}, "plates");
     p.above = h->choice("above", {"fixed", "weight"}, "fixed");
     p.beside = h->choice("beside", {"fixed", "follow"}, "fixed");
     for (const double w : p.within_m) {

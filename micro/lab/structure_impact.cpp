@@ -317,11 +317,15 @@ bridge::RunOutcome runOne(const StructureCase& c, const Sample& sample, const br
     hooks.archive = [&](bridge::StateArchive& a) { a("time_s", t), a("gravity_potential_J", u); };
     // The plates beside the part's cells come down with them (each step the
     // plate's height offset is set to its cell's blocks' mean descent so
-    // far: no state of its own, the same after a resume).
+    // far), and the plates that give come down as the top of the cell under
+    // them would (Face::gives): neither has a state of its own, so both
+    // go on the same after a resume.
     std::vector<std::size_t> driven;  // the part's faces whose plates are driven here, in wall order
     std::vector<double> z0, wz0;      // their cells' blocks' mean height and their plates' height, laid out
     const std::size_t n_spheres = s.spheres.size();
-    if (part && part->beside_follow) {
+    const bool any_gives =
+        part && std::any_of(part->faces.begin(), part->faces.end(), [](const auto& f) { return f.gives; });
+    if (part && (part->beside_follow || any_gives)) {
       const std::size_t first = layout.first_plate;
       for (std::size_t k = 0; k < part->faces.size(); ++k)
         if (s.walls[first + k].program.kind == WallProgram::Kind::Driven) driven.push_back(k);
@@ -332,14 +336,27 @@ bridge::RunOutcome runOne(const StructureCase& c, const Sample& sample, const br
         z0.push_back(meanBlockHeight(s, blocksOf(part->faces[k].cell), layout.blocks_per_cell));
         wz0.push_back(s.walls[first + k].point_m.z());
       }
-      hooks.start = [&, first, n_spheres, blocksOf](Engine& e) {
-        e.setWallDriver([&, first, n_spheres, blocksOf](double, double, const std::vector<Vec3>&,
-                                                        std::vector<Vec3>& moves) {
+      // A giving plate's servo: as the plates that press with the weight
+      // above (settleScene), at most 0.5 m/s, that speed at a force error of
+      // one cell's weight.
+      const double max_speed = 0.5, gain = max_speed / (sample.mass_kg * s.gravity_m_s2.norm());
+      const bool follow = part->beside_follow;
+      hooks.start = [&, first, n_spheres, blocksOf, max_speed, gain, follow](Engine& e) {
+        e.setWallDriver([&, first, n_spheres, blocksOf, max_speed, gain, follow](
+                            double, double dt, const std::vector<Vec3>& forces, std::vector<Vec3>& moves) {
           for (std::size_t q = 0; q < driven.size(); ++q) {
             const StructurePart::Face& f = part->faces[driven[q]];
-            moves[q].setZero();
-            if (f.axis == 2) continue;  // (a plate under or over the cell stands still)
             const std::size_t w = first + driven[q];
+            moves[q].setZero();
+            if (f.gives) {
+              // The load is what the bodies press down with; the cell's top
+              // resists with its law at the plate's descent so far.
+              const double descent = std::max(0.0, wz0[q] - e.wallPosition(w).z());
+              const double excess = -forces[q].z() - bridge::axialResponse(f.law, descent, 0.0).force_N;
+              moves[q].z() = -dt * std::clamp(gain * excess, 0.0, max_speed);
+              continue;
+            }
+            if (!follow || f.axis == 2) continue;  // (a plate under or over the cell stands still)
             const double sink = meanBlockPosition(e, n_spheres, blocksOf(f.cell), layout.blocks_per_cell).z() - z0[q];
             moves[q].z() = sink - (e.wallPosition(w).z() - wz0[q]);
           }

@@ -17,6 +17,7 @@
 #include <vector>
 
 #include "bridge/json_reader.hpp"
+#include "bridge/laws/cell_axial_law.hpp"
 #include "bridge/run.hpp"
 #include "bridge/state_archive.hpp"
 #include "micro/engine.hpp"
@@ -45,6 +46,15 @@ struct StructurePart {
     /// weight (the cell file's mass each), a servo along z; 0: it stands
     /// still. In the impact it is driven as every plate.
     int cells_above = 0;
+    /// A lower face (axis 2, side -1) whose plate gives: while the part
+    /// settles the plate comes down as the top of the cell under it would
+    /// under the load on it, along the loading curve of `law` (that cell's
+    /// axial law, the confined compression's): a servo that lowers it, at
+    /// most 0.5 m/s, while the bodies press on it with more than the law's
+    /// force at its descent so far, and never raises it. false: it stands
+    /// still. In the impact it is driven as every plate.
+    bool gives = false;
+    bridge::AxialLawParams law;
   };
   std::vector<Face> faces;
   /// While the part settles, the plates beside its cells (x and y faces)
@@ -55,8 +65,8 @@ struct StructurePart {
   /// step, the forces the bodies exert on them (N) in, their displacements
   /// over the step (m) out (Engine::WallDriver). Called in the impact only
   /// (while the part settles the plates stand still, but for those that
-  /// carry the weight of cells above, Face::cells_above, and with
-  /// beside_follow those beside the cells).
+  /// carry the weight of cells above, Face::cells_above, those that give,
+  /// Face::gives, and with beside_follow those beside the cells).
   Engine::WallDriver drive;
   /// The largest front and back face displacements (m) of the cells not
   /// resolved, read at each series sample (the summary's face keys take the

@@ -394,6 +394,58 @@ TEST(HybridStructure, StruckCellResolvedTheCellBehindAMacroNode) {
   const double descent = plateDescent("follow", drop);
   EXPECT_GT(drop, 1e-4) << "the cell came down";
   EXPECT_NEAR(descent, drop, 1e-3 * drop);
+  // Below: on a 1 x 1 x 2 column struck on its upper cell, the plate under
+  // it stands for the macro cell below. With below "gives" (that cell's
+  // axial law made linear and soft here, k = 1e5 N/m, so that the weight W
+  // of a cell shortens it a few mm) the plate comes down at
+  // 0.5 m/s x (F - k d) / W while the cell presses it with F above k times
+  // its descent d: over the settling's last 40 % (the cell still coming
+  // down on it) its mean force F is k d + W v / 0.5 for its mean descent d
+  // and speed v (to 2 % of W: the speed is the last step's force's), and
+  // it carries more than half of W. Standing still, it does not come down.
+  {
+    nlohmann::json soft = laws;
+    soft["materials"]["front"]["axial"] = {{"model", "bilinear"},          {"stiffness_N_m", 1e5},
+                                           {"yield_force_N", 1e6},         {"hardening_stiffness_N_m", 3e4},
+                                           {"lockup_shortening_m", 0.125}, {"lockup_stiffness_N_m", 1e8}};
+    writeFile(dir / "soft_laws.json", soft.dump());
+    nlohmann::json col = c;
+    col["law_file"] = "soft_laws.json";
+    col["structure"]["cells"] = {1, 1, 2};
+    col["boulder"]["aim_point_m"] = {0.15, 0.45};
+    struct Lower {
+      double force = 0.0, descent = 0.0, speed = 0.0, end = 0.0;  // (means over the last 40 %; the descent at the end)
+    };
+    const auto lowerPlate = [&](const std::string& below) {
+      const auto [out, sc] = settledVariant(col, "below", below, "stack");
+      weight = sc["cell_mass_kg"].get<double>() * 9.81;
+      const gabion::bridge::H5Reader h5(out / "settle" / "result.h5");
+      const std::vector<double> t = h5.read("/series/time_s"), f = h5.read("/series/walls/interface_1_z_minus/force_N"),
+                                z = h5.read("/series/walls/interface_1_z_minus/position_m");
+      const std::size_t n = t.size(), k = 6 * n / 10;
+      Lower l;
+      if (n < 10 || f.size() != 3 * n || z.size() != 3 * n) {
+        ADD_FAILURE() << "no lower plate's series";
+        return l;
+      }
+      for (std::size_t q = k; q < n; ++q) {
+        l.force -= f[3 * q + 2] / static_cast<double>(n - k);  // (the bodies press it down)
+        l.descent += (z[2] - z[3 * q + 2]) / static_cast<double>(n - k);
+      }
+      l.speed = (z[3 * k + 2] - z[3 * (n - 1) + 2]) / (t[n - 1] - t[k]);
+      l.end = z[2] - z[3 * (n - 1) + 2];
+      return l;
+    };
+    const Lower gives = lowerPlate("gives");
+    EXPECT_GT(gives.end, 1e-3) << "the plate came down";
+    EXPECT_GT(gives.force, 0.5 * weight);
+    EXPECT_NEAR(gives.force, 1e5 * gives.descent + weight * gives.speed / 0.5, 0.02 * weight)
+        << "descent " << gives.descent << " speed " << gives.speed;
+    EXPECT_EQ(lowerPlate("plates").end, 0.0);
+    bad = col;
+    bad["resolve"]["below"] = "soft";
+    refused(bad, "/resolve/below");
+  }
   bad = c;
   bad["run"] = {{"kinematics", "3d"}};
   refused(bad, "/run");
