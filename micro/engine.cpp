@@ -204,6 +204,10 @@ Engine::Engine(const Scene& scene, int threads) {
   laws_.setUniformMass(
       im0 > 0.0 && std::all_of(p_.inv_body_mass.begin(), p_.inv_body_mass.end(), [&](double m) { return m == im0; }),
       im0);
+  const auto allEqual = [](const std::vector<double>& v) {
+    return std::all_of(v.begin(), v.end(), [&](double x) { return x == v.front(); });
+  };
+  one_body_ = all_loose_ && allEqual(p_.mass) && allEqual(p_.inv_mass) && allEqual(p_.inv_inertia);
   const double r0 = p_.r.empty() ? 0.0 : p_.r[0];
   laws_.setUniformRadius(std::all_of(p_.r.begin(), p_.r.end(), [&](double r) { return r == r0; }), r0);
 
@@ -725,7 +729,7 @@ void Engine::integrate(bool measure) {
     const std::size_t b = r.first, e = r.end;
     addForceBuffers(b, e);
     if (all_loose_) {
-      scratch_[t].spheres = integrateSpheres(p_, b, e, dt_, gravity_, measure, any_local_damping_);
+      scratch_[t].spheres = integrateSpheres(p_, b, e, dt_, gravity_, measure, any_local_damping_, one_body_);
       return;
     }
     // Blocks and link nodes move in their own passes: only the loose spheres

@@ -214,6 +214,7 @@ class Engine {
   std::vector<std::uint32_t> loose_;
   bool all_loose_ = true;
   bool any_local_damping_ = true;  ///< a sphere has local damping (alpha never changes)
+  bool one_body_ = false;          ///< every particle is a loose sphere of one mass, inertial mass and moment
   std::vector<RigidBlock> blocks_;
   std::vector<Wall> walls_;
   Links links_;

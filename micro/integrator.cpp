@@ -93,13 +93,27 @@ SphereSums sphereLoop(Particles& p, std::size_t b, std::size_t e, double dt, con
   return {local, ke_t, ke_r, pe, finite, max_d2, ke_now};
 }
 
+// a b + c, rounded once where the machine has FMA (as GCC contracts it in
+// the loops), so that the rounding does not depend on whether the compiler
+// hoists a * b out of a loop where a is invariant (the one-body form) and
+// rounds it apart.
+[[gnu::always_inline]] inline double mulAdd(double a, double b, double c) {
+#ifdef __FMA__
+  return std::fma(a, b, c);
+#else
+  return a * b + c;
+#endif
+}
+
 // The free spheres without local damping (sphereLoop's arithmetic, the kick
 // alone) in two passes, translation then rotation: each pass streams 15 or 9
 // arrays where one pass would stream 24 (the settling benchmark's
 // integration 10 to 20 % faster, the same arrays bit for bit). The damping
 // work is zero; the finiteness probe and the kinetic energy "now" add the
-// two passes' sums.
-template <bool kMeasure>
+// two passes' sums. kOne: every sphere of the range has the first one's
+// mass, inertial mass and moment, read once instead of from three arrays
+// (the same arrays bit for bit).
+template <bool kMeasure, bool kOne>
 SphereSums sphereLoopUndamped(Particles& p, std::size_t b, std::size_t e, double dt, const Vec3& g) {
   double* __restrict X = p.x.data(), * __restrict Y = p.y.data(), * __restrict Z = p.z.data();
   double* __restrict VX = p.vx.data(), * __restrict VY = p.vy.data(), * __restrict VZ = p.vz.data();
@@ -107,14 +121,15 @@ SphereSums sphereLoopUndamped(Particles& p, std::size_t b, std::size_t e, double
   const double* __restrict M = p.mass.data(), * __restrict IM = p.inv_mass.data();
   const double* __restrict X0 = p.x0.data(), * __restrict Y0 = p.y0.data(), * __restrict Z0 = p.z0.data();
   const double gx = g.x(), gy = g.y(), gz = g.z();
+  const double m0 = b < e ? M[b] : 0.0, im0 = b < e ? IM[b] : 0.0;
   double ke_t = 0.0, pe = 0.0, finite = 0.0, max_d2 = 0.0, ke_now_t = 0.0;
 #pragma omp simd reduction(+ : ke_t, pe, finite, ke_now_t) reduction(max : max_d2)
   for (std::size_t i = b; i < e; ++i) {
-    const double m = M[i], im = IM[i];
+    const double m = kOne ? m0 : M[i], im = kOne ? im0 : IM[i];
     double none = 0.0;
-    const double vx = dampedKick<false>(0.0, FX[i] + m * gx, VX[i], im, 0.0, dt, none);
-    const double vy = dampedKick<false>(0.0, FY[i] + m * gy, VY[i], im, 0.0, dt, none);
-    const double vz = dampedKick<false>(0.0, FZ[i] + m * gz, VZ[i], im, 0.0, dt, none);
+    const double vx = dampedKick<false>(0.0, mulAdd(m, gx, FX[i]), VX[i], im, 0.0, dt, none);
+    const double vy = dampedKick<false>(0.0, mulAdd(m, gy, FY[i]), VY[i], im, 0.0, dt, none);
+    const double vz = dampedKick<false>(0.0, mulAdd(m, gz, FZ[i]), VZ[i], im, 0.0, dt, none);
     const double x0 = X[i], y0 = Y[i], z0 = Z[i];
     const double x1 = x0 + dt * vx, y1 = y0 + dt * vy, z1 = z0 + dt * vz;
     if (kMeasure) {  // (as in sphereLoop)
@@ -131,10 +146,11 @@ SphereSums sphereLoopUndamped(Particles& p, std::size_t b, std::size_t e, double
   double* __restrict WX = p.wx.data(), * __restrict WY = p.wy.data(), * __restrict WZ = p.wz.data();
   const double* __restrict TX = p.tx.data(), * __restrict TY = p.ty.data(), * __restrict TZ = p.tz.data();
   const double* __restrict II = p.inv_inertia.data();
+  const double ii0 = b < e ? II[b] : 0.0;
   double ke_r = 0.0, finite_r = 0.0, ke_now_r = 0.0;
 #pragma omp simd reduction(+ : ke_r, finite_r, ke_now_r)
   for (std::size_t i = b; i < e; ++i) {
-    const double ii = II[i];
+    const double ii = kOne ? ii0 : II[i];
     double none = 0.0;
     const double wx = dampedKick<false>(0.0, TX[i], WX[i], ii, 0.0, dt, none);
     const double wy = dampedKick<false>(0.0, TY[i], WY[i], ii, 0.0, dt, none);
@@ -151,13 +167,16 @@ SphereSums sphereLoopUndamped(Particles& p, std::size_t b, std::size_t e, double
 }  // namespace
 
 SphereSums integrateSpheres(Particles& p, std::size_t b, std::size_t e, double dt, const Vec3& g, bool measure,
-                            bool maybe_damped) {
+                            bool maybe_damped, bool one_body) {
   // Without local damping on the range (every alpha 0, as in dynamic runs)
   // the kick is the force alone: the selects and the damping work of
   // dampedKick drop out, a fifth of the loop's time on the settling benchmark.
   const auto* alpha = p.alpha.data();
   const bool damped = maybe_damped && std::any_of(alpha + b, alpha + e, [](double a) { return a != 0.0; });
-  if (!damped) return measure ? sphereLoopUndamped<true>(p, b, e, dt, g) : sphereLoopUndamped<false>(p, b, e, dt, g);
+  if (!damped && one_body)
+    return measure ? sphereLoopUndamped<true, true>(p, b, e, dt, g) : sphereLoopUndamped<false, true>(p, b, e, dt, g);
+  if (!damped)
+    return measure ? sphereLoopUndamped<true, false>(p, b, e, dt, g) : sphereLoopUndamped<false, false>(p, b, e, dt, g);
   return measure ? sphereLoop<true, false>(p, b, e, dt, g, nullptr) : sphereLoop<false, false>(p, b, e, dt, g, nullptr);
 }
 

@@ -35,8 +35,10 @@ struct RigidBlock {
 /// work, a finiteness probe and the largest squared displacement since the
 /// last list build. `maybe_damped`: whether any particle of `p` may have
 /// local damping (false skips the test of the range's coefficients).
+/// `one_body`: every sphere of the range has one mass, inertial mass and
+/// moment (they are then read once; the same sums).
 SphereSums integrateSpheres(Particles& p, std::size_t b, std::size_t e, double dt, const Vec3& g, bool measure,
-                            bool maybe_damped);
+                            bool maybe_damped, bool one_body = false);
 
 /// The forces of a link-node sub-step (micro/linked_nodes.hpp): the step's
 /// held contact and wall force and torque (h*, t*) and the links' force of

@@ -5,6 +5,7 @@
 #include <random>
 
 #include "micro/engine.hpp"
+#include "micro/integrator.hpp"
 #include "micro/rigid_body.hpp"
 #include "micro_test_util.hpp"
 
@@ -414,6 +415,44 @@ std::vector<Vec3> settledPositions(bool two_materials, Spheres kind) {
 TEST(MicroEngine, TheKernelsOneMaterialOneMassAndOneRadiusFormsMatchThePerPairForm) {
   for (const Spheres kind : {Spheres::kEqual, Spheres::kPolydisperse, Spheres::kPolydisperseOneMass})
     EXPECT_TRUE(settledPositions(false, kind) == settledPositions(true, kind)) << static_cast<int>(kind);
+}
+
+// The integrator has two forms of the free spheres' step: masses, inertial
+// masses and moments read per sphere, or read once when every sphere has
+// the same (an engine of equal spheres). Both give the same arrays and sums
+// bit for bit, on and off the measuring steps.
+TEST(MicroEngine, TheIntegratorsOneBodyFormMatchesThePerSphereForm) {
+  gabion::micro::Particles p;
+  const std::size_t n = 1001;  // (a remainder past whole vectors)
+  p.resize(n);
+  std::mt19937_64 rng(5);
+  std::uniform_real_distribution<double> u(-1.0, 1.0);
+  const double m = sphereMass(0.01);
+  for (std::size_t i = 0; i < n; ++i) {
+    p.x[i] = u(rng), p.y[i] = u(rng), p.z[i] = u(rng);
+    p.x0[i] = p.x[i] + 1e-4 * u(rng), p.y0[i] = p.y[i], p.z0[i] = p.z[i];
+    p.vx[i] = u(rng), p.vy[i] = u(rng), p.vz[i] = u(rng);
+    p.wx[i] = 10 * u(rng), p.wy[i] = 10 * u(rng), p.wz[i] = 10 * u(rng);
+    p.fx[i] = 0.1 * u(rng), p.fy[i] = 0.1 * u(rng), p.fz[i] = 0.1 * u(rng);
+    p.tx[i] = 1e-3 * u(rng), p.ty[i] = 1e-3 * u(rng), p.tz[i] = 1e-3 * u(rng);
+    p.mass[i] = m, p.inv_mass[i] = 1.0 / m, p.inv_inertia[i] = 1.0 / (0.4 * m * 1e-4);
+  }
+  for (const bool measure : {false, true}) {
+    gabion::micro::Particles a = p, b = p;
+    const Vec3 g(0.3, -0.2, -9.81);
+    const auto sa = gabion::micro::integrateSpheres(a, 0, n, 1e-4, g, measure, false, true);
+    const auto sb = gabion::micro::integrateSpheres(b, 0, n, 1e-4, g, measure, false, false);
+    for (const auto field :
+         {&gabion::micro::Particles::x, &gabion::micro::Particles::y, &gabion::micro::Particles::z,
+          &gabion::micro::Particles::vx, &gabion::micro::Particles::vy, &gabion::micro::Particles::vz,
+          &gabion::micro::Particles::wx, &gabion::micro::Particles::wy, &gabion::micro::Particles::wz})
+      EXPECT_TRUE(a.*field == b.*field) << "measure " << measure;
+    EXPECT_TRUE(a.vx != p.vx) << "the spheres moved";
+    for (const auto sum :
+         {&gabion::micro::SphereSums::ke_t, &gabion::micro::SphereSums::ke_r, &gabion::micro::SphereSums::pe,
+          &gabion::micro::SphereSums::finite, &gabion::micro::SphereSums::max_d2, &gabion::micro::SphereSums::ke_now})
+      EXPECT_EQ(sa.*sum, sb.*sum) << "measure " << measure;
+  }
 }
 
 // An F_lim contact in the engine: a sphere pressed into the floor by gravity
