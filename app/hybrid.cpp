@@ -180,6 +180,15 @@ class Coupler {
       if (p.structure.gi[q] == 0) front_.push_back(q);
       if (p.structure.gi[q] == p.structure.nx - 1) back_.push_back(q);
     }
+    // A back node behind a resolved cell stands for its cell's front face
+    // (its rear link spans the whole cell, macro/structure.cpp); against a
+    // fixed back support its cell's centre, what the back face measures in
+    // the resolved cells and at every other node, moves half as far.
+    for (const std::size_t q : back_) {
+      const int i = p.structure.gi[q], j = p.structure.gj[q], k = p.structure.gk[q];
+      const bool whole = i > 0 && p.structure.nodeAt(i - 1, j, k) < 0;  // (no node there: a resolved cell)
+      back_centre_.push_back(whole && p.c.structure.support.fixed_back ? 0.5 : 1.0);
+    }
     node_force_.assign(p.structure.nodeCount(), Vec3::Zero());
   }
 
@@ -210,7 +219,7 @@ class Coupler {
   std::pair<double, double> facesMoved() const {
     double front = 0.0, back = 0.0;
     for (const std::size_t q : front_) front = std::max(front, model_.ux()[q]);
-    for (const std::size_t q : back_) back = std::max(back, model_.ux()[q]);
+    for (std::size_t k = 0; k < back_.size(); ++k) back = std::max(back, back_centre_[k] * model_.ux()[back_[k]]);
     return {front, back};
   }
 
@@ -280,6 +289,7 @@ class Coupler {
  private:
   macro::Model model_;
   std::vector<std::size_t> face_node_, front_, back_;
+  std::vector<double> back_centre_;  ///< per back node: its cell centre's displacement over the node's
   std::vector<Vec3> node_force_;
   std::vector<StructurePart::Face> faces_;
   std::vector<Vec3> last_force_, settled_, at_peak_;  // the plates' forces: last step, settled, at the axial peak
