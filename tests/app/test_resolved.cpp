@@ -367,24 +367,39 @@ TEST(HybridStructure, StruckCellResolvedTheCellBehindAMacroNode) {
   // of W. Standing still, it carries less than half of W (the cell comes
   // down from it).
   double weight = 0.0;  // (the cell's, netting included: the run's cell_mass_kg)
+  // A plate's settling, from the series of a run in `out`: over the last
+  // 40 % its mean force along z (N, as the bodies press it) and mean height
+  // below the laid-out one (m), its speed down (m/s), and its descent at the end.
+  struct Settling {
+    double force = 0.0, descent = 0.0, speed = 0.0, end = 0.0;
+  };
+  const auto plateSettling = [&](const std::filesystem::path& out, const std::string& wall) {
+    const gabion::bridge::H5Reader h5(out / "settle" / "result.h5");
+    const std::vector<double> t = h5.read("/series/time_s"), f = h5.read("/series/walls/" + wall + "/force_N"),
+                              z = h5.read("/series/walls/" + wall + "/position_m");
+    const std::size_t n = t.size(), k = 6 * n / 10;
+    Settling l;
+    if (n < 10 || f.size() != 3 * n || z.size() != 3 * n) {
+      ADD_FAILURE() << "no series of " << wall;
+      return l;
+    }
+    for (std::size_t q = k; q < n; ++q) {
+      l.force += f[3 * q + 2] / static_cast<double>(n - k);
+      l.descent += (z[2] - z[3 * q + 2]) / static_cast<double>(n - k);
+    }
+    l.speed = (z[3 * k + 2] - z[3 * (n - 1) + 2]) / (t[n - 1] - t[k]);
+    l.end = z[2] - z[3 * (n - 1) + 2];
+    return l;
+  };
   const auto upperPlate = [&](const std::string& above, double& speed) {
     nlohmann::json col = c;
     col["structure"]["cells"] = {1, 1, 2};
     col["boulder"]["aim_point_m"] = {0.15, 0.15};
     const auto [out, sc] = settledVariant(col, "above", above, "column");
     weight = sc["cell_mass_kg"].get<double>() * 9.81;
-    const gabion::bridge::H5Reader h5(out / "settle" / "result.h5");
-    const std::vector<double> t = h5.read("/series/time_s"), f = h5.read("/series/walls/interface_0_z_plus/force_N"),
-                              z = h5.read("/series/walls/interface_0_z_plus/position_m");
-    const std::size_t n = t.size(), k = 6 * n / 10;
-    if (n < 10 || f.size() != 3 * n || z.size() != 3 * n) {
-      ADD_FAILURE() << "no upper plate's series";
-      return 0.0;
-    }
-    double mean = 0.0;
-    for (std::size_t q = k; q < n; ++q) mean += f[3 * q + 2] / static_cast<double>(n - k);
-    speed = (z[3 * k + 2] - z[3 * (n - 1) + 2]) / (t[n - 1] - t[k]);
-    return mean;
+    const Settling l = plateSettling(out, "interface_0_z_plus");
+    speed = l.speed;
+    return l.force;
   };
   double speed = 0.0;
   const double pressed = upperPlate("weight", speed);
@@ -427,30 +442,14 @@ TEST(HybridStructure, StruckCellResolvedTheCellBehindAMacroNode) {
     col["law_file"] = "soft_laws.json";
     col["structure"]["cells"] = {1, 1, 2};
     col["boulder"]["aim_point_m"] = {0.15, 0.45};
-    struct Lower {
-      double force = 0.0, descent = 0.0, speed = 0.0, end = 0.0;  // (means over the last 40 %; the descent at the end)
-    };
     const auto lowerPlate = [&](const std::string& below) {
       const auto [out, sc] = settledVariant(col, "below", below, "stack");
       weight = sc["cell_mass_kg"].get<double>() * 9.81;
-      const gabion::bridge::H5Reader h5(out / "settle" / "result.h5");
-      const std::vector<double> t = h5.read("/series/time_s"), f = h5.read("/series/walls/interface_1_z_minus/force_N"),
-                                z = h5.read("/series/walls/interface_1_z_minus/position_m");
-      const std::size_t n = t.size(), k = 6 * n / 10;
-      Lower l;
-      if (n < 10 || f.size() != 3 * n || z.size() != 3 * n) {
-        ADD_FAILURE() << "no lower plate's series";
-        return l;
-      }
-      for (std::size_t q = k; q < n; ++q) {
-        l.force -= f[3 * q + 2] / static_cast<double>(n - k);  // (the bodies press it down)
-        l.descent += (z[2] - z[3 * q + 2]) / static_cast<double>(n - k);
-      }
-      l.speed = (z[3 * k + 2] - z[3 * (n - 1) + 2]) / (t[n - 1] - t[k]);
-      l.end = z[2] - z[3 * (n - 1) + 2];
+      Settling l = plateSettling(out, "interface_1_z_minus");
+      l.force = -l.force;  // (the bodies press it down)
       return l;
     };
-    const Lower gives = lowerPlate("gives");
+    const Settling gives = lowerPlate("gives");
     EXPECT_GT(gives.end, 1e-3) << "the plate came down";
     EXPECT_GT(gives.force, 0.5 * weight);
     EXPECT_NEAR(gives.force, 1e5 * gives.descent + weight * gives.speed / 0.5, 0.02 * weight)
