@@ -35,9 +35,8 @@ struct Plan {
   json twin, resolved;
   std::vector<json> hybrids;  ///< macro.impact cases with "resolve", one per `hybrid/within_m`
   std::vector<double> within_m;
-  std::string depth = "reach";  ///< `hybrid/depth`: "whole" resolves every cell behind a front one within reach
-  std::string below =
-      "plates";  ///< `hybrid/below`: "cells" resolves every cell under a resolved one too; "gives" (above)
+  std::string depth = "reach";   ///< `hybrid/depth`: "whole" resolves every cell behind a front one within reach
+  std::string below = "plates";  ///< `hybrid/below`: as a hybrid's `resolve/below` ("plates", "cells", "gives")
   std::string above = "fixed";   ///< `hybrid/above`: "weight" presses the cells above onto the resolved ones
   std::string beside = "fixed";  ///< `hybrid/beside`: "follow" brings the plates beside down with their cells
   double law_edge_m = 0.0;       ///< the laws' cell edge (0: not known)

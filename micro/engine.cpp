@@ -198,18 +198,16 @@ Engine::Engine(const Scene& scene, int threads) {
   nodes_ = LinkedNodes(scene, links_, p_);
   excluded_ = links_.excludedPairs();
 
-  const bool one_material = std::all_of(p_.mat.begin(), p_.mat.end(), [&](std::uint32_t m) { return m == p_.mat[0]; });
-  laws_.setUniform(one_material, p_.mat[0]);
-  const double im0 = p_.inv_body_mass.empty() ? 0.0 : p_.inv_body_mass[0];
-  laws_.setUniformMass(
-      im0 > 0.0 && std::all_of(p_.inv_body_mass.begin(), p_.inv_body_mass.end(), [&](double m) { return m == im0; }),
-      im0);
-  const auto allEqual = [](const std::vector<double>& v) {
-    return std::all_of(v.begin(), v.end(), [&](double x) { return x == v.front(); });
+  // (one material, body mass, radius: the kernels' uniform forms; one mass,
+  // inertial mass and moment: the integrator's one-body form)
+  const auto allEqual = [](const auto& v) {
+    return std::all_of(v.begin(), v.end(), [&](const auto& x) { return x == v.front(); });
   };
+  laws_.setUniform(allEqual(p_.mat), p_.mat[0]);
+  const double im0 = p_.inv_body_mass.empty() ? 0.0 : p_.inv_body_mass[0];
+  laws_.setUniformMass(im0 > 0.0 && allEqual(p_.inv_body_mass), im0);
+  laws_.setUniformRadius(allEqual(p_.r), p_.r.empty() ? 0.0 : p_.r[0]);
   one_body_ = all_loose_ && allEqual(p_.mass) && allEqual(p_.inv_mass) && allEqual(p_.inv_inertia);
-  const double r0 = p_.r.empty() ? 0.0 : p_.r[0];
-  laws_.setUniformRadius(std::all_of(p_.r.begin(), p_.r.end(), [&](double r) { return r == r0; }), r0);
 
   // Size classes; the skin is a fraction of the smallest class's mean radius.
   grid_.assignClasses(p_);
