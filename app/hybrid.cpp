@@ -35,8 +35,10 @@ struct Plan {
   bool below_gives = false;    ///< `resolve.below` "gives": a plate over a macro cell gives as its top would, settling
   bool weight_above = false;   ///< `resolve.above` "weight": an upper plate presses with the cells above, settling
   bool beside_follow = false;  ///< `resolve.beside` "follow": the plates beside come down with their cell, settling
+  bool across_gives = false;  ///< `resolve.across` "gives": the plates across x give as their macro cells would, struck
   std::vector<int> resolved;
   std::vector<StructurePart::Face> faces;
+  std::vector<std::size_t> across;  ///< with across "gives": the faces whose plates give (side faces and those under)
   json micro_case;
   std::string micro_file;  ///< names the fine part in messages
 };
@@ -53,6 +55,12 @@ double distanceToCell(int i, int j, int k, double edge, double y, double z) {
   return std::sqrt(dx * dx + dy * dy + dz * dz);
 }
 
+/// The laws of the macro cell across a face of a resolved cell.
+const bridge::CellMaterial& cellAcross(const macro::Structure& s, const StructurePart::Face& f) {
+  const int node = s.node_of[static_cast<std::size_t>(f.other)];
+  return s.materials[static_cast<std::size_t>(s.material[static_cast<std::size_t>(node)])];
+}
+
 Plan plan(const JsonDocument& doc) {
   const JsonReader root = doc.root();
   Plan p;
@@ -65,6 +73,7 @@ Plan plan(const JsonDocument& doc) {
   p.below_gives = below == "gives";
   p.weight_above = rs.choice("above", {"fixed", "weight"}, "fixed") == "weight";
   p.beside_follow = rs.choice("beside", {"fixed", "follow"}, "fixed") == "follow";
+  p.across_gives = rs.choice("across", {"fixed", "gives"}, "fixed") == "gives";
   const fs::path cell_file = absoluteFrom(doc, rs.string("cell"));
   if (p.c.impacts.size() != 1)
     root.fail("impacts", "a hybrid run takes one impact (the fine part is struck once): give `boulder`");
@@ -137,12 +146,15 @@ Plan plan(const JsonDocument& doc) {
   // macro cell below, gives along that cell's axial law while the part settles.
   if (p.below_gives)
     for (StructurePart::Face& f : p.faces)
-      if (f.axis == 2 && f.side < 0) {
-        const int node = p.structure.node_of[static_cast<std::size_t>(f.other)];
-        f.gives = true;
-        f.law =
-            p.structure.materials[static_cast<std::size_t>(p.structure.material[static_cast<std::size_t>(node)])].axial;
-      }
+      if (f.axis == 2 && f.side < 0) f.gives = true, f.law = cellAcross(p.structure, f).axial;
+  // With across "gives", in the impact, the plates beside and under the
+  // resolved cells give as the macro cells across them would be shortened
+  // (Coupler::giveAcross).
+  if (p.across_gives)
+    for (std::size_t k = 0; k < p.faces.size(); ++k) {
+      StructurePart::Face& f = p.faces[k];
+      if (f.axis == 1 || (f.axis == 2 && f.side < 0)) f.law = cellAcross(p.structure, f).axial, p.across.push_back(k);
+    }
 
   // The fine part: micro.structure's keys, the structure's size, back
   // support and boulder, and the aim as the same fraction of the face.
@@ -157,7 +169,8 @@ Plan plan(const JsonDocument& doc) {
       {"boulder", boulder},
       {"rebound_restitution", p.c.run.rebound_restitution}};
   for (const auto& [key, value] : root.raw("resolve").items()) {
-    if (key == "cell" || key == "within_m" || key == "depth" || key == "below" || key == "above" || key == "beside")
+    if (key == "cell" || key == "within_m" || key == "depth" || key == "below" || key == "above" || key == "beside" ||
+        key == "across")
       continue;
     if (key == "structure" || key == "boulder")
       rs.fail(key, "the hybrid's structure and boulder are the macro case's: give them there");
@@ -190,6 +203,10 @@ class Coupler {
       back_centre_.push_back(whole && p.c.structure.support.fixed_back ? 0.5 : 1.0);
     }
     node_force_.assign(p.structure.nodeCount(), Vec3::Zero());
+    for (const std::size_t k : p.across) {
+      const double weight = cellAcross(p.structure, p.faces[k]).mass_kg * p.c.structure.support.gravity_m_s2;
+      across_.push_back({k, kAcrossSpeed_m_s / weight});
+    }
   }
 
   /// Engine::WallDriver: the plates' forces onto their nodes, one macro
@@ -209,11 +226,45 @@ class Coupler {
     if (st == macro::StepStatus::Perforation && failure_.empty()) failure_ = "the macro part: " + model_.failure();
     last_force_ = forces;
     const std::vector<double>& vx = model_.vx();
-    for (std::size_t k = 0; k < forces.size(); ++k) {
-      // (x-only: the node moves along x; the plate with it)
-      moves[k] = Vec3(dt * vx[face_node_[k]], 0.0, 0.0);
-      work_on_fine_J_ -= forces[k].dot(moves[k]);
+    // (x-only: the node moves along x; the plate with it)
+    for (std::size_t k = 0; k < forces.size(); ++k) moves[k] = Vec3(dt * vx[face_node_[k]], 0.0, 0.0);
+    giveAcross(dt, forces, moves);
+    for (std::size_t k = 0; k < forces.size(); ++k) work_on_fine_J_ -= forces[k].dot(moves[k]);
+  }
+
+  /// With across "gives": each plate beside or under a resolved cell moves
+  /// away from it, along its normal, as the macro cell across would be
+  /// shortened by the push: a servo, at most kAcrossSpeed_m_s (that speed
+  /// at a push in excess of that cell's weight), while the bodies push the
+  /// plate with more than the cell's axial law gives on its loading curve
+  /// at its shortening so far, and never back. Its shortening starts where
+  /// the law carries the push at the impact's start (the weight on the
+  /// plates under, next to nothing on those beside). The macro node does
+  /// not move across x: that cell's shortening across is its own, and the
+  /// work into it (across_J_) is dissipated.
+  void giveAcross(double dt, const std::vector<Vec3>& forces, std::vector<Vec3>& moves) {
+    for (Across& a : across_) {
+      const StructurePart::Face& f = faces_[a.face];
+      const double push = f.side * forces[a.face][f.axis];  // (towards the macro cell)
+      if (!across_started_) a.start_m = shorteningCarrying(f.law, push);
+      const double law = bridge::axialResponse(f.law, a.start_m + a.moved_m, 0.0).force_N;
+      const double d = dt * std::clamp(a.gain_m_s_N * (push - law), 0.0, kAcrossSpeed_m_s);
+      a.moved_m += d;
+      moves[a.face][f.axis] += f.side * d;
+      across_J_ += push * d;
     }
+    across_started_ = true;
+  }
+
+  /// The shortening at which `law`'s loading curve first carries `force`
+  /// (bisection: the curve does not fall), 0 for none.
+  static double shorteningCarrying(const bridge::AxialLawParams& law, double force) {
+    const auto at = [&law](double u) { return bridge::axialResponse(law, u, 0.0).force_N; };
+    if (!(force > at(0.0))) return 0.0;
+    double lo = 0.0, hi = 1e-3;
+    while (at(hi) < force && hi < 1.0) lo = hi, hi *= 2.0;
+    for (int k = 0; k < 60; ++k) (at(0.5 * (lo + hi)) < force ? lo : hi) = 0.5 * (lo + hi);
+    return hi;
   }
 
   std::pair<double, double> facesMoved() const {
@@ -236,7 +287,7 @@ class Coupler {
       if (axial > peak_axial_N_) peak_axial_N_ = axial, at_peak_ = last_force_;
     }
     const macro::Energy& m = model_.energy();
-    residual_J_ = (fine - fine0_) + m.total();
+    residual_J_ = (fine - fine0_) + m.total() + across_J_;
   }
 
   void archive(bridge::StateArchive& a) {
@@ -244,9 +295,22 @@ class Coupler {
     a("work_on_fine_J", work_on_fine_J_), a("fine0", fine0_), a("started", started_), a("residual_J", residual_J_);
     a("last_force", last_force_), a("settled", settled_), a("at_peak", at_peak_), a("peak_axial_N", peak_axial_N_);
     a("failure", failure_);
+    std::vector<double> start, moved;
+    for (const Across& q : across_) start.push_back(q.start_m), moved.push_back(q.moved_m);
+    a("across_J", across_J_), a("across_started", across_started_), a("across_start_m", start);
+    a("across_moved_m", moved);
+    for (std::size_t q = 0; q < across_.size() && q < start.size() && q < moved.size(); ++q)
+      across_[q].start_m = start[q], across_[q].moved_m = moved[q];
   }
 
   const std::string& failure() const { return failure_; }
+
+  /// How far each plate that gives across x has moved (m), by face; NAN for the others.
+  std::vector<double> movedAcross() const {
+    std::vector<double> out(faces_.size(), NAN);
+    for (const Across& a : across_) out[a.face] = a.moved_m;
+    return out;
+  }
 
   /// Each plate's force settled and when the x faces carried most, and
   /// for a lateral face of a cell with an x face behind it, its normal
@@ -273,10 +337,11 @@ class Coupler {
 
   json report(double impact_energy_J) const {
     const macro::Energy& m = model_.energy();
-    const double mismatch = work_on_fine_J_ + m.external_work_J;
+    const double mismatch = work_on_fine_J_ + m.external_work_J + across_J_;
     return {
         {"work_on_fine_part_J", work_on_fine_J_},
         {"work_on_macro_part_J", m.external_work_J},
+        {"work_into_cells_across_J", across_J_},
         {"interface_mismatch_J", mismatch},
         {"macro_energy_J",
          {{"kinetic", m.kinetic_J}, {"elastic", m.elastic_J}, {"plastic", m.plastic_J}, {"friction", m.friction_J}}},
@@ -290,6 +355,17 @@ class Coupler {
   macro::Model model_;
   std::vector<std::size_t> face_node_, front_, back_;
   std::vector<double> back_centre_;  ///< per back node: its cell centre's displacement over the node's
+  /// A plate that gives across x (giveAcross): its face, its servo's gain
+  /// (m/s per N), the macro cell's shortening at the impact's start and
+  /// the plate's move since (m).
+  struct Across {
+    std::size_t face = 0;
+    double gain_m_s_N = 0.0, start_m = 0.0, moved_m = 0.0;
+  };
+  static constexpr double kAcrossSpeed_m_s = 0.5;  // (as the plates that give while the part settles)
+  std::vector<Across> across_;
+  bool across_started_ = false;
+  double across_J_ = 0.0;  // the plates' work into the cells across x, sum F . d
   std::vector<Vec3> node_force_;
   std::vector<StructurePart::Face> faces_;
   std::vector<Vec3> last_force_, settled_, at_peak_;  // the plates' forces: last step, settled, at the axial peak
@@ -344,10 +420,12 @@ bridge::RunOutcome run(const JsonDocument& doc, const bridge::RunContext& ctx) {
   h["below"] = p.cells_below ? "cells" : p.below_gives ? "gives" : "plates";
   h["above"] = p.weight_above ? "weight" : "fixed";
   h["beside"] = p.beside_follow ? "follow" : "fixed";
+  h["across"] = p.across_gives ? "gives" : "fixed";
   json cells = json::array(), faces = json::array();
   const int nx = p.structure.nx, ny = p.structure.ny;
   for (const int c : p.resolved) cells.push_back({c % nx, (c / nx) % ny, c / (nx * ny)});
   const json forces = coupler->interfaceForces();
+  const std::vector<double> across = coupler->movedAcross();
   for (std::size_t k = 0; k < p.faces.size(); ++k) {
     const StructurePart::Face& f = p.faces[k];
     json face = {{"cell", {f.cell % nx, (f.cell / nx) % ny, f.cell / (nx * ny)}},
@@ -355,6 +433,7 @@ bridge::RunOutcome run(const JsonDocument& doc, const bridge::RunContext& ctx) {
                  {"side", f.side},
                  {"macro_node", p.structure.node_of[static_cast<std::size_t>(f.other)]}};
     face.update(forces[k]);
+    if (!std::isnan(across[k])) face["moved_across_m"] = across[k];
     faces.push_back(face);
   }
   h["resolved_cells"] = cells;
@@ -368,7 +447,8 @@ bridge::RunOutcome run(const JsonDocument& doc, const bridge::RunContext& ctx) {
     << " cells resolved (within " << p.within_m << " m of the aim" << (p.whole_depth ? ", through the depth" : "")
     << (p.cells_below ? ", and the cells below them" : "") << (p.below_gives ? ", the plates under them giving" : "")
     << (p.weight_above ? ", the weight of the cells above on them" : "")
-    << (p.beside_follow ? ", the plates beside coming down with them" : "") << "), " << p.faces.size()
+    << (p.beside_follow ? ", the plates beside coming down with them" : "")
+    << (p.across_gives ? ", the plates across x giving" : "") << "), " << p.faces.size()
     << " interface plates; energy balance of both parts " << h["balance_rel_error"].get<double>()
     << ", interface mismatch " << h["interface_mismatch_J"].get<double>() << " J\n";
   out.answer = a.str() + out.answer;

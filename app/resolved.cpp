@@ -39,6 +39,7 @@ struct Plan {
   std::string below = "plates";  ///< `hybrid/below`: as a hybrid's `resolve/below` ("plates", "cells", "gives")
   std::string above = "fixed";   ///< `hybrid/above`: "weight" presses the cells above onto the resolved ones
   std::string beside = "fixed";  ///< `hybrid/beside`: "follow" brings the plates beside down with their cells
+  std::string across = "fixed";  ///< `hybrid/across`: "gives" lets the plates across x give as their cells would
   double law_edge_m = 0.0;       ///< the laws' cell edge (0: not known)
 };
 
@@ -49,6 +50,7 @@ std::string hybridSettings(const Plan& p) {
   if (p.below == "gives") w += ", plates below giving";
   if (p.above == "weight") w += ", weight above";
   if (p.beside == "follow") w += ", plates beside following";
+  if (p.across == "gives") w += ", plates across x giving";
   return w;
 }
 
@@ -114,10 +116,11 @@ Plan plan(const JsonDocument& doc) {
     p.below = h->choice("below", {"plates", "cells", "gives"}, "plates");
     p.above = h->choice("above", {"fixed", "weight"}, "fixed");
     p.beside = h->choice("beside", {"fixed", "follow"}, "fixed");
+    p.across = h->choice("across", {"fixed", "gives"}, "fixed");
     for (const double w : p.within_m) {
       json c = p.twin;
-      json resolve = {{"cell", cell.string()}, {"within_m", w},    {"depth", p.depth},
-                      {"below", p.below},      {"above", p.above}, {"beside", p.beside}};
+      json resolve = {{"cell", cell.string()}, {"within_m", w},      {"depth", p.depth},  {"below", p.below},
+                      {"above", p.above},      {"beside", p.beside}, {"across", p.across}};
       for (const auto& [key, value] : p.resolved.items())
         if (key != "format" && key != "kind" && key != "cell" && key != "structure" && key != "boulder")
           resolve[key] = value;
@@ -227,8 +230,13 @@ bridge::RunOutcome run(const JsonDocument& doc, const bridge::RunContext& ctx) {
   json hybrids = json::array();
   for (std::size_t k = 0; k < hp.size(); ++k) {
     const json& h = hp[k].summary;
-    json row = {{"within_m", p.within_m[k]}, {"depth", p.depth},   {"below", p.below},
-                {"above", p.above},          {"beside", p.beside}, {"folder", "hybrid_" + std::to_string(k)}};
+    json row = {{"within_m", p.within_m[k]},
+                {"depth", p.depth},
+                {"below", p.below},
+                {"above", p.above},
+                {"beside", p.beside},
+                {"across", p.across},
+                {"folder", "hybrid_" + std::to_string(k)}};
     if (hp[k].status != bridge::RunOutcome::Status::Ok) {
       row["status"] = "failed";
       row["message"] = hp[k].message;

@@ -12,10 +12,12 @@
 //           interface plate on the struck cell's back (the macro node
 //           behind it), or the back support (0);
 //   joint   back less behind: how far the meeting of the two cells closed;
-// then the same at the struck cell's largest move, each one's largest, and
-// how much the struck cell's netting (and the resolved cell behind's) grew
+// then the same at the struck cell's largest move, each one's largest, how
+// much the struck cell's netting (and the resolved cell behind's) grew
 // along x, y and z from the impact's start to its end (its two faces'
-// nodes apart along each axis).
+// nodes apart along each axis), and how far the resolved cells beside the
+// struck cell and beside the cell behind it moved aside, along y away from
+// them (their blocks' mean; nan where those cells are macro nodes).
 // The cells are told apart by their bodies' laid-out positions (the
 // settling's first snapshot), the boulder by its radius.
 #include <algorithm>
@@ -40,6 +42,10 @@ struct Motion {
   std::vector<double> time, centre, back, behind;
   std::string behind_is;
   double struck_growth[3] = {0.0, 0.0, 0.0}, behind_growth[3] = {NAN, NAN, NAN};  // (x, y, z; NAN: not resolved)
+  /// The resolved cells beside the struck cell and beside the cell behind
+  /// it (along y): their blocks' mean move along y away from the struck
+  /// cell's column over the impact; NAN where no resolved cell is.
+  double aside[2][2] = {{NAN, NAN}, {NAN, NAN}};  // [struck, behind][-y, +y]
 };
 
 /// The mean x move, from the first snapshot, of `bodies` in each snapshot.
@@ -112,12 +118,18 @@ Motion struckCell(const fs::path& dir) {
   const int k = std::clamp(static_cast<int>(aim[1] / pitch[2]), 0, cells[2] - 1);
   const int struck = cells[0] * (j + cells[1] * k), behind = struck + 1;
   // (bodies before the boulder are the nettings' nodes, after it the blocks)
-  std::vector<std::size_t> struck_blocks, struck_nodes, behind_nodes;
+  std::vector<std::size_t> struck_blocks, struck_nodes, behind_nodes, beside_blocks[2][2];
   for (std::size_t b = 0; b < n; ++b) {
     if (b == boulder) continue;
     const int c = index(b);
     if (c == struck) (b < boulder ? struck_nodes : struck_blocks).push_back(b);
     if (c == behind && b < boulder && cells[0] > 1) behind_nodes.push_back(b);
+    for (int i = 0; i < 2 && i < cells[0]; ++i)
+      for (int s = 0; s < 2; ++s) {
+        const int jj = j + (s == 0 ? -1 : 1);
+        if (b > boulder && jj >= 0 && jj < cells[1] && c == i + cells[0] * (jj + cells[1] * k))
+          beside_blocks[i][s].push_back(b);
+      }
   }
   if (struck_blocks.empty()) throw std::runtime_error(dir.string() + ": no blocks in the struck cell");
   Motion m;
@@ -126,6 +138,13 @@ Motion struckCell(const fs::path& dir) {
   m.back = meanMove(pos, n, snapshots, face(pos, struck_nodes, true));
   const std::string plate = "/series/walls/interface_" + std::to_string(struck) + "_x_plus/displacement_m";
   for (int a = 0; a < 3; ++a) m.struck_growth[a] = growth(pos, n, snapshots, struck_nodes, a);
+  for (int i = 0; i < 2; ++i)
+    for (int s = 0; s < 2; ++s) {
+      if (beside_blocks[i][s].empty()) continue;
+      double sum = 0.0;
+      for (const std::size_t b : beside_blocks[i][s]) sum += pos[((snapshots - 1) * n + b) * 3 + 1] - pos[b * 3 + 1];
+      m.aside[i][s] = (s == 0 ? -1.0 : 1.0) * sum / static_cast<double>(beside_blocks[i][s].size());
+    }
   if (!behind_nodes.empty()) {
     for (int a = 0; a < 3; ++a) m.behind_growth[a] = growth(pos, n, snapshots, behind_nodes, a);
     m.behind = meanMove(pos, n, snapshots, face(pos, behind_nodes, false));
@@ -175,6 +194,9 @@ int main(int argc, char** argv) {
         std::printf("; the cell behind: %.1f, %.1f, %.1f", 1e3 * m.behind_growth[0], 1e3 * m.behind_growth[1],
                     1e3 * m.behind_growth[2]);
       std::printf("\n");
+      std::printf(
+          "  the resolved cells beside it (-y, +y), moved aside: %.1f, %.1f; beside the cell behind: %.1f, %.1f\n",
+          1e3 * m.aside[0][0], 1e3 * m.aside[0][1], 1e3 * m.aside[1][0], 1e3 * m.aside[1][1]);
     }
   } catch (const std::exception& e) {
     std::fprintf(stderr, "bench_struck_cell: %s\n", e.what());
