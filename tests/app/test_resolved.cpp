@@ -37,6 +37,21 @@ void expectMomentumIsImpulse(const std::filesystem::path& dir, double mass, doub
   EXPECT_NEAR(mass * (v.front() - v.back()), impulse, 0.03 * mass * v0);
 }
 
+// The small cell made into dir/cell/ (cell.h5), and laws for it: the
+// illustrative ones scaled to its 0.3 m edge (a hybrid's macro part only
+// needs plausible ones); null if the cell could not be made.
+nlohmann::json smallCellAndLaws(const std::filesystem::path& dir) {
+  writeFile(dir / "cell.json", gabion::testing::smallCellCase());
+  const auto made = runGabion("run -q " + (dir / "cell.json").string() + " -o " + (dir / "cell").string());
+  EXPECT_EQ(made.exit_code, 0) << made.output;
+  if (made.exit_code != 0) return nullptr;
+  nlohmann::json laws =
+      nlohmann::json::parse(std::ifstream(std::string(GABION_SOURCE_DIR) + "/cases/laws/illustrative.json"));
+  for (auto& [name, m] : laws["materials"].items())
+    m["edge_m"] = 0.3, m["mass_kg"] = m["mass_kg"].get<double>() * 0.216;
+  return laws;
+}
+
 const char* kStructure = R"({"format": "gabion.case/1", "kind": "micro.structure", "cell": "cell/cell.h5",
  "structure": {"cells": [2, 1, 1]}, "boulder": {"diameter_m": 0.25, "velocity_m_s": 8},
  "settle": {"duration_s": 0.01, "until_at_rest": false}, "run": {"duration_s": 0.03}})";
@@ -229,14 +244,8 @@ TEST(ResolvedStructure, SettlesUntilAtRestAndResumesToTheSameWall) {
 // their energy; the boulder's momentum is the impulse of the force on it.
 TEST(HybridStructure, StruckCellResolvedTheCellBehindAMacroNode) {
   const auto dir = scratchDir("hybrid");
-  writeFile(dir / "cell.json", gabion::testing::smallCellCase());
-  ASSERT_EQ(runGabion("run -q " + (dir / "cell.json").string() + " -o " + (dir / "cell").string()).exit_code, 0);
-  // Laws for the 0.3 m cell: the illustrative ones, scaled (the hybrid's
-  // macro part only needs plausible ones).
-  nlohmann::json laws =
-      nlohmann::json::parse(std::ifstream(std::string(GABION_SOURCE_DIR) + "/cases/laws/illustrative.json"));
-  for (auto& [name, m] : laws["materials"].items())
-    m["edge_m"] = 0.3, m["mass_kg"] = m["mass_kg"].get<double>() * 0.216;
+  nlohmann::json laws = smallCellAndLaws(dir);
+  ASSERT_FALSE(laws.is_null());
   writeFile(dir / "laws.json", laws.dump());
   nlohmann::json c = {{"format", "gabion.case/1"},
                       {"kind", "macro.impact"},
@@ -480,12 +489,8 @@ TEST(HybridStructure, StruckCellResolvedTheCellBehindAMacroNode) {
 // interface still balances. Fixed, they do not move across x.
 TEST(HybridStructure, PlatesAcrossXGiveAsTheMacroCellsLaw) {
   const auto dir = scratchDir("hybrid_across");
-  writeFile(dir / "cell.json", gabion::testing::smallCellCase());
-  ASSERT_EQ(runGabion("run -q " + (dir / "cell.json").string() + " -o " + (dir / "cell").string()).exit_code, 0);
-  nlohmann::json laws =
-      nlohmann::json::parse(std::ifstream(std::string(GABION_SOURCE_DIR) + "/cases/laws/illustrative.json"));
-  for (auto& [name, m] : laws["materials"].items())
-    m["edge_m"] = 0.3, m["mass_kg"] = m["mass_kg"].get<double>() * 0.216;
+  nlohmann::json laws = smallCellAndLaws(dir);
+  ASSERT_FALSE(laws.is_null());
   nlohmann::json c = {{"format", "gabion.case/1"},
                       {"kind", "macro.impact"},
                       {"law_file", "laws.json"},
