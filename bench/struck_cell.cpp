@@ -125,10 +125,10 @@ Motion struckCell(const fs::path& dir) {
     if (c == struck) (b < boulder ? struck_nodes : struck_blocks).push_back(b);
     if (c == behind && b < boulder && cells[0] > 1) behind_nodes.push_back(b);
     for (int i = 0; i < 2 && i < cells[0]; ++i)
-      for (int s = 0; s < 2; ++s) {
-        const int jj = j + (s == 0 ? -1 : 1);
+      for (int side = 0; side < 2; ++side) {
+        const int jj = j + (side == 0 ? -1 : 1);
         if (b > boulder && jj >= 0 && jj < cells[1] && c == i + cells[0] * (jj + cells[1] * k))
-          beside_blocks[i][s].push_back(b);
+          beside_blocks[i][side].push_back(b);
       }
   }
   if (struck_blocks.empty()) throw std::runtime_error(dir.string() + ": no blocks in the struck cell");
@@ -139,11 +139,12 @@ Motion struckCell(const fs::path& dir) {
   const std::string plate = "/series/walls/interface_" + std::to_string(struck) + "_x_plus/displacement_m";
   for (int a = 0; a < 3; ++a) m.struck_growth[a] = growth(pos, n, snapshots, struck_nodes, a);
   for (int i = 0; i < 2; ++i)
-    for (int s = 0; s < 2; ++s) {
-      if (beside_blocks[i][s].empty()) continue;
+    for (int side = 0; side < 2; ++side) {
+      const std::vector<std::size_t>& blocks = beside_blocks[i][side];
+      if (blocks.empty()) continue;
       double sum = 0.0;
-      for (const std::size_t b : beside_blocks[i][s]) sum += pos[((snapshots - 1) * n + b) * 3 + 1] - pos[b * 3 + 1];
-      m.aside[i][s] = (s == 0 ? -1.0 : 1.0) * sum / static_cast<double>(beside_blocks[i][s].size());
+      for (const std::size_t b : blocks) sum += pos[((snapshots - 1) * n + b) * 3 + 1] - pos[b * 3 + 1];
+      m.aside[i][side] = (side == 0 ? -1.0 : 1.0) * sum / static_cast<double>(blocks.size());
     }
   if (!behind_nodes.empty()) {
     for (int a = 0; a < 3; ++a) m.behind_growth[a] = growth(pos, n, snapshots, behind_nodes, a);
