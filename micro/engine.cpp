@@ -611,9 +611,20 @@ void Engine::advanceLinkedNodes(bool measure) {
       for (const WorkerScratch& s : scratch_)
         energy_.elastic_link += s.link_elastic, energy_.link_plastic += s.link_plastic;
   }
-  nodes_.hold(p_, rebuilds_ != nodes_rebuilds_);
+  // (each node's copies are its own: by ranges of nodes, as the sub-steps)
+  const auto overNodes = [&](const auto& job) {  // job(first node, end)
+    if (node_parts == 1) return job(std::size_t{0}, nn);
+    parallel(StageProfile::kLinks, [&](int task) {
+      const Range r = evenPart(nn, static_cast<std::size_t>(task), node_parts);
+      job(r.first, r.end);
+    });
+  };
+  const bool rebuilt = rebuilds_ != nodes_rebuilds_;
+  overNodes([&](std::size_t k0, std::size_t k1) {
+    nodes_.hold(p_, rebuilt, k0, k1);
+    if (links_.hasBeams()) nodes_.addBeams(links_, k0, k1);
+  });
   nodes_rebuilds_ = rebuilds_;
-  if (links_.hasBeams()) nodes_.addBeams(links_);
   const double h = dt_ / substeps_;
   for (int k = 0; k < substeps_; ++k) {
     const bool last = k + 1 == substeps_, m = measure && last;
@@ -640,7 +651,7 @@ void Engine::advanceLinkedNodes(bool measure) {
     sums_.local += s.local, sums_.finite += s.finite, sums_.max_d2 = std::max(sums_.max_d2, s.max_d2);
     if (m) sums_.ke_t += s.ke_t, sums_.ke_r += s.ke_r, sums_.pe += s.pe, sums_.ke_now += s.ke_now;
   }
-  nodes_.store(p_, dt_);
+  overNodes([&](std::size_t k0, std::size_t k1) { nodes_.store(p_, dt_, k0, k1); });
 }
 
 // ---------------------------------------------------------------------------

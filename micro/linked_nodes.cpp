@@ -30,25 +30,24 @@ LinkedNodes::LinkedNodes(const Scene& scene, const Links& links, Particles& p) {
   }
 }
 
-void LinkedNodes::hold(const Particles& p, bool rebuilt) {
+void LinkedNodes::hold(const Particles& p, bool rebuilt, std::size_t k0, std::size_t k1) {
   const std::uint32_t* id = n_.id.data();
-  for (std::size_t k = 0; k < size(); ++k) {
+  for (std::size_t k = k0; k < k1; ++k) {
     const std::uint32_t i = p.slot[id[k]];
     hfx_[k] = p.fx[i], hfy_[k] = p.fy[i], hfz_[k] = p.fz[i];
     htx_[k] = p.tx[i], hty_[k] = p.ty[i], htz_[k] = p.tz[i];
+    sx_[k] = n_.x[k], sy_[k] = n_.y[k], sz_[k] = n_.z[k];
+    rx_[k] = ry_[k] = rz_[k] = 0.0;
   }
   if (rebuilt)
-    for (std::size_t k = 0; k < size(); ++k) {
+    for (std::size_t k = k0; k < k1; ++k) {
       const std::uint32_t i = p.slot[id[k]];
       n_.x0[k] = p.x0[i], n_.y0[k] = p.y0[i], n_.z0[k] = p.z0[i];
     }
-  sx_ = n_.x, sy_ = n_.y, sz_ = n_.z;
-  std::fill(rx_.begin(), rx_.end(), 0.0), std::fill(ry_.begin(), ry_.end(), 0.0),
-      std::fill(rz_.begin(), rz_.end(), 0.0);
 }
 
-void LinkedNodes::addBeams(const Links& links) {
-  for (std::size_t k = 0; k < size(); ++k) {
+void LinkedNodes::addBeams(const Links& links, std::size_t k0, std::size_t k1) {
+  for (std::size_t k = k0; k < k1; ++k) {
     const Vec3 f = links.nodeBeamForce(k), t = links.nodeBeamTorque(k);
     hfx_[k] += f.x(), hfy_[k] += f.y(), hfz_[k] += f.z();
     htx_[k] += t.x(), hty_[k] += t.y(), htz_[k] += t.z();
@@ -76,7 +75,7 @@ void LinkedNodes::addDrivenWork(int k, int substeps, double h, double& driven_wo
                         (held * hfz_[j] + lfz_[j]) * n_.vz[j]);
 }
 
-void LinkedNodes::store(Particles& p, double dt) const {
+void LinkedNodes::store(Particles& p, double dt, std::size_t k0, std::size_t k1) const {
   const double inv = 1.0 / dt;
   const std::uint32_t *id = n_.id.data(), *slot = p.slot.data();
   // Positions, mean velocities and mean spins over the step.
@@ -86,7 +85,7 @@ void LinkedNodes::store(Particles& p, double dt) const {
   const double *x = n_.x.data(), *y = n_.y.data(), *z = n_.z.data();
   const double *sx = sx_.data(), *sy = sy_.data(), *sz = sz_.data();
   const double *rx = rx_.data(), *ry = ry_.data(), *rz = rz_.data();
-  for (std::size_t k = 0; k < size(); ++k) {
+  for (std::size_t k = k0; k < k1; ++k) {
     const std::uint32_t i = slot[id[k]];
     X[i] = x[k], Y[i] = y[k], Z[i] = z[k];
     VX[i] = (x[k] - sx[k]) * inv, VY[i] = (y[k] - sy[k]) * inv, VZ[i] = (z[k] - sz[k]) * inv;

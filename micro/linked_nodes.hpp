@@ -42,8 +42,9 @@ class LinkedNodes {
   /// Takes the step's contact and wall forces and torques of the nodes from
   /// the store, and their positions at the step's start; with `rebuilt`
   /// (the neighbour list was built since the last call) also their positions
-  /// at that build. Their turn starts again from zero.
-  void hold(const Particles& p, bool rebuilt);
+  /// at that build. Their turn starts again from zero. For nodes [k0, k1):
+  /// each node's copy is its own, so ranges may be held in parallel.
+  void hold(const Particles& p, bool rebuilt, std::size_t k0, std::size_t k1);
   /// Sub-step k of `substeps` (each h long) for nodes [k0, k1): the link
   /// forces are in `links` (evaluated on x(), y(), z()); sub-step 0 adds the
   /// held impulse. Kicks and drifts every node by h, and turns it (its turn
@@ -59,8 +60,9 @@ class LinkedNodes {
   /// over the step of length dt (its displacement / dt), and as spin the
   /// mean over the step (its turn / dt): the contacts' shear increments then
   /// follow the node's real path over the step, whatever the sub-steps did
-  /// inside it. (Their force stays here: force().)
-  void store(Particles& p, double dt) const;
+  /// inside it. (Their force stays here: force().) For nodes [k0, k1),
+  /// each into its own slot: ranges may be stored in parallel.
+  void store(Particles& p, double dt, std::size_t k0, std::size_t k1) const;
   /// The force on the node of stable id `id` at the last step (the held
   /// contact and wall forces plus the links' of its last sub-step; N), or
   /// nullopt when `id` is not a link node.
@@ -69,8 +71,9 @@ class LinkedNodes {
   /// The beams' force and torque (Links::evaluateBeams, at the step's start,
   /// before hold) join the held forces: bending wires are soft beside their
   /// axial stiffness (a node turns against them in tens of microseconds), so
-  /// they act once per step, as an impulse, like the contacts.
-  void addBeams(const Links& links);
+  /// they act once per step, as an impulse, like the contacts. For nodes
+  /// [k0, k1) (ranges in parallel).
+  void addBeams(const Links& links, std::size_t k0, std::size_t k1);
   /// Each node's turn over the last step (rad), until hold.
   const double* turnX() const { return rx_.data(); }
   const double* turnY() const { return ry_.data(); }
