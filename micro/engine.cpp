@@ -611,16 +611,18 @@ void Engine::advanceLinkedNodes(bool measure) {
       for (const WorkerScratch& s : scratch_)
         energy_.elastic_link += s.link_elastic, energy_.link_plastic += s.link_plastic;
   }
-  // (each node's copies are its own: by ranges of nodes, as the sub-steps)
-  const auto overNodes = [&](const auto& job) {  // job(first node, end)
-    if (node_parts == 1) return job(std::size_t{0}, nn);
+  // The nodes' copies, sums and kicks by ranges of nodes (each node's are
+  // its own).
+  const auto overNodes = [&](const auto& job) {  // job(range, first node, end)
+    if (node_parts == 1) return job(std::size_t{0}, std::size_t{0}, nn);
     parallel(StageProfile::kLinks, [&](int task) {
-      const Range r = evenPart(nn, static_cast<std::size_t>(task), node_parts);
-      job(r.first, r.end);
+      const auto t = static_cast<std::size_t>(task);
+      const Range r = evenPart(nn, t, node_parts);
+      job(t, r.first, r.end);
     });
   };
   const bool rebuilt = rebuilds_ != nodes_rebuilds_;
-  overNodes([&](std::size_t k0, std::size_t k1) {
+  overNodes([&](std::size_t, std::size_t k0, std::size_t k1) {
     nodes_.hold(p_, rebuilt, k0, k1);
     if (links_.hasBeams()) nodes_.addBeams(links_, k0, k1);
   });
@@ -636,22 +638,19 @@ void Engine::advanceLinkedNodes(bool measure) {
       energy_.link_rupture += s.link_rupture;
       link_events_.insert(link_events_.end(), s.link_events.begin(), s.link_events.end());
     }
+    overNodes([&](std::size_t t, std::size_t k0, std::size_t k1) {
+      part_sums[t] = nodes_.advance(links_, k, substeps_, h, gravity_, m, k0, k1);
+    });
     SphereSums s;
-    if (node_parts == 1) {
-      s = nodes_.advance(links_, k, substeps_, h, gravity_, m, 0, nn);
-    } else {
-      parallel(StageProfile::kLinks, [&](int task) {
-        const auto t = static_cast<std::size_t>(task);
-        const Range r = evenPart(nn, t, node_parts);
-        part_sums[t] = nodes_.advance(links_, k, substeps_, h, gravity_, m, r.first, r.end);
-      });
+    if (node_parts == 1)
+      s = part_sums[0];
+    else
       for (const SphereSums& p : part_sums) s.add(p);  // (in part order)
-    }
     nodes_.addDrivenWork(k, substeps_, h, energy_.driven_work);
     sums_.local += s.local, sums_.finite += s.finite, sums_.max_d2 = std::max(sums_.max_d2, s.max_d2);
     if (m) sums_.ke_t += s.ke_t, sums_.ke_r += s.ke_r, sums_.pe += s.pe, sums_.ke_now += s.ke_now;
   }
-  overNodes([&](std::size_t k0, std::size_t k1) { nodes_.store(p_, dt_, k0, k1); });
+  overNodes([&](std::size_t, std::size_t k0, std::size_t k1) { nodes_.store(p_, dt_, k0, k1); });
 }
 
 // ---------------------------------------------------------------------------
