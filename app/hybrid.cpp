@@ -36,9 +36,12 @@ struct Plan {
   bool weight_above = false;   ///< `resolve.above` "weight": an upper plate presses with the cells above, settling
   bool beside_follow = false;  ///< `resolve.beside` "follow": the plates beside come down with their cell, settling
   bool across_gives = false;  ///< `resolve.across` "gives": the plates across x give as their macro cells would, struck
+  bool joints = false;        ///< `resolve.joint` "law": the plates on x faces give as the joint law closes, struck
   std::vector<int> resolved;
   std::vector<StructurePart::Face> faces;
   std::vector<std::size_t> across;  ///< with across "gives": the faces whose plates give (side faces and those under)
+  /// with joint "law": the x faces, and the joint law of the macro cell across each
+  std::vector<std::pair<std::size_t, bridge::JointLawParams>> joint_faces;
   json micro_case;
   std::string micro_file;  ///< names the fine part in messages
 };
@@ -74,6 +77,7 @@ Plan plan(const JsonDocument& doc) {
   p.weight_above = rs.choice("above", {"fixed", "weight"}, "fixed") == "weight";
   p.beside_follow = rs.choice("beside", {"fixed", "follow"}, "fixed") == "follow";
   p.across_gives = rs.choice("across", {"fixed", "gives"}, "fixed") == "gives";
+  p.joints = rs.choice("joint", {"none", "law"}, "none") == "law";
   const fs::path cell_file = absoluteFrom(doc, rs.string("cell"));
   if (p.c.impacts.size() != 1)
     root.fail("impacts", "a hybrid run takes one impact (the fine part is struck once): give `boulder`");
@@ -156,6 +160,21 @@ Plan plan(const JsonDocument& doc) {
       if (f.axis == 1 || (f.axis == 2 && f.side < 0)) f.law = cellAcross(p.structure, f).axial, p.across.push_back(k);
     }
 
+  // With joint "law", in the impact, the plates on the x faces give as the
+  // joint between the resolved cell and the macro cell across closes
+  // (Coupler::closeJoints), by that cell's joint law.
+  if (p.joints)
+    for (std::size_t k = 0; k < p.faces.size(); ++k) {
+      const StructurePart::Face& f = p.faces[k];
+      if (f.axis != 0) continue;
+      const bridge::CellMaterial& m = cellAcross(p.structure, f);
+      if (!m.joint)
+        rs.fail("joint",
+                "\"law\" needs a joint law in the macro cells' material (law.json: materials/<name>/joint; fit it "
+                "with a fit case's \"joint\" from two confined compressions, docs/fitting.md)");
+      p.joint_faces.emplace_back(k, *m.joint);
+    }
+
   // The fine part: micro.structure's keys, the structure's size, back
   // support and boulder, and the aim as the same fraction of the face.
   json boulder = {{"diameter_m", b.diameter_m},
@@ -170,7 +189,7 @@ Plan plan(const JsonDocument& doc) {
       {"rebound_restitution", p.c.run.rebound_restitution}};
   for (const auto& [key, value] : root.raw("resolve").items()) {
     if (key == "cell" || key == "within_m" || key == "depth" || key == "below" || key == "above" || key == "beside" ||
-        key == "across")
+        key == "across" || key == "joint")
       continue;
     if (key == "structure" || key == "boulder")
       rs.fail(key, "the hybrid's structure and boulder are the macro case's: give them there");
@@ -207,6 +226,10 @@ class Coupler {
       const double weight = cellAcross(p.structure, p.faces[k]).mass_kg * p.c.structure.support.gravity_m_s2;
       across_.push_back({k, kAcrossSpeed_m_s / weight});
     }
+    for (const auto& [k, law] : p.joint_faces) {
+      const double weight = cellAcross(p.structure, p.faces[k]).mass_kg * p.c.structure.support.gravity_m_s2;
+      joints_.push_back({k, law, kJointSpeed_m_s / weight});
+    }
   }
 
   /// Engine::WallDriver: the plates' forces onto their nodes, one macro
@@ -229,7 +252,30 @@ class Coupler {
     // (x-only: the node moves along x; the plate with it)
     for (std::size_t k = 0; k < forces.size(); ++k) moves[k] = Vec3(dt * vx[face_node_[k]], 0.0, 0.0);
     giveAcross(dt, forces, moves);
+    closeJoints(dt, forces, moves);
     for (std::size_t k = 0; k < forces.size(); ++k) work_on_fine_J_ -= forces[k].dot(moves[k]);
+  }
+
+  /// With joint "law": each plate on an x face gives, towards the macro
+  /// cell across, as the joint between the two cells closes: a servo, at
+  /// most kJointSpeed_m_s (that speed at a push in excess of that cell's
+  /// weight), while the bodies push the plate with more than the joint law
+  /// carries at its closure so far, and never back (the joint stays
+  /// closed). Its closure starts where the law carries the push at the
+  /// impact's start. The plate's move is the macro node's plus the joint's;
+  /// the work into the joint (joint_J_) is dissipated.
+  void closeJoints(double dt, const std::vector<Vec3>& forces, std::vector<Vec3>& moves) {
+    for (Joint& j : joints_) {
+      const StructurePart::Face& f = faces_[j.face];
+      const double push = f.side * forces[j.face][f.axis];  // (towards the macro cell)
+      if (!joints_started_) j.start_m = bridge::jointClosure(j.law, push);
+      const double carried = bridge::jointForce(j.law, j.start_m + j.closed_m);
+      const double d = dt * std::clamp(j.gain_m_s_N * (push - carried), 0.0, kJointSpeed_m_s);
+      j.closed_m += d;
+      moves[j.face][f.axis] += f.side * d;
+      joint_J_ += push * d;
+    }
+    joints_started_ = true;
   }
 
   /// With across "gives": each plate beside or under a resolved cell moves
@@ -287,7 +333,7 @@ class Coupler {
       if (axial > peak_axial_N_) peak_axial_N_ = axial, at_peak_ = last_force_;
     }
     const macro::Energy& m = model_.energy();
-    residual_J_ = (fine - fine0_) + m.total() + across_J_;
+    residual_J_ = (fine - fine0_) + m.total() + across_J_ + joint_J_;
   }
 
   void archive(bridge::StateArchive& a) {
@@ -301,6 +347,12 @@ class Coupler {
     a("across_moved_m", moved);
     for (std::size_t q = 0; q < across_.size() && q < start.size() && q < moved.size(); ++q)
       across_[q].start_m = start[q], across_[q].moved_m = moved[q];
+    std::vector<double> jstart, jclosed;
+    for (const Joint& j : joints_) jstart.push_back(j.start_m), jclosed.push_back(j.closed_m);
+    a("joint_J", joint_J_), a("joints_started", joints_started_), a("joint_start_m", jstart);
+    a("joint_closed_m", jclosed);
+    for (std::size_t q = 0; q < joints_.size() && q < jstart.size() && q < jclosed.size(); ++q)
+      joints_[q].start_m = jstart[q], joints_[q].closed_m = jclosed[q];
   }
 
   const std::string& failure() const { return failure_; }
@@ -309,6 +361,13 @@ class Coupler {
   std::vector<double> movedAcross() const {
     std::vector<double> out(faces_.size(), NAN);
     for (const Across& a : across_) out[a.face] = a.moved_m;
+    return out;
+  }
+
+  /// How far each x face's joint closed in the impact (m), by face; NAN for the others.
+  std::vector<double> jointClosed() const {
+    std::vector<double> out(faces_.size(), NAN);
+    for (const Joint& j : joints_) out[j.face] = j.closed_m;
     return out;
   }
 
@@ -337,11 +396,12 @@ class Coupler {
 
   json report(double impact_energy_J) const {
     const macro::Energy& m = model_.energy();
-    const double mismatch = work_on_fine_J_ + m.external_work_J + across_J_;
+    const double mismatch = work_on_fine_J_ + m.external_work_J + across_J_ + joint_J_;
     return {
         {"work_on_fine_part_J", work_on_fine_J_},
         {"work_on_macro_part_J", m.external_work_J},
         {"work_into_cells_across_J", across_J_},
+        {"work_into_joints_J", joint_J_},
         {"interface_mismatch_J", mismatch},
         {"macro_energy_J",
          {{"kinetic", m.kinetic_J}, {"elastic", m.elastic_J}, {"plastic", m.plastic_J}, {"friction", m.friction_J}}},
@@ -366,6 +426,19 @@ class Coupler {
   std::vector<Across> across_;
   bool across_started_ = false;
   double across_J_ = 0.0;  // the plates' work into the cells across x, sum F . d
+  /// A plate on an x face whose joint closes (closeJoints): its face, the
+  /// joint law, its servo's gain (m/s per N), the closure at the impact's
+  /// start and since (m).
+  struct Joint {
+    std::size_t face = 0;
+    bridge::JointLawParams law;
+    double gain_m_s_N = 0.0, start_m = 0.0, closed_m = 0.0;
+  };
+  /// (the joints of a struck wall close at up to about 1.3 m/s, bench_struck_cell)
+  static constexpr double kJointSpeed_m_s = 2.0;
+  std::vector<Joint> joints_;
+  bool joints_started_ = false;
+  double joint_J_ = 0.0;  // the plates' work into the joints, sum F . d
   std::vector<Vec3> node_force_;
   std::vector<StructurePart::Face> faces_;
   std::vector<Vec3> last_force_, settled_, at_peak_;  // the plates' forces: last step, settled, at the axial peak
@@ -421,11 +494,12 @@ bridge::RunOutcome run(const JsonDocument& doc, const bridge::RunContext& ctx) {
   h["above"] = p.weight_above ? "weight" : "fixed";
   h["beside"] = p.beside_follow ? "follow" : "fixed";
   h["across"] = p.across_gives ? "gives" : "fixed";
+  h["joint"] = p.joints ? "law" : "none";
   json cells = json::array(), faces = json::array();
   const int nx = p.structure.nx, ny = p.structure.ny;
   for (const int c : p.resolved) cells.push_back({c % nx, (c / nx) % ny, c / (nx * ny)});
   const json forces = coupler->interfaceForces();
-  const std::vector<double> across = coupler->movedAcross();
+  const std::vector<double> across = coupler->movedAcross(), closed = coupler->jointClosed();
   for (std::size_t k = 0; k < p.faces.size(); ++k) {
     const StructurePart::Face& f = p.faces[k];
     json face = {{"cell", {f.cell % nx, (f.cell / nx) % ny, f.cell / (nx * ny)}},
@@ -434,6 +508,7 @@ bridge::RunOutcome run(const JsonDocument& doc, const bridge::RunContext& ctx) {
                  {"macro_node", p.structure.node_of[static_cast<std::size_t>(f.other)]}};
     face.update(forces[k]);
     if (!std::isnan(across[k])) face["moved_across_m"] = across[k];
+    if (!std::isnan(closed[k])) face["joint_closed_m"] = closed[k];
     faces.push_back(face);
   }
   h["resolved_cells"] = cells;
@@ -448,9 +523,10 @@ bridge::RunOutcome run(const JsonDocument& doc, const bridge::RunContext& ctx) {
     << (p.cells_below ? ", and the cells below them" : "") << (p.below_gives ? ", the plates under them giving" : "")
     << (p.weight_above ? ", the weight of the cells above on them" : "")
     << (p.beside_follow ? ", the plates beside coming down with them" : "")
-    << (p.across_gives ? ", the plates across x giving" : "") << "), " << p.faces.size()
-    << " interface plates; energy balance of both parts " << h["balance_rel_error"].get<double>()
-    << ", interface mismatch " << h["interface_mismatch_J"].get<double>() << " J\n";
+    << (p.across_gives ? ", the plates across x giving" : "") << (p.joints ? ", joints closing at the x faces" : "")
+    << "), " << p.faces.size() << " interface plates; energy balance of both parts "
+    << h["balance_rel_error"].get<double>() << ", interface mismatch " << h["interface_mismatch_J"].get<double>()
+    << " J\n";
   out.answer = a.str() + out.answer;
   return out;
 }

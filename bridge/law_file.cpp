@@ -167,6 +167,16 @@ LawFile readLawMaterials(const JsonReader& materials, int version) {
     c.interface.friction = itf.number("friction", Check::NonNegative);
     c.interface.tangential_stiffness_N_m = itf.number("tangential_stiffness_N_m", Check::Positive);
     c.impact = readAxialLaw(m.object("impact"), c.edge_m, version, /*impact=*/true);
+    if (const auto jl = m.optionalObject("joint")) {
+      jl->choice("model", {"power"});
+      JointLawParams j;
+      j.closure_at_1kN_m = jl->number("closure_at_1kN_m", Check::Positive);
+      j.exponent = jl->number("exponent", Check::Positive);
+      c.joint = j;
+      c.joint_info = json::object();
+      if (jl->has("force_range_N")) c.joint_info["force_range_N"] = jl->numbers("force_range_N", Check::NonNegative, 2);
+      if (jl->has("provenance")) c.joint_info["provenance"] = jl->raw("provenance");
+    }
     const JsonReader prov = m.object("provenance");
     prov.choice("status", {"illustrative", "fitted", "measured"});
     c.provenance = m.raw("provenance");
@@ -203,6 +213,13 @@ json toJson(const LawFile& laws) {
     m["interface"] = {{"friction", c.interface.friction},
                       {"tangential_stiffness_N_m", c.interface.tangential_stiffness_N_m}};
     m["impact"] = toJson(c.impact);
+    if (c.joint) {
+      json jl = c.joint_info.is_object() ? c.joint_info : json::object();
+      jl["model"] = "power";
+      jl["closure_at_1kN_m"] = c.joint->closure_at_1kN_m;
+      jl["exponent"] = c.joint->exponent;
+      m["joint"] = jl;
+    }
     m["provenance"] = c.provenance;
     mats[name] = m;
   }

@@ -7,10 +7,12 @@
 #include <filesystem>
 #include <map>
 #include <nlohmann/json.hpp>
+#include <optional>
 #include <string>
 
 #include "bridge/json_reader.hpp"
 #include "bridge/laws/cell_axial_law.hpp"
+#include "bridge/laws/cell_joint_law.hpp"
 
 namespace gabion::bridge {
 
@@ -33,7 +35,9 @@ struct CellMaterial {
   AxialLawParams axial;  ///< confined compression between x-neighbours
   LateralLaw lateral;
   InterfaceLaw interface;
-  AxialLawParams impact;                                 ///< boulder against the front face
+  AxialLawParams impact;                ///< boulder against the front face
+  std::optional<JointLawParams> joint;  ///< two cells pressed together (optional)
+  nlohmann::json joint_info;            ///< the joint's force_range_N and provenance, as read or fitted (written back)
   nlohmann::json provenance = nlohmann::json::object();  ///< what it was fitted from, how, error; "status" is required
 };
 

@@ -13,6 +13,7 @@
 #include "bridge/plot.hpp"
 #include "bridge/units.hpp"
 #include "fitting/case_input.hpp"
+#include "fitting/joint_fit.hpp"
 #include "fitting/sha256.hpp"
 #include "gabion_version.hpp"
 
@@ -115,7 +116,16 @@ struct TestSpec {
   std::string pointer;
 };
 
+/// The joint between two cells (fitting/joint_fit.hpp): a confined
+/// compression of one cell and of a row of them along the same axis.
+struct JointSpec {
+  CurveSource cell, row;
+  int cells_in_series = 2;
+  std::string pointer;
+};
+
 struct FitCase {
+  std::optional<JointSpec> joint;
   std::string material;
   double lockup_strain = bridge::kDefaultLockupStrain;  ///< of the cell edge
   double lockup_ratio = bridge::kDefaultLockupStiffnessRatio;
@@ -258,7 +268,18 @@ FitCase readFitCase(const bridge::JsonDocument& doc) {
     }
     c.tests.push_back(std::move(spec));
   }
-  if (c.tests.empty()) root.failHere("nothing to fit: give at least one of axial, lateral, interface, impact");
+  if (const auto j = root.optionalObject("joint")) {
+    JointSpec spec;
+    spec.pointer = j->pointer();
+    // (the first loading is read from each curve: unloading cycles may be in it)
+    spec.cell = readCurveSource(j->object("cell"), defaultsFor("axial"), 0, dir);
+    spec.row = readCurveSource(j->object("row"), defaultsFor("axial"), 0, dir);
+    spec.cell.request.path = spec.row.request.path = bridge::CurvePath::Cyclic;
+    spec.cells_in_series = static_cast<int>(j->integer("cells_in_series", 2, 2));
+    c.joint = spec;
+  }
+  if (c.tests.empty() && !c.joint)
+    root.failHere("nothing to fit: give at least one of axial, lateral, interface, impact, joint");
 
   const bool complete = c.tests.size() == kTests.size();
   if (!complete && !c.base_law)
@@ -400,6 +421,7 @@ void checkCase(const bridge::JsonDocument& doc) {
     loadGrids(t.curves, c.grid_points);
     loadGrids(t.rate_curves, c.grid_points);
   }
+  if (c.joint) loadCurve(c.joint->cell), loadCurve(c.joint->row);
   if (c.base_law) {
     const auto base = bridge::loadLawFile(*c.base_law);
     if (base.materials.count(c.base_material) == 0)
@@ -548,6 +570,53 @@ bridge::RunOutcome runCase(const bridge::JsonDocument& doc, const bridge::RunCon
     }
   }
 
+  if (c.joint) {
+    const JointSpec& js = *c.joint;
+    JointFit jf;
+    try {
+      jf = fitJoint(loadCurve(js.cell), loadCurve(js.row), js.cells_in_series);
+    } catch (const std::runtime_error& e) {
+      throw bridge::InputError(doc.file(), js.pointer, e.what());
+    }
+    material.joint = jf.law;
+    json entry = {{"model", "power"},
+                  {"closure_at_1kN_m", jf.law.closure_at_1kN_m},
+                  {"exponent", jf.law.exponent},
+                  {"r2_log_log", jf.r2},
+                  {"levels_used", jf.points},
+                  {"levels", jf.force_N.size()},
+                  {"force_range_N", {jf.force_lo_N, jf.force_hi_N}},
+                  {"cells_in_series", js.cells_in_series},
+                  {"inputs",
+                   {{{"role", "cell"}, {"file", js.cell.file.string()}, {"sha256", sha256File(js.cell.file)}},
+                    {{"role", "row"}, {"file", js.row.file.string()}, {"sha256", sha256File(js.row.file)}}}}};
+    material.joint_info = {{"force_range_N", {jf.force_lo_N, jf.force_hi_N}},
+                           {"provenance",
+                            {{"fitted_from", entry["inputs"]},
+                             {"cells_in_series", js.cells_in_series},
+                             {"r2_log_log", jf.r2},
+                             {"method", "row less cells_in_series x cell at each force level, power law in log-log"}}}};
+    results["joint"] = entry;
+    fitted["joint"] = entry;
+    if (c.plots) {
+      bridge::PlotSpec plot;
+      plot.title = "Joint between two cells: closure against force";
+      plot.x_label = "force across the joint (kN)";
+      plot.y_label = "closure of one joint (mm)";
+      bridge::PlotSeries pts{
+          "row less " + std::to_string(js.cells_in_series) + " x cell", {}, {}, bridge::PlotSeries::Style::Markers};
+      bridge::PlotSeries law{"c = c1 (F / 1 kN)^b", {}, {}, bridge::PlotSeries::Style::Line};
+      for (std::size_t k = 0; k < jf.force_N.size(); ++k) {
+        if (std::isfinite(jf.closure_m[k]))
+          pts.x.push_back(1e-3 * jf.force_N[k]), pts.y.push_back(1e3 * jf.closure_m[k]);
+        law.x.push_back(1e-3 * jf.force_N[k]), law.y.push_back(1e3 * bridge::jointClosure(jf.law, jf.force_N[k]));
+      }
+      plot.series = {pts, law};
+      bridge::writePlotPng(ctx.outdir / "fit_joint.png", plot);
+      plots.push_back("fit_joint.png");
+    }
+  }
+
   // A law file is only "fitted" if no part of it is illustrative.
   provenance["status"] = c.tests.size() == kTests.size() || base_status != "illustrative" ? "fitted" : "illustrative";
   provenance["software"] = std::string("gabion ") + gabion::kVersion;
@@ -569,7 +638,20 @@ bridge::RunOutcome runCase(const bridge::JsonDocument& doc, const bridge::RunCon
   bridge::loadLawFile(ctx.outdir / "law.json");
 
   outcome.results["fit"] = results;
-  for (const auto& [name, entry] : results.items()) outcome.answer += "fit: " + describeFit(name, entry) + "\n";
+  for (const auto& [name, entry] : results.items()) {
+    if (name != "joint") {
+      outcome.answer += "fit: " + describeFit(name, entry) + "\n";
+      continue;
+    }
+    std::ostringstream line;
+    line.precision(3);
+    line << "fit: joint (power, R2 log-log " << entry["r2_log_log"].get<double>() << ", "
+         << entry["levels_used"].get<std::size_t>() << " of " << entry["levels"].get<std::size_t>()
+         << " force levels): closure at 1 kN " << 1e3 * entry["closure_at_1kN_m"].get<double>() << " mm, exponent "
+         << entry["exponent"].get<double>() << "; closure at " << 1e-3 * entry["force_range_N"][1].get<double>()
+         << " kN " << 1e3 * bridge::jointClosure(*material.joint, entry["force_range_N"][1].get<double>()) << " mm\n";
+    outcome.answer += line.str();
+  }
   outcome.results["law_file"] = "law.json";
   outcome.results["law_status"] = provenance["status"];
   outcome.results["plots"] = plots;

@@ -14,6 +14,8 @@
 namespace gabion::micro::lab {
 namespace {
 
+constexpr long long kMaxCellsInSeries = 4;
+
 using bridge::Check;
 using bridge::JsonReader;
 
@@ -21,6 +23,8 @@ using bridge::JsonReader;
 // touch both rock and netting.
 struct CompressionCase {
   bool confined = true;  // micro.cc (six walls) or micro.uc (two plates)
+  int axis = 2;          // loading axis: 2 (z, the lid comes down) or 0 (x, the lid pushes along -x)
+  int in_series = 1;     // copies of the cell in a row along the loading axis (a joint between each two)
   LabSetup setup;
   double velocity_m_s = 0.1;      // of the lid
   double strain = 0.15;           // the lid's travel over the sample's height
@@ -46,6 +50,11 @@ CompressionCase parseCase(const bridge::JsonDocument& doc, bool confined) {
           l->fail("unload_at_strain", "must increase, and stay below the final strain " + std::to_string(c.strain));
     }
     c.unload_to = l->number("unload_to_force_fraction", c.unload_to, Check::UnitOpen);
+    c.axis = l->choice("axis", {"z", "x"}, "z") == "x" ? 0 : 2;
+    c.in_series = static_cast<int>(l->integer("cells_in_series", 1, 1));
+    if (c.in_series > kMaxCellsInSeries)
+      l->fail("cells_in_series",
+              "must be <= " + std::to_string(kMaxCellsInSeries) + " (cells in a row along the load)");
   }
   if (const auto q = root.optionalObject("quasi_static")) {
     c.max_kinetic_ratio = q->number("max_kinetic_ratio", c.max_kinetic_ratio, Check::Positive);
@@ -59,38 +68,79 @@ CompressionCase parseCase(const bridge::JsonDocument& doc, bool confined) {
     }
   // Long enough for the loading and each unloading-reloading cycle; the test
   // ends when the lid reaches the final strain. The series every 1 ms.
-  const double travel = 0.55 * c.strain;  // (m, for a cell up to 0.55 m high; longer: give run.duration_s)
+  const double travel = 0.55 * c.in_series * c.strain;  // (m, for cells up to 0.55 m long; longer: give run.duration_s)
   double back = 0.0;
-  for (const double s : c.unload_at) back += 2.0 * 0.55 * s;
+  for (const double s : c.unload_at) back += 2.0 * 0.55 * c.in_series * s;
   c.setup = parseLabSetup(root, 8.0, 1.2 * (travel + back) / c.velocity_m_s, 1e-3);
   return c;
 }
 
-// Where the walls go: the sample's extent, the lid on top.
-Scene buildScene(const CompressionCase& c, const Sample& sample) {
+// The cells the rig holds: the sample, or with cells_in_series n copies of
+// it in a row along the loading axis, one extent apart (the bodies of each
+// just touching the next's, as micro.structure lays its cells out). Its
+// extent is the row's.
+Sample row(const CompressionCase& c, const Sample& sample) {
+  if (c.in_series == 1) return sample;
+  Sample out = sample;
+  Scene& s = out.scene;
+  const Scene& cell = sample.scene;
+  s.spheres.clear(), s.blocks.clear(), s.links.clear();
+  const double pitch = sample.hi[c.axis] - sample.lo[c.axis];
+  for (int k = 0; k < c.in_series; ++k) {
+    const Vec3 shift = k * pitch * Vec3::Unit(c.axis);
+    const std::size_t first = s.spheres.size();
+    for (SphereSpec sp : cell.spheres) sp.center_m += shift, s.spheres.push_back(sp);
+    for (BlockSpec b : cell.blocks) b.position_m += shift, s.blocks.push_back(b);
+    for (LinkSpec l : cell.links) l.a += first, l.b += first, s.links.push_back(l);
+  }
+  out.hi[c.axis] += (c.in_series - 1) * pitch;
+  out.mass_kg *= c.in_series;
+  out.netting_nodes *= static_cast<std::size_t>(c.in_series);
+  return out;
+}
+
+// The rig's walls by their role: the fixed plate facing the lid, the four
+// lateral plates (confined), the lid.
+struct Rig {
+  std::size_t facing = 0, lid = 0;
+  std::vector<std::size_t> sides;
+};
+
+// Where the walls go: the sample's extent, the lid on the loading axis's
+// upper face. Loaded along z: the base faces the lid, and the lateral plates
+// are x_minus, x_plus, y_minus, y_plus. Loaded along x: x_minus faces the
+// lid; the cell stands on the base, under a fixed top (confined), between
+// y_minus and y_plus, the lateral plates (the base and top carry its weight).
+Scene buildScene(const CompressionCase& c, const Sample& sample, Rig* rig = nullptr) {
   Scene s = sample.scene;
+  Rig r;
   const auto plate = [&](const std::string& name, const Vec3& point, const Vec3& normal) {
     s.walls.push_back(fixedWall(name, point, normal, sample.plate_material));
+    return s.walls.size() - 1;
   };
   const Vec3 lo = sample.lo, hi = sample.hi;
-  plate("base", lo, Vec3::UnitZ());
+  r.facing = plate(c.axis == 2 ? "base" : "x_minus", lo, Vec3::Unit(c.axis));
+  if (c.axis == 0) plate("base", lo, Vec3::UnitZ());
   if (c.confined) {
-    plate("x_minus", lo, Vec3::UnitX());
-    plate("x_plus", hi, -Vec3::UnitX());
-    plate("y_minus", lo, Vec3::UnitY());
-    plate("y_plus", hi, -Vec3::UnitY());
+    if (c.axis == 2) r.sides.push_back(plate("x_minus", lo, Vec3::UnitX()));
+    if (c.axis == 2) r.sides.push_back(plate("x_plus", hi, -Vec3::UnitX()));
+    r.sides.push_back(plate("y_minus", lo, Vec3::UnitY()));
+    r.sides.push_back(plate("y_plus", hi, -Vec3::UnitY()));
+    if (c.axis == 0) plate("top", hi, -Vec3::UnitZ());
   }
-  plate("lid", hi, -Vec3::UnitZ());
+  r.lid = plate("lid", hi, -Vec3::Unit(c.axis));
   s.walls.back().program.kind = WallProgram::Kind::Velocity;
-  s.walls.back().program.velocity_m_s = Vec3(0, 0, -c.velocity_m_s);
+  s.walls.back().program.velocity_m_s = -c.velocity_m_s * Vec3::Unit(c.axis);
+  if (rig) *rig = r;
   return s;
 }
 
 // The scene as the test runs it: the rig, and a duration long enough for the
-// loading and each unloading-reloading cycle at the sample's height.
-Scene planScene(const CompressionCase& c, const Sample& sample) {
-  Scene scene = buildScene(c, sample);
-  const double height = sample.hi.z() - sample.lo.z();
+// loading and each unloading-reloading cycle at the sample's length.
+Scene planScene(const CompressionCase& c, const Sample& cell, Rig* rig = nullptr) {
+  const Sample sample = row(c, cell);
+  Scene scene = buildScene(c, sample, rig);
+  const double height = sample.hi[c.axis] - sample.lo[c.axis];
   double travel = c.strain * height;
   for (const double s : c.unload_at) travel += 2.0 * s * height;
   if (!c.setup.duration_given) scene.run.duration_s = 1.2 * travel / c.velocity_m_s;
@@ -102,7 +152,7 @@ void check(const bridge::JsonDocument& doc, bool confined) {
   checkCells(c.setup);
   if (c.setup.cells.front().generate.empty()) {
     const Sample sample = loadSample(c.setup.cells.front().file, c.setup);
-    const Scene s = buildScene(c, sample);
+    const Scene s = planScene(c, sample);
     validateScene(s, doc.file());
     chooseDt(s, criticalTimeStep(s), doc.file());
   }
@@ -153,15 +203,22 @@ CurveShape curveShape(const std::vector<double>& u, const std::vector<double>& f
   return out;
 }
 
-bridge::RunOutcome runOne(const CompressionCase& c, const Sample& sample, const bridge::RunContext& ctx,
+bridge::RunOutcome runOne(const CompressionCase& c, const Sample& cell, const bridge::RunContext& ctx,
                           const std::string& file) {
-  Scene scene = planScene(c, sample);
-  const double height = sample.hi.z() - sample.lo.z();
+  Rig rig;
+  Scene scene = planScene(c, cell, &rig);
+  const Sample sample = row(c, cell);
+  const int ax = c.axis;
+  const double height = sample.hi[ax] - sample.lo[ax];
   const double target = c.strain * height;
-  const std::size_t nwalls = scene.walls.size(), lid = nwalls - 1;
+  const std::size_t lid = rig.lid;
 
   Curves cv;
-  cv.side.resize(4);
+  cv.side.resize(rig.sides.size());
+  std::vector<Vec3> side_normal;
+  std::vector<std::string> side_name;
+  for (const std::size_t w : rig.sides)
+    side_normal.push_back(scene.walls[w].normal), side_name.push_back(scene.walls[w].name);
   struct Cycle {
     double strain, force_N, displacement_m, stiffness_N_m = NAN;
     double u_low = NAN, f_low = NAN;
@@ -172,15 +229,21 @@ bridge::RunOutcome runOne(const CompressionCase& c, const Sample& sample, const 
   SceneRunHooks hooks;
   hooks.label = c.confined ? "micro.cc" : "micro.uc";
   hooks.record = [&](const Engine& e, double) {
-    const double u = sample.hi.z() - e.wallPosition(lid).z();  // (the lid started at the top of the cell)
+    const double u = sample.hi[ax] - e.wallPosition(lid)[ax];  // (the lid started at the sample's upper face)
     cv.time.push_back(e.time());
     cv.displacement.push_back(u);
-    cv.force.push_back(e.wallForce(lid).z());
-    cv.base_force.push_back(-e.wallForce(0).z());
+    cv.force.push_back(e.wallForce(lid)[ax]);
+    cv.base_force.push_back(-e.wallForce(rig.facing)[ax]);
     if (c.confined) {
-      const double f[4] = {-e.wallForce(1).x(), e.wallForce(2).x(), -e.wallForce(3).y(), e.wallForce(4).y()};
-      for (int k = 0; k < 4; ++k) cv.side[static_cast<std::size_t>(k)].push_back(f[k]);
-      cv.lateral.push_back(0.25 * (f[0] + f[1] + f[2] + f[3]));
+      // (a lateral plate's force on it, outwards: its normal points into the sample)
+      double mean = 0.0;
+      for (std::size_t k = 0; k < rig.sides.size(); ++k) {
+        const std::size_t w = rig.sides[k];
+        const double f = -e.wallForce(w).dot(side_normal[k]);
+        cv.side[k].push_back(f);
+        mean += f / static_cast<double>(rig.sides.size());
+      }
+      cv.lateral.push_back(mean);
     }
     cv.kinetic.push_back(e.kineticEnergyNow());
     cv.work.push_back(e.energy().wall_work_J);
@@ -195,14 +258,14 @@ bridge::RunOutcome runOne(const CompressionCase& c, const Sample& sample, const 
       cycles.push_back({c.unload_at[next_cycle], f, u});
       ++next_cycle;
       unloading = true;
-      p.velocity_m_s = Vec3(0, 0, c.velocity_m_s);
+      p.velocity_m_s = c.velocity_m_s * Vec3::Unit(ax);
       e.setWallProgram(lid, p);
     } else if (unloading && f <= c.unload_to * cycles.back().force_N) {
       Cycle& cy = cycles.back();
       cy.u_low = u, cy.f_low = f;
       if (cy.displacement_m > u) cy.stiffness_N_m = (cy.force_N - f) / (cy.displacement_m - u);
       unloading = false;
-      p.velocity_m_s = Vec3(0, 0, -c.velocity_m_s);
+      p.velocity_m_s = -c.velocity_m_s * Vec3::Unit(ax);
       e.setWallProgram(lid, p);
     }
   };
@@ -233,8 +296,8 @@ bridge::RunOutcome runOne(const CompressionCase& c, const Sample& sample, const 
     if (c.confined) {
       h5.write("/curves/lateral/axial_force_N", cv.force, "N");
       h5.write("/curves/lateral/lateral_force_N", cv.lateral, "N");
-      const char* names[4] = {"x_minus", "x_plus", "y_minus", "y_plus"};
-      for (std::size_t k = 0; k < 4; ++k) h5.write(std::string("/curves/lateral/") + names[k] + "_N", cv.side[k], "N");
+      for (std::size_t k = 0; k < cv.side.size(); ++k)
+        h5.write("/curves/lateral/" + side_name[k] + "_N", cv.side[k], "N");
     }
   };
   bridge::RunOutcome out = runScene(std::move(scene), file, ctx, hooks);
@@ -245,8 +308,11 @@ bridge::RunOutcome runOne(const CompressionCase& c, const Sample& sample, const 
   for (std::size_t k = 0; k < cv.kinetic.size(); ++k) qs.add(cv.kinetic[k], cv.work[k]);
   const double ratio = qs.ratio();
   const auto peak = std::max_element(cv.force.begin(), cv.force.end()) - cv.force.begin();
-  r["height_m"] = height;
-  r["width_m"] = {sample.hi.x() - sample.lo.x(), sample.hi.y() - sample.lo.y()};
+  r["loading_axis"] = std::string(1, "xyz"[ax]);
+  r["cells_in_series"] = c.in_series;
+  r["height_m"] = height;  // (along the loading axis)
+  const int across1 = ax == 2 ? 0 : 1, across2 = ax == 2 ? 1 : 2;
+  r["width_m"] = {sample.hi[across1] - sample.lo[across1], sample.hi[across2] - sample.lo[across2]};
   r["mass_kg"] = sample.mass_kg;
   r["velocity_m_s"] = c.velocity_m_s;
   r["peak_force_N"] = cv.force[static_cast<std::size_t>(peak)];

@@ -573,4 +573,71 @@ TEST(HybridStructure, PlatesAcrossXGiveAsTheMacroCellsLaw) {
   EXPECT_NE(refused.output.find("/resolve/across"), std::string::npos) << refused.output;
 }
 
+// A 2 x 1 x 1 wall, its struck cell resolved, the macro cell behind it: with
+// joint "law" the plate between them gives, towards the macro cell, as the
+// joint law closes (closure c1 (F / 1 kN)^b): by what the summary says, more
+// for a softer joint, the work into the joint dissipated so that the
+// interface still balances. With joint "none" nothing closes; "law" without
+// a joint in the law file is refused, naming the field.
+TEST(HybridStructure, PlatesOnXFacesGiveAsTheJointCloses) {
+  const auto dir = scratchDir("hybrid_joint");
+  nlohmann::json laws = smallCellAndLaws(dir);
+  ASSERT_FALSE(laws.is_null());
+  nlohmann::json c = {{"format", "gabion.case/1"},
+                      {"kind", "macro.impact"},
+                      {"law_file", "laws.json"},
+                      {"structure", {{"cells", {2, 1, 1}}, {"material", {{"front", "front"}, {"core", "front"}}}}},
+                      {"boulder", {{"diameter_m", 0.25}, {"density_kg_m3", 2600}, {"velocity_m_s", 8}}},
+                      {"resolve",
+                       {{"cell", "cell/cell.h5"},
+                        {"within_m", 0.0},
+                        {"settle", {{"duration_s", 0.01}, {"until_at_rest", false}}},
+                        {"run", {{"duration_s", 0.02}}}}}};
+  const auto run = [&](double c1_m, const std::string& joint) {
+    const std::string name = joint + "_" + std::to_string(static_cast<long>(1e6 * c1_m));
+    nlohmann::json l = laws;
+    if (c1_m > 0.0)
+      l["materials"]["front"]["joint"] = {{"model", "power"}, {"closure_at_1kN_m", c1_m}, {"exponent", 0.6}};
+    writeFile(dir / (name + "_laws.json"), l.dump());
+    nlohmann::json cs = c;
+    cs["law_file"] = name + "_laws.json";
+    cs["resolve"]["joint"] = joint;
+    writeFile(dir / (name + ".json"), cs.dump());
+    const auto out = runGabion("run -q " + (dir / (name + ".json")).string() + " -o " + (dir / name).string());
+    EXPECT_EQ(out.exit_code, 0) << out.output;
+    return out.exit_code == 0 ? summaryOf(dir / name) : nlohmann::json();
+  };
+  const auto closed = [](const nlohmann::json& s) {
+    double sum = 0.0;
+    for (const auto& f : s["hybrid"]["interfaces"])
+      if (f.contains("joint_closed_m")) sum += f["joint_closed_m"].get<double>();
+    return sum;
+  };
+  const nlohmann::json soft = run(5e-3, "law");
+  ASSERT_TRUE(soft.is_object());
+  const nlohmann::json& h = soft["hybrid"];
+  EXPECT_EQ(h["joint"], "law");
+  EXPECT_GT(closed(soft), 1e-4) << "the struck cell pushed the joint closed";
+  const double into = h["work_into_joints_J"].get<double>();
+  EXPECT_GT(into, 0.0);
+  EXPECT_LT(std::fabs(h["interface_mismatch_J"].get<double>()), 1e-9 * into);
+  EXPECT_LT(std::fabs(h["balance_rel_error"].get<double>()), 0.02);
+  const nlohmann::json stiff = run(5e-5, "law");
+  ASSERT_TRUE(stiff.is_object());
+  EXPECT_LT(closed(stiff), 0.5 * closed(soft)) << "a stiffer joint closes less";
+  EXPECT_GT(closed(stiff), 0.0);
+  const nlohmann::json none = run(5e-3, "none");
+  ASSERT_TRUE(none.is_object());
+  EXPECT_EQ(none["hybrid"]["work_into_joints_J"].get<double>(), 0.0);
+  for (const auto& f : none["hybrid"]["interfaces"]) EXPECT_FALSE(f.contains("joint_closed_m"));
+  nlohmann::json bad = c;
+  bad["law_file"] = "laws_without_joint.json";
+  writeFile(dir / "laws_without_joint.json", laws.dump());
+  bad["resolve"]["joint"] = "law";
+  writeFile(dir / "bad.json", bad.dump());
+  const auto refused = runGabion("check " + (dir / "bad.json").string());
+  EXPECT_EQ(refused.exit_code, 2) << refused.output;
+  EXPECT_NE(refused.output.find("/resolve/joint"), std::string::npos) << refused.output;
+}
+
 }  // namespace

@@ -289,3 +289,30 @@ TEST(LawFile, AxialMomentumFluxReadsBackAndIsRefusedWhereItCannotHold) {
   j["materials"]["front"]["axial"].erase("momentum_flux_kg_m");
   expectRefused(path, j, "/materials/front/axial/momentum_flux_growth_m", "needs momentum_flux_kg_m");
 }
+
+// The joint law (optional): reads back with its range and provenance, is
+// absent where not given, and a bad value or model is named.
+TEST(LawFile, TheJointLawReadsBackAndBadValuesAreNamed) {
+  const std::string path = ::testing::TempDir() + "law_joint.json";
+  LawFile laws = sampleLaws();
+  writeJsonAtomic(path, toJson(laws));
+  EXPECT_FALSE(loadLawFile(path).materials.at("front").joint.has_value());
+  laws.materials["front"].joint = JointLawParams{1.5e-3, 0.61};
+  laws.materials["front"].joint_info = {{"force_range_N", {3e3, 6e4}}, {"provenance", {{"from", "test"}}}};
+  writeJsonAtomic(path, toJson(laws));
+  const CellMaterial back = loadLawFile(path).materials.at("front");
+  ASSERT_TRUE(back.joint.has_value());
+  EXPECT_DOUBLE_EQ(back.joint->closure_at_1kN_m, 1.5e-3);
+  EXPECT_DOUBLE_EQ(back.joint->exponent, 0.61);
+  EXPECT_EQ(back.joint_info["force_range_N"], nlohmann::json({3e3, 6e4}));
+  EXPECT_EQ(back.joint_info["provenance"]["from"], "test");
+  nlohmann::json j = toJson(laws);
+  j["materials"]["front"]["joint"]["exponent"] = -1;
+  expectRefused(path, j, "/materials/front/joint/exponent");
+  j = toJson(laws);
+  j["materials"]["front"]["joint"]["model"] = "table";
+  expectRefused(path, j, "/materials/front/joint/model");
+  j = toJson(laws);
+  j["materials"]["front"]["joint"]["closure"] = 1;
+  expectRefused(path, j, "/materials/front/joint/closure");
+}

@@ -288,5 +288,60 @@ TEST(FitCli, TheAxialMomentumFluxIsFittedFromFastCompressions) {
   EXPECT_NE(e.output.find("/lateral/rate_curves"), std::string::npos) << e.output;
 }
 
+// The joint law through a fit case: the curves of one cell and of a row of
+// two (CSV; the row's two cells with a joint closing as 2 mm (F / 1 kN)^0.6
+// between them) go into the law file with the base law's other laws, its
+// provenance and its figure. A row that is just two cells has no joint to
+// fit: exit 2, naming the field.
+TEST(FitCli, AJointFromTwoCompressionsGoesIntoTheLawFile) {
+  const auto out = testing::scratchDir("fit_cli_joint");
+  const auto write = [&](const std::string& name, double joint_c1_m) {
+    std::ofstream csv(out / name);
+    csv.precision(12);
+    csv << "displacement_m,force_N\n";
+    for (int k = 0; k <= 2000; ++k) {
+      const double f = 60.0 * k, cell = 0.08 * std::pow(f / 6e4, 0.4);
+      csv << 2.0 * cell + joint_c1_m * std::pow(f / 1e3, 0.6) << "," << f << "\n";
+    }
+  };
+  {
+    std::ofstream csv(out / "cell.csv");
+    csv.precision(12);
+    csv << "displacement_m,force_N\n";
+    for (int k = 0; k <= 2000; ++k) csv << 0.08 * std::pow(60.0 * k / 6e4, 0.4) << "," << 60.0 * k << "\n";
+  }
+  write("row.csv", 2e-3);
+  write("row_no_joint.csv", 0.0);
+  json c = {
+      {"format", "gabion.case/1"},
+      {"kind", "fit"},
+      {"material", {{"name", "cell"}}},
+      {"base_law", {{"file", (kCases / "data/fit/illustrative_law.json").string()}, {"material", "limestone_cell"}}},
+      {"joint", {{"cell", {{"file", "cell.csv"}}}, {"row", {{"file", "row.csv"}}}, {"cells_in_series", 2}}}};
+  std::ofstream(out / "case.json") << c.dump(2);
+  const auto r = runGabion("run " + (out / "case.json").string() + " -q -o " + (out / "fit").string());
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  const auto law = bridge::loadLawFile(out / "fit" / "law.json");
+  const auto& m = law.materials.at("cell");
+  ASSERT_TRUE(m.joint.has_value());
+  EXPECT_NEAR(m.joint->closure_at_1kN_m, 2e-3, 1e-3 * 2e-3);
+  EXPECT_NEAR(m.joint->exponent, 0.6, 1e-3);
+  EXPECT_EQ(m.joint_info.at("provenance").at("fitted_from").at(1).at("sha256").get<std::string>().size(), 64u);
+  EXPECT_EQ(m.joint_info.at("force_range_N").at(1).get<double>(), 1.2e5);
+  const auto& base = bridge::loadLawFile(kCases / "data/fit/illustrative_law.json").materials.at("limestone_cell");
+  EXPECT_EQ(m.axial.stiffness_N_m, base.axial.stiffness_N_m) << "the other laws are the base law's";
+  EXPECT_TRUE(fs::exists(out / "fit" / "fit_joint.png"));
+  const json summary = json::parse(std::ifstream(out / "fit" / "summary.json"));
+  EXPECT_GT(summary.at("fit").at("joint").at("r2_log_log").get<double>(), 0.999);
+  EXPECT_NE(r.output.find("fit: joint"), std::string::npos) << r.output;
+
+  c["joint"]["row"]["file"] = "row_no_joint.csv";
+  std::ofstream(out / "bad.json") << c.dump(2);
+  const auto bad = runGabion("run " + (out / "bad.json").string() + " -q -o " + (out / "bad").string());
+  EXPECT_EQ(bad.exit_code, 2) << bad.output;
+  EXPECT_NE(bad.output.find("/joint"), std::string::npos) << bad.output;
+  EXPECT_NE(bad.output.find("no joint"), std::string::npos) << bad.output;
+}
+
 }  // namespace
 }  // namespace gabion::fitting

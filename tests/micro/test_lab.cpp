@@ -243,6 +243,49 @@ TEST(MicroLab, TheFourTestsRunOnASmallCellAndKeepTheirBalances) {
   EXPECT_GT(m["impact"]["stiffness_N_m"].get<double>(), 0.0);
 }
 
+// CC along x of a row of two cells (loading.axis "x", cells_in_series 2):
+// the lid pushes along -x through both; the row is twice the cell's extent
+// along x and holds twice its spheres; with frictionless plates and gravity
+// across the load, the plate facing the lid carries the lid's force (to
+// within the cells' inertia); the summary says how it was loaded. Bad
+// values are named.
+TEST(MicroLab, ACompressionAlongXOfARowOfCells) {
+  const auto dir = scratchDir("lab_row");
+  writeFile(dir / "cell.json", smallCell());
+  ASSERT_EQ(runGabion("run -q " + (dir / "cell.json").string() + " -o " + (dir / "cell").string()).exit_code, 0);
+  const auto run = [&](const std::string& name, int n) {
+    writeFile(
+        dir / (name + ".json"),
+        labCase("micro.cc", R"(, "loading": {"velocity_m_s": 0.1, "strain": 0.05, "axis": "x", "cells_in_series": )" +
+                                std::to_string(n) + "}"));
+    const auto r = runGabion("run -q " + (dir / (name + ".json")).string() + " -o " + (dir / name).string());
+    EXPECT_EQ(r.exit_code, 0) << r.output;
+    return r.exit_code == 0 ? summaryOf(dir / name) : nlohmann::json();
+  };
+  const nlohmann::json one = run("one", 1), row = run("row", 2);
+  ASSERT_TRUE(one.is_object() && row.is_object());
+  EXPECT_EQ(row["loading_axis"], "x");
+  EXPECT_EQ(row["cells_in_series"], 2);
+  EXPECT_NEAR(row["height_m"].get<double>(), 2.0 * one["height_m"].get<double>(), 1e-12);
+  EXPECT_EQ(row["width_m"], one["width_m"]);
+  EXPECT_EQ(row["spheres"].get<int>(), 2 * one["spheres"].get<int>());
+  EXPECT_NEAR(row["mass_kg"].get<double>(), 2.0 * one["mass_kg"].get<double>(), 1e-9);
+  EXPECT_TRUE(row["reached_strain"].get<bool>());
+  EXPECT_LT(std::fabs(row["energy"]["balance_rel_error"].get<double>()), 0.01);
+  const gabion::bridge::H5Reader h(dir / "row" / "result.h5");
+  const auto lid = h.read("/curves/axial/force_N"), facing = h.read("/curves/axial/base_force_N");
+  EXPECT_GT(lid.back(), 0.0);
+  EXPECT_NEAR(facing.back(), lid.back(), 0.05 * lid.back());
+  EXPECT_EQ(h.read("/curves/lateral/y_minus_N").size(), lid.size());
+  for (const auto& [loading, field] : {std::make_pair(R"({"axis": "y"})", "/loading/axis"),
+                                       std::make_pair(R"({"cells_in_series": 5})", "/loading/cells_in_series")}) {
+    writeFile(dir / "bad.json", labCase("micro.cc", std::string(R"(, "loading": )") + loading));
+    const auto bad = runGabion("check " + (dir / "bad.json").string());
+    EXPECT_EQ(bad.exit_code, 2) << bad.output;
+    EXPECT_NE(bad.output.find(field), std::string::npos) << bad.output;
+  }
+}
+
 // The paper's observations that a small cell can check (docs/validation.md
 // shows them on the default cell): the F_lim cap on the rock's own contacts
 // yields and weakens the CC response (Fig. 8); a rock of higher friction

@@ -1,0 +1,89 @@
+#!/usr/bin/env bash
+# The joint between two cells (docs/fitting.md, The joint between two cells;
+# docs/resolved.md, Where the struck cell's move is lost), on the pipeline's
+# cell and law:
+#   OUT/cc_x_1, OUT/cc_x_2      the cell in confined compression along x, alone
+#                               and in a row of two (micro.cc, loading.axis "x",
+#                               loading.cells_in_series 1 and 2);
+#   OUT/uc_x_1, OUT/uc_x_2      the same unconfined (micro.uc), for comparison;
+#   OUT/fit                     the joint law fitted from the CC pair (a fit
+#                               case's "joint"), added to the pipeline's law:
+#                               OUT/fit/law.json;
+#   OUT/fit_uc                  the same from the UC pair;
+#   OUT/law_plastic_joint.json  that law with plastic densification;
+#   OUT/hybrid_joint_0.25, OUT/hybrid_plastic_joint_0.25,
+#   OUT/hybrid_plastic_joint_across_0.25
+#                               bench/resolved/run.sh's 4-cell hybrid at 10 m/s
+#                               on the centre with resolve.joint "law", with
+#                               plastic densification too, and with the plates
+#                               across x giving too.
+#   bench/resolved/joint.sh [--out DIR] [--threads N]
+# About 10 minutes on 2 cores. Needs the pipeline's results (README, command
+# 1) and bench/resolved/run.sh's centre_10_m_s (its hybrid_1/case.json).
+# A run whose summary.json exists is not run again (delete it to rerun).
+set -euo pipefail
+here=$(cd "$(dirname "$0")" && pwd)
+root=$(cd "$here/../.." && pwd)
+out=$root/results/joint threads=2
+while [ $# -gt 0 ]; do
+  case $1 in
+    --out) out=$2; shift 2 ;;
+    --threads) threads=$2; shift 2 ;;
+    *) echo "unknown option $1" >&2; exit 2 ;;
+  esac
+done
+. "$here/common.sh"
+hybrid=$root/results/speed_error/centre_10_m_s/hybrid_1/case.json
+[ -f "$hybrid" ] || { echo "no $hybrid: run bench/resolved/run.sh first" >&2; exit 2; }
+for n in 1 2; do
+  run_once "cc_x_$n" "$root/results/pipeline/2_cc/case.json" --set loading.axis=x \
+    --set loading.cells_in_series=$n --set loading.strain=0.15 --set 'loading.unload_at_strain=[]'
+  run_once "uc_x_$n" "$root/results/pipeline/2_uc/case.json" --set loading.axis=x \
+    --set loading.cells_in_series=$n --set loading.strain=0.2
+done
+# The fit cases: the joint from each pair, the pipeline's other laws kept.
+python3 - "$out" "$root/results/pipeline/law.json" <<'PY'
+import json, sys
+out, law = sys.argv[1], sys.argv[2]
+for name, pair, group in (("fit", "cc", "axial"), ("fit_uc", "uc", "uc")):
+    curve = lambda n: {"file": f"{pair}_x_{n}/result.h5", "x_dataset": f"/curves/{group}/displacement_m",
+                       "y_dataset": f"/curves/{group}/force_N"}
+    json.dump({"format": "gabion.case/1", "kind": "fit",
+               "description": f"the joint between two cells from {pair.upper()} along x of one cell and a row of two",
+               "material": {"name": "front"}, "base_law": {"file": law, "material": "front"},
+               "joint": {"cell": curve(1), "row": curve(2), "cells_in_series": 2}},
+              open(f"{out}/{name}.json", "w"), indent=1)
+PY
+run_once fit "$out/fit.json"
+run_once fit_uc "$out/fit_uc.json"
+python3 - "$out" <<'PY'
+import json, sys
+out = sys.argv[1]
+law = json.load(open(f"{out}/fit/law.json"))
+law["materials"]["front"]["axial"]["densification"] = "plastic"
+json.dump(law, open(f"{out}/law_plastic_joint.json", "w"), indent=1)
+PY
+run_once hybrid_joint_0.25 "$hybrid" --law "$out/fit/law.json" --set resolve.joint=law
+run_once hybrid_plastic_joint_0.25 "$hybrid" --law "$out/law_plastic_joint.json" --set resolve.joint=law
+run_once hybrid_plastic_joint_across_0.25 "$hybrid" --law "$out/law_plastic_joint.json" --set resolve.joint=law \
+  --set resolve.across=gives
+for f in fit fit_uc; do grep "^fit: joint" "$out/$f.log" || true; done
+python3 - "$root" "$out" <<'PY'
+import json, sys
+root, out = sys.argv[1], sys.argv[2]
+wall = json.load(open(f"{root}/results/speed_error/centre_10_m_s/resolved/summary.json"))
+keys = ["peak_force_N", "max_penetration_m", "max_back_face_displacement_m"]
+print("| 4-cell hybrid, 10 m/s on the centre | peak force | penetration | back face | wall time s |")
+print("|---|---|---|---|---|")
+for label, d in (("as before", f"{root}/results/speed_error/centre_10_m_s/hybrid_1"),
+                 ("plastic densification", f"{out}/plastic_densification_0.25"),
+                 ("joint", f"{out}/hybrid_joint_0.25"),
+                 ("plastic densification, joint", f"{out}/hybrid_plastic_joint_0.25"),
+                 ("plastic densification, joint, plates across x giving", f"{out}/hybrid_plastic_joint_across_0.25")):
+    try:
+        s = json.load(open(f"{d}/summary.json"))
+    except OSError:
+        continue
+    err = " | ".join(f"{100 * (s[k] / wall[k] - 1):+.1f} %" for k in keys)
+    print(f"| {label} | {err} | {s['wall_time_s']:.0f} |")
+PY
