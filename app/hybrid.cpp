@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 #include <filesystem>
+#include <functional>
 #include <memory>
 #include <sstream>
 
@@ -201,6 +202,39 @@ Plan plan(const JsonDocument& doc) {
 
 /// The macro part in motion, stepped by the fine engine's wall driver.
 class Coupler {
+  /// A plate that gives (give()): its face, its law's loading curve (force,
+  /// N, at a move, m) and that curve's inverse, its servo's gain (m/s per N) and top speed, where
+  /// the curve stood at the impact's start and how far the plate has moved
+  /// since (m).
+  struct GivingPlate {
+    std::size_t face = 0;
+    std::function<double(double)> force_at;
+    std::function<double(double)> carrying;  ///< its inverse: the move (m) at which it first carries a force (N)
+    double gain_m_s_N = 0.0, top_m_s = 0.0, start_m = 0.0, moved_m = 0.0;
+  };
+  /// One kind of giving plates, with the work into their laws (J).
+  struct Giving {
+    std::vector<GivingPlate> plates;
+    bool started = false;
+    double work_J = 0.0;  // the plates' work into the laws, sum F . d
+    std::vector<double> movedByFace(std::size_t n) const {
+      std::vector<double> out(n, NAN);
+      for (const GivingPlate& q : plates) out[q.face] = q.moved_m;
+      return out;
+    }
+    void archive(bridge::StateArchive& a, const std::string& name) {
+      std::vector<double> start, moved;
+      for (const GivingPlate& q : plates) start.push_back(q.start_m), moved.push_back(q.moved_m);
+      a(name + "_J", work_J), a(name + "_started", started), a(name + "_start_m", start);
+      a(name + "_moved_m", moved);
+      for (std::size_t k = 0; k < plates.size() && k < start.size() && k < moved.size(); ++k)
+        plates[k].start_m = start[k], plates[k].moved_m = moved[k];
+    }
+  };
+  static constexpr double kAcrossSpeed_m_s = 0.5;  // (as the plates that give while the part settles)
+  /// (the joints of a struck wall close at up to about 1.3 m/s, bench_struck_cell)
+  static constexpr double kJointSpeed_m_s = 2.0;
+
  public:
   explicit Coupler(const Plan& p)
       : model_(p.structure, p.c.run.kinematics), faces_(p.faces), critical_s_(model_.criticalTimeStep()) {
@@ -222,14 +256,19 @@ class Coupler {
       back_centre_.push_back(whole && p.c.structure.support.fixed_back ? 0.5 : 1.0);
     }
     node_force_.assign(p.structure.nodeCount(), Vec3::Zero());
+    const auto weightAcross = [&](std::size_t k) {
+      return cellAcross(p.structure, p.faces[k]).mass_kg * p.c.structure.support.gravity_m_s2;
+    };
     for (const std::size_t k : p.across) {
-      const double weight = cellAcross(p.structure, p.faces[k]).mass_kg * p.c.structure.support.gravity_m_s2;
-      across_.push_back({k, kAcrossSpeed_m_s / weight});
+      const bridge::AxialLawParams law = p.faces[k].law;
+      const auto at = [law](double u) { return bridge::axialResponse(law, u, 0.0).force_N; };
+      across_.plates.push_back(
+          {k, at, [at](double f) { return carrying(at, f); }, kAcrossSpeed_m_s / weightAcross(k), kAcrossSpeed_m_s});
     }
-    for (const auto& [k, law] : p.joint_faces) {
-      const double weight = cellAcross(p.structure, p.faces[k]).mass_kg * p.c.structure.support.gravity_m_s2;
-      joints_.push_back({k, law, kJointSpeed_m_s / weight});
-    }
+    for (const auto& [k, law] : p.joint_faces)
+      joints_.plates.push_back({k, [law = law](double c) { return bridge::jointForce(law, c); },
+                                [law = law](double f) { return bridge::jointClosure(law, f); },
+                                kJointSpeed_m_s / weightAcross(k), kJointSpeed_m_s});
   }
 
   /// Engine::WallDriver: the plates' forces onto their nodes, one macro
@@ -251,61 +290,39 @@ class Coupler {
     const std::vector<double>& vx = model_.vx();
     // (x-only: the node moves along x; the plate with it)
     for (std::size_t k = 0; k < forces.size(); ++k) moves[k] = Vec3(dt * vx[face_node_[k]], 0.0, 0.0);
-    giveAcross(dt, forces, moves);
-    closeJoints(dt, forces, moves);
+    give(across_, dt, forces, moves);
+    give(joints_, dt, forces, moves);
     for (std::size_t k = 0; k < forces.size(); ++k) work_on_fine_J_ -= forces[k].dot(moves[k]);
   }
 
-  /// With joint "law": each plate on an x face gives, towards the macro
-  /// cell across, as the joint between the two cells closes: a servo, at
-  /// most kJointSpeed_m_s (that speed at a push in excess of that cell's
-  /// weight), while the bodies push the plate with more than the joint law
-  /// carries at its closure so far, and never back (the joint stays
-  /// closed). Its closure starts where the law carries the push at the
-  /// impact's start. The plate's move is the macro node's plus the joint's;
-  /// the work into the joint (joint_J_) is dissipated.
-  void closeJoints(double dt, const std::vector<Vec3>& forces, std::vector<Vec3>& moves) {
-    for (Joint& j : joints_) {
-      const StructurePart::Face& f = faces_[j.face];
-      const double push = f.side * forces[j.face][f.axis];  // (towards the macro cell)
-      if (!joints_started_) j.start_m = bridge::jointClosure(j.law, push);
-      const double carried = bridge::jointForce(j.law, j.start_m + j.closed_m);
-      const double d = dt * std::clamp(j.gain_m_s_N * (push - carried), 0.0, kJointSpeed_m_s);
-      j.closed_m += d;
-      moves[j.face][f.axis] += f.side * d;
-      joint_J_ += push * d;
+  /// Plates that give (across "gives": those beside and under a resolved
+  /// cell, by the macro cell across's axial law; joint "law": those on its
+  /// x faces, by the joint law, the joint between the two cells closing):
+  /// each moves along its normal, away from the resolved cell, as the
+  /// law's loading curve allows: a servo, at most its top speed (that speed
+  /// at a push in excess of the macro cell's weight), while the bodies push
+  /// the plate with more than the curve carries at its move so far, and
+  /// never back. The curve starts where it carries the push at the impact's
+  /// start (the weight on the plates under, next to nothing on the others).
+  /// The macro node does not move with it: the work into the law
+  /// (g.work_J) is dissipated.
+  void give(Giving& g, double dt, const std::vector<Vec3>& forces, std::vector<Vec3>& moves) {
+    for (GivingPlate& q : g.plates) {
+      const StructurePart::Face& f = faces_[q.face];
+      const double push = f.side * forces[q.face][f.axis];  // (towards the macro cell)
+      if (!g.started) q.start_m = q.carrying(push);
+      const double carried = q.force_at(q.start_m + q.moved_m);
+      const double d = dt * std::clamp(q.gain_m_s_N * (push - carried), 0.0, q.top_m_s);
+      q.moved_m += d;
+      moves[q.face][f.axis] += f.side * d;
+      g.work_J += push * d;
     }
-    joints_started_ = true;
+    g.started = true;
   }
 
-  /// With across "gives": each plate beside or under a resolved cell moves
-  /// away from it, along its normal, as the macro cell across would be
-  /// shortened by the push: a servo, at most kAcrossSpeed_m_s (that speed
-  /// at a push in excess of that cell's weight), while the bodies push the
-  /// plate with more than the cell's axial law gives on its loading curve
-  /// at its shortening so far, and never back. Its shortening starts where
-  /// the law carries the push at the impact's start (the weight on the
-  /// plates under, next to nothing on those beside). The macro node does
-  /// not move across x: that cell's shortening across is its own, and the
-  /// work into it (across_J_) is dissipated.
-  void giveAcross(double dt, const std::vector<Vec3>& forces, std::vector<Vec3>& moves) {
-    for (Across& a : across_) {
-      const StructurePart::Face& f = faces_[a.face];
-      const double push = f.side * forces[a.face][f.axis];  // (towards the macro cell)
-      if (!across_started_) a.start_m = shorteningCarrying(f.law, push);
-      const double law = bridge::axialResponse(f.law, a.start_m + a.moved_m, 0.0).force_N;
-      const double d = dt * std::clamp(a.gain_m_s_N * (push - law), 0.0, kAcrossSpeed_m_s);
-      a.moved_m += d;
-      moves[a.face][f.axis] += f.side * d;
-      across_J_ += push * d;
-    }
-    across_started_ = true;
-  }
-
-  /// The shortening at which `law`'s loading curve first carries `force`
-  /// (bisection: the curve does not fall), 0 for none.
-  static double shorteningCarrying(const bridge::AxialLawParams& law, double force) {
-    const auto at = [&law](double u) { return bridge::axialResponse(law, u, 0.0).force_N; };
+  /// Where a loading curve first carries `force` (bisection: the curve does
+  /// not fall), 0 for none: the inverse of a law that has none in closed form.
+  static double carrying(const std::function<double(double)>& at, double force) {
     if (!(force > at(0.0))) return 0.0;
     double lo = 0.0, hi = 1e-3;
     while (at(hi) < force && hi < 1.0) lo = hi, hi *= 2.0;
@@ -333,7 +350,7 @@ class Coupler {
       if (axial > peak_axial_N_) peak_axial_N_ = axial, at_peak_ = last_force_;
     }
     const macro::Energy& m = model_.energy();
-    residual_J_ = (fine - fine0_) + m.total() + across_J_ + joint_J_;
+    residual_J_ = (fine - fine0_) + m.total() + across_.work_J + joints_.work_J;
   }
 
   void archive(bridge::StateArchive& a) {
@@ -341,35 +358,16 @@ class Coupler {
     a("work_on_fine_J", work_on_fine_J_), a("fine0", fine0_), a("started", started_), a("residual_J", residual_J_);
     a("last_force", last_force_), a("settled", settled_), a("at_peak", at_peak_), a("peak_axial_N", peak_axial_N_);
     a("failure", failure_);
-    std::vector<double> start, moved;
-    for (const Across& q : across_) start.push_back(q.start_m), moved.push_back(q.moved_m);
-    a("across_J", across_J_), a("across_started", across_started_), a("across_start_m", start);
-    a("across_moved_m", moved);
-    for (std::size_t q = 0; q < across_.size() && q < start.size() && q < moved.size(); ++q)
-      across_[q].start_m = start[q], across_[q].moved_m = moved[q];
-    std::vector<double> jstart, jclosed;
-    for (const Joint& j : joints_) jstart.push_back(j.start_m), jclosed.push_back(j.closed_m);
-    a("joint_J", joint_J_), a("joints_started", joints_started_), a("joint_start_m", jstart);
-    a("joint_closed_m", jclosed);
-    for (std::size_t q = 0; q < joints_.size() && q < jstart.size() && q < jclosed.size(); ++q)
-      joints_[q].start_m = jstart[q], joints_[q].closed_m = jclosed[q];
+    across_.archive(a, "across");
+    joints_.archive(a, "joint");
   }
 
   const std::string& failure() const { return failure_; }
 
   /// How far each plate that gives across x has moved (m), by face; NAN for the others.
-  std::vector<double> movedAcross() const {
-    std::vector<double> out(faces_.size(), NAN);
-    for (const Across& a : across_) out[a.face] = a.moved_m;
-    return out;
-  }
-
+  std::vector<double> movedAcross() const { return across_.movedByFace(faces_.size()); }
   /// How far each x face's joint closed in the impact (m), by face; NAN for the others.
-  std::vector<double> jointClosed() const {
-    std::vector<double> out(faces_.size(), NAN);
-    for (const Joint& j : joints_) out[j.face] = j.closed_m;
-    return out;
-  }
+  std::vector<double> jointClosed() const { return joints_.movedByFace(faces_.size()); }
 
   /// Each plate's force settled and when the x faces carried most, and
   /// for a lateral face of a cell with an x face behind it, its normal
@@ -396,12 +394,12 @@ class Coupler {
 
   json report(double impact_energy_J) const {
     const macro::Energy& m = model_.energy();
-    const double mismatch = work_on_fine_J_ + m.external_work_J + across_J_ + joint_J_;
+    const double mismatch = work_on_fine_J_ + m.external_work_J + across_.work_J + joints_.work_J;
     return {
         {"work_on_fine_part_J", work_on_fine_J_},
         {"work_on_macro_part_J", m.external_work_J},
-        {"work_into_cells_across_J", across_J_},
-        {"work_into_joints_J", joint_J_},
+        {"work_into_cells_across_J", across_.work_J},
+        {"work_into_joints_J", joints_.work_J},
         {"interface_mismatch_J", mismatch},
         {"macro_energy_J",
          {{"kinetic", m.kinetic_J}, {"elastic", m.elastic_J}, {"plastic", m.plastic_J}, {"friction", m.friction_J}}},
@@ -415,30 +413,7 @@ class Coupler {
   macro::Model model_;
   std::vector<std::size_t> face_node_, front_, back_;
   std::vector<double> back_centre_;  ///< per back node: its cell centre's displacement over the node's
-  /// A plate that gives across x (giveAcross): its face, its servo's gain
-  /// (m/s per N), the macro cell's shortening at the impact's start and
-  /// the plate's move since (m).
-  struct Across {
-    std::size_t face = 0;
-    double gain_m_s_N = 0.0, start_m = 0.0, moved_m = 0.0;
-  };
-  static constexpr double kAcrossSpeed_m_s = 0.5;  // (as the plates that give while the part settles)
-  std::vector<Across> across_;
-  bool across_started_ = false;
-  double across_J_ = 0.0;  // the plates' work into the cells across x, sum F . d
-  /// A plate on an x face whose joint closes (closeJoints): its face, the
-  /// joint law, its servo's gain (m/s per N), the closure at the impact's
-  /// start and since (m).
-  struct Joint {
-    std::size_t face = 0;
-    bridge::JointLawParams law;
-    double gain_m_s_N = 0.0, start_m = 0.0, closed_m = 0.0;
-  };
-  /// (the joints of a struck wall close at up to about 1.3 m/s, bench_struck_cell)
-  static constexpr double kJointSpeed_m_s = 2.0;
-  std::vector<Joint> joints_;
-  bool joints_started_ = false;
-  double joint_J_ = 0.0;  // the plates' work into the joints, sum F . d
+  Giving across_, joints_;           // across "gives", joint "law"
   std::vector<Vec3> node_force_;
   std::vector<StructurePart::Face> faces_;
   std::vector<Vec3> last_force_, settled_, at_peak_;  // the plates' forces: last step, settled, at the axial peak
