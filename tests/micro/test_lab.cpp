@@ -246,9 +246,10 @@ TEST(MicroLab, TheFourTestsRunOnASmallCellAndKeepTheirBalances) {
 // CC along x of a row of two cells (loading.axis "x", cells_in_series 2):
 // the lid pushes along -x through both; the row is twice the cell's extent
 // along x and holds twice its spheres; with frictionless plates and gravity
-// across the load, the plate facing the lid carries the lid's force (to
-// within the cells' inertia); the summary says how it was loaded. Bad
-// values are named.
+// across the load, no other plate carries a force along x and the plate
+// facing the lid carries the lid's force (on average over the end of the
+// loading, to within the cells' inertia); the summary says how it was
+// loaded. Bad values are named.
 TEST(MicroLab, ACompressionAlongXOfARowOfCells) {
   const auto dir = scratchDir("lab_row");
   writeFile(dir / "cell.json", smallCell());
@@ -274,8 +275,21 @@ TEST(MicroLab, ACompressionAlongXOfARowOfCells) {
   EXPECT_LT(std::fabs(row["energy"]["balance_rel_error"].get<double>()), 0.01);
   const gabion::bridge::H5Reader h(dir / "row" / "result.h5");
   const auto lid = h.read("/curves/axial/force_N"), facing = h.read("/curves/axial/base_force_N");
-  EXPECT_GT(lid.back(), 0.0);
-  EXPECT_NEAR(facing.back(), lid.back(), 0.05 * lid.back());
+  // The other plates are frictionless: none carries a force along x, so
+  // the lid and the plate facing it differ only by the row's rate of change
+  // of momentum. Over the last fifth of this short loading that is 5 to 6 %
+  // (the cells, loaded from their files, still settle: kinetic/work 0.3);
+  // a wrong plate or axis would give nothing like the lid's force.
+  for (const char* wall : {"base", "top", "y_minus", "y_plus"}) {
+    const auto f = h.read(std::string("/series/walls/") + wall + "/force_N");
+    ASSERT_FALSE(f.empty()) << wall;
+    for (std::size_t k = 0; k < f.size(); k += 3) EXPECT_EQ(f[k], 0.0) << wall << " sample " << k / 3;
+  }
+  const std::size_t from = lid.size() - lid.size() / 5;
+  double lid_mean = 0.0, facing_mean = 0.0;
+  for (std::size_t k = from; k < lid.size(); ++k) lid_mean += lid[k], facing_mean += facing[k];
+  EXPECT_GT(lid_mean, 0.0);
+  EXPECT_NEAR(facing_mean, lid_mean, 0.12 * lid_mean);
   EXPECT_EQ(h.read("/curves/lateral/y_minus_N").size(), lid.size());
   for (const auto& [loading, field] : {std::make_pair(R"({"axis": "y"})", "/loading/axis"),
                                        std::make_pair(R"({"cells_in_series": 5})", "/loading/cells_in_series")}) {
