@@ -19,6 +19,7 @@
 #include "bridge/output.hpp"
 #include "bridge/plot.hpp"
 #include "bridge/units.hpp"
+#include "fitting/joint_fit.hpp"
 #include "fitting/law_fit.hpp"
 #include "fitting/sha256.hpp"
 #include "gabion_version.hpp"
@@ -50,6 +51,10 @@ struct PipelineCase {
   /// Plate speeds of the confined compressions the axial law's momentum
   /// flux is fitted on (empty: none, the law has no flux).
   std::vector<double> cc_rate_velocities_m_s;
+  /// Cells in the row whose confined compression along x, beside one
+  /// cell's, gives the joint law (0: none); and those compressions' strain.
+  int joint_cells_in_series = 0;
+  double joint_strain = 0.15;
   fs::path structure_case;
   std::string material = "front";
   std::vector<double> velocities_m_s;
@@ -80,6 +85,12 @@ PipelineCase readPipeline(const JsonDocument& doc) {
   c.uci_velocities_m_s = root.numbers("uci_velocities_m_s", Check::Positive, 1);
   if (root.has("cc_rate_velocities_m_s"))
     c.cc_rate_velocities_m_s = root.numbers("cc_rate_velocities_m_s", Check::Positive, 1);
+  if (const auto j = root.optionalObject("joint")) {
+    c.joint_cells_in_series = static_cast<int>(j->integer("cells_in_series", 2, 2));
+    if (c.joint_cells_in_series > 4) j->fail("cells_in_series", "must be <= 4 (cells in a row along the load)");
+    c.joint_strain = j->number("strain", c.joint_strain, Check::Positive);
+    if (c.joint_strain > 0.6) j->fail("strain", "must be <= 0.6 (the lid's travel over the row's length)");
+  }
   const JsonReader st = root.object("structure");
   c.structure_case = relative(doc, st.string("case"));
   c.material = st.string("material", c.material);
@@ -380,7 +391,7 @@ json around(double x, double lo, double hi) {
 // spanning decades around the scales the tests measured, the lock-up from the
 // cell's porosity.
 json fitCase(const PipelineCase& c, const std::map<std::string, StageResult>& lab, const std::vector<StageResult>& rate,
-             double edge_m, double mass_kg, double porosity) {
+             const std::vector<StageResult>& joint, double edge_m, double mass_kg, double porosity) {
   auto curves = [&](const std::string& test, bool cyclic) {
     json list = json::array();
     for (const auto& [file, label] : labResults(lab.at(test))) {
@@ -430,6 +441,15 @@ json fitCase(const PipelineCase& c, const std::map<std::string, StageResult>& la
     for (const StageResult& r : rate)
       for (const auto& [file, label] : labResults(r)) list.push_back({{"file", fs::absolute(file).string()}});
     out["axial"]["rate_curves"] = list;
+  }
+  // The compressions along x of one cell and of a row: the joint law
+  // (docs/fitting.md), from the first replicate's pair.
+  if (joint.size() == 2) {
+    const auto first = [](const StageResult& st) {
+      const auto files = labResults(st);
+      return files.empty() ? json() : json{{"file", fs::absolute(files.front().first).string()}, {"path", "cyclic"}};
+    };
+    out["joint"] = {{"cell", first(joint[0])}, {"row", first(joint[1])}, {"cells_in_series", c.joint_cells_in_series}};
   }
   return out;
 }
@@ -573,8 +593,9 @@ bridge::RunOutcome runStages(const JsonDocument& doc, const bridge::RunContext& 
   const fs::path out = ctx.outdir;
   StageClock clock;
   clock.total = (c.cell_is_file ? 0 : c.replicates) + static_cast<int>(kTests.size()) +
-                static_cast<int>(c.cc_rate_velocities_m_s.size()) + 1 + static_cast<int>(c.velocities_m_s.size()) +
-                (c.sweep_case ? 1 : 0) + (c.capacity_case ? 1 : 0) + (c.design_case ? 1 : 0);
+                static_cast<int>(c.cc_rate_velocities_m_s.size()) + (c.joint_cells_in_series > 0 ? 2 : 0) + 1 +
+                static_cast<int>(c.velocities_m_s.size()) + (c.sweep_case ? 1 : 0) + (c.capacity_case ? 1 : 0) +
+                (c.design_case ? 1 : 0);
 
   // 1. The cell(s): generated from the micro.cell case (consecutive seeds for
   //    replicates), or the cell file given.
@@ -655,16 +676,43 @@ bridge::RunOutcome runStages(const JsonDocument& doc, const bridge::RunContext& 
     if (const auto e = findKind("micro.cc")->estimate(JsonDocument(staged.value, (dir / "case.json").string())))
       clock.estimated[name] = clock.pending[name] = e->body_steps;
   }
+  // Where a joint is asked for: the confined compression along x of one
+  // cell and of a row of them, to the joint's strain, without unloading.
+  std::vector<RateStage> joint_cases;
+  if (c.joint_cells_in_series > 0)
+    for (const int n : {1, c.joint_cells_in_series}) {
+      json tc = test_cases.at("cc");
+      tc["loading"] = cc_loading;
+      tc["loading"]["axis"] = "x";
+      tc["loading"]["cells_in_series"] = n;
+      tc["loading"]["strain"] = c.joint_strain;
+      tc["loading"]["unload_at_strain"] = json::array();
+      tc["description"] =
+          n == 1 ? std::string("The CC test along x of one cell: the joint law (pipeline)")
+                 : "The CC test along x of a row of " + std::to_string(n) + " cells: the joint law (pipeline)";
+      const std::string name = n == 1 ? "cc along x" : "cc along x, " + std::to_string(n) + " cells";
+      const fs::path dir = out / (n == 1 ? "2_cc_x" : "2_cc_x_row");
+      joint_cases.push_back({name, tc, dir});
+      const StagedCase staged = stageCase(tc, cells, {}, dir, std::nullopt);
+      if (reusable(dir, staged.key)) continue;
+      if (const auto e = findKind("micro.cc")->estimate(JsonDocument(staged.value, (dir / "case.json").string())))
+        clock.estimated[name] = clock.pending[name] = e->body_steps;
+    }
   for (const auto& t : kTests) {
     stages.push_back(runStage(t, kTestKind.at(t), test_cases.at(t), cells, settingsOf(t), ctx, out / ("2_" + t), clock,
                               std::nullopt, cells.size() > 1 ? FailedRuns::LeaveOut : FailedRuns::Stop));
     lab[t] = stages.back();
   }
-  std::vector<StageResult> rate;
+  std::vector<StageResult> rate, joint;
   for (const RateStage& r : rate_cases) {
     stages.push_back(runStage(r.name, "micro.cc", r.value, cells, {}, ctx, r.dir, clock, std::nullopt,
                               cells.size() > 1 ? FailedRuns::LeaveOut : FailedRuns::Stop));
     rate.push_back(stages.back());
+  }
+  for (const RateStage& r : joint_cases) {
+    stages.push_back(runStage(r.name, "micro.cc", r.value, cells, {}, ctx, r.dir, clock, std::nullopt,
+                              cells.size() > 1 ? FailedRuns::LeaveOut : FailedRuns::Stop));
+    joint.push_back(stages.back());
   }
   double mass_kg = num(cell_summary, "mass_kg");
   if (!(mass_kg > 0.0)) mass_kg = num(lab.at("cc").summary, "mass_kg");
@@ -675,7 +723,9 @@ bridge::RunOutcome runStages(const JsonDocument& doc, const bridge::RunContext& 
     for (const auto& r : labResults(st)) curve_files.push_back(r.first);
   for (const StageResult& st : rate)
     for (const auto& r : labResults(st)) curve_files.push_back(r.first);
-  stages.push_back(runStage("fit", "fit", fitCase(c, lab, rate, edge_m, mass_kg, porosity), curve_files,
+  for (const StageResult& st : joint)
+    for (const auto& r : labResults(st)) curve_files.push_back(r.first);
+  stages.push_back(runStage("fit", "fit", fitCase(c, lab, rate, joint, edge_m, mass_kg, porosity), curve_files,
                             settingsOf("fit"), ctx, out / "3_fit", clock));
   const StageResult fit = stages.back();
 
@@ -857,6 +907,13 @@ bridge::RunOutcome runStages(const JsonDocument& doc, const bridge::RunContext& 
   if (fj.contains("momentum_flux"))
     rep.figure(out / "3_fit" / "fit_momentum_flux.png", "fit_momentum_flux.png",
                "The axial law's momentum flux: CC at other plate speeds");
+  if (fj.contains("joint")) {
+    rep.text("The joint between two cells (CC along x of one cell and of a row of " +
+             std::to_string(c.joint_cells_in_series) +
+             "; docs/fitting.md): " + html(fitting::describeJointFit(fj.at("joint"))) +
+             ". A hybrid's resolve.joint \"law\" carries it at its interface plates (docs/resolved.md).");
+    rep.figure(out / "3_fit" / "fit_joint.png", "fit_joint.png", "The joint between two cells: closure against force");
+  }
 
   rep.heading("4. The structure");
   rows.clear();
@@ -964,6 +1021,7 @@ bridge::RunOutcome runStages(const JsonDocument& doc, const bridge::RunContext& 
   console << "pipeline: fitted laws of '" << c.material << "' (95 % intervals):\n";
   for (const char* law_name : {"axial", "momentum_flux", "lateral", "interface", "impact"})
     if (fj.contains(law_name)) console << "  " << fitting::describeFit(law_name, fj.at(law_name)) << "\n";
+  if (fj.contains("joint")) console << "  " << fitting::describeJointFit(fj.at("joint")) << "\n";
   if (capacity) console << "pipeline: capacity: " << capacity->summary.at("answer").get<std::string>() << "\n";
   if (design) console << "pipeline: design: " << design->summary.at("answer").get<std::string>() << "\n";
   for (const auto& w : rep.warnings()) console << "pipeline: warning: " << w << "\n";

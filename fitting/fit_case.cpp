@@ -638,20 +638,8 @@ bridge::RunOutcome runCase(const bridge::JsonDocument& doc, const bridge::RunCon
   bridge::loadLawFile(ctx.outdir / "law.json");
 
   outcome.results["fit"] = results;
-  for (const auto& [name, entry] : results.items()) {
-    if (name != "joint") {
-      outcome.answer += "fit: " + describeFit(name, entry) + "\n";
-      continue;
-    }
-    std::ostringstream line;
-    line.precision(3);
-    line << "fit: joint (power, R2 log-log " << entry["r2_log_log"].get<double>() << ", "
-         << entry["levels_used"].get<std::size_t>() << " of " << entry["levels"].get<std::size_t>()
-         << " force levels): closure at 1 kN " << 1e3 * entry["closure_at_1kN_m"].get<double>() << " mm, exponent "
-         << entry["exponent"].get<double>() << "; closure at " << 1e-3 * entry["force_range_N"][1].get<double>()
-         << " kN " << 1e3 * bridge::jointClosure(*material.joint, entry["force_range_N"][1].get<double>()) << " mm\n";
-    outcome.answer += line.str();
-  }
+  for (const auto& [name, entry] : results.items())
+    outcome.answer += "fit: " + (name == "joint" ? describeJointFit(entry) : describeFit(name, entry)) + "\n";
   outcome.results["law_file"] = "law.json";
   outcome.results["law_status"] = provenance["status"];
   outcome.results["plots"] = plots;

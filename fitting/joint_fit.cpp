@@ -68,4 +68,16 @@ JointFit fitJoint(const bridge::Curve& cell, const bridge::Curve& row, int cells
   return out;
 }
 
+std::string describeJointFit(const nlohmann::json& entry) {
+  const bridge::JointLawParams law{entry.at("closure_at_1kN_m").get<double>(), entry.at("exponent").get<double>()};
+  const double top = entry.at("force_range_N").at(1).get<double>();
+  std::ostringstream line;
+  line.precision(3);
+  line << "joint (power, R2 log-log " << entry.at("r2_log_log").get<double>() << ", "
+       << entry.at("levels_used").get<std::size_t>() << " of " << entry.at("levels").get<std::size_t>()
+       << " force levels): closure at 1 kN " << 1e3 * law.closure_at_1kN_m << " mm, exponent " << law.exponent
+       << "; closure at " << 1e-3 * top << " kN " << 1e3 * bridge::jointClosure(law, top) << " mm";
+  return line.str();
+}
+
 }  // namespace gabion::fitting

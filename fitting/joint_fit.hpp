@@ -7,6 +7,8 @@
 /// power law c = c_1 (F / 1 kN)^b is fitted to the closure of one joint by
 /// least squares in log-log (closed form).
 #include <cstddef>
+#include <nlohmann/json.hpp>
+#include <string>
 #include <vector>
 
 #include "bridge/curve.hpp"
@@ -39,5 +41,10 @@ double shorteningAtForce(const bridge::Curve& c, double force_N);
 /// where fewer than half the levels (or three) show it.
 JointFit fitJoint(const bridge::Curve& cell, const bridge::Curve& row, int cells_in_series, std::size_t levels = 40,
                   double lowest_fraction = 0.05);
+
+/// One line on a fitted joint, from its summary entry (the fit case's
+/// `fit.joint`): "joint (power, R2 log-log ..., n of m force levels):
+/// closure at 1 kN ... mm, exponent ...; closure at <top> kN ... mm".
+std::string describeJointFit(const nlohmann::json& entry);
 
 }  // namespace gabion::fitting

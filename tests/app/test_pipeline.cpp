@@ -11,6 +11,7 @@
 #include <regex>
 #include <set>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "bridge/law_file.hpp"
@@ -74,6 +75,7 @@ void writeSmallChain(const fs::path& dir) {
  "lab": {"cc": "cc.json", "uc": "uc.json", "uci": "uci.json", "shear": "shear.json"},
  "uci_velocities_m_s": [5, 8],
  "cc_rate_velocities_m_s": [1.5],
+ "joint": {"cells_in_series": 2, "strain": 0.15},
  "structure": {"case": "wall.json", "material": "small", "velocities_m_s": [8, 12]},
  "sweep": "sweep.json", "capacity": "capacity.json", "design": "design.json"})");
 }
@@ -87,8 +89,8 @@ TEST(Pipeline, ReducedChainRunsEveryStageThenReusesThem) {
   auto r = runGabion("run " + (dir / "pipeline.json").string() + " --threads 2 -o " + out.string());
   ASSERT_EQ(r.exit_code, 0) << r.output;
   // The console's headline: fitted parameters with intervals, the answers, the report.
-  for (const char* line :
-       {"fitted laws of 'small'", "pipeline: capacity:", "pipeline: design:", "report.html", "one draw of its packing"})
+  for (const char* line : {"fitted laws of 'small'", "joint (power",
+                           "pipeline: capacity:", "pipeline: design:", "report.html", "one draw of its packing"})
     EXPECT_NE(r.output.find(line), std::string::npos) << line << "\n" << r.output;
 
   const auto s = readJson(out / "summary.json");
@@ -100,10 +102,11 @@ TEST(Pipeline, ReducedChainRunsEveryStageThenReusesThem) {
     EXPECT_EQ(readJson(d / "summary.json").at("status"), "ok") << d;
     EXPECT_TRUE(fs::exists(d / "stage.json")) << d;
   }
-  for (const char* f : {"1_cell/cell.h5", "2_cc/result.h5", "2_cc_rate_1.5_m_s/result.h5", "2_uc/result.h5",
-                        "2_uci/v5/result.h5", "2_uci/v8/result.h5", "2_shear/result.h5", "3_fit/law.json",
-                        "4_impact_8_m_s/result.h5", "4_sweep/sweep.csv", "figures/sweep_chart_penetration.png",
-                        "5_capacity/capacity.png", "6_design/capacity_vs_thickness.png", "law.json", "report.html"})
+  for (const char* f :
+       {"1_cell/cell.h5", "2_cc/result.h5", "2_cc_rate_1.5_m_s/result.h5", "2_cc_x/result.h5", "2_cc_x_row/result.h5",
+        "3_fit/fit_joint.png", "2_uc/result.h5", "2_uci/v5/result.h5", "2_uci/v8/result.h5", "2_shear/result.h5",
+        "3_fit/law.json", "4_impact_8_m_s/result.h5", "4_sweep/sweep.csv", "figures/sweep_chart_penetration.png",
+        "5_capacity/capacity.png", "6_design/capacity_vs_thickness.png", "law.json", "report.html"})
     EXPECT_TRUE(fs::exists(out / f)) << f;
   // Each lab test estimated its cost before it ran (the ETA's ground), and
   // none took more steps than estimated.
@@ -135,12 +138,27 @@ TEST(Pipeline, ReducedChainRunsEveryStageThenReusesThem) {
   EXPECT_TRUE(fast.at("loading").at("unload_at_strain").empty());
   EXPECT_EQ(fast.at("loading").at("strain"), readJson(out / "2_cc" / "case.json").at("loading").at("strain"));
   EXPECT_GE(m.axial.momentum_flux_kg_m, 0.0);
+  // The joint from the compressions along x of one cell and of a row of
+  // two, to the joint's strain, without unloading: in the law file.
+  for (const auto& [folder, n] : {std::make_pair("2_cc_x", 1), std::make_pair("2_cc_x_row", 2)}) {
+    const auto loading = readJson(out / folder / "case.json").at("loading");
+    EXPECT_EQ(loading.at("axis"), "x") << folder;
+    EXPECT_EQ(loading.at("cells_in_series"), n) << folder;
+    EXPECT_EQ(loading.at("strain"), 0.15) << folder;
+    EXPECT_TRUE(loading.at("unload_at_strain").empty()) << folder;
+  }
+  ASSERT_TRUE(m.joint.has_value());
+  EXPECT_GT(m.joint->closure_at_1kN_m, 0.0);
+  EXPECT_GT(m.joint->exponent, 0.0);
+  EXPECT_TRUE(m.provenance.at("fitted").contains("joint"));
+  EXPECT_EQ(m.joint_info.at("provenance").at("cells_in_series"), 2);
   EXPECT_TRUE(fs::exists(out / "3_fit" / "fit_momentum_flux.png"));
   EXPECT_EQ(m.provenance.at("lockup").at("from"), "porosity");
   EXPECT_DOUBLE_EQ(m.edge_m, 0.3);
 
   // The report embeds every figure it lists, each also a file in figures/.
   const std::string html = readText(out / "report.html");
+  EXPECT_NE(html.find("The joint between two cells"), std::string::npos);
   const auto figures = s.at("figures");
   EXPECT_GE(figures.size(), 10u);
   std::size_t embedded = 0;
@@ -212,7 +230,7 @@ TEST(Pipeline, ReplicateCellsGiveTheScatterOfTheFit) {
   writeSmallChain(dir);
   auto j = readJson(dir / "pipeline.json");
   j["replicates"] = 2;
-  j.erase("sweep"), j.erase("capacity"), j.erase("design");
+  j.erase("sweep"), j.erase("capacity"), j.erase("design"), j.erase("joint");
   j["structure"]["velocities_m_s"] = {8};
   writeFile(dir / "pipeline.json", j.dump());
   const fs::path out = dir / "out";
@@ -342,4 +360,13 @@ TEST(Pipeline, BadInputNamesTheField) {
   r = runGabion("check " + (dir / "bad_rate.json").string());
   EXPECT_EQ(r.exit_code, 2) << r.output;
   EXPECT_NE(r.output.find("/cc_rate_velocities_m_s"), std::string::npos) << r.output;
+
+  for (const auto& [key, value] : {std::make_pair("cells_in_series", 7.0), std::make_pair("strain", -0.1)}) {
+    j = readJson(dir / "pipeline.json");
+    j["joint"][key] = value;
+    writeFile(dir / "bad_joint.json", j.dump());
+    r = runGabion("check " + (dir / "bad_joint.json").string());
+    EXPECT_EQ(r.exit_code, 2) << r.output;
+    EXPECT_NE(r.output.find(std::string("/joint/") + key), std::string::npos) << r.output;
+  }
 }
