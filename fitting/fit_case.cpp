@@ -651,8 +651,10 @@ bridge::RunOutcome runCase(const bridge::JsonDocument& doc, const bridge::RunCon
 }  // namespace
 
 bridge::CaseKind fitCaseKind() {
-  return {"fit", "identify the macro cell laws (axial, lateral, interface, impact) from curves with NLopt", checkCase,
-          runCase, nullptr};
+  return {"fit",
+          "identify the macro cell laws (axial, lateral, interface, impact) from curves with NLopt, and the joint "
+          "between two cells",
+          checkCase, runCase, nullptr};
 }
 
 }  // namespace gabion::fitting
