@@ -16,9 +16,12 @@
 #                               bench/resolved/run.sh's 4-cell hybrid at 10 m/s
 #                               on the centre with resolve.joint "law", with
 #                               plastic densification too, and with the plates
-#                               across x giving too.
+#                               across x giving too;
+#   OUT/<scenario>/hybrid_joint_0.25, OUT/<scenario>/hybrid_plastic_joint_0.25
+#                               the same on centre_6_m_s, centre_8_m_s and
+#                               side_10_m_s.
 #   bench/resolved/joint.sh [--out DIR] [--threads N]
-# About 10 minutes on 2 cores. Needs the pipeline's results (README, command
+# About 15 minutes on 2 cores. Needs the pipeline's results (README, command
 # 1) and bench/resolved/run.sh's centre_10_m_s (its hybrid_1/case.json).
 # A run whose summary.json exists is not run again (delete it to rerun).
 set -euo pipefail
@@ -67,6 +70,13 @@ run_once hybrid_joint_0.25 "$hybrid" --law "$out/fit/law.json" --set resolve.joi
 run_once hybrid_plastic_joint_0.25 "$hybrid" --law "$out/law_plastic_joint.json" --set resolve.joint=law
 run_once hybrid_plastic_joint_across_0.25 "$hybrid" --law "$out/law_plastic_joint.json" --set resolve.joint=law \
   --set resolve.across=gives
+# The other scenarios of bench/resolved/run.sh: the joint, and with plastic densification.
+for s in centre_6_m_s centre_8_m_s side_10_m_s; do
+  h=$root/results/speed_error/$s/hybrid_1/case.json
+  [ -f "$h" ] || { echo "no $h: run bench/resolved/run.sh first" >&2; continue; }
+  run_once "$s/hybrid_joint_0.25" "$h" --law "$out/fit/law.json" --set resolve.joint=law
+  run_once "$s/hybrid_plastic_joint_0.25" "$h" --law "$out/law_plastic_joint.json" --set resolve.joint=law
+done
 for f in fit fit_uc; do grep "^fit: joint" "$out/$f.log" || true; done
 python3 - "$root" "$out" <<'PY'
 import json, sys
@@ -86,4 +96,21 @@ for label, d in (("as before", f"{root}/results/speed_error/centre_10_m_s/hybrid
         continue
     err = " | ".join(f"{100 * (s[k] / wall[k] - 1):+.1f} %" for k in keys)
     print(f"| {label} | {err} | {s['wall_time_s']:.0f} |")
+print()
+print("| scenario | 4-cell hybrid | peak force | penetration | back face | wall time s |")
+print("|---|---|---|---|---|---|")
+for scenario in ("centre_6_m_s", "centre_8_m_s", "side_10_m_s"):
+    try:
+        wall = json.load(open(f"{root}/results/speed_error/{scenario}/resolved/summary.json"))
+    except OSError:
+        continue
+    for label, d in (("as before", f"{root}/results/speed_error/{scenario}/hybrid_1"),
+                     ("joint", f"{out}/{scenario}/hybrid_joint_0.25"),
+                     ("plastic densification, joint", f"{out}/{scenario}/hybrid_plastic_joint_0.25")):
+        try:
+            s = json.load(open(f"{d}/summary.json"))
+        except OSError:
+            continue
+        err = " | ".join(f"{100 * (s[k] / wall[k] - 1):+.1f} %" for k in keys)
+        print(f"| {scenario} | {label} | {err} | {s['wall_time_s']:.0f} |")
 PY
