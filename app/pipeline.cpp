@@ -651,16 +651,18 @@ bridge::RunOutcome runStages(const JsonDocument& doc, const bridge::RunContext& 
     if (const auto e = findKind(kTestKind.at(t))->estimate(JsonDocument(staged.value, (dir / "case.json").string())))
       clock.estimated[t] = clock.pending[t] = e->body_steps;
   }
-  // The confined compression again at faster plate speeds, where asked
-  // (the axial law's momentum flux): to the CC stage's strain, without
-  // unloading, the netting's real mass (the fill's inertia is what they
-  // measure).
-  struct RateStage {
+  // A CC stage beyond the quasi-static one (at another plate speed, or
+  // along x for the joint): its name, its case and its folder.
+  struct ExtraCc {
     std::string name;
     json value;
     fs::path dir;
   };
-  std::vector<RateStage> rate_cases;
+  // The confined compression again at faster plate speeds, where asked
+  // (the axial law's momentum flux): to the CC stage's strain, without
+  // unloading, the netting's real mass (the fill's inertia is what they
+  // measure).
+  std::vector<ExtraCc> rate_cases;
   for (double v : c.cc_rate_velocities_m_s) {
     json tc = test_cases.at("cc");
     tc["loading"] = cc_loading;  // (its strain, or the default where it gives none)
@@ -678,7 +680,7 @@ bridge::RunOutcome runStages(const JsonDocument& doc, const bridge::RunContext& 
   }
   // Where a joint is asked for: the confined compression along x of one
   // cell and of a row of them, to the joint's strain, without unloading.
-  std::vector<RateStage> joint_cases;
+  std::vector<ExtraCc> joint_cases;
   if (c.joint_cells_in_series > 0)
     for (const int n : {1, c.joint_cells_in_series}) {
       json tc = test_cases.at("cc");
@@ -704,12 +706,12 @@ bridge::RunOutcome runStages(const JsonDocument& doc, const bridge::RunContext& 
     lab[t] = stages.back();
   }
   std::vector<StageResult> rate, joint;
-  for (const RateStage& r : rate_cases) {
+  for (const ExtraCc& r : rate_cases) {
     stages.push_back(runStage(r.name, "micro.cc", r.value, cells, {}, ctx, r.dir, clock, std::nullopt,
                               cells.size() > 1 ? FailedRuns::LeaveOut : FailedRuns::Stop));
     rate.push_back(stages.back());
   }
-  for (const RateStage& r : joint_cases) {
+  for (const ExtraCc& r : joint_cases) {
     stages.push_back(runStage(r.name, "micro.cc", r.value, cells, {}, ctx, r.dir, clock, std::nullopt,
                               cells.size() > 1 ? FailedRuns::LeaveOut : FailedRuns::Stop));
     joint.push_back(stages.back());
