@@ -81,36 +81,41 @@ for f in fit fit_uc; do grep "^fit: joint" "$out/$f.log" || true; done
 python3 - "$root" "$out" <<'PY'
 import json, sys
 root, out = sys.argv[1], sys.argv[2]
-wall = json.load(open(f"{root}/results/speed_error/centre_10_m_s/resolved/summary.json"))
 keys = ["peak_force_N", "max_penetration_m", "max_back_face_displacement_m"]
+
+
+def load(d):
+    try:
+        return json.load(open(f"{d}/summary.json"))
+    except OSError:
+        return None
+
+
+def rows(scenario, runs, first=""):
+    """A table row per run found: its errors against the scenario's resolved wall."""
+    wall = load(f"{root}/results/speed_error/{scenario}/resolved")
+    for label, d in runs:
+        s = load(d)
+        if wall is None or s is None:
+            continue
+        err = " | ".join(f"{100 * (s[k] / wall[k] - 1):+.1f} %" for k in keys)
+        print(f"| {first}{label} | {err} | {s['wall_time_s']:.0f} |")
+
+
 print("| 4-cell hybrid, 10 m/s on the centre | peak force | penetration | back face | wall time s |")
 print("|---|---|---|---|---|")
-for label, d in (("as before", f"{root}/results/speed_error/centre_10_m_s/hybrid_1"),
-                 ("plastic densification", f"{out}/plastic_densification_0.25"),
-                 ("joint", f"{out}/hybrid_joint_0.25"),
-                 ("plastic densification, joint", f"{out}/hybrid_plastic_joint_0.25"),
-                 ("plastic densification, joint, plates across x giving", f"{out}/hybrid_plastic_joint_across_0.25")):
-    try:
-        s = json.load(open(f"{d}/summary.json"))
-    except OSError:
-        continue
-    err = " | ".join(f"{100 * (s[k] / wall[k] - 1):+.1f} %" for k in keys)
-    print(f"| {label} | {err} | {s['wall_time_s']:.0f} |")
+rows("centre_10_m_s", (("as before", f"{root}/results/speed_error/centre_10_m_s/hybrid_1"),
+                       ("plastic densification", f"{out}/plastic_densification_0.25"),
+                       ("joint", f"{out}/hybrid_joint_0.25"),
+                       ("plastic densification, joint", f"{out}/hybrid_plastic_joint_0.25"),
+                       ("plastic densification, joint, plates across x giving",
+                        f"{out}/hybrid_plastic_joint_across_0.25")))
 print()
 print("| scenario | 4-cell hybrid | peak force | penetration | back face | wall time s |")
 print("|---|---|---|---|---|---|")
 for scenario in ("centre_6_m_s", "centre_8_m_s", "side_10_m_s"):
-    try:
-        wall = json.load(open(f"{root}/results/speed_error/{scenario}/resolved/summary.json"))
-    except OSError:
-        continue
-    for label, d in (("as before", f"{root}/results/speed_error/{scenario}/hybrid_1"),
-                     ("joint", f"{out}/{scenario}/hybrid_joint_0.25"),
-                     ("plastic densification, joint", f"{out}/{scenario}/hybrid_plastic_joint_0.25")):
-        try:
-            s = json.load(open(f"{d}/summary.json"))
-        except OSError:
-            continue
-        err = " | ".join(f"{100 * (s[k] / wall[k] - 1):+.1f} %" for k in keys)
-        print(f"| {scenario} | {label} | {err} | {s['wall_time_s']:.0f} |")
+    rows(scenario, (("as before", f"{root}/results/speed_error/{scenario}/hybrid_1"),
+                    ("joint", f"{out}/{scenario}/hybrid_joint_0.25"),
+                    ("plastic densification, joint", f"{out}/{scenario}/hybrid_plastic_joint_0.25")),
+         first=f"{scenario} | ")
 PY
