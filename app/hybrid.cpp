@@ -154,7 +154,7 @@ Plan plan(const JsonDocument& doc) {
       if (f.axis == 2 && f.side < 0) f.gives = true, f.law = cellAcross(p.structure, f).axial;
   // With across "gives", in the impact, the plates beside and under the
   // resolved cells give as the macro cells across them would be shortened
-  // (Coupler::giveAcross).
+  // (Coupler::give).
   if (p.across_gives)
     for (std::size_t k = 0; k < p.faces.size(); ++k) {
       StructurePart::Face& f = p.faces[k];
@@ -163,7 +163,7 @@ Plan plan(const JsonDocument& doc) {
 
   // With joint "law", in the impact, the plates on the x faces give as the
   // joint between the resolved cell and the macro cell across closes
-  // (Coupler::closeJoints), by that cell's joint law.
+  // (Coupler::give), by that cell's joint law.
   if (p.joints)
     for (std::size_t k = 0; k < p.faces.size(); ++k) {
       const StructurePart::Face& f = p.faces[k];

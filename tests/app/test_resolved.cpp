@@ -53,6 +53,15 @@ nlohmann::json smallCellAndLaws(const std::filesystem::path& dir) {
   return laws;
 }
 
+// `bad` written into `dir` is refused by `gabion check` (exit 2), the
+// message naming `pointer`.
+void expectRefused(const std::filesystem::path& dir, const nlohmann::json& bad, const std::string& pointer) {
+  writeFile(dir / "bad.json", bad.dump());
+  const auto out = runGabion("check " + (dir / "bad.json").string());
+  EXPECT_EQ(out.exit_code, 2) << out.output;
+  EXPECT_NE(out.output.find(pointer), std::string::npos) << out.output;
+}
+
 // A hybrid macro.impact case on small cells (smallCellAndLaws' laws.json
 // and cell): a wall of `cells`, its struck cell resolved alone, struck at
 // 8 m/s after a set 0.01 s settling, 0.02 s of impact.
@@ -248,10 +257,7 @@ TEST(ResolvedStructure, SettlesUntilAtRestAndResumesToTheSameWall) {
 
   // A longest settling shorter than the shortest is refused, named.
   c["settle"] = {{"duration_s", 0.2}, {"longest_s", 0.1}};
-  writeFile(dir / "bad.json", c.dump());
-  const auto bad = runGabion("check " + (dir / "bad.json").string());
-  EXPECT_EQ(bad.exit_code, 2) << bad.output;
-  EXPECT_NE(bad.output.find("/settle/longest_s"), std::string::npos) << bad.output;
+  expectRefused(dir, c, "/settle/longest_s");
 }
 
 // The hybrid: a macro.impact case with "resolve". The struck front cell is
@@ -318,12 +324,7 @@ TEST(HybridStructure, StruckCellResolvedTheCellBehindAMacroNode) {
   EXPECT_TRUE(s["touched"].get<bool>());
   expectMomentumIsImpulse(dir / "out", s["boulder_mass_kg"].get<double>(), 8.0);
   // Bad input, named before anything runs.
-  const auto refused = [&](const nlohmann::json& bad, const std::string& pointer) {
-    writeFile(dir / "bad.json", bad.dump());
-    const auto out = runGabion("check " + (dir / "bad.json").string());
-    EXPECT_EQ(out.exit_code, 2) << out.output;
-    EXPECT_NE(out.output.find(pointer), std::string::npos) << out.output;
-  };
+  const auto refused = [&](const nlohmann::json& bad, const std::string& pointer) { expectRefused(dir, bad, pointer); };
   nlohmann::json bad = c;
   bad["resolve"]["within_m"] = 5.0;
   refused(bad, "/resolve/within_m");  // (the whole structure: larger than it)
@@ -575,10 +576,7 @@ TEST(HybridStructure, PlatesAcrossXGiveAsTheMacroCellsLaw) {
   nlohmann::json bad = c;
   bad["law_file"] = "fixed_20000_laws.json";
   bad["resolve"]["across"] = "slide";
-  writeFile(dir / "bad.json", bad.dump());
-  const auto refused = runGabion("check " + (dir / "bad.json").string());
-  EXPECT_EQ(refused.exit_code, 2) << refused.output;
-  EXPECT_NE(refused.output.find("/resolve/across"), std::string::npos) << refused.output;
+  expectRefused(dir, bad, "/resolve/across");
 }
 
 // A 2 x 1 x 1 wall, its struck cell resolved, the macro cell behind it: with
@@ -633,10 +631,7 @@ TEST(HybridStructure, PlatesOnXFacesGiveAsTheJointCloses) {
   bad["law_file"] = "laws_without_joint.json";
   writeFile(dir / "laws_without_joint.json", laws.dump());
   bad["resolve"]["joint"] = "law";
-  writeFile(dir / "bad.json", bad.dump());
-  const auto refused = runGabion("check " + (dir / "bad.json").string());
-  EXPECT_EQ(refused.exit_code, 2) << refused.output;
-  EXPECT_NE(refused.output.find("/resolve/joint"), std::string::npos) << refused.output;
+  expectRefused(dir, bad, "/resolve/joint");
 }
 
 }  // namespace
