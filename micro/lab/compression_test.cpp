@@ -137,8 +137,8 @@ Scene buildScene(const CompressionCase& c, const Sample& sample, Rig* rig = null
 
 // The scene as the test runs it: the rig, and a duration long enough for the
 // loading and each unloading-reloading cycle at the sample's length.
-Scene planScene(const CompressionCase& c, const Sample& cell, Rig* rig = nullptr) {
-  const Sample sample = row(c, cell);
+// `sample`: the rig's cells, row() of the cell.
+Scene planScene(const CompressionCase& c, const Sample& sample, Rig* rig = nullptr) {
   Scene scene = buildScene(c, sample, rig);
   const double height = sample.hi[c.axis] - sample.lo[c.axis];
   double travel = c.strain * height;
@@ -152,7 +152,7 @@ void check(const bridge::JsonDocument& doc, bool confined) {
   checkCells(c.setup);
   if (c.setup.cells.front().generate.empty()) {
     const Sample sample = loadSample(c.setup.cells.front().file, c.setup);
-    const Scene s = planScene(c, sample);
+    const Scene s = planScene(c, row(c, sample));
     validateScene(s, doc.file());
     chooseDt(s, criticalTimeStep(s), doc.file());
   }
@@ -206,8 +206,8 @@ CurveShape curveShape(const std::vector<double>& u, const std::vector<double>& f
 bridge::RunOutcome runOne(const CompressionCase& c, const Sample& cell, const bridge::RunContext& ctx,
                           const std::string& file) {
   Rig rig;
-  Scene scene = planScene(c, cell, &rig);
   const Sample sample = row(c, cell);
+  Scene scene = planScene(c, sample, &rig);
   const int ax = c.axis;
   const double height = sample.hi[ax] - sample.lo[ax];
   const double target = c.strain * height;
@@ -434,7 +434,7 @@ std::shared_ptr<const Replicates> replicates(const bridge::JsonDocument& doc, bo
 
 std::optional<bridge::Estimate> estimate(const bridge::JsonDocument& doc, bool confined) {
   const CompressionCase c = parseCase(doc, confined);
-  return estimateReplicates(c.setup, 1, [&](const Sample& s, std::size_t) { return planScene(c, s); });
+  return estimateReplicates(c.setup, 1, [&](const Sample& s, std::size_t) { return planScene(c, row(c, s)); });
 }
 
 }  // namespace
