@@ -25,6 +25,10 @@ using micro::lab::StructurePart;
 using nlohmann::json;
 using Vec3 = Eigen::Vector3d;
 
+/// The most tiles along an edge of a plate cut for the joint law (a tile of
+/// a 0.5 m face at 5 is 0.1 m, a block or two).
+constexpr int kMaxJointTiles = 5;
+
 /// A hybrid case, read: the macro case, the cells resolved, their faces on
 /// macro cells, and the fine part as a micro.structure document.
 struct Plan {
@@ -38,6 +42,7 @@ struct Plan {
   bool beside_follow = false;  ///< `resolve.beside` "follow": the plates beside come down with their cell, settling
   bool across_gives = false;  ///< `resolve.across` "gives": the plates across x give as their macro cells would, struck
   bool joints = false;        ///< `resolve.joint` "law": the plates on x faces give as the joint law closes, struck
+  int joint_tiles = 1;        ///< `resolve.joint_tiles`: with joints, each x face's plate cut in n x n tiles
   std::vector<int> resolved;
   std::vector<StructurePart::Face> faces;
   std::vector<std::size_t> across;  ///< with across "gives": the faces whose plates give (side faces and those under)
@@ -79,6 +84,11 @@ Plan plan(const JsonDocument& doc) {
   p.beside_follow = rs.choice("beside", {"fixed", "follow"}, "fixed") == "follow";
   p.across_gives = rs.choice("across", {"fixed", "gives"}, "fixed") == "gives";
   p.joints = rs.choice("joint", {"none", "law"}, "none") == "law";
+  p.joint_tiles = static_cast<int>(rs.integer("joint_tiles", 1, 1));
+  if (p.joint_tiles > kMaxJointTiles)
+    rs.fail("joint_tiles", "at most " + std::to_string(kMaxJointTiles) + " tiles along an edge");
+  if (p.joint_tiles > 1 && !p.joints)
+    rs.fail("joint_tiles", "tiles carry the joint law: give resolve.joint \"law\" too");
   const fs::path cell_file = absoluteFrom(doc, rs.string("cell"));
   if (p.c.impacts.size() != 1)
     root.fail("impacts", "a hybrid run takes one impact (the fine part is struck once): give `boulder`");
@@ -142,7 +152,10 @@ Plan plan(const JsonDocument& doc) {
         // (an upper face: the cells stacked on it, their weight on the
         // resolved cell while it settles, with above "weight")
         const int above = axis == 2 && side > 0 && p.weight_above ? nz - 1 - ijk[2] : 0;
-        p.faces.push_back({cell, axis, side, o[0] + nx * (o[1] + ny * o[2]), above, false, {}});
+        // (with joint tiles, an x face is tiles x tiles plates, each a face)
+        const int tiles = axis == 0 ? p.joint_tiles : 1;
+        for (int t = 0; t < tiles * tiles; ++t)
+          p.faces.push_back({cell, axis, side, o[0] + nx * (o[1] + ny * o[2]), above, false, {}, tiles, t});
       }
   }
   p.c.structure.resolved_cells = p.resolved;
@@ -190,7 +203,7 @@ Plan plan(const JsonDocument& doc) {
       {"rebound_restitution", p.c.run.rebound_restitution}};
   for (const auto& [key, value] : root.raw("resolve").items()) {
     if (key == "cell" || key == "within_m" || key == "depth" || key == "below" || key == "above" || key == "beside" ||
-        key == "across" || key == "joint")
+        key == "across" || key == "joint" || key == "joint_tiles")
       continue;
     if (key == "structure" || key == "boulder")
       rs.fail(key, "the hybrid's structure and boulder are the macro case's: give them there");
@@ -265,10 +278,16 @@ class Coupler {
       across_.plates.push_back(
           {k, at, [at](double f) { return carrying(at, f); }, kAcrossSpeed_m_s / weightAcross(k), kAcrossSpeed_m_s});
     }
-    for (const auto& [k, law] : p.joint_faces)
-      joints_.plates.push_back({k, [law = law](double c) { return bridge::jointForce(law, c); },
-                                [law = law](double f) { return bridge::jointClosure(law, f); },
-                                kJointSpeed_m_s / weightAcross(k), kJointSpeed_m_s});
+    // A tile carries its share of the face's joint law: the closure at a
+    // pressure is the law's at that pressure over the whole face (the joint
+    // a bed of independent springs), so a tile of 1/n of the face closes
+    // as the whole face would under n times the tile's force.
+    for (const auto& [k, law] : p.joint_faces) {
+      const double n = static_cast<double>(p.faces[k].tiles) * p.faces[k].tiles;
+      joints_.plates.push_back({k, [law = law, n](double c) { return bridge::jointForce(law, c) / n; },
+                                [law = law, n](double f) { return bridge::jointClosure(law, n * f); },
+                                n * kJointSpeed_m_s / weightAcross(k), kJointSpeed_m_s});
+    }
   }
 
   /// Engine::WallDriver: the plates' forces onto their nodes, one macro
@@ -381,12 +400,14 @@ class Coupler {
       json f = {{"force_settled_N", {settled.x(), settled.y(), settled.z()}},
                 {"force_at_peak_axial_N", {peak.x(), peak.y(), peak.z()}}};
       const int a = faces_[k].axis;
+      double axial = 0.0;  // (the x face behind, all its tiles)
+      bool behind = false;
       for (std::size_t q = 0; q < faces_.size() && a != 0; ++q) {
         if (faces_[q].axis != 0 || faces_[q].side != 1 || faces_[q].cell != faces_[k].cell) continue;
-        const double axial =
-            (q < at_peak_.size() ? at_peak_[q].x() : 0.0) - (q < settled_.size() ? settled_[q].x() : 0.0);
-        if (axial > 0.0) f["reaction_to_axial_at_peak"] = std::fabs(peak[a] - settled[a]) / axial;
+        behind = true;
+        axial += (q < at_peak_.size() ? at_peak_[q].x() : 0.0) - (q < settled_.size() ? settled_[q].x() : 0.0);
       }
+      if (behind && axial > 0.0) f["reaction_to_axial_at_peak"] = std::fabs(peak[a] - settled[a]) / axial;
       out.push_back(f);
     }
     return out;
@@ -470,6 +491,7 @@ bridge::RunOutcome run(const JsonDocument& doc, const bridge::RunContext& ctx) {
   h["beside"] = p.beside_follow ? "follow" : "fixed";
   h["across"] = p.across_gives ? "gives" : "fixed";
   h["joint"] = p.joints ? "law" : "none";
+  h["joint_tiles"] = p.joint_tiles;
   json cells = json::array(), faces = json::array();
   const int nx = p.structure.nx, ny = p.structure.ny;
   for (const int c : p.resolved) cells.push_back({c % nx, (c / nx) % ny, c / (nx * ny)});
@@ -481,6 +503,7 @@ bridge::RunOutcome run(const JsonDocument& doc, const bridge::RunContext& ctx) {
                  {"axis", std::string(1, "xyz"[f.axis])},
                  {"side", f.side},
                  {"macro_node", p.structure.node_of[static_cast<std::size_t>(f.other)]}};
+    if (f.tiles > 1) face["tile"] = {f.tile % f.tiles, f.tile / f.tiles};
     face.update(forces[k]);
     if (!std::isnan(across[k])) face["moved_across_m"] = across[k];
     if (!std::isnan(closed[k])) face["joint_closed_m"] = closed[k];
@@ -499,6 +522,8 @@ bridge::RunOutcome run(const JsonDocument& doc, const bridge::RunContext& ctx) {
     << (p.weight_above ? ", the weight of the cells above on them" : "")
     << (p.beside_follow ? ", the plates beside coming down with them" : "")
     << (p.across_gives ? ", the plates across x giving" : "") << (p.joints ? ", joints closing at the x faces" : "")
+    << (p.joint_tiles > 1 ? " in " + std::to_string(p.joint_tiles) + " x " + std::to_string(p.joint_tiles) + " tiles"
+                          : "")
     << "), " << p.faces.size() << " interface plates; energy balance of both parts "
     << h["balance_rel_error"].get<double>() << ", interface mismatch " << h["interface_mismatch_J"].get<double>()
     << " J\n";

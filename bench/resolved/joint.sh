@@ -17,11 +17,16 @@
 #                               on the centre with resolve.joint "law", with
 #                               plastic densification too, and with the plates
 #                               across x giving too;
+#   OUT/hybrid_joint_tiles_3_0.25, OUT/hybrid_joint_tiles_5_0.25,
+#   OUT/hybrid_plastic_joint_tiles_3_0.25
+#                               the same with the x faces' plates in 3 x 3 and
+#                               5 x 5 tiles (resolve.joint_tiles), and with
+#                               plastic densification in 3 x 3;
 #   OUT/<scenario>/hybrid_joint_0.25, OUT/<scenario>/hybrid_plastic_joint_0.25
 #                               the same on centre_6_m_s, centre_8_m_s and
 #                               side_10_m_s.
 #   bench/resolved/joint.sh [--out DIR] [--threads N]
-# About 15 minutes on 2 cores. Needs the pipeline's results (README, command
+# About 20 minutes on 2 cores. Needs the pipeline's results (README, command
 # 1) and bench/resolved/run.sh's centre_10_m_s (its hybrid_1/case.json).
 # A run whose summary.json exists is not run again (delete it to rerun).
 set -euo pipefail
@@ -70,6 +75,13 @@ run_once hybrid_joint_0.25 "$hybrid" --law "$out/fit/law.json" --set resolve.joi
 run_once hybrid_plastic_joint_0.25 "$hybrid" --law "$out/law_plastic_joint.json" --set resolve.joint=law
 run_once hybrid_plastic_joint_across_0.25 "$hybrid" --law "$out/law_plastic_joint.json" --set resolve.joint=law \
   --set resolve.across=gives
+# The plates behind cut into tiles, each with its share of the joint law.
+for n in 3 5; do
+  run_once "hybrid_joint_tiles_${n}_0.25" "$hybrid" --law "$out/fit/law.json" --set resolve.joint=law \
+    --set resolve.joint_tiles=$n
+done
+run_once hybrid_plastic_joint_tiles_3_0.25 "$hybrid" --law "$out/law_plastic_joint.json" --set resolve.joint=law \
+  --set resolve.joint_tiles=3
 # The other scenarios of bench/resolved/run.sh: the joint, and with plastic densification.
 for s in centre_6_m_s centre_8_m_s side_10_m_s; do
   h=$root/results/speed_error/$s/hybrid_1/case.json
@@ -109,7 +121,10 @@ rows("centre_10_m_s", (("as before", f"{root}/results/speed_error/centre_10_m_s/
                        ("joint", f"{out}/hybrid_joint_0.25"),
                        ("plastic densification, joint", f"{out}/hybrid_plastic_joint_0.25"),
                        ("plastic densification, joint, plates across x giving",
-                        f"{out}/hybrid_plastic_joint_across_0.25")))
+                        f"{out}/hybrid_plastic_joint_across_0.25"),
+                       ("joint, plates behind in 3 x 3 tiles", f"{out}/hybrid_joint_tiles_3_0.25"),
+                       ("joint, plates behind in 5 x 5 tiles", f"{out}/hybrid_joint_tiles_5_0.25"),
+                       ("plastic densification, joint in 3 x 3 tiles", f"{out}/hybrid_plastic_joint_tiles_3_0.25")))
 print()
 print("| scenario | 4-cell hybrid | peak force | penetration | back face | wall time s |")
 print("|---|---|---|---|---|---|")

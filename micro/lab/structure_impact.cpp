@@ -121,10 +121,15 @@ struct Layout {
 WallSpec facePlate(const StructurePart::Face& f, const StructureCase& c, const Layout& l, const Sample& sample) {
   const int idx[3] = {f.cell % c.nx, (f.cell / c.nx) % c.ny, f.cell / (c.nx * c.ny)};
   const int a = f.axis, b = (a + 1) % 3, d = (a + 2) % 3;
+  // (a tile's centre: its place (u, v) of tiles x tiles across the face)
+  const double in_u = (f.tile % f.tiles + 0.5) / f.tiles, in_v = (f.tile / f.tiles + 0.5) / f.tiles;
   Vec3 centre;
-  for (int q = 0; q < 3; ++q) centre[q] = (idx[q] + (q == a ? (f.side > 0 ? 1.0 : 0.0) : 0.5)) * l.pitch[q];
+  centre[a] = (idx[a] + (f.side > 0 ? 1.0 : 0.0)) * l.pitch[a];
+  centre[b] = (idx[b] + in_u) * l.pitch[b];
+  centre[d] = (idx[d] + in_v) * l.pitch[d];
   WallSpec w;
   w.name = "interface_" + std::to_string(f.cell) + "_" + "xyz"[a] + (f.side > 0 ? "_plus" : "_minus");
+  if (f.tiles > 1) w.name += "_tile_" + std::to_string(f.tile % f.tiles) + "_" + std::to_string(f.tile / f.tiles);
   w.point_m = centre;
   w.normal = -static_cast<double>(f.side) * Vec3::Unit(a);
   w.material = sample.netting_material >= 0 ? sample.netting_material : sample.plate_material;
@@ -133,8 +138,8 @@ WallSpec facePlate(const StructurePart::Face& f, const StructureCase& c, const L
   w.rounded_edges = true;  // (plates of neighbours that moved apart make a step; a node meets its edge)
   w.axis_u = Vec3::Unit(b);
   // (v = normal x u lies along the third axis, either way)
-  w.half_u_m = 0.5 * l.pitch[b];
-  w.half_v_m = 0.5 * l.pitch[d];
+  w.half_u_m = 0.5 * l.pitch[b] / f.tiles;
+  w.half_v_m = 0.5 * l.pitch[d] / f.tiles;
   return w;
 }
 
@@ -595,7 +600,8 @@ void checkPart(const StructureCase& c, const StructurePart& part, const std::str
   for (const int cell : part.cells)
     if (cell < 0 || cell >= n) throw bridge::InputError(file, "/structure/cells", "a resolved cell is off the grid");
   for (const StructurePart::Face& f : part.faces)
-    if (f.cell < 0 || f.cell >= n || f.axis < 0 || f.axis > 2 || (f.side != 1 && f.side != -1))
+    if (f.cell < 0 || f.cell >= n || f.axis < 0 || f.axis > 2 || (f.side != 1 && f.side != -1) || f.tiles < 1 ||
+        f.tile < 0 || f.tile >= f.tiles * f.tiles)
       throw bridge::InputError(file, "/structure/cells", "an interface face is off the grid");
 }
 

@@ -55,6 +55,12 @@ struct StructurePart {
     /// still. In the impact it is driven as every plate.
     bool gives = false;
     bridge::AxialLawParams law;
+    /// The face cut into tiles x tiles plates (each its own Face, the same
+    /// cell, axis, side and other), this one tile number `tile` = u + tiles v,
+    /// u along the axis after `axis` (cyclically), v along the one after
+    /// that; 1: the whole face is one plate.
+    int tiles = 1;
+    int tile = 0;
   };
   std::vector<Face> faces;
   /// While the part settles, the plates beside its cells (x and y faces)
