@@ -10,7 +10,7 @@
 //   behind  what stands behind it: the resolved cell behind's front face
 //           (its nodes within 30 mm of its foremost), or, in a hybrid, the
 //           interface plate on the struck cell's back (the macro node
-//           behind it), or the back support (0);
+//           behind it; cut in tiles, their mean), or the back support (0);
 //   joint   back less behind: how far the meeting of the two cells closed;
 // then the same at the struck cell's largest move, each one's largest, how
 // much the struck cell's netting (and the resolved cell behind's) grew
@@ -136,7 +136,15 @@ Motion struckCell(const fs::path& dir) {
   m.time = run.read("/bodies/time_s");
   m.centre = meanMove(pos, n, snapshots, struck_blocks);
   m.back = meanMove(pos, n, snapshots, face(pos, struck_nodes, true));
-  const std::string plate = "/series/walls/interface_" + std::to_string(struck) + "_x_plus/displacement_m";
+  // (the plate on its back: one, or tiles (resolve.joint_tiles), their mean)
+  const std::string plate = "/series/walls/interface_" + std::to_string(struck) + "_x_plus";
+  std::vector<std::string> plates;
+  if (run.has(plate + "/displacement_m")) plates.push_back(plate + "/displacement_m");
+  for (int u = 0; u < 5; ++u)
+    for (int v = 0; v < 5; ++v) {
+      const std::string tile = plate + "_tile_" + std::to_string(u) + "_" + std::to_string(v) + "/displacement_m";
+      if (run.has(tile)) plates.push_back(tile);
+    }
   for (int a = 0; a < 3; ++a) m.struck_growth[a] = growth(pos, n, snapshots, struck_nodes, a);
   for (int i = 0; i < 2; ++i)
     for (int side = 0; side < 2; ++side) {
@@ -150,14 +158,21 @@ Motion struckCell(const fs::path& dir) {
     for (int a = 0; a < 3; ++a) m.behind_growth[a] = growth(pos, n, snapshots, behind_nodes, a);
     m.behind = meanMove(pos, n, snapshots, face(pos, behind_nodes, false));
     m.behind_is = "the resolved cell behind's front face";
-  } else if (run.has(plate)) {
-    const std::vector<double> t = run.read("/series/time_s"), d = run.read(plate);
-    for (const double at : m.time) {  // (the series sample nearest each snapshot)
-      const std::size_t q = static_cast<std::size_t>(std::lower_bound(t.begin(), t.end(), at) - t.begin());
-      const std::size_t r = q > 0 && (q == t.size() || at - t[q - 1] < t[q] - at) ? q - 1 : q;
-      m.behind.push_back(d[3 * r] - d[0]);
+  } else if (!plates.empty()) {
+    const std::vector<double> t = run.read("/series/time_s");
+    m.behind.assign(snapshots, 0.0);
+    for (const std::string& name : plates) {
+      const std::vector<double> d = run.read(name);
+      for (std::size_t snap = 0; snap < snapshots; ++snap) {  // (the series sample nearest each snapshot)
+        const double at = m.time[snap];
+        const std::size_t q = static_cast<std::size_t>(std::lower_bound(t.begin(), t.end(), at) - t.begin());
+        const std::size_t r = q > 0 && (q == t.size() || at - t[q - 1] < t[q] - at) ? q - 1 : q;
+        m.behind[snap] += (d[3 * r] - d[0]) / static_cast<double>(plates.size());
+      }
     }
-    m.behind_is = "the interface plate on its back (the macro node behind)";
+    m.behind_is = plates.size() == 1 ? "the interface plate on its back (the macro node behind)"
+                                     : "the interface plate on its back (the macro node behind), its " +
+                                           std::to_string(plates.size()) + " tiles' mean";
   } else {
     m.behind.assign(snapshots, 0.0);
     m.behind_is = "the back support";
