@@ -25,9 +25,18 @@
 #   OUT/<scenario>/hybrid_joint_0.25, OUT/<scenario>/hybrid_plastic_joint_0.25
 #                               the same on centre_6_m_s, centre_8_m_s and
 #                               side_10_m_s.
+#   OUT/wall_54/...             where the 54-cell wall struck while settling
+#                               is there (results/wide_moving/wall_54, the
+#                               first command of docs/resolved.md's table of
+#                               wide walls struck while settling): its 5-cell
+#                               hybrid with the joint, in 1, 3 x 3 and 5 x 5
+#                               tiles, with plastic densification, and with the
+#                               plates across x giving; its 10-cell hybrid
+#                               (within 0.5 m) without and with the joint.
 #   bench/resolved/joint.sh [--out DIR] [--threads N]
-# About 20 minutes on 2 cores. Needs the pipeline's results (README, command
-# 1) and bench/resolved/run.sh's centre_10_m_s (its hybrid_1/case.json).
+# About 20 minutes on 2 cores, 10 more with the 54-cell wall. Needs the
+# pipeline's results (README, command 1) and bench/resolved/run.sh's
+# centre_10_m_s (its hybrid_1/case.json).
 # A run whose summary.json exists is not run again (delete it to rerun).
 set -euo pipefail
 here=$(cd "$(dirname "$0")" && pwd)
@@ -89,11 +98,28 @@ for s in centre_6_m_s centre_8_m_s side_10_m_s; do
   run_once "$s/hybrid_joint_0.25" "$h" --law "$out/fit/law.json" --set resolve.joint=law
   run_once "$s/hybrid_plastic_joint_0.25" "$h" --law "$out/law_plastic_joint.json" --set resolve.joint=law
 done
+# The 54-cell wall struck while settling, where it is there.
+wide=$root/results/wide_moving/wall_54
+if [ -f "$wide/hybrid_0/case.json" ]; then
+  wide_run() {
+    local name=$1 law=$2; shift 2
+    run_once "wall_54/$name" "$wide/hybrid_0/case.json" --law "$law" --set resolve.settle.until_at_rest=false "$@"
+  }
+  for n in 1 3 5; do
+    wide_run "joint_tiles_${n}_0.25" "$out/fit/law.json" --set resolve.joint=law --set resolve.joint_tiles=$n
+  done
+  wide_run plastic_joint_tiles_3_0.25 "$out/law_plastic_joint.json" --set resolve.joint=law --set resolve.joint_tiles=3
+  wide_run plastic_joint_tiles_3_across_0.25 "$out/law_plastic_joint.json" --set resolve.joint=law \
+    --set resolve.joint_tiles=3 --set resolve.across=gives
+  wide_run reach_0.5 "$root/results/pipeline/law.json" --set resolve.within_m=0.5
+  wide_run reach_0.5_joint_tiles_3 "$out/fit/law.json" --set resolve.within_m=0.5 --set resolve.joint=law \
+    --set resolve.joint_tiles=3
+fi
 for f in fit fit_uc; do grep "^fit: joint" "$out/$f.log" || true; done
 python3 - "$root" "$out" <<'PY'
 import json, sys
 root, out = sys.argv[1], sys.argv[2]
-keys = ["peak_force_N", "max_penetration_m", "max_back_face_displacement_m"]
+keys = ["peak_force_N", "max_penetration_m", "contact_duration_s", "max_back_face_displacement_m"]
 
 
 def load(d):
@@ -103,19 +129,22 @@ def load(d):
         return None
 
 
-def rows(scenario, runs, first=""):
-    """A table row per run found: its errors against the scenario's resolved wall."""
-    wall = load(f"{root}/results/speed_error/{scenario}/resolved")
+def rows(scenario, runs, first="", wall_dir=None):
+    """A table row per run found: its errors against the scenario's resolved
+    wall, its wall time and how many times faster than the wall it ran."""
+    wall = load(wall_dir or f"{root}/results/speed_error/{scenario}/resolved")
     for label, d in runs:
         s = load(d)
         if wall is None or s is None:
             continue
         err = " | ".join(f"{100 * (s[k] / wall[k] - 1):+.1f} %" for k in keys)
-        print(f"| {first}{label} | {err} | {s['wall_time_s']:.0f} |")
+        fast = wall["wall_time_s"] / s["wall_time_s"]
+        print(f"| {first}{label} | {err} | {s['outcome']} | {s['wall_time_s']:.0f} | {fast:.1f} |")
 
 
-print("| 4-cell hybrid, 10 m/s on the centre | peak force | penetration | back face | wall time s |")
-print("|---|---|---|---|---|")
+head = "peak force | penetration | contact | back face | outcome | wall time s | x faster |"
+print(f"| 4-cell hybrid, 10 m/s on the centre | {head}")
+print("|---|---|---|---|---|---|---|---|")
 rows("centre_10_m_s", (("as before", f"{root}/results/speed_error/centre_10_m_s/hybrid_1"),
                        ("plastic densification", f"{out}/plastic_densification_0.25"),
                        ("joint", f"{out}/hybrid_joint_0.25"),
@@ -125,12 +154,30 @@ rows("centre_10_m_s", (("as before", f"{root}/results/speed_error/centre_10_m_s/
                        ("joint, plates behind in 3 x 3 tiles", f"{out}/hybrid_joint_tiles_3_0.25"),
                        ("joint, plates behind in 5 x 5 tiles", f"{out}/hybrid_joint_tiles_5_0.25"),
                        ("plastic densification, joint in 3 x 3 tiles", f"{out}/hybrid_plastic_joint_tiles_3_0.25")))
-print()
-print("| scenario | 4-cell hybrid | peak force | penetration | back face | wall time s |")
-print("|---|---|---|---|---|---|")
-for scenario in ("centre_6_m_s", "centre_8_m_s", "side_10_m_s"):
+others = [s for s in ("centre_6_m_s", "centre_8_m_s", "side_10_m_s")
+          if load(f"{root}/results/speed_error/{s}/resolved") is not None]
+if others:
+    print()
+    print(f"| scenario | 4-cell hybrid | {head}")
+    print("|---|---|---|---|---|---|---|---|---|")
+for scenario in others:
     rows(scenario, (("as before", f"{root}/results/speed_error/{scenario}/hybrid_1"),
                     ("joint", f"{out}/{scenario}/hybrid_joint_0.25"),
                     ("plastic densification, joint", f"{out}/{scenario}/hybrid_plastic_joint_0.25")),
          first=f"{scenario} | ")
+wide = f"{root}/results/wide_moving/wall_54"
+if load(f"{wide}/resolved") is not None:
+    print()
+    print(f"| 54-cell wall struck while settling, hybrid | {head}")
+    print("|---|---|---|---|---|---|---|---|")
+    rows(None, (("5 cells", f"{wide}/hybrid_0"),
+                ("5 cells, joint", f"{out}/wall_54/joint_tiles_1_0.25"),
+                ("5 cells, joint in 3 x 3 tiles", f"{out}/wall_54/joint_tiles_3_0.25"),
+                ("5 cells, joint in 5 x 5 tiles", f"{out}/wall_54/joint_tiles_5_0.25"),
+                ("5 cells, plastic densification, joint in 3 x 3 tiles", f"{out}/wall_54/plastic_joint_tiles_3_0.25"),
+                ("5 cells, plastic densification, joint in 3 x 3 tiles, plates across x giving",
+                 f"{out}/wall_54/plastic_joint_tiles_3_across_0.25"),
+                ("10 cells (within 0.5 m)", f"{out}/wall_54/reach_0.5"),
+                ("10 cells, joint in 3 x 3 tiles", f"{out}/wall_54/reach_0.5_joint_tiles_3")),
+         wall_dir=f"{wide}/resolved")
 PY
