@@ -136,14 +136,15 @@ Motion struckCell(const fs::path& dir) {
   m.time = run.read("/bodies/time_s");
   m.centre = meanMove(pos, n, snapshots, struck_blocks);
   m.back = meanMove(pos, n, snapshots, face(pos, struck_nodes, true));
-  // (the plate on its back: one, or tiles (resolve.joint_tiles), their mean)
+  // (the plate on its back: one, or the hybrid's joint_tiles x joint_tiles
+  // tiles, their mean)
   const std::string plate = "/series/walls/interface_" + std::to_string(struck) + "_x_plus";
+  const int tiles = s.contains("hybrid") ? s["hybrid"].value("joint_tiles", 1) : 1;
   std::vector<std::string> plates;
-  if (run.has(plate + "/displacement_m")) plates.push_back(plate + "/displacement_m");
-  for (int u = 0; u < 5; ++u)
-    for (int v = 0; v < 5; ++v) {
-      const std::string tile = plate + "_tile_" + std::to_string(u) + "_" + std::to_string(v) + "/displacement_m";
-      if (run.has(tile)) plates.push_back(tile);
+  for (int u = 0; u < tiles; ++u)
+    for (int v = 0; v < tiles; ++v) {
+      const std::string name = tiles == 1 ? plate : plate + "_tile_" + std::to_string(u) + "_" + std::to_string(v);
+      if (run.has(name + "/displacement_m")) plates.push_back(name + "/displacement_m");
     }
   for (int a = 0; a < 3; ++a) m.struck_growth[a] = growth(pos, n, snapshots, struck_nodes, a);
   for (int i = 0; i < 2; ++i)

@@ -687,6 +687,7 @@ TEST(HybridStructure, JointTilesEachGiveByTheirShareOfTheLaw) {
   const auto law = [&](double force) { return force > 0.0 ? c1 * std::pow(force / 1e3, b) : 0.0; };
   double least = 1.0, most = 0.0;
   const Tile* loaded = nullptr;
+  const double centre = tile[{1, 1}].node;
   for (const auto& [uv, t] : tile) {
     EXPECT_GE(t.closed, 0.0);
     // (the series' samples every 0.1 ms may miss the largest push by a
@@ -696,7 +697,6 @@ TEST(HybridStructure, JointTilesEachGiveByTheirShareOfTheLaw) {
     // the run's end, when the summary's closures are taken, in which a
     // tile closes 0.2 mm at most at its servo's 2 m/s and the node moves
     // less)
-    const double centre = tile[{1, 1}].node;
     EXPECT_NEAR(t.node, centre, 3e-4) << uv.first << " " << uv.second;
     least = std::min(least, t.closed), most = std::max(most, t.closed);
     if (!loaded || t.last > loaded->last) loaded = &t;
