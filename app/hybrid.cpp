@@ -43,6 +43,7 @@ struct Plan {
   bool across_gives = false;  ///< `resolve.across` "gives": the plates across x give as their macro cells would, struck
   bool joints = false;        ///< `resolve.joint` "law": the plates on x faces give as the joint law closes, struck
   int joint_tiles = 1;        ///< `resolve.joint_tiles`: with joints, each x face's plate cut in n x n tiles
+  int macro_axes = 1;         ///< `resolve.macro_motion`: the macro nodes move along x (1), x and y (2), or x, y, z (3)
   std::vector<int> resolved;
   std::vector<StructurePart::Face> faces;
   std::vector<std::size_t> across;  ///< with across "gives": the faces whose plates give (side faces and those under)
@@ -89,6 +90,8 @@ Plan plan(const JsonDocument& doc) {
     rs.fail("joint_tiles", "at most " + std::to_string(kMaxJointTiles) + " tiles along an edge");
   if (p.joint_tiles > 1 && !p.joints)
     rs.fail("joint_tiles", "tiles carry the joint law: give resolve.joint \"law\" too");
+  const std::string motion = rs.choice("macro_motion", {"x", "xy", "xyz"}, "x");
+  p.macro_axes = static_cast<int>(motion.size());
   const fs::path cell_file = absoluteFrom(doc, rs.string("cell"));
   if (p.c.impacts.size() != 1)
     root.fail("impacts", "a hybrid run takes one impact (the fine part is struck once): give `boulder`");
@@ -203,7 +206,7 @@ Plan plan(const JsonDocument& doc) {
       {"rebound_restitution", p.c.run.rebound_restitution}};
   for (const auto& [key, value] : root.raw("resolve").items()) {
     if (key == "cell" || key == "within_m" || key == "depth" || key == "below" || key == "above" || key == "beside" ||
-        key == "across" || key == "joint" || key == "joint_tiles")
+        key == "across" || key == "joint" || key == "joint_tiles" || key == "macro_motion")
       continue;
     if (key == "structure" || key == "boulder")
       rs.fail(key, "the hybrid's structure and boulder are the macro case's: give them there");
@@ -249,8 +252,16 @@ class Coupler {
   static constexpr double kJointSpeed_m_s = 2.0;
 
  public:
+  /// With macro_motion "xy" or "xyz" the macro part runs in 3-D kinematics
+  /// (the lateral links' cell law across the y and z faces, the ground's
+  /// under the base, friction on every face), with "xy" its z forces held
+  /// at zero: its nodes do not move along z (the friction along z is
+  /// driven by z slides only).
   explicit Coupler(const Plan& p)
-      : model_(p.structure, p.c.run.kinematics), faces_(p.faces), critical_s_(model_.criticalTimeStep()) {
+      : model_(p.structure, p.macro_axes > 1 ? macro::Kinematics::ThreeD : p.c.run.kinematics),
+        axes_(p.macro_axes),
+        faces_(p.faces),
+        critical_s_(model_.criticalTimeStep()) {
     for (const StructurePart::Face& f : p.faces) {
       const int node = p.structure.node_of[static_cast<std::size_t>(f.other)];
       face_node_.push_back(static_cast<std::size_t>(node));
@@ -292,23 +303,42 @@ class Coupler {
 
   /// Engine::WallDriver: the plates' forces onto their nodes, one macro
   /// step, the nodes' displacements back to the plates.
+  ///
+  /// The macro part starts at rest with no force in its laws, while the
+  /// plates carry the settled part's forces (the resolved cells' weight on
+  /// the plates under them, their fill's push on the others), which in the
+  /// wall the cells across hold with forces of their own. In x-only that
+  /// push is small and the nodes take the plates' whole forces. In 3-D
+  /// (macro_motion "xy", "xyz") the nodes take the forces' change since
+  /// the impact's first step: the settled forces are the macro part's
+  /// pre-stress, and their work on the nodes' moves (prestress_work_J_)
+  /// is energy the cells across bring in.
   void drive(double, double dt, const std::vector<Vec3>& forces, std::vector<Vec3>& moves) {
     if (dt > critical_s_) {
       std::ostringstream m;
       m << "the fine step " << dt << " s is above the macro part's critical step " << critical_s_ << " s";
       throw bridge::NumericalError(model_.steps(), model_.time_s(), m.str());
     }
+    if (prestress_.empty()) prestress_.assign(forces.size(), Vec3::Zero());
+    if (axes_ > 1 && !prestressed_) prestress_ = forces, prestressed_ = true;
     for (const std::size_t n : face_node_) node_force_[n].setZero();
-    for (std::size_t k = 0; k < forces.size(); ++k) node_force_[face_node_[k]] += forces[k];
-    for (const std::size_t n : face_node_) model_.setExternalForce(n, node_force_[n]);
+    for (std::size_t k = 0; k < forces.size(); ++k) node_force_[face_node_[k]] += forces[k] - prestress_[k];
+    for (const std::size_t n : face_node_)
+      model_.setExternalForce(n, {node_force_[n].x(), node_force_[n].y(), axes_ > 2 ? node_force_[n].z() : 0.0});
     const macro::StepStatus st = model_.step(dt);
     if (st == macro::StepStatus::NonFinite)
       throw bridge::NumericalError(model_.steps(), model_.time_s(), "the macro part: " + model_.failure());
     if (st == macro::StepStatus::Perforation && failure_.empty()) failure_ = "the macro part: " + model_.failure();
     last_force_ = forces;
-    const std::vector<double>& vx = model_.vx();
-    // (x-only: the node moves along x; the plate with it)
-    for (std::size_t k = 0; k < forces.size(); ++k) moves[k] = Vec3(dt * vx[face_node_[k]], 0.0, 0.0);
+    const std::vector<double>&vx = model_.vx(), &vy = model_.vy(), &vz = model_.vz();
+    // (the node moves along x, y with "xy", z with "xyz"; the plate with it)
+    for (std::size_t k = 0; k < forces.size(); ++k) {
+      const std::size_t n = face_node_[k];
+      moves[k] = Vec3(dt * vx[n], axes_ > 1 ? dt * vy[n] : 0.0, axes_ > 2 ? dt * vz[n] : 0.0);
+      prestress_work_J_ += prestress_[k].dot(moves[k]);
+    }
+    for (const double u : model_.uy()) max_move_m_[0] = std::max(max_move_m_[0], std::fabs(u));
+    for (const double u : model_.uz()) max_move_m_[1] = std::max(max_move_m_[1], std::fabs(u));
     give(across_, dt, forces, moves);
     give(joints_, dt, forces, moves);
     for (std::size_t k = 0; k < forces.size(); ++k) work_on_fine_J_ -= forces[k].dot(moves[k]);
@@ -369,14 +399,15 @@ class Coupler {
       if (axial > peak_axial_N_) peak_axial_N_ = axial, at_peak_ = last_force_;
     }
     const macro::Energy& m = model_.energy();
-    residual_J_ = (fine - fine0_) + m.total() + across_.work_J + joints_.work_J;
+    residual_J_ = (fine - fine0_) + m.total() + across_.work_J + joints_.work_J + prestress_work_J_;
   }
 
   void archive(bridge::StateArchive& a) {
     model_.archive(a);
     a("work_on_fine_J", work_on_fine_J_), a("fine0", fine0_), a("started", started_), a("residual_J", residual_J_);
     a("last_force", last_force_), a("settled", settled_), a("at_peak", at_peak_), a("peak_axial_N", peak_axial_N_);
-    a("failure", failure_);
+    a("failure", failure_), a("max_y_move_m", max_move_m_[0]), a("max_z_move_m", max_move_m_[1]);
+    a("prestress", prestress_), a("prestressed", prestressed_), a("prestress_work_J", prestress_work_J_);
     across_.archive(a, "across");
     joints_.archive(a, "joint");
   }
@@ -415,7 +446,7 @@ class Coupler {
 
   json report(double impact_energy_J) const {
     const macro::Energy& m = model_.energy();
-    const double mismatch = work_on_fine_J_ + m.external_work_J + across_.work_J + joints_.work_J;
+    const double mismatch = work_on_fine_J_ + m.external_work_J + across_.work_J + joints_.work_J + prestress_work_J_;
     return {
         {"work_on_fine_part_J", work_on_fine_J_},
         {"work_on_macro_part_J", m.external_work_J},
@@ -427,11 +458,15 @@ class Coupler {
         {"macro_balance_rel_error", impact_energy_J > 0.0 ? (m.total() - m.external_work_J) / impact_energy_J : 0.0},
         {"balance_rel_error", impact_energy_J > 0.0 ? residual_J_ / impact_energy_J : 0.0},
         {"macro_steps", model_.steps()},
+        {"prestress_work_J", prestress_work_J_},
+        {"macro_max_y_move_m", max_move_m_[0]},
+        {"macro_max_z_move_m", max_move_m_[1]},
         {"macro_critical_time_step_s", critical_s_}};
   }
 
  private:
   macro::Model model_;
+  int axes_ = 1;  ///< macro_motion: 1 "x", 2 "xy", 3 "xyz"
   std::vector<std::size_t> face_node_, front_, back_;
   std::vector<double> back_centre_;  ///< per back node: its cell centre's displacement over the node's
   Giving across_, joints_;           // across "gives", joint "law"
@@ -440,6 +475,12 @@ class Coupler {
   std::vector<Vec3> last_force_, settled_, at_peak_;  // the plates' forces: last step, settled, at the axial peak
   double critical_s_;                                 // the macro part's (s)
   double peak_axial_N_ = 0.0;
+  double max_move_m_[2] = {0.0, 0.0};  // the largest |y| and |z| moves of a macro node (m)
+  /// The plates' forces at the impact's first step, which the macro part
+  /// holds as pre-stress (3-D; zero in x-only), and their work on the nodes' moves (J).
+  std::vector<Vec3> prestress_;
+  bool prestressed_ = false;
+  double prestress_work_J_ = 0.0;
   double work_on_fine_J_ = 0.0;  // the plates' work on the bodies, -sum F . d
   double fine0_ = 0.0, residual_J_ = 0.0;
   bool started_ = false;
@@ -492,6 +533,7 @@ bridge::RunOutcome run(const JsonDocument& doc, const bridge::RunContext& ctx) {
   h["across"] = p.across_gives ? "gives" : "fixed";
   h["joint"] = p.joints ? "law" : "none";
   h["joint_tiles"] = p.joint_tiles;
+  h["macro_motion"] = std::string("xyz").substr(0, static_cast<std::size_t>(p.macro_axes));
   json cells = json::array(), faces = json::array();
   const int nx = p.structure.nx, ny = p.structure.ny;
   for (const int c : p.resolved) cells.push_back({c % nx, (c / nx) % ny, c / (nx * ny)});
@@ -524,9 +566,10 @@ bridge::RunOutcome run(const JsonDocument& doc, const bridge::RunContext& ctx) {
     << (p.across_gives ? ", the plates across x giving" : "") << (p.joints ? ", joints closing at the x faces" : "")
     << (p.joint_tiles > 1 ? " in " + std::to_string(p.joint_tiles) + " x " + std::to_string(p.joint_tiles) + " tiles"
                           : "")
-    << "), " << p.faces.size() << " interface plates; energy balance of both parts "
-    << h["balance_rel_error"].get<double>() << ", interface mismatch " << h["interface_mismatch_J"].get<double>()
-    << " J\n";
+    << (p.macro_axes == 2 ? ", the macro nodes moving along x and y" : "")
+    << (p.macro_axes == 3 ? ", the macro nodes moving along x, y and z" : "") << "), " << p.faces.size()
+    << " interface plates; energy balance of both parts " << h["balance_rel_error"].get<double>()
+    << ", interface mismatch " << h["interface_mismatch_J"].get<double>() << " J\n";
   out.answer = a.str() + out.answer;
   return out;
 }

@@ -113,6 +113,8 @@ class Model {
   const std::vector<double>& uy() const { return uy_; }
   const std::vector<double>& uz() const { return uz_; }
   const std::vector<double>& vx() const { return vx_; }
+  const std::vector<double>& vy() const { return vy_; }
+  const std::vector<double>& vz() const { return vz_; }
   /// Axial (x) compressive force of each cell: mean of its front and back loads (N).
   const std::vector<double>& cellAxialForce() const { return cell_axial_; }
   /// Force of each axial link (x-neighbours and back supports, Structure::axial order) (N).

@@ -580,6 +580,99 @@ TEST(HybridStructure, PlatesAcrossXGiveAsTheMacroCellsLaw) {
   expectRefused(dir, bad, "/resolve/across");
 }
 
+// The wall one cell deep and three wide again, its middle cell resolved:
+// with macro_motion "xy" the macro nodes beside it move along y as well as
+// x (3-D kinematics held in z), so the plates on its side faces follow them
+// out as its fill bulges sideways: each plate's y move is its node's (the
+// summary's largest macro y move). The nodes take the change of the
+// plates' forces since the impact's start (the settled forces are the
+// macro part's pre-stress), and the pre-stress's work on their moves
+// closes the interface's balance. "xyz" frees z too. With "x" (the
+// default) the plates do not move across x and the nodes take the whole
+// forces; a value other than the three is refused, naming the field.
+TEST(HybridStructure, MacroNodesAlongXAndYCarryThePlatesBeside) {
+  const auto dir = scratchDir("hybrid_xy");
+  nlohmann::json laws = smallCellAndLaws(dir);
+  ASSERT_FALSE(laws.is_null());
+  writeFile(dir / "laws.json", laws.dump());
+  nlohmann::json c = struckCellResolved({1, 3, 1});
+  const auto run = [&](const std::string& motion) {
+    nlohmann::json cs = c;
+    cs["resolve"]["macro_motion"] = motion;
+    writeFile(dir / (motion + ".json"), cs.dump());
+    const auto out = runGabion("run -q " + (dir / (motion + ".json")).string() + " -o " + (dir / motion).string());
+    EXPECT_EQ(out.exit_code, 0) << out.output;
+    return out.exit_code == 0 ? summaryOf(dir / motion) : nlohmann::json();
+  };
+  // The side plates' largest y move out of the series (m; + away from the struck cell).
+  const auto movedOut = [&](const std::string& motion, const char* wall, double sign) {
+    const gabion::bridge::H5Reader h5(dir / motion / "result.h5");
+    const std::vector<double> p = h5.read(std::string("/series/walls/") + wall + "/position_m");
+    EXPECT_GT(p.size(), 30u) << wall;
+    double moved = 0.0;
+    for (std::size_t q = 3; q < p.size(); q += 3) moved = std::max(moved, sign * (p[q + 1] - p[1]));
+    return moved;
+  };
+  const auto balanced = [](const nlohmann::json& h) {
+    const double to_macro = std::fabs(h["work_on_macro_part_J"].get<double>());
+    EXPECT_GT(to_macro, 0.0);
+    const double pre = std::fabs(h["prestress_work_J"].get<double>());
+    EXPECT_LT(std::fabs(h["interface_mismatch_J"].get<double>()), 1e-9 * (to_macro + pre));
+    EXPECT_LT(std::fabs(h["balance_rel_error"].get<double>()), 0.02);
+  };
+  for (const std::string motion : {"xy", "xyz"}) {
+    SCOPED_TRACE(motion);
+    const nlohmann::json s = run(motion);
+    ASSERT_TRUE(s.is_object());
+    const nlohmann::json& h = s["hybrid"];
+    EXPECT_EQ(h["macro_motion"], motion);
+    const double minus = movedOut(motion, "interface_1_y_minus", -1.0);
+    const double plus = movedOut(motion, "interface_1_y_plus", 1.0);
+    EXPECT_GT(minus, 1e-5) << "the fill pushed the macro node beside it out";
+    EXPECT_GT(plus, 1e-5);
+    // (the series samples every 0.1 ms: the node's largest move may fall
+    // between two, and the plate moves by the node's velocity times each
+    // step, a little off its integrated displacement)
+    const double largest = h["macro_max_y_move_m"].get<double>();
+    EXPECT_LE(std::max(minus, plus), largest * (1.0 + 1e-3));
+    EXPECT_GT(std::max(minus, plus), 0.9 * largest);
+    if (motion == "xy")
+      EXPECT_EQ(h["macro_max_z_move_m"].get<double>(), 0.0);
+    else
+      EXPECT_GT(h["macro_max_z_move_m"].get<double>(), 0.0);
+    balanced(h);
+  }
+  const nlohmann::json x = run("x");
+  ASSERT_TRUE(x.is_object());
+  const nlohmann::json& h = x["hybrid"];
+  EXPECT_EQ(h["macro_motion"], "x");
+  EXPECT_EQ(h["macro_max_y_move_m"].get<double>(), 0.0);
+  EXPECT_EQ(h["prestress_work_J"].get<double>(), 0.0);
+  EXPECT_EQ(movedOut("x", "interface_1_y_minus", -1.0) + movedOut("x", "interface_1_y_plus", 1.0), 0.0);
+  balanced(h);
+  // Two cells stacked, the upper one struck and resolved: the plate under
+  // it carries its weight from the settling on, which the macro cell below
+  // holds as pre-stress; the weight's work on that cell's moves closes the
+  // interface's balance.
+  nlohmann::json stacked = struckCellResolved({1, 1, 2});
+  stacked["boulder"]["aim_point_m"] = {0.15, 0.45};
+  stacked["resolve"]["macro_motion"] = "xyz";
+  writeFile(dir / "stacked.json", stacked.dump());
+  const auto out = runGabion("run -q " + (dir / "stacked.json").string() + " -o " + (dir / "stacked").string());
+  ASSERT_EQ(out.exit_code, 0) << out.output;
+  const nlohmann::json st = summaryOf(dir / "stacked");
+  ASSERT_EQ(st["hybrid"]["interfaces"].size(), 1u);
+  EXPECT_EQ(st["hybrid"]["interfaces"][0]["axis"], "z");
+  const double weight = -st["hybrid"]["interfaces"][0]["force_settled_N"][2].get<double>();
+  EXPECT_GT(weight, 0.0) << "the resolved cell stands on the plate";
+  EXPECT_NE(st["hybrid"]["prestress_work_J"].get<double>(), 0.0) << "the settled weight is pre-stress";
+  EXPECT_GT(st["hybrid"]["macro_max_z_move_m"].get<double>(), 0.0);
+  balanced(st["hybrid"]);
+  nlohmann::json bad = c;
+  bad["resolve"]["macro_motion"] = "yz";
+  expectRefused(dir, bad, "/resolve/macro_motion");
+}
+
 // A 2 x 1 x 1 wall, its struck cell resolved, the macro cell behind it: with
 // joint "law" the plate between them gives, towards the macro cell, as the
 // joint law closes (closure c1 (F / 1 kN)^b): by what the summary says, more
