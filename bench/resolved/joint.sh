@@ -22,6 +22,11 @@
 #                               the same with the x faces' plates in 3 x 3 and
 #                               5 x 5 tiles (resolve.joint_tiles), and with
 #                               plastic densification in 3 x 3;
+#   OUT/hybrid_xy_0.25, OUT/hybrid_xyz_0.25, OUT/hybrid_xyz_joint_tiles_3_0.25
+#                               the same with the macro nodes moving along x
+#                               and y, and along x, y and z
+#                               (resolve.macro_motion "xy", "xyz"), the
+#                               latter also with the joint in 3 x 3 tiles;
 #   OUT/<scenario>/hybrid_joint_0.25, OUT/<scenario>/hybrid_plastic_joint_0.25
 #                               the same on centre_6_m_s, centre_8_m_s and
 #                               side_10_m_s.
@@ -32,9 +37,11 @@
 #                               hybrid with the joint, in 1, 3 x 3 and 5 x 5
 #                               tiles, with plastic densification, and with the
 #                               plates across x giving; its 10-cell hybrid
-#                               (within 0.5 m) without and with the joint.
+#                               (within 0.5 m) without and with the joint;
+#                               and those with the macro nodes moving along
+#                               x and y, or x, y and z (resolve.macro_motion).
 #   bench/resolved/joint.sh [--out DIR] [--threads N]
-# About 20 minutes on 2 cores, 10 more with the 54-cell wall. Needs the
+# About 25 minutes on 2 cores, 20 more with the 54-cell wall. Needs the
 # pipeline's results (README, command 1) and bench/resolved/run.sh's
 # centre_10_m_s (its hybrid_1/case.json).
 # A run whose summary.json exists is not run again (delete it to rerun).
@@ -91,6 +98,11 @@ for n in 3 5; do
 done
 run_once hybrid_plastic_joint_tiles_3_0.25 "$hybrid" --law "$out/law_plastic_joint.json" --set resolve.joint=law \
   --set resolve.joint_tiles=3
+# The macro nodes moving along x and y: the plates beside follow their cells pushed aside.
+run_once hybrid_xy_0.25 "$hybrid" --law "$root/results/pipeline/law.json" --set resolve.macro_motion=xy
+run_once hybrid_xyz_0.25 "$hybrid" --law "$root/results/pipeline/law.json" --set resolve.macro_motion=xyz
+run_once hybrid_xyz_joint_tiles_3_0.25 "$hybrid" --law "$out/fit/law.json" --set resolve.joint=law \
+  --set resolve.joint_tiles=3 --set resolve.macro_motion=xyz
 # The other scenarios of bench/resolved/run.sh: the joint, and with plastic densification.
 for s in centre_6_m_s centre_8_m_s side_10_m_s; do
   h=$root/results/speed_error/$s/hybrid_1/case.json
@@ -114,6 +126,15 @@ if [ -f "$wide/hybrid_0/case.json" ]; then
   wide_run reach_0.5 "$root/results/pipeline/law.json" --set resolve.within_m=0.5
   wide_run reach_0.5_joint_tiles_3 "$out/fit/law.json" --set resolve.within_m=0.5 --set resolve.joint=law \
     --set resolve.joint_tiles=3
+  wide_run xy_0.25 "$root/results/pipeline/law.json" --set resolve.macro_motion=xy
+  wide_run xyz_0.25 "$root/results/pipeline/law.json" --set resolve.macro_motion=xyz
+  wide_run xyz_joint_tiles_3_0.25 "$out/fit/law.json" --set resolve.joint=law --set resolve.joint_tiles=3 \
+    --set resolve.macro_motion=xyz
+  wide_run plastic_xyz_joint_tiles_3_0.25 "$out/law_plastic_joint.json" --set resolve.joint=law \
+    --set resolve.joint_tiles=3 --set resolve.macro_motion=xyz
+  wide_run reach_0.5_xyz "$root/results/pipeline/law.json" --set resolve.within_m=0.5 --set resolve.macro_motion=xyz
+  wide_run reach_0.5_xyz_joint_tiles_3 "$out/fit/law.json" --set resolve.within_m=0.5 --set resolve.joint=law \
+    --set resolve.joint_tiles=3 --set resolve.macro_motion=xyz
 fi
 for f in fit fit_uc; do grep "^fit: joint" "$out/$f.log" || true; done
 python3 - "$root" "$out" <<'PY'
@@ -153,7 +174,10 @@ rows("centre_10_m_s", (("as before", f"{root}/results/speed_error/centre_10_m_s/
                         f"{out}/hybrid_plastic_joint_across_0.25"),
                        ("joint, plates behind in 3 x 3 tiles", f"{out}/hybrid_joint_tiles_3_0.25"),
                        ("joint, plates behind in 5 x 5 tiles", f"{out}/hybrid_joint_tiles_5_0.25"),
-                       ("plastic densification, joint in 3 x 3 tiles", f"{out}/hybrid_plastic_joint_tiles_3_0.25")))
+                       ("plastic densification, joint in 3 x 3 tiles", f"{out}/hybrid_plastic_joint_tiles_3_0.25"),
+                       ("macro nodes along x and y", f"{out}/hybrid_xy_0.25"),
+                       ("macro nodes along x, y and z", f"{out}/hybrid_xyz_0.25"),
+                       ("macro nodes along x, y and z, joint in 3 x 3 tiles", f"{out}/hybrid_xyz_joint_tiles_3_0.25")))
 others = [s for s in ("centre_6_m_s", "centre_8_m_s", "side_10_m_s")
           if load(f"{root}/results/speed_error/{s}/resolved") is not None]
 if others:
@@ -178,6 +202,14 @@ if load(f"{wide}/resolved") is not None:
                 ("5 cells, plastic densification, joint in 3 x 3 tiles, plates across x giving",
                  f"{out}/wall_54/plastic_joint_tiles_3_across_0.25"),
                 ("10 cells (within 0.5 m)", f"{out}/wall_54/reach_0.5"),
-                ("10 cells, joint in 3 x 3 tiles", f"{out}/wall_54/reach_0.5_joint_tiles_3")),
+                ("10 cells, joint in 3 x 3 tiles", f"{out}/wall_54/reach_0.5_joint_tiles_3"),
+                ("5 cells, macro nodes along x and y", f"{out}/wall_54/xy_0.25"),
+                ("5 cells, macro nodes along x, y and z", f"{out}/wall_54/xyz_0.25"),
+                ("5 cells, macro nodes along x, y and z, joint in 3 x 3 tiles", f"{out}/wall_54/xyz_joint_tiles_3_0.25"),
+                ("5 cells, macro nodes along x, y and z, plastic densification, joint in 3 x 3 tiles",
+                 f"{out}/wall_54/plastic_xyz_joint_tiles_3_0.25"),
+                ("10 cells, macro nodes along x, y and z", f"{out}/wall_54/reach_0.5_xyz"),
+                ("10 cells, macro nodes along x, y and z, joint in 3 x 3 tiles",
+                 f"{out}/wall_54/reach_0.5_xyz_joint_tiles_3")),
          wall_dir=f"{wide}/resolved")
 PY
