@@ -162,6 +162,10 @@ Plan plan(const JsonDocument& doc) {
       }
   }
   p.c.structure.resolved_cells = p.resolved;
+  // In 3-D the macro part stands on the ground as the resolved cells stand
+  // on their base: the half-cell law against sinking, friction under the
+  // column's weight (support "ground" "friction", whatever the case says).
+  if (p.macro_axes > 1) p.c.structure.support.ground_friction = true;
   p.structure = macro::buildCaseStructure(doc, p.c);
   // With below "gives", the plate under a resolved cell, the top of the
   // macro cell below, gives along that cell's axial law while the part settles.

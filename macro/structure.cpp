@@ -152,6 +152,8 @@ Structure buildStructure(const StructureSpec& spec, const bridge::LawFile& laws)
            resolved[static_cast<std::size_t>(i + s.nx * (j + s.ny * k))] != 0;
   };
   std::size_t explicit_next = 0;
+  // Every cell's material, resolved or not (-1: none, a stepped front).
+  std::vector<int> cell_material(static_cast<std::size_t>(s.nx) * s.ny * s.nz, -1);
   for (int k = 0; k < s.nz; ++k)
     for (int j = 0; j < s.ny; ++j)
       for (int i = s.front_offset_cells[static_cast<std::size_t>(k)]; i < s.nx; ++i) {
@@ -164,6 +166,7 @@ Structure buildStructure(const StructureSpec& spec, const bridge::LawFile& laws)
           const int depth = i - s.front_offset_cells[static_cast<std::size_t>(k)];
           name = depth < spec.material.front_depth_cells ? spec.material.front : spec.material.core;
         }
+        cell_material[static_cast<std::size_t>(i + s.nx * (j + s.ny * k))] = materialIndex(name);
         if (isResolved(i, j, k)) {
           if (i > s.front_offset_cells[static_cast<std::size_t>(k)] && !isResolved(i - 1, j, k))
             throw std::invalid_argument("resolved cell (" + std::to_string(i) + ", " + std::to_string(j) + ", " +
@@ -234,9 +237,12 @@ Structure buildStructure(const StructureSpec& spec, const bridge::LawFile& laws)
       s.lateral.friction.push_back(internFriction(s, pairFriction(ma, mb)));
     }
     if (k == 0 && spec.support.ground_friction) {
+      // (the whole column: a resolved cell above stands on this one, its
+      // weight held by the hybrid's plate, and reaches the ground through it)
       double column = 0.0;
       for (int kk = 0; kk < s.nz; ++kk)
-        if (const int c = s.nodeAt(i, j, kk); c >= 0) column += s.mass_kg[static_cast<std::size_t>(c)];
+        if (const int m = cell_material[static_cast<std::size_t>(i + s.nx * (j + s.ny * kk))]; m >= 0)
+          column += s.materials[static_cast<std::size_t>(m)].mass_kg;
       const double mu = spec.support.ground_friction_coefficient >= 0.0 ? spec.support.ground_friction_coefficient
                                                                         : ma.interface.friction;
       const double kt = spec.support.ground_tangential_stiffness_N_m > 0.0

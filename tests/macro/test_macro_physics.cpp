@@ -841,6 +841,16 @@ TEST(MacroHybrid, AResolvedCellLeavesItsNeighbourTheWholeOfItsCell) {
   EXPECT_GT(m.energy().external_work_J, 0.0);
   EXPECT_LT(worst, 1.01 * lead);
   EXPECT_LT(lead, 0.02 * F * 2.0 * F / k);
+  // A macro base cell under a resolved one carries its weight to the
+  // ground: its ground link's column is both cells (the resolved cell's
+  // weight is held by the hybrid's plate, not by the node).
+  StructureSpec stacked = grid(1, 1, 2);
+  stacked.resolved_cells = {1};
+  stacked.support.ground_friction = true;
+  const Structure st = buildStructure(stacked, laws);
+  ASSERT_EQ(st.nodeCount(), 1u);
+  ASSERT_EQ(st.ground.node.size(), 1u);
+  EXPECT_DOUBLE_EQ(st.ground.weight_N[0], 2.0 * mass * stacked.support.gravity_m_s2);
   // A resolved cell behind a macro cell is refused.
   StructureSpec behind = grid(2, 1, 1);
   behind.resolved_cells = {1};
