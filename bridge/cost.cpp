@@ -23,13 +23,29 @@ Estimate oneRun(double bodies, double steps, double snapshots) {
 }
 }  // namespace
 
+namespace {
+// (1 while the scene fits the cache, then 1 + growth per e-fold of bodies)
+double cacheFactor(double bodies, double growth) {
+  return bodies > kMicroCacheBodies ? 1.0 + growth * std::log(bodies / kMicroCacheBodies) : 1.0;
+}
+}  // namespace
+
+double microSecondsPerBodyStep(double bodies) {
+  return kMicroSecondsPerBodyStep * cacheFactor(bodies, kMicroBodyStepGrowth);
+}
+
+double microSecondsPerLinkSubstep(double bodies) {
+  return kMicroSecondsPerLinkSubstep * cacheFactor(bodies, kMicroLinkSubstepGrowth);
+}
+
 Estimate microRun(double bodies, double steps, double snapshots, double snapshot_records, double series,
                   double link_substeps) {
   Estimate e = oneRun(bodies, steps, snapshots);
   e.memory_bytes = kBaseBytes + kMicroBytesPerBody * bodies;
   // (the series: about 40 columns of doubles)
   e.output_bytes = kMicroSnapshotBytesPerBody * snapshot_records * snapshots + 40.0 * 8.0 * series;
-  e.wall_time_s = kMicroSecondsPerBodyStep * e.body_steps + kMicroSecondsPerLinkSubstep * link_substeps * steps;
+  e.wall_time_s =
+      microSecondsPerBodyStep(bodies) * e.body_steps + microSecondsPerLinkSubstep(bodies) * link_substeps * steps;
   return e;
 }
 

@@ -19,12 +19,24 @@ constexpr double kMicroSecondsPerBodyStep = 3.5e-8;
 constexpr double kMicroBytesPerBody = 1000.0;
 constexpr double kMicroSnapshotBytesPerBody = 100.0;
 /// Fine DEM: seconds per link per sub-step of the link nodes, on one thread,
-/// on top of the body-steps. Measured on the one-cell hybrid of
-/// docs/resolved.md (a cell's 1,578 links at 8 sub-steps: 0.31 ms a step),
-/// it runs high for the links alone; with the body-steps' rate, which runs
-/// low for a wall of a hundred thousand spheres, the resolved wall's
-/// estimate comes within 12 % of its time on one thread.
+/// on top of the body-steps (a cell's 1,578 links at 8 sub-steps: 0.32 ms a
+/// step of its confined compression).
 constexpr double kMicroSecondsPerLinkSubstep = 2.5e-8;
+/// Both rates hold while the scene's bodies fit the core's cache, up to
+/// about kMicroCacheBodies block members and spheres (one cell); past that
+/// each grows by its factor per e-fold of bodies: measured on one thread
+/// (the stage table of `gabion run --threads 1`), a cell's confined
+/// compression (9,129 bodies) gives 34 ns a body-step and 26 ns a link
+/// sub-step; the resolved 12-cell wall (110,000) 87 and 37 ns; the 54-cell
+/// wall (493,000) 103 and 46 ns (docs/getting-started.md, What a run will
+/// cost). The estimate so comes within 5 % of both walls' step loops.
+constexpr double kMicroCacheBodies = 1e4;
+constexpr double kMicroBodyStepGrowth = 0.6;
+constexpr double kMicroLinkSubstepGrowth = 0.18;
+/// The seconds per body-step and per link sub-step on one thread, in a
+/// scene of `bodies` bodies.
+double microSecondsPerBodyStep(double bodies);
+double microSecondsPerLinkSubstep(double bodies);
 /// Structure scale: seconds per cell-step (a 1,000-cell impact, 525 steps,
 /// 9.4 ms) and bytes per cell (measured on 1e6 cells).
 constexpr double kMacroSecondsPerCellStep = 1.8e-8;
