@@ -356,15 +356,17 @@ void Engine::updateNeighbours() {
   ++rebuilds_;
 }
 
-// The contact kernel's buffers of touching pairs: a chunk plus the longest row.
+// The contact kernel's buffers of touching pairs: a chunk plus the longest
+// row, plus 8 (the vector scan stores eight entries whole).
 void Engine::sizeTouchBuffers() {
   std::uint32_t longest_row = 0;
   for (std::size_t i = 0; i < p_.size(); ++i)
     longest_row = std::max(longest_row, list_.row_begin[i + 1] - list_.row_begin[i]);
+  const std::size_t size = kChunk + longest_row + 8;
   for (auto& sc : scratch_) {
-    sc.touch_i.resize(kChunk + longest_row);
-    sc.touch_k.resize(kChunk + longest_row);
-    for (auto* v : {&sc.touch_ex, &sc.touch_ey, &sc.touch_ez}) v->resize(kChunk + longest_row);
+    sc.touch_i.resize(size);
+    sc.touch_k.resize(size);
+    for (auto* v : {&sc.touch_ex, &sc.touch_ey, &sc.touch_ez}) v->resize(size);
   }
 }
 
