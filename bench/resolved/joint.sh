@@ -39,7 +39,10 @@
 #                               plates across x giving; its 10-cell hybrid
 #                               (within 0.5 m) without and with the joint;
 #                               and those with the macro nodes moving along
-#                               x and y, or x, y and z (resolve.macro_motion).
+#                               x and y, or x, y and z (resolve.macro_motion),
+#                               the hybrid through the depth too (its x-only
+#                               row where docs/resolved.md's wall_54_more
+#                               runs are there).
 #   bench/resolved/joint.sh [--out DIR] [--threads N]
 # About 25 minutes on 2 cores, 20 more with the 54-cell wall. Needs the
 # pipeline's results (README, command 1) and bench/resolved/run.sh's
@@ -135,6 +138,7 @@ if [ -f "$wide/hybrid_0/case.json" ]; then
   wide_run reach_0.5_xyz "$root/results/pipeline/law.json" --set resolve.within_m=0.5 --set resolve.macro_motion=xyz
   wide_run reach_0.5_xyz_joint_tiles_3 "$out/fit/law.json" --set resolve.within_m=0.5 --set resolve.joint=law \
     --set resolve.joint_tiles=3 --set resolve.macro_motion=xyz
+  wide_run whole_0.25_xyz "$root/results/pipeline/law.json" --set resolve.depth=whole --set resolve.macro_motion=xyz
 fi
 for f in fit fit_uc; do grep "^fit: joint" "$out/$f.log" || true; done
 python3 - "$root" "$out" <<'PY'
@@ -210,6 +214,8 @@ if load(f"{wide}/resolved") is not None:
                  f"{out}/wall_54/plastic_xyz_joint_tiles_3_0.25"),
                 ("10 cells, macro nodes along x, y and z", f"{out}/wall_54/reach_0.5_xyz"),
                 ("10 cells, macro nodes along x, y and z, joint in 3 x 3 tiles",
-                 f"{out}/wall_54/reach_0.5_xyz_joint_tiles_3")),
+                 f"{out}/wall_54/reach_0.5_xyz_joint_tiles_3"),
+                ("10 cells through the depth", f"{root}/results/wide_moving/wall_54_more/whole_0.25"),
+                ("10 cells through the depth, macro nodes along x, y and z", f"{out}/wall_54/whole_0.25_xyz")),
          wall_dir=f"{wide}/resolved")
 PY
