@@ -139,6 +139,8 @@ if [ -f "$wide/hybrid_0/case.json" ]; then
   wide_run reach_0.5_xyz_joint_tiles_3 "$out/fit/law.json" --set resolve.within_m=0.5 --set resolve.joint=law \
     --set resolve.joint_tiles=3 --set resolve.macro_motion=xyz
   wide_run whole_0.25_xyz "$root/results/pipeline/law.json" --set resolve.depth=whole --set resolve.macro_motion=xyz
+  wide_run whole_0.25_xyz_across "$root/results/pipeline/law.json" --set resolve.depth=whole \
+    --set resolve.macro_motion=xyz --set resolve.across=gives
 fi
 for f in fit fit_uc; do grep "^fit: joint" "$out/$f.log" || true; done
 python3 - "$root" "$out" <<'PY'
@@ -216,6 +218,8 @@ if load(f"{wide}/resolved") is not None:
                 ("10 cells, macro nodes along x, y and z, joint in 3 x 3 tiles",
                  f"{out}/wall_54/reach_0.5_xyz_joint_tiles_3"),
                 ("10 cells through the depth", f"{root}/results/wide_moving/wall_54_more/whole_0.25"),
-                ("10 cells through the depth, macro nodes along x, y and z", f"{out}/wall_54/whole_0.25_xyz")),
+                ("10 cells through the depth, macro nodes along x, y and z", f"{out}/wall_54/whole_0.25_xyz"),
+                ("10 cells through the depth, macro nodes along x, y and z, plates across x giving",
+                 f"{out}/wall_54/whole_0.25_xyz_across")),
          wall_dir=f"{wide}/resolved")
 PY
