@@ -6,6 +6,10 @@
 //   bench_curves points OUT.png TITLE XLABEL YLABEL LABEL=X:Y,X:Y,... ...
 //     draws each labelled list of points, joined, with markers (a table
 //     drawn as a chart: bench/resolved/table.py);
+//   bench_curves scatter OUT.png TITLE XLABEL YLABEL LABEL=X:Y,X:Y,... ...
+//     the same, markers only (runs that are not a sequence:
+//     bench/resolved/joint.sh); a series given as line:LABEL=... is drawn
+//     dashed (a reference, such as a target's edge);
 //   bench_curves error REF.h5 RUN.h5 XDS YDS [WINDOW [XMAX]]
 //     prints, as JSON, how far RUN's curve is from REF's: both taken on their
 //     first loading (x while it increases), each averaged over a moving
@@ -138,14 +142,17 @@ int at(char** argv) {
 
 }  // namespace
 
-int points(int argc, char** argv) {
+int points(int argc, char** argv, gabion::bridge::PlotSeries::Style style) {
   if (argc < 7) return 2;
   gabion::bridge::PlotSpec spec = chart(argv);
   for (int a = 6; a < argc; ++a) {
     const std::string arg = argv[a];
     const auto eq = arg.find('=');
     if (eq == std::string::npos) return 2;
-    gabion::bridge::PlotSeries s{arg.substr(0, eq), {}, {}, gabion::bridge::PlotSeries::Style::LineMarkers};
+    const bool reference = style == gabion::bridge::PlotSeries::Style::Markers && arg.rfind("line:", 0) == 0;
+    const std::size_t from = reference ? 5 : 0;
+    gabion::bridge::PlotSeries s{
+        arg.substr(from, eq - from), {}, {}, reference ? gabion::bridge::PlotSeries::Style::Dashed : style};
     for (const std::string& xy : split(arg.substr(eq + 1), ',')) {
       const auto parts = split(xy, ':');
       if (parts.size() != 2) return 2;
@@ -163,7 +170,8 @@ int main(int argc, char** argv) {
   int rc = 2;
   try {
     if (verb == "plot") rc = plot(argc, argv);
-    if (verb == "points") rc = points(argc, argv);
+    if (verb == "points") rc = points(argc, argv, gabion::bridge::PlotSeries::Style::LineMarkers);
+    if (verb == "scatter") rc = points(argc, argv, gabion::bridge::PlotSeries::Style::Markers);
     if (verb == "error" && argc >= 6 && argc <= 8) rc = error(argc, argv);
     if (verb == "at" && argc == 6) rc = at(argv);
   } catch (const std::exception& e) {
@@ -174,6 +182,7 @@ int main(int argc, char** argv) {
     std::fprintf(stderr,
                  "usage: bench_curves plot OUT.png TITLE XLABEL YLABEL LABEL=FILE.h5:XDS:YDS[:XSCALE:YSCALE] ...\n"
                  "       bench_curves points OUT.png TITLE XLABEL YLABEL LABEL=X:Y,X:Y,... ...\n"
+                 "       bench_curves scatter OUT.png TITLE XLABEL YLABEL [line:]LABEL=X:Y,X:Y,... ...\n"
                  "       bench_curves error REF.h5 RUN.h5 XDS YDS [WINDOW [XMAX]]\n"
                  "       bench_curves at FILE.h5 XDS YDS X\n");
   return rc;

@@ -144,7 +144,7 @@ if [ -f "$wide/hybrid_0/case.json" ]; then
 fi
 for f in fit fit_uc; do grep "^fit: joint" "$out/$f.log" || true; done
 python3 - "$root" "$out" <<'PY'
-import json, sys
+import json, math, os, subprocess, sys
 root, out = sys.argv[1], sys.argv[2]
 keys = ["peak_force_N", "max_penetration_m", "contact_duration_s", "max_back_face_displacement_m"]
 
@@ -158,15 +158,20 @@ def load(d):
 
 def rows(scenario, runs, first="", wall_dir=None):
     """A table row per run found: its errors against the scenario's resolved
-    wall, its wall time and how many times faster than the wall it ran."""
+    wall, its wall time and how many times faster than the wall it ran.
+    Returns (label, times faster, largest |error| in %) of each."""
     wall = load(wall_dir or f"{root}/results/speed_error/{scenario}/resolved")
+    points = []
     for label, d in runs:
         s = load(d)
         if wall is None or s is None:
             continue
-        err = " | ".join(f"{100 * (s[k] / wall[k] - 1):+.1f} %" for k in keys)
+        errors = [100 * (s[k] / wall[k] - 1) for k in keys]
+        err = " | ".join(f"{e:+.1f} %" for e in errors)
         fast = wall["wall_time_s"] / s["wall_time_s"]
         print(f"| {first}{label} | {err} | {s['outcome']} | {s['wall_time_s']:.0f} | {fast:.1f} |")
+        points.append((label, fast, max(abs(e) for e in errors)))
+    return points
 
 
 head = "peak force | penetration | contact | back face | outcome | wall time s | x faster |"
@@ -200,7 +205,7 @@ if load(f"{wide}/resolved") is not None:
     print()
     print(f"| 54-cell wall struck while settling, hybrid | {head}")
     print("|---|---|---|---|---|---|---|---|")
-    rows(None, (("5 cells", f"{wide}/hybrid_0"),
+    points = rows(None, (("5 cells", f"{wide}/hybrid_0"),
                 ("5 cells, joint", f"{out}/wall_54/joint_tiles_1_0.25"),
                 ("5 cells, joint in 3 x 3 tiles", f"{out}/wall_54/joint_tiles_3_0.25"),
                 ("5 cells, joint in 5 x 5 tiles", f"{out}/wall_54/joint_tiles_5_0.25"),
@@ -222,4 +227,19 @@ if load(f"{wide}/resolved") is not None:
                 ("10 cells through the depth, macro nodes along x, y and z, plates across x giving",
                  f"{out}/wall_54/whole_0.25_xyz_across")),
          wall_dir=f"{wide}/resolved")
+    # The chart: each hybrid's largest error against its speed-up, those
+    # with x-only macro nodes apart from those moving across x.
+    curves = f"{root}/build/bench/bench_curves"
+    if points and os.path.exists(curves):
+        series = []
+        for name, across in (("x-only macro nodes", False), ("macro nodes moving across x", True)):
+            pts = sorted((math.log10(f), e) for label, f, e in points if ("macro nodes" in label) == across)
+            if pts:
+                series.append(f"{name}=" + ",".join(f"{x:.4f}:{y:.3f}" for x, y in pts))
+        series.append("line:target: within 5 % at a tenth of the time or less=1:0,1:5,2:5")
+        os.makedirs(f"{out}/figures", exist_ok=True)
+        subprocess.run([curves, "scatter", f"{out}/figures/wall_54_error_vs_speed_up.png",
+                        "54-cell wall struck while settling: each hybrid's largest error against its speed-up",
+                        "times faster than the resolved wall, log10", "largest |error| of the four keys (%)"] + series,
+                       check=True)
 PY
