@@ -42,7 +42,10 @@
 #                               x and y, or x, y and z (resolve.macro_motion),
 #                               the hybrid through the depth too (its x-only
 #                               row where docs/resolved.md's wall_54_more
-#                               runs are there).
+#                               runs are there);
+#   OUT/figures/wall_54_error_vs_speed_up.png
+#                               each of those hybrids' largest error against
+#                               its speed-up (build/bench/bench_curves).
 #   bench/resolved/joint.sh [--out DIR] [--threads N]
 # About 25 minutes on 2 cores, 20 more with the 54-cell wall. Needs the
 # pipeline's results (README, command 1) and bench/resolved/run.sh's
