@@ -323,8 +323,7 @@ class Coupler {
       m << "the fine step " << dt << " s is above the macro part's critical step " << critical_s_ << " s";
       throw bridge::NumericalError(model_.steps(), model_.time_s(), m.str());
     }
-    if (prestress_.empty()) prestress_.assign(forces.size(), Vec3::Zero());
-    if (axes_ > 1 && !prestressed_) prestress_ = forces, prestressed_ = true;
+    if (prestress_.empty()) prestress_ = axes_ > 1 ? forces : std::vector<Vec3>(forces.size(), Vec3::Zero());
     for (const std::size_t n : face_node_) node_force_[n].setZero();
     for (std::size_t k = 0; k < forces.size(); ++k) node_force_[face_node_[k]] += forces[k] - prestress_[k];
     for (const std::size_t n : face_node_)
@@ -341,8 +340,10 @@ class Coupler {
       moves[k] = Vec3(dt * vx[n], axes_ > 1 ? dt * vy[n] : 0.0, axes_ > 2 ? dt * vz[n] : 0.0);
       prestress_work_J_ += prestress_[k].dot(moves[k]);
     }
-    for (const double u : model_.uy()) max_move_m_[0] = std::max(max_move_m_[0], std::fabs(u));
-    for (const double u : model_.uz()) max_move_m_[1] = std::max(max_move_m_[1], std::fabs(u));
+    if (axes_ > 1) {  // (x-only nodes do not move across x)
+      for (const double u : model_.uy()) max_move_m_[0] = std::max(max_move_m_[0], std::fabs(u));
+      for (const double u : model_.uz()) max_move_m_[1] = std::max(max_move_m_[1], std::fabs(u));
+    }
     give(across_, dt, forces, moves);
     give(joints_, dt, forces, moves);
     for (std::size_t k = 0; k < forces.size(); ++k) work_on_fine_J_ -= forces[k].dot(moves[k]);
@@ -411,7 +412,7 @@ class Coupler {
     a("work_on_fine_J", work_on_fine_J_), a("fine0", fine0_), a("started", started_), a("residual_J", residual_J_);
     a("last_force", last_force_), a("settled", settled_), a("at_peak", at_peak_), a("peak_axial_N", peak_axial_N_);
     a("failure", failure_), a("max_y_move_m", max_move_m_[0]), a("max_z_move_m", max_move_m_[1]);
-    a("prestress", prestress_), a("prestressed", prestressed_), a("prestress_work_J", prestress_work_J_);
+    a("prestress", prestress_), a("prestress_work_J", prestress_work_J_);
     across_.archive(a, "across");
     joints_.archive(a, "joint");
   }
@@ -481,9 +482,9 @@ class Coupler {
   double peak_axial_N_ = 0.0;
   double max_move_m_[2] = {0.0, 0.0};  // the largest |y| and |z| moves of a macro node (m)
   /// The plates' forces at the impact's first step, which the macro part
-  /// holds as pre-stress (3-D; zero in x-only), and their work on the nodes' moves (J).
+  /// holds as pre-stress (3-D; zero in x-only; empty before that step),
+  /// and their work on the nodes' moves (J).
   std::vector<Vec3> prestress_;
-  bool prestressed_ = false;
   double prestress_work_J_ = 0.0;
   double work_on_fine_J_ = 0.0;  // the plates' work on the bodies, -sum F . d
   double fine0_ = 0.0, residual_J_ = 0.0;
