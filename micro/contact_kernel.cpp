@@ -294,51 +294,65 @@ void contactPartition(Particles& p, const NeighbourList& list, const MaterialLaw
     m -= nq;
   };
   const std::uint32_t* __restrict const NBR = list.nbr.data();
-  const std::uint32_t* __restrict const ROW = list.row_begin.data();
-  for (std::uint32_t i = r0; i < r1; ++i) {
-    const double xi = X[i], yi = Y[i], zi = Z[i], ri = R[i];
-    const std::uint32_t kb = ROW[i], ke = ROW[i + 1];
+  const std::uint32_t* __restrict const OWN = list.owner.data();
+  // The partition's list entries in one run, row after row: each entry
+  // carries its row (the list's owner), so the vector scan fills every lane
+  // whatever the rows' lengths (a row has three or four entries in a
+  // settled packing: a scan row by row left half the lanes empty and
+  // mispredicted its loop's end at every row).
+  const std::uint32_t kb = list.row_begin[r0], ke = list.row_begin[r1];
+  // (one radius: the reach of every pair is 2 r, no radii gathered)
+  const bool one_radius = laws.uniform_radius;
+  const double reach0 = laws.uniform_radius_m + laws.uniform_radius_m;
 #if defined(__AVX512F__) && defined(__AVX512VL__)
-    // Eight list entries at a time: the partners' coordinates gathered, the
-    // touching ones compressed in registers and stored whole (the next
-    // group overwrites the tail; the buffers hold kChunk + the longest row
-    // + 8). The same differences as the scalar loop below, so the same
-    // pairs' kinematics: a pair on the edge that the two loops classify
-    // apart has no overlap and does nothing in touchingPairs.
-    const __m512d vxi = _mm512_set1_pd(xi), vyi = _mm512_set1_pd(yi), vzi = _mm512_set1_pd(zi),
-                  vri = _mm512_set1_pd(ri);
-    const __m256i vi = _mm256_set1_epi32(static_cast<int>(i)), lanes = _mm256_setr_epi32(0, 1, 2, 3, 4, 5, 6, 7);
-    for (std::uint32_t k = kb; k < ke; k += 8) {
-      const std::uint32_t n = std::min<std::uint32_t>(8, ke - k);
-      const auto valid = static_cast<__mmask8>((1u << n) - 1u);
-      const __m256i j = _mm256_maskz_loadu_epi32(valid, NBR + k);
-      const __m512d ex = _mm512_sub_pd(_mm512_mask_i32gather_pd(vxi, valid, j, X, 8), vxi);
-      const __m512d ey = _mm512_sub_pd(_mm512_mask_i32gather_pd(vyi, valid, j, Y, 8), vyi);
-      const __m512d ez = _mm512_sub_pd(_mm512_mask_i32gather_pd(vzi, valid, j, Z, 8), vzi);
-      const __m512d rs = _mm512_add_pd(vri, _mm512_mask_i32gather_pd(vri, valid, j, R, 8));
-      const __m512d d2 = _mm512_fmadd_pd(ez, ez, _mm512_fmadd_pd(ey, ey, _mm512_mul_pd(ex, ex)));
-      const __mmask8 touch = _mm512_mask_cmp_pd_mask(valid, d2, _mm512_mul_pd(rs, rs), _CMP_LT_OQ);
-      _mm256_storeu_si256(reinterpret_cast<__m256i*>(ti + m), vi);
-      _mm256_storeu_si256(
-          reinterpret_cast<__m256i*>(tk + m),
-          _mm256_maskz_compress_epi32(touch, _mm256_add_epi32(_mm256_set1_epi32(static_cast<int>(k)), lanes)));
-      _mm512_storeu_pd(tx + m, _mm512_maskz_compress_pd(touch, ex));
-      _mm512_storeu_pd(ty + m, _mm512_maskz_compress_pd(touch, ey));
-      _mm512_storeu_pd(tz + m, _mm512_maskz_compress_pd(touch, ez));
-      m += static_cast<std::size_t>(__builtin_popcount(touch));
+  // Eight entries at a time: both bodies' coordinates gathered, the
+  // touching entries compressed in registers and stored whole (the next
+  // group overwrites the tail; the buffers hold kChunk + 8). The same
+  // differences as the scalar loop below, so the same pairs' kinematics: a
+  // pair on the edge that the two loops classify apart has no overlap and
+  // does nothing in touchingPairs.
+  const __m256i lanes = _mm256_setr_epi32(0, 1, 2, 3, 4, 5, 6, 7);
+  const __m512d vreach0 = _mm512_set1_pd(reach0 * reach0), zero = _mm512_setzero_pd();
+  for (std::uint32_t k = kb; k < ke; k += 8) {
+    const std::uint32_t n = std::min<std::uint32_t>(8, ke - k);
+    const auto valid = static_cast<__mmask8>((1u << n) - 1u);
+    const __m256i i = _mm256_maskz_loadu_epi32(valid, OWN + k), j = _mm256_maskz_loadu_epi32(valid, NBR + k);
+    const __m512d ex =
+        _mm512_sub_pd(_mm512_mask_i32gather_pd(zero, valid, j, X, 8), _mm512_mask_i32gather_pd(zero, valid, i, X, 8));
+    const __m512d ey =
+        _mm512_sub_pd(_mm512_mask_i32gather_pd(zero, valid, j, Y, 8), _mm512_mask_i32gather_pd(zero, valid, i, Y, 8));
+    const __m512d ez =
+        _mm512_sub_pd(_mm512_mask_i32gather_pd(zero, valid, j, Z, 8), _mm512_mask_i32gather_pd(zero, valid, i, Z, 8));
+    __m512d reach2 = vreach0;
+    if (!one_radius) {
+      const __m512d rs =
+          _mm512_add_pd(_mm512_mask_i32gather_pd(zero, valid, i, R, 8), _mm512_mask_i32gather_pd(zero, valid, j, R, 8));
+      reach2 = _mm512_mul_pd(rs, rs);
     }
-#else
-    for (std::uint32_t k = kb; k < ke; ++k) {  // the buffers hold kChunk + the longest row
-      const std::uint32_t j = NBR[k];
-      const double ex = X[j] - xi, ey = Y[j] - yi, ez = Z[j] - zi, rs = ri + R[j];
-      ti[m] = i;
-      tk[m] = k;
-      tx[m] = ex, ty[m] = ey, tz[m] = ez;
-      m += (ex * ex + ey * ey + ez * ez < rs * rs) ? 1 : 0;
-    }
-#endif
-    while (m >= kChunk) flush(kChunk);  // leaves fewer than kChunk, so the next row fits
+    const __m512d d2 = _mm512_fmadd_pd(ez, ez, _mm512_fmadd_pd(ey, ey, _mm512_mul_pd(ex, ex)));
+    const __mmask8 touch = _mm512_mask_cmp_pd_mask(valid, d2, reach2, _CMP_LT_OQ);
+    _mm256_storeu_si256(reinterpret_cast<__m256i*>(ti + m), _mm256_maskz_compress_epi32(touch, i));
+    _mm256_storeu_si256(
+        reinterpret_cast<__m256i*>(tk + m),
+        _mm256_maskz_compress_epi32(touch, _mm256_add_epi32(_mm256_set1_epi32(static_cast<int>(k)), lanes)));
+    _mm512_storeu_pd(tx + m, _mm512_maskz_compress_pd(touch, ex));
+    _mm512_storeu_pd(ty + m, _mm512_maskz_compress_pd(touch, ey));
+    _mm512_storeu_pd(tz + m, _mm512_maskz_compress_pd(touch, ez));
+    m += static_cast<std::size_t>(__builtin_popcount(touch));
+    if (m >= kChunk) flush(kChunk);  // leaves fewer than 8
   }
+#else
+  for (std::uint32_t k = kb; k < ke; ++k) {  // the buffers hold kChunk + 8
+    const std::uint32_t i = OWN[k], j = NBR[k];
+    const double ex = X[j] - X[i], ey = Y[j] - Y[i], ez = Z[j] - Z[i];
+    const double rs = one_radius ? reach0 : R[i] + R[j];
+    ti[m] = i;
+    tk[m] = k;
+    tx[m] = ex, ty[m] = ey, tz[m] = ez;
+    m += (ex * ex + ey * ey + ez * ez < rs * rs) ? 1 : 0;
+    if (m >= kChunk) flush(kChunk);
+  }
+#endif
   if (m > 0) flush(m);
   s.contacts += out.contacts;
   if (out.failed) s.failed = true, s.fail_i = out.fail_i, s.fail_j = out.fail_j, s.fail_ratio = out.fail_ratio;

@@ -356,13 +356,11 @@ void Engine::updateNeighbours() {
   ++rebuilds_;
 }
 
-// The contact kernel's buffers of touching pairs: a chunk plus the longest
-// row, plus 8 (the vector scan stores eight entries whole).
+// The contact kernel's buffers of touching pairs: a chunk plus 8 (the scan
+// flushes a full chunk after each group of eight entries, and the vector
+// scan stores eight entries whole).
 void Engine::sizeTouchBuffers() {
-  std::uint32_t longest_row = 0;
-  for (std::size_t i = 0; i < p_.size(); ++i)
-    longest_row = std::max(longest_row, list_.row_begin[i + 1] - list_.row_begin[i]);
-  const std::size_t size = kChunk + longest_row + 8;
+  const std::size_t size = kChunk + 8 + 8;
   for (auto& sc : scratch_) {
     sc.touch_i.resize(size);
     sc.touch_k.resize(size);
@@ -966,7 +964,7 @@ void Engine::archive(bridge::StateArchive& a) {
   p_.forEachStateField([&](const char*, const auto& v) { sizes_ok = sizes_ok && v.size() == n; });
   p_.forEachScratchField([&](const char*, const auto& v) { sizes_ok = sizes_ok && v.size() == n; });
   if (!sizes_ok) throw std::invalid_argument("checkpoint: a state of another scene or number of threads");
-  if (listed) sizeTouchBuffers();
+  if (listed) list_.indexOwners(0, n), sizeTouchBuffers();
   if (listed && laws_.any_viscous) wallDamping(p_, walls_, laws_);
 }
 

@@ -284,13 +284,19 @@ void NeighbourGrid::buildList(const Particles& p, double skin, const ExcludedPai
     std::vector<std::size_t> base(nblocks + 1, 0);
     for (std::size_t b = 0; b < nblocks; ++b) base[b + 1] = base[b] + list_blocks_[b].size();
     out.nbr.resize(base[nblocks]);
+    out.owner.resize(base[nblocks]);
+    out.row_begin[n] = static_cast<std::uint32_t>(out.nbr.size());
     for_blocks(nblocks, [&](std::size_t b) {
       const auto shift = static_cast<std::uint32_t>(base[b]);
       for (std::size_t i = blockBegin(b); i < blockBegin(b + 1); ++i) out.row_begin[i] += shift;
       std::copy(list_blocks_[b].begin(), list_blocks_[b].end(), out.nbr.begin() + static_cast<long>(base[b]));
     });
+    // (after every block's shift: a block's last row ends where the next begins)
+    for_blocks(nblocks, [&](std::size_t b) { out.indexOwners(blockBegin(b), blockBegin(b + 1)); });
+    return;
   }
   out.row_begin[n] = static_cast<std::uint32_t>(out.nbr.size());
+  out.indexOwners(0, n);
 }
 
 }  // namespace gabion::micro

@@ -13,6 +13,7 @@
 ///
 /// Particles are sorted by class, then by cell: partners are close in
 /// memory, and a row's partners come out in increasing index order.
+#include <algorithm>
 #include <cstdint>
 #include <functional>
 #include <vector>
@@ -25,9 +26,17 @@ namespace gabion::micro {
 /// block writes only what it owns (Engine::forBlocks).
 using ForBlocks = std::function<void(std::size_t blocks, const std::function<void(std::size_t)>& fn)>;
 
-/// The half neighbour list: CSR by row i, partners j > i in increasing order.
+/// The half neighbour list: CSR by row i, partners j > i in increasing order;
+/// `owner[k]` is the row of entry k (so that a scan of the list can run over
+/// its entries, not row by row).
 struct NeighbourList {
-  std::vector<std::uint32_t> row_begin, nbr;
+  std::vector<std::uint32_t> row_begin, nbr, owner;
+  /// Sizes `owner` to the list and fills it for the rows [first, end).
+  void indexOwners(std::size_t first, std::size_t end) {
+    owner.resize(nbr.size());
+    for (std::size_t i = first; i < end; ++i)
+      std::fill(owner.begin() + row_begin[i], owner.begin() + row_begin[i + 1], static_cast<std::uint32_t>(i));
+  }
 };
 
 /// Pairs that never touch although they may be near (particles joined by a
