@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 #include <limits>
+#include <memory>
 
 namespace gabion::micro {
 
@@ -132,27 +133,41 @@ void wallCandidates(const Particles& p, std::vector<Wall>& walls, double skin, s
   const auto blockBegin = [&](std::size_t b) { return n * b / nblocks; };
   std::vector<std::vector<std::uint32_t>> lists(nblocks * nwalls);
   for_blocks(nblocks, [&](std::size_t b) {
+    const std::size_t i0 = blockBegin(b), i1 = blockBegin(b + 1);
+    const std::unique_ptr<std::uint32_t[]> buffer(new std::uint32_t[i1 - i0 + 1]);
+    std::uint32_t* __restrict const o = buffer.get();
+    const double *__restrict X = p.x.data(), *__restrict Y = p.y.data(), *__restrict Z = p.z.data(),
+                 *__restrict R = p.r.data(), *__restrict IMB = p.inv_body_mass.data();
+    const std::uint8_t* __restrict GRP = p.group.data();
     for (std::size_t wi = 0; wi < nwalls; ++wi) {
       const Wall& w = walls[wi];
-      const Vec3& q = w.position;
+      const double px = w.position.x(), py = w.position.y(), pz = w.position.z();
+      const double nx = w.n.x(), ny = w.n.y(), nz = w.n.z();
+      const double ux = w.u.x(), uy = w.u.y(), uz = w.u.z(), vx = w.v.x(), vy = w.v.y(), vz = w.v.z();
       // the wall may move half a skin before the next build
-      const double lim_u = w.bounded ? w.half_u + skin : std::numeric_limits<double>::infinity();
-      const double lim_v = w.bounded ? w.half_v + skin : std::numeric_limits<double>::infinity();
-      std::vector<std::uint32_t>& out = lists[b * nwalls + wi];
-      for (std::size_t i = blockBegin(b); i < blockBegin(b + 1); ++i) {
-        if (p.inv_body_mass[i] == 0.0 || ((w.skip_groups >> p.group[i]) & 1u) != 0) continue;
-        const Vec3 d(p.x[i] - q.x(), p.y[i] - q.y(), p.z[i] - q.z());
-        const double dist = d.dot(w.n);
-        if (dist >= p.r[i] + skin) continue;
-        // (a rounded plate also meets a particle beyond its rectangle, at its
-        // rim, and one behind it)
-        const double edge = w.rounded ? p.r[i] : 0.0;
-        if (w.rounded && dist <= -p.r[i] - skin) continue;
-        if (w.bounded && ((!w.rounded && dist < -skin) || std::fabs(d.dot(w.u)) > lim_u + edge ||
-                          std::fabs(d.dot(w.v)) > lim_v + edge))
-          continue;
-        out.push_back(static_cast<std::uint32_t>(i));
+      const double inf = std::numeric_limits<double>::infinity();
+      const double lim_u = w.bounded ? w.half_u + skin : inf, lim_v = w.bounded ? w.half_v + skin : inf;
+      const bool bounded = w.bounded, rounded = w.rounded;
+      const std::uint32_t skip = w.skip_groups;
+      // Branch-free (the test decides whether the write is kept): the
+      // particles are in cell order, so a wall's candidates come in short
+      // runs, and a branch on each mispredicted at every run's ends.
+      std::size_t cnt = 0;
+      for (std::size_t i = i0; i < i1; ++i) {
+        const double dx = X[i] - px, dy = Y[i] - py, dz = Z[i] - pz, r = R[i];
+        const double dist = dx * nx + dy * ny + dz * nz;
+        const bool loose = IMB[i] != 0.0, grouped = ((skip >> GRP[i]) & 1u) == 0;
+        // (a rounded plate also meets a particle beyond its rectangle, at
+        // its rim, and one behind it)
+        const double edge = rounded ? r : 0.0;
+        const bool front = dist < r + skin, behind = rounded ? dist > -r - skin : !bounded || dist >= -skin;
+        const bool over = !bounded || ((std::fabs(dx * ux + dy * uy + dz * uz) <= lim_u + edge) &
+                                       (std::fabs(dx * vx + dy * vy + dz * vz) <= lim_v + edge));
+        const bool keep = loose & grouped & front & behind & over;
+        o[cnt] = static_cast<std::uint32_t>(i);
+        cnt += keep ? 1 : 0;
       }
+      lists[b * nwalls + wi].assign(o, o + cnt);
     }
   });
   for (std::size_t wi = 0; wi < nwalls; ++wi) {
