@@ -60,6 +60,13 @@ class StateArchive {
   void operator()(const std::string& name, std::vector<double>& v);
   void operator()(const std::string& name, std::vector<Eigen::Vector3d>& v);
   void operator()(const std::string& name, std::vector<std::string>& v);
+  /// Doubles in a vector of another allocator (an aligned store's), through a copy.
+  template <class A, std::enable_if_t<!std::is_same_v<A, std::allocator<double>>, int> = 0>
+  void operator()(const std::string& name, std::vector<double, A>& v) {
+    std::vector<double> x(v.begin(), v.end());
+    (*this)(name, x);
+    if (loading()) v.assign(x.begin(), x.end());
+  }
   template <class T, std::enable_if_t<std::is_integral_v<T>, int> = 0>
   void operator()(const std::string& name, std::vector<T>& v) {
     std::vector<long long> x(v.begin(), v.end());

@@ -23,6 +23,22 @@ Range evenPart(std::size_t n, std::size_t t, std::size_t parts) {
   return {n * t / parts, n * (t + 1) / parts};
 }
 
+// The first particle of a worker's range, boundary k rounded down to a whole
+// cache line of the store's fields (eight doubles), not before `previous`.
+std::uint32_t lineStart(std::size_t k, std::uint32_t previous) {
+  constexpr std::size_t kLine = 64 / sizeof(double);
+  return std::max(previous, static_cast<std::uint32_t>(k / kLine * kLine));
+}
+
+// As evenPart, for ranges of the particle store's fields: the inner
+// boundaries fall on whole cache lines (eight doubles; the fields are
+// line-aligned, micro/particles.hpp), so two workers never write one line.
+Range linePart(std::size_t n, std::size_t t, std::size_t parts) {
+  constexpr std::size_t kLine = 64 / sizeof(double);
+  const auto cut = [&](std::size_t k) { return k == 0 ? 0 : k == parts ? n : n * k / parts / kLine * kLine; };
+  return {cut(t), cut(t + 1)};
+}
+
 // Blocks of the same shape and density (a wall of copies of one cell, each
 // block a copy of its cell's) share one computation: the key is the exact
 // bytes of the shape, so each block gets what it would get alone.
@@ -395,9 +411,9 @@ Engine::SavedContacts Engine::saveContacts() {
 }
 
 namespace {
-template <class T>
-void permute(std::vector<T>& v, const std::vector<std::uint32_t>& order) {
-  std::vector<T> tmp(v.size());
+template <class T, class A>
+void permute(std::vector<T, A>& v, const std::vector<std::uint32_t>& order) {
+  std::vector<T, A> tmp(v.size());
   for (std::size_t k = 0; k < order.size(); ++k) tmp[k] = v[order[k]];
   v.swap(tmp);
 }
@@ -501,7 +517,7 @@ void Engine::partitionRows(const std::vector<std::uint32_t>& from) {
       continue;
     }
     for (std::size_t i = blockBegin(b); i < blockBegin(b + 1) && t < T; ++i) {
-      while (t < T && acc >= total * t / T) part_begin_[t++] = static_cast<std::uint32_t>(i);
+      while (t < T && acc >= total * t / T) part_begin_[t] = lineStart(i, part_begin_[t - 1]), ++t;
       acc += rowWeight(i);
     }
   }
@@ -531,7 +547,7 @@ void Engine::partitionWallCandidates() {
       else
         first = mid + 1;
     }
-    wall_part_[t] = first;
+    wall_part_[t] = lineStart(first, wall_part_[t - 1]);
   }
 }
 
@@ -733,7 +749,7 @@ void Engine::integrate(bool measure) {
   const std::size_t workers = scratch_.size(), n = p_.size();
   parallel(StageProfile::kIntegrate, [&](int task) {
     const auto t = static_cast<std::size_t>(task);
-    const Range r = evenPart(n, t, workers);
+    const Range r = linePart(n, t, workers);
     const std::size_t b = r.first, e = r.end;
     addForceBuffers(b, e);
     if (all_loose_) {

@@ -9,6 +9,7 @@
 /// survives the re-sort: `slot[id]` is its current index.
 #include <cstddef>
 #include <cstdint>
+#include <new>
 #include <vector>
 
 #include "bridge/state_archive.hpp"
@@ -21,17 +22,42 @@ namespace gabion::micro {
 /// particles joined by a link never touch each other (micro/links.hpp).
 constexpr int kGroupCount = 32;
 
+/// Allocates on cache-line (64-byte) boundaries: the workers' ranges of a
+/// field, cut at multiples of eight particles, then share no cache line (two
+/// cores writing one line take it from each other at every step).
+template <class T>
+struct CacheLineAllocator {
+  using value_type = T;
+  static constexpr std::align_val_t kAlign{64};
+  CacheLineAllocator() = default;
+  template <class U>
+  CacheLineAllocator(const CacheLineAllocator<U>&) {}
+  T* allocate(std::size_t n) { return static_cast<T*>(::operator new(n * sizeof(T), kAlign)); }
+  void deallocate(T* p, std::size_t) { ::operator delete(p, kAlign); }
+  template <class U>
+  bool operator==(const CacheLineAllocator<U>&) const {
+    return true;
+  }
+  template <class U>
+  bool operator!=(const CacheLineAllocator<U>&) const {
+    return false;
+  }
+};
+/// A field of the particle store.
+template <class T>
+using Field = std::vector<T, CacheLineAllocator<T>>;
+
 struct Particles {
   // --- state: moves with the particle when the store is re-sorted
-  std::vector<double> x, y, z;        ///< centre (m)
-  std::vector<double> vx, vy, vz;     ///< velocity (m/s)
-  std::vector<double> wx, wy, wz;     ///< angular velocity (rad/s)
-  std::vector<double> r;              ///< radius (m)
-  std::vector<double> inv_body_mass;  ///< 1/m of the owning body (1/kg); 0: fixed (contact damping, pairs)
+  Field<double> x, y, z;        ///< centre (m)
+  Field<double> vx, vy, vz;     ///< velocity (m/s)
+  Field<double> wx, wy, wz;     ///< angular velocity (rad/s)
+  Field<double> r;              ///< radius (m)
+  Field<double> inv_body_mass;  ///< 1/m of the owning body (1/kg); 0: fixed (contact damping, pairs)
   /// free spheres only (else 0), for the integrator: mass gives the weight,
   /// inv_mass and inv_inertia the motion (SphereSpec::mass_scale)
-  std::vector<double> mass, inv_mass, inv_inertia;
-  std::vector<double> alpha;             ///< Cundall local damping of free spheres (-)
+  Field<double> mass, inv_mass, inv_inertia;
+  Field<double> alpha;                   ///< Cundall local damping of free spheres (-)
   std::vector<std::int32_t> body;        ///< owning block, -1 for a free sphere
   std::vector<std::uint32_t> mat;        ///< material (32-bit: the vector kernels gather it)
   std::vector<std::uint32_t> id;         ///< stable id
@@ -39,9 +65,9 @@ struct Particles {
   std::vector<std::uint8_t> size_class;  ///< size class of the neighbour grid (micro/neighbour_grid.hpp)
 
   // --- scratch: recomputed, not carried through a re-sort
-  std::vector<double> fx, fy, fz;  ///< force of this step (N)
-  std::vector<double> tx, ty, tz;  ///< torque about the centre (N m)
-  std::vector<double> x0, y0, z0;  ///< centre at the last neighbour-list build (m)
+  Field<double> fx, fy, fz;  ///< force of this step (N)
+  Field<double> tx, ty, tz;  ///< torque about the centre (N m)
+  Field<double> x0, y0, z0;  ///< centre at the last neighbour-list build (m)
 
   /// id -> current index (not permuted: rewritten by permute()).
   std::vector<std::uint32_t> slot;
