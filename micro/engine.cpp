@@ -411,22 +411,29 @@ Engine::SavedContacts Engine::saveContacts() {
 }
 
 namespace {
+// Permutes a field in place through a worker's scratch of its type: the
+// field keeps its (line-aligned) buffer. (A new buffer for each field at
+// every rebuild, swapped in, let the heap fragment under aligned
+// allocations: the settling run at N = 20,000 grew by 6 MB over its
+// rebuilds.)
 template <class T, class A>
-void permute(std::vector<T, A>& v, const std::vector<std::uint32_t>& order) {
-  std::vector<T, A> tmp(v.size());
+void permute(std::vector<T, A>& v, const std::vector<std::uint32_t>& order, std::vector<T>& tmp) {
+  tmp.resize(order.size());
   for (std::size_t k = 0; k < order.size(); ++k) tmp[k] = v[order[k]];
-  v.swap(tmp);
+  std::copy(tmp.begin(), tmp.end(), v.begin());
 }
 }  // namespace
 
 void Engine::reorderParticles(const std::vector<std::uint32_t>& order) {
   // One field per task (the store's one list of fields), tasks dealt to the workers in turn.
-  std::vector<std::function<void()>> tasks;
-  p_.forEachStateField(
-      [&](const char*, auto& field) { tasks.emplace_back([&field, &order] { permute(field, order); }); });
+  std::vector<std::function<void(WorkerScratch&)>> tasks;
+  p_.forEachStateField([&](const char*, auto& field) {
+    tasks.emplace_back([&field, &order](WorkerScratch& s) { permute(field, order, s.permute.of(field)); });
+  });
   const std::size_t workers = scratch_.size();
   parallel(StageProfile::kNeighbours, [&](int t) {
-    for (std::size_t a = static_cast<std::size_t>(t); a < tasks.size(); a += workers) tasks[a]();
+    for (std::size_t a = static_cast<std::size_t>(t); a < tasks.size(); a += workers)
+      tasks[a](scratch_[static_cast<std::size_t>(t)]);
   });
   for (std::size_t k = 0; k < p_.size(); ++k) p_.slot[p_.id[k]] = static_cast<std::uint32_t>(k);
 }
