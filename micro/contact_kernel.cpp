@@ -45,6 +45,7 @@ struct KernelHistory {
 struct KernelOut {
   double *FX, *FY, *FZ, *TX, *TY, *TZ;
   double *BFX, *BFY, *BFZ, *BTX, *BTY, *BTZ;
+  std::uint8_t* written;  // per group of eight particles of the buffer
   std::uint32_t own_end;
   ContactEnergy* energy;
   std::size_t contacts = 0;
@@ -195,6 +196,7 @@ void touchingPairs(const KernelIn& in, const std::uint32_t* ci, const std::uint3
     // in registers.
     double* __restrict BFX = out.BFX, * __restrict BFY = out.BFY, * __restrict BFZ = out.BFZ;
     double* __restrict BTX = out.BTX, * __restrict BTY = out.BTY, * __restrict BTZ = out.BTZ;
+    std::uint8_t* __restrict written = out.written;
     for (std::size_t q = 0; q < nq; ++q) {
       const std::uint32_t i = ci[q], j = NBR[ck[q]];
       FX[i] += b[kFx][q], FY[i] += b[kFy][q], FZ[i] += b[kFz][q];
@@ -204,6 +206,7 @@ void touchingPairs(const KernelIn& in, const std::uint32_t* ci, const std::uint3
         TX[j] += b[kJx][q], TY[j] += b[kJy][q], TZ[j] += b[kJz][q];
       } else {
         hi = std::max(hi, j);
+        written[j >> 3] = 1;
         BFX[j] -= b[kFx][q], BFY[j] -= b[kFy][q], BFZ[j] -= b[kFz][q];
         BTX[j] += b[kJx][q], BTY[j] += b[kJy][q], BTZ[j] += b[kJz][q];
       }
@@ -270,6 +273,7 @@ void contactPartition(Particles& p, const NeighbourList& list, const MaterialLaw
   out.TX = p.tx.data(), out.TY = p.ty.data(), out.TZ = p.tz.data();
   out.BFX = s.fx.data(), out.BFY = s.fy.data(), out.BFZ = s.fz.data();
   out.BTX = s.tx.data(), out.BTY = s.ty.data(), out.BTZ = s.tz.data();
+  out.written = s.written.data();
   out.own_end = r1;
   out.energy = &s.energy;
   ContactSet& next = s.sets[hcur ^ 1];

@@ -237,10 +237,12 @@ Engine::Engine(const Scene& scene, int threads) {
   pool_ = std::make_unique<WorkerPool>(threads);
   scratch_.resize(static_cast<std::size_t>(pool_->size()));
   profile_.partition_busy_s.resize(scratch_.size());
-  for (std::size_t t = 0; t + 1 < scratch_.size(); ++t)  // partners beyond partition t's particles
+  for (std::size_t t = 0; t + 1 < scratch_.size(); ++t) {  // partners beyond partition t's particles
     for (auto* v :
          {&scratch_[t].fx, &scratch_[t].fy, &scratch_[t].fz, &scratch_[t].tx, &scratch_[t].ty, &scratch_[t].tz})
       v->assign(p_.size(), 0.0);
+    scratch_[t].written.assign(p_.size() / 8 + 1, 0);
+  }
 }
 
 Engine::~Engine() = default;
@@ -737,17 +739,22 @@ void Engine::driveWalls() {
 // non-finite states and whether the list must be rebuilt.
 
 // The contact kernel's partition t left the forces on particles beyond its
-// rows in its buffer (the band [lo, hi]); they are added here, for each
-// particle in partition order, and the buffers cleared.
+// rows in its buffer (the band [lo, hi], in the groups of eight particles it
+// marked written); they are added here, for each particle in partition
+// order, and the buffers and marks cleared. [b, e) starts on a whole group.
 void Engine::addForceBuffers(std::size_t b, std::size_t e) {
   for (std::size_t t = 0; t + 1 < scratch_.size(); ++t) {
     WorkerScratch& s = scratch_[t];
     if (s.lo > s.hi) continue;
     const std::size_t lo = std::max<std::size_t>(b, s.lo), hi = std::min<std::size_t>(e, s.hi + std::size_t{1});
-    for (std::size_t i = lo; i < hi; ++i) {
-      p_.fx[i] += s.fx[i], p_.fy[i] += s.fy[i], p_.fz[i] += s.fz[i];
-      p_.tx[i] += s.tx[i], p_.ty[i] += s.ty[i], p_.tz[i] += s.tz[i];
-      s.fx[i] = s.fy[i] = s.fz[i] = s.tx[i] = s.ty[i] = s.tz[i] = 0.0;
+    for (std::size_t g = lo / 8; g * 8 < hi; ++g) {
+      if (s.written[g] == 0) continue;
+      s.written[g] = 0;
+      for (std::size_t i = std::max(lo, g * 8); i < std::min(hi, g * 8 + 8); ++i) {
+        p_.fx[i] += s.fx[i], p_.fy[i] += s.fy[i], p_.fz[i] += s.fz[i];
+        p_.tx[i] += s.tx[i], p_.ty[i] += s.ty[i], p_.tz[i] += s.tz[i];
+        s.fx[i] = s.fy[i] = s.fz[i] = s.tx[i] = s.ty[i] = s.tz[i] = 0.0;
+      }
     }
   }
 }

@@ -86,11 +86,14 @@ struct WorkerScratch {
   PermuteScratch permute;  ///< re-sorting the store's fields (rebuilds)
 
   // contact kernel: the force buffer for partners beyond the particles of
-  // its partition (none for the last partition) and the band [lo, hi] of it
-  // written; the contact sets (the last step's and this step's); a chunk of
-  // touching pairs (+ one list row)
+  // its partition (none for the last partition), the band [lo, hi] of it
+  // written and, per group of eight particles, whether it was written (a
+  // partition's partners beyond its rows can be few and far apart: large
+  // spheres at the end of the order); the contact sets (the last step's and
+  // this step's); a chunk of touching pairs
   std::vector<double> fx, fy, fz, tx, ty, tz;
   std::uint32_t lo = 0, hi = 0;
+  std::vector<std::uint8_t> written;
   ContactSet sets[2];
   std::vector<std::uint32_t> touch_i, touch_k;
   std::vector<double> touch_ex, touch_ey, touch_ez;  // x_j - x_i of the collected pairs
