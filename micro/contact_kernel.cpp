@@ -302,8 +302,8 @@ void contactPartition(Particles& p, const NeighbourList& list, const MaterialLaw
   // The partition's list entries in one run, row after row: each entry
   // carries its row (the list's owner), so the vector scan fills every lane
   // whatever the rows' lengths (a row has three or four entries in a
-  // settled packing: a scan row by row left half the lanes empty and
-  // mispredicted its loop's end at every row).
+  // settled packing: a scan row by row would leave half the lanes empty
+  // and mispredict its loop's end at every row).
   const std::uint32_t kb = list.row_begin[r0], ke = list.row_begin[r1];
   // (one radius: the reach of every pair is 2 r, no radii gathered)
   const bool one_radius = laws.uniform_radius;

@@ -415,8 +415,8 @@ Engine::SavedContacts Engine::saveContacts() {
 namespace {
 // Permutes a field in place through a worker's scratch of its type: the
 // field keeps its (line-aligned) buffer. (A new buffer for each field at
-// every rebuild, swapped in, let the heap fragment under aligned
-// allocations: the settling run at N = 20,000 grew by 6 MB over its
+// every rebuild, swapped in, would fragment the heap under aligned
+// allocations: the settling run at N = 20,000 would grow by 6 MB over its
 // rebuilds.)
 template <class T, class A>
 void permute(std::vector<T, A>& v, const std::vector<std::uint32_t>& order, std::vector<T>& tmp) {
