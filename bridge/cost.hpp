@@ -11,27 +11,26 @@
 
 namespace gabion::bridge {
 
-/// Fine DEM: seconds per body-step on one thread (the default pipeline's
-/// four lab tests measured 2.4e-8 to 4.9e-8), bytes of memory per body
+/// Fine DEM: seconds per body-step on one thread, bytes of memory per body
 /// (27,000 spheres: 19 MB above the process's base), bytes per body per
 /// snapshot record in result.h5 (position, velocity, angular velocity).
-constexpr double kMicroSecondsPerBodyStep = 3.5e-8;
+constexpr double kMicroSecondsPerBodyStep = 2.8e-8;
 constexpr double kMicroBytesPerBody = 1000.0;
 constexpr double kMicroSnapshotBytesPerBody = 100.0;
 /// Fine DEM: seconds per link per sub-step of the link nodes, on one thread,
-/// on top of the body-steps (a cell's 1,578 links at 8 sub-steps: 0.32 ms a
+/// on top of the body-steps (a cell's 1,578 links at 8 sub-steps: 0.28 ms a
 /// step of its confined compression).
-constexpr double kMicroSecondsPerLinkSubstep = 2.5e-8;
+constexpr double kMicroSecondsPerLinkSubstep = 2.2e-8;
 /// Both rates hold while the scene's bodies fit the core's cache, up to
 /// about kMicroCacheBodies block members and spheres (one cell); past that
 /// each grows by its factor per e-fold of bodies: measured on one thread
 /// (the stage table of `gabion run --threads 1`), a cell's confined
-/// compression (9,129 bodies) gives 34 ns a body-step and 26 ns a link
-/// sub-step; the resolved 12-cell wall (110,000) 87 and 37 ns; the 54-cell
-/// wall (493,000) 103 and 46 ns (docs/getting-started.md, What a run will
+/// compression (9,129 bodies) gives 28 ns a body-step and 22 ns a link
+/// sub-step; the resolved 12-cell wall (110,000) 67 and 31 ns; the 54-cell
+/// wall (493,000) 79 and 38 ns (docs/getting-started.md, What a run will
 /// cost). The estimate so comes within 5 % of both walls' step loops.
 constexpr double kMicroCacheBodies = 1e4;
-constexpr double kMicroBodyStepGrowth = 0.6;
+constexpr double kMicroBodyStepGrowth = 0.51;
 constexpr double kMicroLinkSubstepGrowth = 0.18;
 /// The seconds per body-step and per link sub-step on one thread, in a
 /// scene of `bodies` bodies.

@@ -240,7 +240,7 @@ TEST(MicroLinkSubsteps, TheCostEstimateCountsEachLinkAtEachSubStep) {
 // The rates hold while a scene fits the core's cache (about one cell's
 // bodies) and grow with the bodies past that, as measured on one cell and
 // on the resolved 12-cell and 54-cell walls (bridge/cost.hpp): the walls'
-// step loops, 15.3 and 83.3 ms a step on one thread there (109,549 bodies
+// step loops, 12.0 and 64.6 ms a step on one thread there (109,549 bodies
 // and 18,936 links; 492,967 and 85,212; 8 sub-steps), are estimated within
 // 5 %, where the one-cell rates gave half.
 TEST(MicroCost, TheRatesGrowWithTheSceneOutOfTheCache) {
@@ -250,9 +250,9 @@ TEST(MicroCost, TheRatesGrowWithTheSceneOutOfTheCache) {
   const auto step = [](double bodies, double links) {
     return microRun(bodies, 1.0, 1.0, 1.0, 1.0, 8.0 * links).wall_time_s;
   };
-  EXPECT_NEAR(step(109549.0, 18936.0), 15.3e-3, 0.05 * 15.3e-3);
-  EXPECT_NEAR(step(492967.0, 85212.0), 83.3e-3, 0.05 * 83.3e-3);
-  EXPECT_LT(kMicroSecondsPerBodyStep * 109549.0 + kMicroSecondsPerLinkSubstep * 8.0 * 18936.0, 0.55 * 15.3e-3);
+  EXPECT_NEAR(step(109549.0, 18936.0), 12.0e-3, 0.05 * 12.0e-3);
+  EXPECT_NEAR(step(492967.0, 85212.0), 64.6e-3, 0.05 * 64.6e-3);
+  EXPECT_LT(kMicroSecondsPerBodyStep * 109549.0 + kMicroSecondsPerLinkSubstep * 8.0 * 18936.0, 0.55 * 12.0e-3);
   EXPECT_GT(microSecondsPerBodyStep(1e6), microSecondsPerBodyStep(1e5));
 }
 
