@@ -21,9 +21,7 @@ Estimate oneRun(double bodies, double steps, double snapshots) {
   e.snapshots = snapshots;
   return e;
 }
-}  // namespace
 
-namespace {
 // (1 while the scene fits the cache, then 1 + growth per e-fold of bodies)
 double cacheFactor(double bodies, double growth) {
   return bodies > kMicroCacheBodies ? 1.0 + growth * std::log(bodies / kMicroCacheBodies) : 1.0;

@@ -45,7 +45,7 @@ struct KernelHistory {
 struct KernelOut {
   double *FX, *FY, *FZ, *TX, *TY, *TZ;
   double *BFX, *BFY, *BFZ, *BTX, *BTY, *BTZ;
-  std::uint8_t* written;  // per group of eight particles of the buffer
+  std::uint8_t* written;  // per cache line of particles (kParticlesPerLine) of the buffer
   std::uint32_t own_end;
   ContactEnergy* energy;
   std::size_t contacts = 0;
@@ -206,7 +206,7 @@ void touchingPairs(const KernelIn& in, const std::uint32_t* ci, const std::uint3
         TX[j] += b[kJx][q], TY[j] += b[kJy][q], TZ[j] += b[kJz][q];
       } else {
         hi = std::max(hi, j);
-        written[j >> 3] = 1;
+        written[j / kParticlesPerLine] = 1;
         BFX[j] -= b[kFx][q], BFY[j] -= b[kFy][q], BFZ[j] -= b[kFz][q];
         BTX[j] += b[kJx][q], BTY[j] += b[kJy][q], BTZ[j] += b[kJz][q];
       }

@@ -24,18 +24,16 @@ Range evenPart(std::size_t n, std::size_t t, std::size_t parts) {
 }
 
 // The first particle of a worker's range, boundary k rounded down to a whole
-// cache line of the store's fields (eight doubles), not before `previous`.
+// cache line of the store's fields (kParticlesPerLine; the fields are
+// line-aligned, micro/particles.hpp), not before `previous`: two workers
+// never write one line.
 std::uint32_t lineStart(std::size_t k, std::uint32_t previous) {
-  constexpr std::size_t kLine = 64 / sizeof(double);
-  return std::max(previous, static_cast<std::uint32_t>(k / kLine * kLine));
+  return std::max(previous, static_cast<std::uint32_t>(k / kParticlesPerLine * kParticlesPerLine));
 }
 
-// As evenPart, for ranges of the particle store's fields: the inner
-// boundaries fall on whole cache lines (eight doubles; the fields are
-// line-aligned, micro/particles.hpp), so two workers never write one line.
+// As evenPart, with the inner boundaries on whole cache lines (lineStart).
 Range linePart(std::size_t n, std::size_t t, std::size_t parts) {
-  constexpr std::size_t kLine = 64 / sizeof(double);
-  const auto cut = [&](std::size_t k) { return k == 0 ? 0 : k == parts ? n : n * k / parts / kLine * kLine; };
+  const auto cut = [&](std::size_t k) { return k == parts ? n : std::size_t{lineStart(n * k / parts, 0)}; };
   return {cut(t), cut(t + 1)};
 }
 
@@ -241,7 +239,7 @@ Engine::Engine(const Scene& scene, int threads) {
     for (auto* v :
          {&scratch_[t].fx, &scratch_[t].fy, &scratch_[t].fz, &scratch_[t].tx, &scratch_[t].ty, &scratch_[t].tz})
       v->assign(p_.size(), 0.0);
-    scratch_[t].written.assign(p_.size() / 8 + 1, 0);
+    scratch_[t].written.assign(p_.size() / kParticlesPerLine + 1, 0);
   }
 }
 
@@ -747,10 +745,11 @@ void Engine::addForceBuffers(std::size_t b, std::size_t e) {
     WorkerScratch& s = scratch_[t];
     if (s.lo > s.hi) continue;
     const std::size_t lo = std::max<std::size_t>(b, s.lo), hi = std::min<std::size_t>(e, s.hi + std::size_t{1});
-    for (std::size_t g = lo / 8; g * 8 < hi; ++g) {
+    constexpr std::size_t kLine = kParticlesPerLine;
+    for (std::size_t g = lo / kLine; g * kLine < hi; ++g) {
       if (s.written[g] == 0) continue;
       s.written[g] = 0;
-      for (std::size_t i = std::max(lo, g * 8); i < std::min(hi, g * 8 + 8); ++i) {
+      for (std::size_t i = std::max(lo, g * kLine); i < std::min(hi, g * kLine + kLine); ++i) {
         p_.fx[i] += s.fx[i], p_.fy[i] += s.fy[i], p_.fz[i] += s.fz[i];
         p_.tx[i] += s.tx[i], p_.ty[i] += s.ty[i], p_.tz[i] += s.tz[i];
         s.fx[i] = s.fy[i] = s.fz[i] = s.tx[i] = s.ty[i] = s.tz[i] = 0.0;
@@ -994,7 +993,7 @@ void Engine::archive(bridge::StateArchive& a) {
   p_.forEachStateField([&](const char*, const auto& v) { sizes_ok = sizes_ok && v.size() == n; });
   p_.forEachScratchField([&](const char*, const auto& v) { sizes_ok = sizes_ok && v.size() == n; });
   if (!sizes_ok) throw std::invalid_argument("checkpoint: a state of another scene or number of threads");
-  if (listed) list_.indexOwners(0, n), sizeTouchBuffers();
+  if (listed) list_.indexOwners(), sizeTouchBuffers();
   if (listed && laws_.any_viscous) wallDamping(p_, walls_, laws_);
 }
 

@@ -296,7 +296,7 @@ void NeighbourGrid::buildList(const Particles& p, double skin, const ExcludedPai
     return;
   }
   out.row_begin[n] = static_cast<std::uint32_t>(out.nbr.size());
-  out.indexOwners(0, n);
+  out.indexOwners();
 }
 
 }  // namespace gabion::micro

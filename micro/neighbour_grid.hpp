@@ -31,11 +31,16 @@ using ForBlocks = std::function<void(std::size_t blocks, const std::function<voi
 /// its entries, not row by row).
 struct NeighbourList {
   std::vector<std::uint32_t> row_begin, nbr, owner;
-  /// Sizes `owner` to the list and fills it for the rows [first, end).
+  /// Fills `owner` (sized to the list) for the rows [first, end): workers
+  /// may fill ranges of rows at once.
   void indexOwners(std::size_t first, std::size_t end) {
-    owner.resize(nbr.size());
     for (std::size_t i = first; i < end; ++i)
       std::fill(owner.begin() + row_begin[i], owner.begin() + row_begin[i + 1], static_cast<std::uint32_t>(i));
+  }
+  /// Sizes `owner` to the list and fills it for every row.
+  void indexOwners() {
+    owner.resize(nbr.size());
+    if (!row_begin.empty()) indexOwners(0, row_begin.size() - 1);
   }
 };
 

@@ -46,6 +46,9 @@ struct CacheLineAllocator {
 /// A field of the particle store.
 template <class T>
 using Field = std::vector<T, CacheLineAllocator<T>>;
+/// Particles per cache line of a double field: the grain at which workers'
+/// ranges are cut and force buffers are marked.
+constexpr std::size_t kParticlesPerLine = static_cast<std::size_t>(CacheLineAllocator<double>::kAlign) / sizeof(double);
 
 struct Particles {
   // --- state: moves with the particle when the store is re-sorted

@@ -87,7 +87,8 @@ struct WorkerScratch {
 
   // contact kernel: the force buffer for partners beyond the particles of
   // its partition (none for the last partition), the band [lo, hi] of it
-  // written and, per group of eight particles, whether it was written (a
+  // written and, per cache line of particles (kParticlesPerLine), whether it
+  // was written (a
   // partition's partners beyond its rows can be few and far apart: large
   // spheres at the end of the order); the contact sets (the last step's and
   // this step's); a chunk of touching pairs
