@@ -281,7 +281,8 @@ int runSlice(const Options& o, const gabion::bridge::CaseKind& kind, const JsonD
   ctx.outdir = outdir;
   ctx.threads = o.threads;
   ctx.case_file = o.case_file;
-  ctx.progress = !o.quiet && isatty(STDOUT_FILENO) != 0;
+  ctx.progress = !o.quiet;
+  ctx.progress_log = isatty(STDOUT_FILENO) == 0;
   ctx.workers = workers;
   ctx.case_digest = gabion::bridge::hexDigest(gabion::bridge::fnv1a(doc.json().dump()));
   const auto outcome = gabion::bridge::runRowSlice(*plan, doc, which, ctx);
@@ -320,7 +321,8 @@ int commandRun(Options& o, gabion::app::RankPool* workers) {
   ctx.outdir = outdir;
   ctx.threads = o.threads;
   ctx.case_file = o.case_file;
-  ctx.progress = !o.quiet && isatty(STDOUT_FILENO) != 0;
+  ctx.progress = !o.quiet;
+  ctx.progress_log = isatty(STDOUT_FILENO) == 0;
   if (workers != nullptr && (kind->rows || kind->serve)) {
     workers->workHere(taskHandler(*kind, doc));  // (rank 0 takes tasks too)
     ctx.workers = workers;

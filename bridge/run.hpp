@@ -22,9 +22,13 @@ class RemoteWorkers;  // bridge/rows.hpp
 
 /// What a run gets from the command line.
 struct RunContext {
-  std::filesystem::path outdir;     ///< existing output folder
-  int threads = 1;                  ///< --threads
-  bool progress = false;            ///< show a progress line
+  std::filesystem::path outdir;  ///< existing output folder
+  int threads = 1;               ///< --threads
+  bool progress = false;         ///< show the progress
+  /// stdout is a log, not a terminal: the progress as a plain line every
+  /// `progress_log_interval_s` (from then on), not one line rewritten in place.
+  bool progress_log = false;
+  double progress_log_interval_s = 60.0;
   std::filesystem::path case_file;  ///< for provenance and messages
   /// A digest of the effective case (its JSON after --set): a checkpoint
   /// left in outdir is continued only by a run of the same case.
@@ -44,8 +48,10 @@ struct RunContext {
 };
 
 /// Reports the progress of a long run as one line on a terminal
-/// (simulated time, steps/s, ETA). Silent when disabled; it also waits
-/// `delay_s` before the first line so that short runs print nothing.
+/// (simulated time, steps/s, ETA), or into a log as a plain line a minute
+/// (RunContext::progress_log). Silent when disabled; it also waits `delay_s`
+/// (a log: its interval, a minute) before the first line so that short runs
+/// print nothing.
 class Progress {
  public:
   Progress() = default;
@@ -61,6 +67,8 @@ class Progress {
 
  private:
   bool enabled_ = false;
+  bool log_ = false;
+  double interval_s_ = 0.25;  ///< between two lines
   bool printed_ = false;
   std::string label_;
   std::function<std::string(double)> context_;
