@@ -10,6 +10,7 @@ hybrid variants of bench/resolved/hybrids.sh."""
 import json
 import math
 import os
+import re
 import subprocess
 import sys
 
@@ -47,7 +48,11 @@ def settings(depth, info):
     return ((" through the depth" if depth == "whole" else "") +
             (" and below" if info.get("below") == "cells" else "") +
             (", weight above" if info.get("above") == "weight" else "") +
-            (", plates beside following" if info.get("beside") == "follow" else ""))
+            (", plates beside following" if info.get("beside") == "follow" else "") +
+            {"xy": ", macro nodes along x and y", "xyz": ", macro nodes along x, y and z"}.get(
+                info.get("macro_motion"), "") +
+            (", plates across x giving" if info.get("across") == "gives" else "") +
+            (", joint" if info.get("joint") == "law" else ""))
 
 
 def summary(path):
@@ -242,7 +247,8 @@ def wide(out, curves=None):
     print("| " + " | ".join(head) + " |")
     print("|" + "---|" * len(head))
     series = []
-    for n in (54, 210):
+    walls = sorted(int(m.group(1)) for m in (re.fullmatch(r"wall_(\d+)", d) for d in os.listdir(out)) if m)
+    for n in walls:
         path = os.path.join(out, f"wall_{n}", "summary.json")
         if not os.path.isfile(path):
             continue

@@ -13,9 +13,17 @@
 #             "cells" and beside "follow";
 #   wall_210  2 x 15 x 7 cells: resolved, macro twin, and hybrids within
 #             0.25 and 0.36 m through the depth;
+#   wall_90   2 x 15 x 3 cells: resolved, macro twin, and the hybrid within
+#             0.25 m through the depth, as it is and with the macro nodes
+#             moving along x, y and z and the plates across x giving;
+# with --pipeline DIR, every wall is made of DIR's cell (DIR/1_cell/cell.h5)
+# and its twin takes DIR's laws (DIR/law.json), and wall_54 also runs the
+# 10-cell hybrid through the depth with the macro nodes along x, y and z, as
+# it is and with the plates across x giving (resolve.macro_motion "xyz",
+# resolve.across "gives"), in place of the variants above;
 # then one table, and a chart of each hybrid's largest error against how
 # many times faster than its resolved wall it ran (OUT/figures/wide_error_vs_speed_up.png).
-#   bench/resolved/wide.sh [--out DIR] [--threads N] [--walls "54 210"]
+#   bench/resolved/wide.sh [--out DIR] [--threads N] [--walls "54 90 210"] [--pipeline DIR]
 # About two hours for wall_54 on 2 cores, most of it the resolved wall
 # settling (1 s); wall_210 needs a denser cell to stand at rest
 # (docs/resolved.md, What is left).
@@ -24,19 +32,38 @@
 set -euo pipefail
 here=$(cd "$(dirname "$0")" && pwd)
 root=$(cd "$here/../.." && pwd)
-out=$root/results/wide threads=2 walls="54 210"
+out=$root/results/wide threads=2 walls="54 210" pipeline=
 while [ $# -gt 0 ]; do
   case $1 in
     --out) out=$2; shift 2 ;;
     --threads) threads=$2; shift 2 ;;
     --walls) walls=$2; shift 2 ;;
+    --pipeline) pipeline=$(cd "$2" && pwd); shift 2 ;;
     *) echo "unknown option $1" >&2; exit 2 ;;
   esac
 done
 . "$here/common.sh"
+# (the cell and the laws of another pipeline's results, with --pipeline)
+cell=()
+if [ -n "$pipeline" ]; then
+  [ -f "$pipeline/law.json" ] && [ -f "$pipeline/1_cell/cell.h5" ] ||
+    { echo "$pipeline: no law.json or 1_cell/cell.h5 (a pipeline's results)" >&2; exit 2; }
+  cell=(--set "law_file=$pipeline/law.json" --set "cell=$pipeline/1_cell/cell.h5")
+fi
 for w in $walls; do
   case $w in
     54)
+      if [ -n "$pipeline" ]; then
+        run_once wall_54 "$root/cases/macro_resolved.json" "${cell[@]}" --set 'structure.cells=[2,9,3]' \
+          --set 'hybrid.within_m=[0.25]' --set hybrid.depth=whole
+        h=$out/wall_54/hybrid_0/case.json
+        if [ -f "$h" ]; then
+          run_once wall_54_more/reach_0.25 "$h" --set resolve.depth=reach
+          run_once wall_54_more/whole_xyz_0.25 "$h" --set resolve.macro_motion=xyz
+          run_once wall_54_more/whole_xyz_gives_0.25 "$h" --set resolve.macro_motion=xyz --set resolve.across=gives
+        fi
+        continue
+      fi
       run_once wall_54 "$root/cases/macro_resolved.json" --set 'structure.cells=[2,9,3]' --set 'hybrid.within_m=[0.25]'
       h=$out/wall_54/hybrid_0/case.json
       if [ -f "$h" ]; then
@@ -53,11 +80,17 @@ for w in $walls; do
           --set resolve.settle.until_at_rest=false --set resolve.settle.duration_s=1
       fi
       ;;
+    90)
+      run_once wall_90 "$root/cases/macro_resolved.json" "${cell[@]}" --set 'structure.cells=[2,15,3]' \
+        --set 'hybrid.within_m=[0.25]' --set hybrid.depth=whole
+      h=$out/wall_90/hybrid_0/case.json
+      [ -f "$h" ] && run_once wall_90_more/whole_xyz_gives_0.25 "$h" --set resolve.macro_motion=xyz --set resolve.across=gives
+      ;;
     210)
-      run_once wall_210 "$root/cases/macro_resolved.json" --set 'structure.cells=[2,15,7]' \
+      run_once wall_210 "$root/cases/macro_resolved.json" "${cell[@]}" --set 'structure.cells=[2,15,7]' \
         --set 'hybrid.within_m=[0.25,0.36]' --set hybrid.depth=whole
       ;;
-    *) echo "unknown wall $w (54 or 210)" >&2; exit 2 ;;
+    *) echo "unknown wall $w (54, 90 or 210)" >&2; exit 2 ;;
   esac
 done
 python3 "$here/table.py" --wide "$out" "$curves"
