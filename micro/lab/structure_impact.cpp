@@ -384,6 +384,12 @@ bridge::RunOutcome runOne(const StructureCase& c, const Sample& sample, const br
     // mass came down over the settling's last fifth (the samples are whole
     // in a resumed settling: they are in its checkpoint).
     settle_results["descent_speed_m_s"] = descentSpeed(t, u, weight);
+    // And how fast its bodies still moved, as a whole: a stack whose centre of
+    // mass stands still may still sway, its rows sliding one way and back.
+    // The root mean square of their speeds, weighted by mass.
+    if (const auto& en = settle_results["energy"]; en.contains("kinetic_translational_J"))
+      settle_results["rms_speed_m_s"] = std::sqrt(2.0 * std::max(0.0, en["kinetic_translational_J"].get<double>()) *
+                                                  layout.scene.gravity_m_s2.norm() / weight);
     settle_results["duration_s"] = settled_at;
     settle_results["until_at_rest"] = c.until_at_rest;
     // How far the stack came down, and the struck cell's blocks: the aim,

@@ -227,6 +227,11 @@ TEST(ResolvedStructure, SettlesUntilAtRestAndResumesToTheSameWall) {
     // (how far the stack came down: the potential's fall over the weight)
     EXPECT_NEAR(settle["centre_of_mass_drop_m"].get<double>(), (u.front() - u.back()) / weight, 1e-9);
     EXPECT_GT(settle["centre_of_mass_drop_m"].get<double>(), 0.0);
+    // (its bodies' speed at the end: from their kinetic energy over their mass)
+    const double rms = settle["rms_speed_m_s"].get<double>();
+    EXPECT_NEAR(rms, std::sqrt(2.0 * settle["energy"]["kinetic_translational_J"].get<double>() * 9.81 / weight), 1e-9);
+    EXPECT_GT(rms, 0.0);
+    EXPECT_LT(rms, 0.5);
     // (the struck cell, on the base, came down a little: the aim, its laid-out
     // mid-height by default, is that much higher above its blocks)
     EXPECT_LT(std::fabs(settle["struck_cell_drop_m"].get<double>()), 0.02);
