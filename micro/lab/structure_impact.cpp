@@ -52,6 +52,9 @@ struct StructureCase {
   bool until_at_rest = true;
   double settle_longest_s = 1.0;
   double at_rest_m_s = kSettledDescentSpeed;
+  // At rest also needs the bodies' mass-weighted rms speed below this; 0:
+  // not checked (a stack may stop coming down and still sway).
+  double at_rest_rms_m_s = 0.0;
   double rebound_restitution = 0.05;  // as macro.impact's run.rebound_restitution
 };
 
@@ -93,6 +96,7 @@ StructureCase parseCase(const bridge::JsonDocument& doc, bool whole = true) {
     c.until_at_rest = s->boolean("until_at_rest", c.until_at_rest);
     c.settle_longest_s = s->number("longest_s", c.settle_longest_s, Check::Positive);
     c.at_rest_m_s = s->number("at_rest_m_s", c.at_rest_m_s, Check::Positive);
+    c.at_rest_rms_m_s = s->number("at_rest_rms_speed_m_s", c.at_rest_rms_m_s, Check::NonNegative);
     if (c.until_at_rest && c.settle_longest_s < c.settle_s)
       s->fail("longest_s", "the longest settling is shorter than duration_s, the shortest");
   }
@@ -309,6 +313,12 @@ bridge::RunOutcome runOne(const StructureCase& c, const Sample& sample, const br
     std::filesystem::create_directories(sub.outdir);
     const double weight = sample.mass_kg * static_cast<double>(laid_out) * layout.scene.gravity_m_s2.norm();
     std::vector<double> t, u;  // (the samples' times and gravity potentials)
+    // The bodies' mass-weighted rms speed, from their kinetic energy (at the
+    // last sample: the energies are measured at the samples).
+    const double g = layout.scene.gravity_m_s2.norm();
+    const auto rmsSpeed = [weight, g](double kinetic_J) {
+      return std::sqrt(2.0 * std::max(0.0, kinetic_J) * g / weight);
+    };
     SceneRunHooks hooks;
     hooks.label = "micro.structure settle";
     hooks.record = [&](const Engine& e, double time) {
@@ -317,7 +327,8 @@ bridge::RunOutcome runOne(const StructureCase& c, const Sample& sample, const br
     };
     if (c.until_at_rest)
       hooks.done = [&](const Engine& e) {
-        return e.time() >= c.settle_s && descentSpeed(t, u, weight) <= c.at_rest_m_s;
+        return e.time() >= c.settle_s && descentSpeed(t, u, weight) <= c.at_rest_m_s &&
+               (c.at_rest_rms_m_s <= 0.0 || rmsSpeed(e.energy().kinetic_translational_J) <= c.at_rest_rms_m_s);
       };
     hooks.archive = [&](bridge::StateArchive& a) { a("time_s", t), a("gravity_potential_J", u); };
     // The plates beside the part's cells come down with them (each step the
@@ -388,8 +399,8 @@ bridge::RunOutcome runOne(const StructureCase& c, const Sample& sample, const br
     // mass stands still may still sway, its rows sliding one way and back.
     // The root mean square of their speeds, weighted by mass.
     if (const auto& en = settle_results["energy"]; en.contains("kinetic_translational_J"))
-      settle_results["rms_speed_m_s"] = std::sqrt(2.0 * std::max(0.0, en["kinetic_translational_J"].get<double>()) *
-                                                  layout.scene.gravity_m_s2.norm() / weight);
+      settle_results["rms_speed_m_s"] = rmsSpeed(en["kinetic_translational_J"].get<double>());
+    if (c.at_rest_rms_m_s > 0.0) settle_results["at_rest_rms_speed_m_s"] = c.at_rest_rms_m_s;
     settle_results["duration_s"] = settled_at;
     settle_results["until_at_rest"] = c.until_at_rest;
     // How far the stack came down, and the struck cell's blocks: the aim,
@@ -554,7 +565,18 @@ bridge::RunOutcome runOne(const StructureCase& c, const Sample& sample, const br
     warnings.push_back("the impact was not over at the end of run.duration_s: lengthen it");
   if (!settle_results.is_null()) {
     const double descent = settle_results["descent_speed_m_s"].get<double>();
-    r["settled"] = descent <= c.at_rest_m_s;
+    const double rms = settle_results.value("rms_speed_m_s", 0.0);
+    const bool swaying = c.at_rest_rms_m_s > 0.0 && rms > c.at_rest_rms_m_s;
+    r["settled"] = descent <= c.at_rest_m_s && !swaying;
+    if (swaying && descent <= c.at_rest_m_s) {
+      std::ostringstream m;
+      m.precision(3);
+      m << "the structure was still moving when the boulder came: at the end of its settling ("
+        << settle_results["duration_s"].get<double>() << " s) its bodies' rms speed was " << 1e3 * rms
+        << " mm/s (at rest: below " << 1e3 * c.at_rest_rms_m_s << " mm/s, settle.at_rest_rms_speed_m_s); "
+        << (c.until_at_rest ? "lengthen settle.longest_s" : "lengthen settle.duration_s, or set settle.until_at_rest");
+      warnings.push_back(m.str());
+    }
     if (descent > c.at_rest_m_s) {
       std::ostringstream m;
       m.precision(3);

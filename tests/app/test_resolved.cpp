@@ -242,6 +242,29 @@ TEST(ResolvedStructure, SettlesUntilAtRestAndResumesToTheSameWall) {
       }
     }
   }
+  {
+    // At rest also by the bodies' speed: asked for half the rms speed the
+    // plain settling ended at, it settles longer, and ends below that bound
+    // or, at settle.longest_s, says it was still moving.
+    const double rms = settle["rms_speed_m_s"].get<double>(), bound = 0.5 * rms;
+    nlohmann::json still = c;
+    still["settle"]["at_rest_rms_speed_m_s"] = bound;
+    still["settle"]["longest_s"] = 0.3;
+    writeFile(dir / "still.json", still.dump());
+    const auto rs = runGabion("run -q " + (dir / "still.json").string() + " -o " + (dir / "still").string());
+    ASSERT_EQ(rs.exit_code, 0) << rs.output;
+    const nlohmann::json ss = summaryOf(dir / "still");
+    EXPECT_GT(ss["settle"]["duration_s"].get<double>(), at);
+    EXPECT_EQ(ss["settle"]["at_rest_rms_speed_m_s"].get<double>(), bound);
+    if (ss["settle"]["ended_by"] == "test") {
+      EXPECT_LE(ss["settle"]["rms_speed_m_s"].get<double>(), bound);
+      EXPECT_TRUE(ss["settled"].get<bool>());
+    } else {
+      EXPECT_GT(ss["settle"]["rms_speed_m_s"].get<double>(), bound);
+      EXPECT_FALSE(ss["settled"].get<bool>());
+      EXPECT_NE(ss["warnings"].dump().find("still moving"), std::string::npos) << ss["warnings"].dump();
+    }
+  }
   // Killed in the settling (after its first checkpoint), resumed.
   const auto killed = dir / "killed";
   const std::string out =
