@@ -55,6 +55,11 @@ struct StructureCase {
   // At rest also needs the bodies' mass-weighted rms speed below this; 0:
   // not checked (a stack may stop coming down and still sway).
   double at_rest_rms_m_s = 0.0;
+  // The boulder aimed, once the stack has settled, at the laid-out aim point
+  // (false) or at that point lowered by the struck cell's drop (true): the
+  // same place on the cell as laid out, where the macro twin's boulder meets
+  // its cell.
+  bool aim_settled = false;
   double rebound_restitution = 0.05;  // as macro.impact's run.rebound_restitution
 };
 
@@ -97,6 +102,7 @@ StructureCase parseCase(const bridge::JsonDocument& doc, bool whole = true) {
     c.settle_longest_s = s->number("longest_s", c.settle_longest_s, Check::Positive);
     c.at_rest_m_s = s->number("at_rest_m_s", c.at_rest_m_s, Check::Positive);
     c.at_rest_rms_m_s = s->number("at_rest_rms_speed_m_s", c.at_rest_rms_m_s, Check::NonNegative);
+    c.aim_settled = s->choice("aim", {"laid_out", "settled_cell"}, "laid_out") == "settled_cell";
     if (c.until_at_rest && c.settle_longest_s < c.settle_s)
       s->fail("longest_s", "the longest settling is shorter than duration_s, the shortest");
   }
@@ -290,7 +296,7 @@ bridge::RunOutcome runOne(const StructureCase& c, const Sample& sample, const br
                           const std::string& file, const StructurePart* part = nullptr) {
   Layout layout = buildLayout(c, sample, part);
   checkAim(c, layout, file);
-  const Vec3 aim = aimPoint(c, layout);
+  Vec3 aim = aimPoint(c, layout);  // (laid out; lowered with the struck cell where settle.aim says)
   // (the cells laid out: the whole structure's, or a hybrid's resolved ones)
   const std::size_t laid_out = layout.blocks_per_cell > 0 ? layout.scene.blocks.size() / layout.blocks_per_cell : 0;
   nlohmann::json settle_results;
@@ -410,7 +416,12 @@ bridge::RunOutcome runOne(const StructureCase& c, const Sample& sample, const br
     if (struck >= 0 && layout.blocks_per_cell > 0) {
       const std::size_t first = static_cast<std::size_t>(struck) * layout.blocks_per_cell;
       const double settled_z = meanBlockHeight(standing, first, layout.blocks_per_cell);
-      settle_results["struck_cell_drop_m"] = meanBlockHeight(layout.scene, first, layout.blocks_per_cell) - settled_z;
+      const double drop = meanBlockHeight(layout.scene, first, layout.blocks_per_cell) - settled_z;
+      settle_results["struck_cell_drop_m"] = drop;
+      if (c.aim_settled) {
+        aim.z() -= drop;
+        settle_results["aim_lowered_m"] = drop;
+      }
       settle_results["aim_above_struck_cell_m"] = aim.z() - settled_z;
     }
   }

@@ -245,11 +245,13 @@ TEST(ResolvedStructure, SettlesUntilAtRestAndResumesToTheSameWall) {
   {
     // At rest also by the bodies' speed: asked for half the rms speed the
     // plain settling ended at, it settles longer, and ends below that bound
-    // or, at settle.longest_s, says it was still moving.
+    // or, at settle.longest_s, says it was still moving. And aimed at the
+    // settled cell: the boulder comes that much lower than laid out.
     const double rms = settle["rms_speed_m_s"].get<double>(), bound = 0.5 * rms;
     nlohmann::json still = c;
     still["settle"]["at_rest_rms_speed_m_s"] = bound;
     still["settle"]["longest_s"] = 0.3;
+    still["settle"]["aim"] = "settled_cell";
     writeFile(dir / "still.json", still.dump());
     const auto rs = runGabion("run -q " + (dir / "still.json").string() + " -o " + (dir / "still").string());
     ASSERT_EQ(rs.exit_code, 0) << rs.output;
@@ -264,6 +266,19 @@ TEST(ResolvedStructure, SettlesUntilAtRestAndResumesToTheSameWall) {
       EXPECT_FALSE(ss["settled"].get<bool>());
       EXPECT_NE(ss["warnings"].dump().find("still moving"), std::string::npos) << ss["warnings"].dump();
     }
+    const double drop = ss["settle"]["struck_cell_drop_m"].get<double>(), laid_z = s["aim_point_m"][1].get<double>();
+    EXPECT_GT(drop, 0.0);
+    EXPECT_EQ(ss["settle"]["aim_lowered_m"].get<double>(), drop);
+    EXPECT_NEAR(ss["aim_point_m"][1].get<double>(), laid_z - drop, 1e-12);
+    EXPECT_EQ(ss["aim_point_m"][0], s["aim_point_m"][0]);
+    // (the aim above the settled cell as the laid-out aim was above the laid-out cell)
+    EXPECT_NEAR(ss["settle"]["aim_above_struck_cell_m"].get<double>(),
+                settle["aim_above_struck_cell_m"].get<double>() - settle["struck_cell_drop_m"].get<double>(), 1e-12);
+    // (the boulder, the largest body, starts at that height)
+    const gabion::bridge::H5Reader h(dir / "still" / "result.h5");
+    const auto radius = h.read("/bodies/radius_m"), pos = h.read("/bodies/position_m");
+    const std::size_t b = static_cast<std::size_t>(std::max_element(radius.begin(), radius.end()) - radius.begin());
+    EXPECT_NEAR(pos[3 * b + 2], laid_z - drop, 1e-9);
   }
   // Killed in the settling (after its first checkpoint), resumed.
   const auto killed = dir / "killed";
