@@ -25,8 +25,11 @@
 # many times faster than its resolved wall it ran (OUT/figures/wide_error_vs_speed_up.png).
 #   bench/resolved/wide.sh [--out DIR] [--threads N] [--walls "54 90 210"] [--pipeline DIR]
 # About two hours for wall_54 on 2 cores, most of it the resolved wall
-# settling (1 s); wall_210 needs a denser cell to stand at rest
-# (docs/resolved.md, What is left).
+# settling (1 s); with --pipeline of the denser cell (docs/resolved.md, A
+# denser cell) about 50 minutes, the wall at rest after 0.28 s. wall_90's
+# resolved wall has 1.7 times the bodies (`gabion check` of its case: up to
+# 6.4 h on one thread with the longest settling); wall_210 needs a denser
+# cell to stand at rest (docs/resolved.md, What is left).
 # Needs the pipeline's cell and laws (README, command 1: results/pipeline).
 # A run whose summary.json exists is not run again (delete it to rerun).
 set -euo pipefail
