@@ -172,7 +172,11 @@ std::optional<bridge::Estimate> estimate(const JsonDocument& doc) {
 SubCase runPart(const std::string& name, const json& value, const bridge::RunContext& parent, const fs::path& dir) {
   fs::create_directories(dir);
   bridge::beginManifest(dir);
-  SubCase part = runSubCase(value, "", parent, dir);
+  // (its progress lines say which part they are of: a run of an hour has three)
+  const auto& outer = parent.progress_context;
+  SubCase part = runSubCase(value, "", parent, dir, [name, outer](double eta_s) {
+    return (outer ? outer(eta_s) + " " : std::string()) + "macro.resolved, " + name + ":";
+  });
   bridge::writeManifest(dir, bridge::statusName(part.status));
   if (part.status != bridge::RunOutcome::Status::Ok) part.message = name + " (" + dir.string() + "): " + part.message;
   return part;
