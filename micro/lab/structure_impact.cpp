@@ -317,11 +317,10 @@ bridge::RunOutcome runOne(const StructureCase& c, const Sample& sample, const br
     bridge::RunContext sub = ctx;
     sub.outdir = ctx.outdir / "settle";
     std::filesystem::create_directories(sub.outdir);
-    const double weight = sample.mass_kg * static_cast<double>(laid_out) * layout.scene.gravity_m_s2.norm();
+    const double g = layout.scene.gravity_m_s2.norm(), weight = sample.mass_kg * static_cast<double>(laid_out) * g;
     std::vector<double> t, u;  // (the samples' times and gravity potentials)
     // The bodies' mass-weighted rms speed, from their kinetic energy (at the
     // last sample: the energies are measured at the samples).
-    const double g = layout.scene.gravity_m_s2.norm();
     const auto rmsSpeed = [weight, g](double kinetic_J) {
       return std::sqrt(2.0 * std::max(0.0, kinetic_J) * g / weight);
     };
@@ -577,25 +576,22 @@ bridge::RunOutcome runOne(const StructureCase& c, const Sample& sample, const br
   if (!settle_results.is_null()) {
     const double descent = settle_results["descent_speed_m_s"].get<double>();
     const double rms = settle_results.value("rms_speed_m_s", 0.0);
+    const bool coming_down = descent > c.at_rest_m_s;
     const bool swaying = c.at_rest_rms_m_s > 0.0 && rms > c.at_rest_rms_m_s;
-    r["settled"] = descent <= c.at_rest_m_s && !swaying;
-    if (swaying && descent <= c.at_rest_m_s) {
+    r["settled"] = !coming_down && !swaying;
+    if (coming_down || swaying) {  // (coming down is said first: it is the larger motion)
       std::ostringstream m;
       m.precision(3);
-      m << "the structure was still moving when the boulder came: at the end of its settling ("
-        << settle_results["duration_s"].get<double>() << " s) its bodies' rms speed was " << 1e3 * rms
-        << " mm/s (at rest: below " << 1e3 * c.at_rest_rms_m_s << " mm/s, settle.at_rest_rms_speed_m_s); "
-        << (c.until_at_rest ? "lengthen settle.longest_s" : "lengthen settle.duration_s, or set settle.until_at_rest");
-      warnings.push_back(m.str());
-    }
-    if (descent > c.at_rest_m_s) {
-      std::ostringstream m;
-      m.precision(3);
-      m << "the structure was still settling when the boulder came: at the end of its settling ("
-        << settle_results["duration_s"].get<double>() << " s) its centre of mass was coming down at " << 1e3 * descent
-        << " mm/s (at rest: below " << 1e3 * c.at_rest_m_s << " mm/s, settle.at_rest_m_s); the boulder struck a "
-        << "structure in motion: "
-        << (c.until_at_rest ? "lengthen settle.longest_s" : "lengthen settle.duration_s, or set settle.until_at_rest");
+      m << "the structure was still " << (coming_down ? "settling" : "moving")
+        << " when the boulder came: at the end of its settling (" << settle_results["duration_s"].get<double>()
+        << " s) ";
+      if (coming_down)
+        m << "its centre of mass was coming down at " << 1e3 * descent << " mm/s (at rest: below "
+          << 1e3 * c.at_rest_m_s << " mm/s, settle.at_rest_m_s); the boulder struck a structure in motion: ";
+      else
+        m << "its bodies' rms speed was " << 1e3 * rms << " mm/s (at rest: below " << 1e3 * c.at_rest_rms_m_s
+          << " mm/s, settle.at_rest_rms_speed_m_s); ";
+      m << (c.until_at_rest ? "lengthen settle.longest_s" : "lengthen settle.duration_s, or set settle.until_at_rest");
       warnings.push_back(m.str());
     }
   }
