@@ -268,6 +268,19 @@ gabion::app::TaskHandler taskHandler(const gabion::bridge::CaseKind& kind, const
   };
 }
 
+// The run's context as the options give it: where, on how many threads, from
+// which case file, and how its progress shows (a plain line every minute
+// when stdout is a log, not a terminal).
+gabion::bridge::RunContext runContext(const Options& o, const fs::path& outdir) {
+  gabion::bridge::RunContext ctx;
+  ctx.outdir = outdir;
+  ctx.threads = o.threads;
+  ctx.case_file = o.case_file;
+  ctx.progress = !o.quiet;
+  ctx.progress_log = isatty(STDOUT_FILENO) == 0;
+  return ctx;
+}
+
 // --rows: runs a slice of the case's rows into their per-row folders; no
 // table, summary or manifest (other processes may be writing rows beside).
 int runSlice(const Options& o, const gabion::bridge::CaseKind& kind, const JsonDocument& doc, const fs::path& outdir,
@@ -277,12 +290,7 @@ int runSlice(const Options& o, const gabion::bridge::CaseKind& kind, const JsonD
   makeOutdir(outdir.string());
   requireSameRows(outdir, doc);
   if (o.resume.empty()) writeRunRecord(o, outdir, doc);
-  gabion::bridge::RunContext ctx;
-  ctx.outdir = outdir;
-  ctx.threads = o.threads;
-  ctx.case_file = o.case_file;
-  ctx.progress = !o.quiet;
-  ctx.progress_log = isatty(STDOUT_FILENO) == 0;
+  gabion::bridge::RunContext ctx = runContext(o, outdir);
   ctx.workers = workers;
   ctx.case_digest = gabion::bridge::hexDigest(gabion::bridge::fnv1a(doc.json().dump()));
   const auto outcome = gabion::bridge::runRowSlice(*plan, doc, which, ctx);
@@ -317,12 +325,7 @@ int commandRun(Options& o, gabion::app::RankPool* workers) {
   }
   makeOutdir(outdir.string());
 
-  gabion::bridge::RunContext ctx;
-  ctx.outdir = outdir;
-  ctx.threads = o.threads;
-  ctx.case_file = o.case_file;
-  ctx.progress = !o.quiet;
-  ctx.progress_log = isatty(STDOUT_FILENO) == 0;
+  gabion::bridge::RunContext ctx = runContext(o, outdir);
   if (workers != nullptr && (kind->rows || kind->serve)) {
     workers->workHere(taskHandler(*kind, doc));  // (rank 0 takes tasks too)
     ctx.workers = workers;
