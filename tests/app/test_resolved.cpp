@@ -281,6 +281,29 @@ TEST(ResolvedStructure, SettlesUntilAtRestAndResumesToTheSameWall) {
     const std::size_t b = static_cast<std::size_t>(std::max_element(radius.begin(), radius.end()) - radius.begin());
     EXPECT_NEAR(pos[3 * b + 2], laid_z - drop, 1e-9);
   }
+  {
+    // The settling's own local damping (settle.local_damping), for the
+    // settling alone: at 0 the settling's bodies lose nothing to it, and the
+    // impact, with the materials' own (the rock's 0.1), does; 1 or more is
+    // refused, naming the field.
+    nlohmann::json undamped = c;
+    undamped["settle"]["local_damping"] = 0.0;
+    undamped["settle"]["longest_s"] = at;
+    writeFile(dir / "undamped.json", undamped.dump());
+    const auto ru = runGabion("run -q " + (dir / "undamped.json").string() + " -o " + (dir / "undamped").string());
+    ASSERT_EQ(ru.exit_code, 0) << ru.output;
+    const nlohmann::json su = summaryOf(dir / "undamped");
+    EXPECT_EQ(su["settle"]["local_damping"].get<double>(), 0.0);
+    EXPECT_EQ(su["settle"]["energy"]["local_damping_dissipation_J"].get<double>(), 0.0);
+    EXPECT_GT(settle["energy"]["local_damping_dissipation_J"].get<double>(), 0.0);  // (the plain settling's)
+    EXPECT_GT(su["energy"]["local_damping_dissipation_J"].get<double>(), 0.0);
+    EXPECT_FALSE(s["settle"].contains("local_damping"));
+    undamped["settle"]["local_damping"] = 1.0;
+    writeFile(dir / "overdamped.json", undamped.dump());
+    const auto bad = runGabion("check " + (dir / "overdamped.json").string());
+    EXPECT_EQ(bad.exit_code, 2) << bad.output;
+    EXPECT_NE(bad.output.find("/settle/local_damping: must be in [0, 1)"), std::string::npos) << bad.output;
+  }
   // Killed in the settling (after its first checkpoint), resumed.
   const auto killed = dir / "killed";
   const std::string out =
