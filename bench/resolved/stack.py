@@ -4,10 +4,10 @@
     python3 bench/resolved/stack.py RESOLVED_DIR
     python3 bench/resolved/stack.py CELL.h5       (the cell's lid alone)
 
-RESOLVED_DIR is a micro.structure run (a macro.resolved run's `resolved/`
-folder): its case.json names the cell file and the wall's cells, its
-settle/result.h5 holds the bodies laid out (first snapshot) and settled
-(last). For each pair of cells one above the other, the sink of the upper
+RESOLVED_DIR is a micro.structure run (or a macro.resolved run's
+`resolved/` folder): its case (case.json, or run.json's) names the cell
+file and the wall's cells, its settle/result.h5 holds the bodies laid out
+(first snapshot) and settled (last). For each pair of cells one above the other, the sink of the upper
 cell's blocks onto the lower cell's blocks (their mean heights' drops,
 upper less lower) is cut into three parts that add up to it:
 
@@ -42,8 +42,12 @@ def main():
     folder = Path(sys.argv[1])
     if folder.suffix == ".h5":  # (a cell file alone: its lid)
         case = {"cell": str(folder)}
-    else:
+    elif (folder / "case.json").exists():  # (a macro.resolved run's resolved/)
         case = json.loads((folder / "case.json").read_text())
+    else:  # (a micro.structure run of its own: the case as it ran, beside its file)
+        run = json.loads((folder / "run.json").read_text())
+        case = run["case"]
+        case["cell"] = str(Path(run["case_file"]).parent / case["cell"])
     cell = h5py.File(case["cell"], "r")
     x = cell["spheres/center_m"][:]
     r = cell["spheres/radius_m"][:]

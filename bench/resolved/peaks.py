@@ -1,0 +1,62 @@
+#!/usr/bin/env python3
+"""The impact force's peak over windows, and when the boulder stopped.
+
+    python3 bench/resolved/peaks.py REFERENCE_DIR RUN_DIR...
+
+Each folder is a micro.structure run or a hybrid's (its result.h5 holds
+/curves/impact: time_s, force_N, boulder_velocity_m_s, penetration_m). For
+each it prints the force's largest value (`peak_force_N` of its summary),
+the largest mean over windows of 1, 2 and 5 ms (a peak that one granular
+spike does not set), the time from first contact to the deepest
+penetration (when the boulder stopped), and when the force last fell
+below 5 % of its peak; then each run's relative differences from the
+first folder's.
+"""
+import sys
+from pathlib import Path
+
+import numpy as np
+
+try:
+    import h5py
+except ImportError:
+    sys.exit("needs h5py (apt-get install python3-h5py)")
+
+WINDOWS_S = (1e-3, 2e-3, 5e-3)
+
+
+def measures(folder):
+    c = h5py.File(Path(folder) / "result.h5", "r")["curves/impact"]
+    t, f, pen = c["time_s"][:], c["force_N"][:], c["penetration_m"][:]
+    if len(t) < 2 or f.max() <= 0.0:
+        sys.exit(f"{folder}: no impact force in result.h5")
+    dt = (t[-1] - t[0]) / (len(t) - 1)
+    out = [f.max()]
+    for w in WINDOWS_S:
+        n = max(1, int(round(w / dt)))
+        out.append(np.convolve(f, np.ones(n) / n, "valid").max())
+    first = np.argmax(f > 0.0)
+    out.append(t[np.argmax(pen)] - t[first])
+    after = np.where(f[np.argmax(f):] >= 0.05 * f.max())[0]
+    out.append(t[np.argmax(f) + after[-1]] - t[first])
+    return out
+
+
+def main():
+    if len(sys.argv) < 2:
+        sys.exit(__doc__)
+    names = ["peak kN", "1 ms kN", "2 ms kN", "5 ms kN", "to stop ms", "above 5 % ms"]
+    scale = [1e-3] * 4 + [1e3] * 2
+    rows = [(f, measures(f)) for f in sys.argv[1:]]
+    print("| run | " + " | ".join(names) + " |")
+    print("|---" * (len(names) + 1) + "|")
+    ref = rows[0][1]
+    for k, (folder, m) in enumerate(rows):
+        cells = []
+        for v, r, s in zip(m, ref, scale):
+            cells.append(f"{v * s:.1f}" + ("" if k == 0 else f" ({100 * (v / r - 1):+.1f} %)"))
+        print(f"| {folder} | " + " | ".join(cells) + " |")
+
+
+if __name__ == "__main__":
+    main()
