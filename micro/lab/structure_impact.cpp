@@ -61,9 +61,8 @@ struct StructureCase {
   // its cell.
   bool aim_settled = false;
   // Cundall's local damping of every material while the stack settles (NaN:
-  // each material's own): a high value brings it to rest sooner, the rows
-  // that fall onto the row under them landing without a sway; the impact
-  // runs with the materials' own.
+  // each material's own); the impact runs with the materials' own. (A
+  // higher value slows the stack's fall: it comes to rest later and looser.)
   double settle_local_damping = std::numeric_limits<double>::quiet_NaN();
   double rebound_restitution = 0.05;  // as macro.impact's run.rebound_restitution
 };
