@@ -15,7 +15,8 @@
 #             0.25 and 0.36 m through the depth;
 #   wall_90   2 x 15 x 3 cells: resolved, macro twin, and the hybrid within
 #             0.25 m through the depth, as it is and with the macro nodes
-#             moving along x, y and z and the plates across x giving;
+#             moving along x, y and z and the plates across x giving, and
+#             the latter within 0.5 m (18 cells);
 # with --pipeline DIR, every wall is made of DIR's cell (DIR/1_cell/cell.h5)
 # and its twin takes DIR's laws (DIR/law.json), and wall_54 also runs the
 # 10-cell hybrid through the depth with the macro nodes along x, y and z, as
@@ -87,7 +88,11 @@ for w in $walls; do
       run_once wall_90 "$root/cases/macro_resolved.json" "${cell[@]}" --set 'structure.cells=[2,15,3]' \
         --set 'hybrid.within_m=[0.25]' --set hybrid.depth=whole
       h=$out/wall_90/hybrid_0/case.json
-      [ -f "$h" ] && run_once wall_90_more/whole_xyz_gives_0.25 "$h" --set resolve.macro_motion=xyz --set resolve.across=gives
+      if [ -f "$h" ]; then
+        run_once wall_90_more/whole_xyz_gives_0.25 "$h" --set resolve.macro_motion=xyz --set resolve.across=gives
+        run_once wall_90_more/whole_xyz_gives_0.5 "$h" --set resolve.within_m=0.5 --set resolve.macro_motion=xyz \
+          --set resolve.across=gives
+      fi
       ;;
     210)
       run_once wall_210 "$root/cases/macro_resolved.json" "${cell[@]}" --set 'structure.cells=[2,15,7]' \
