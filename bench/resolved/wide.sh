@@ -11,6 +11,10 @@
 #             coming down with their cells (resolve.beside "follow"),
 #             and settled for the wall's 1 s, as it is and with below
 #             "cells" and beside "follow";
+#   wall_150  2 x 15 x 5 cells: resolved, macro twin, and the hybrid within
+#             0.5 m through the depth (the 3 x 3 front cells around the aim
+#             and those behind them, 18 cells), as it is and with the macro
+#             nodes moving along x, y and z and the plates across x giving;
 #   wall_210  2 x 15 x 7 cells: resolved, macro twin, and hybrids within
 #             0.25 and 0.36 m through the depth;
 #   wall_90   2 x 15 x 3 cells: resolved, macro twin, and the hybrid within
@@ -24,7 +28,7 @@
 # resolve.across "gives"), in place of the variants above;
 # then one table, and a chart of each hybrid's largest error against how
 # many times faster than its resolved wall it ran (OUT/figures/wide_error_vs_speed_up.png).
-#   bench/resolved/wide.sh [--out DIR] [--threads N] [--walls "54 90 210"] [--pipeline DIR]
+#   bench/resolved/wide.sh [--out DIR] [--threads N] [--walls "54 90 150 210"] [--pipeline DIR]
 # About two hours for wall_54 on 2 cores, most of it the resolved wall
 # settling (1 s); with --pipeline of the denser cell (docs/resolved.md, A
 # denser cell) about 50 minutes, the wall at rest after 0.28 s. wall_90's
@@ -94,11 +98,18 @@ for w in $walls; do
           --set resolve.across=gives
       fi
       ;;
+    150)
+      run_once wall_150 "$root/cases/macro_resolved.json" "${cell[@]}" --set 'structure.cells=[2,15,5]' \
+        --set 'hybrid.within_m=[0.5]' --set hybrid.depth=whole
+      h=$out/wall_150/hybrid_0/case.json
+      [ -f "$h" ] && run_once wall_150_more/whole_xyz_gives_0.5 "$h" --set resolve.macro_motion=xyz \
+        --set resolve.across=gives
+      ;;
     210)
       run_once wall_210 "$root/cases/macro_resolved.json" "${cell[@]}" --set 'structure.cells=[2,15,7]' \
         --set 'hybrid.within_m=[0.25,0.36]' --set hybrid.depth=whole
       ;;
-    *) echo "unknown wall $w (54, 90 or 210)" >&2; exit 2 ;;
+    *) echo "unknown wall $w (54, 90, 150 or 210)" >&2; exit 2 ;;
   esac
 done
 python3 "$here/table.py" --wide "$out" "$curves"
