@@ -60,10 +60,10 @@ struct StructureCase {
   // same place on the cell as laid out, where the macro twin's boulder meets
   // its cell.
   bool aim_settled = false;
-  // Cundall's local damping of every material while the stack settles (NaN:
+  // Cundall's local damping of every material while the stack settles (none:
   // each material's own); the impact runs with the materials' own. (A
   // higher value slows the stack's fall: it comes to rest later and looser.)
-  double settle_local_damping = std::numeric_limits<double>::quiet_NaN();
+  std::optional<double> settle_local_damping;
   double rebound_restitution = 0.05;  // as macro.impact's run.rebound_restitution
 };
 
@@ -107,7 +107,7 @@ StructureCase parseCase(const bridge::JsonDocument& doc, bool whole = true) {
     c.at_rest_m_s = s->number("at_rest_m_s", c.at_rest_m_s, Check::Positive);
     c.at_rest_rms_m_s = s->number("at_rest_rms_speed_m_s", c.at_rest_rms_m_s, Check::NonNegative);
     c.aim_settled = s->choice("aim", {"laid_out", "settled_cell"}, "laid_out") == "settled_cell";
-    if (const auto alpha = s->optionalNumber("local_damping", Check::UnitOpen)) c.settle_local_damping = *alpha;
+    c.settle_local_damping = s->optionalNumber("local_damping", Check::UnitOpen);
     if (c.until_at_rest && c.settle_longest_s < c.settle_s)
       s->fail("longest_s", "the longest settling is shorter than duration_s, the shortest");
   }
@@ -226,8 +226,8 @@ Scene settleScene(const StructureCase& c, const Layout& l, const Sample& sample,
       p.gain_m_s_N = p.max_speed_m_s / p.target_force_N;
     }
   }
-  if (!std::isnan(c.settle_local_damping))
-    for (Material& m : s.materials) m.local_damping = c.settle_local_damping;
+  if (c.settle_local_damping)
+    for (Material& m : s.materials) m.local_damping = *c.settle_local_damping;
   s.run.duration_s = longest;
   s.run.output_interval_s = longest / 5.0;
   s.run.series_interval_s = std::min(s.run.series_interval_s, c.settle_s / 10.0);
@@ -414,7 +414,7 @@ bridge::RunOutcome runOne(const StructureCase& c, const Sample& sample, const br
     if (const auto& en = settle_results["energy"]; en.contains("kinetic_translational_J"))
       settle_results["rms_speed_m_s"] = rmsSpeed(en["kinetic_translational_J"].get<double>());
     if (c.at_rest_rms_m_s > 0.0) settle_results["at_rest_rms_speed_m_s"] = c.at_rest_rms_m_s;
-    if (!std::isnan(c.settle_local_damping)) settle_results["local_damping"] = c.settle_local_damping;
+    if (c.settle_local_damping) settle_results["local_damping"] = *c.settle_local_damping;
     settle_results["duration_s"] = settled_at;
     settle_results["until_at_rest"] = c.until_at_rest;
     // How far the stack came down, and the struck cell's blocks: the aim,
