@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <array>
 #include <cmath>
+#include <iostream>
 #include <limits>
 #include <optional>
 #include <sstream>
@@ -12,6 +13,7 @@
 #include "bridge/plot.hpp"
 #include "micro/cell/cell_file.hpp"
 #include "micro/lab/lab_setup.hpp"
+#include "micro/netting/lacing.hpp"
 #include "micro/scene_run.hpp"
 
 namespace gabion::micro::lab {
@@ -65,6 +67,14 @@ struct StructureCase {
   // higher value slows the stack's fall: it comes to rest later and looser.)
   std::optional<double> settle_local_damping;
   double rebound_restitution = 0.05;  // as macro.impact's run.rebound_restitution
+  // Neighbouring cells laced along the edges where their faces meet
+  // (micro/netting/lacing.hpp), `at_s` into the settling (0: as laid out).
+  struct Lacing {
+    LacingParams params;
+    double at_s = 0.15;
+    double edge_band_m = 0.0;  // 0: 1.5 node radii
+  };
+  std::optional<Lacing> lacing;
 };
 
 /// `whole`: the structure is resolved whole (a part checks its own cell count).
@@ -112,6 +122,19 @@ StructureCase parseCase(const bridge::JsonDocument& doc, bool whole = true) {
       s->fail("longest_s", "the longest settling is shorter than duration_s, the shortest");
   }
   c.rebound_restitution = root.number("rebound_restitution", c.rebound_restitution, Check::Fraction);
+  if (const auto l = root.optionalObject("lacing")) {
+    StructureCase::Lacing lc;
+    lc.params.wire_diameter_m = l->number("wire_diameter_m", lc.params.wire_diameter_m, Check::Positive);
+    if (lc.params.wire_diameter_m > 0.01) l->fail("wire_diameter_m", "a lacing wire over 10 mm thick is no wire");
+    lc.params.max_gap_m = l->number("max_gap_m", lc.params.max_gap_m, Check::Positive);
+    lc.at_s = l->number("at_s", lc.at_s, Check::NonNegative);
+    lc.edge_band_m = l->number("edge_band_m", lc.edge_band_m, Check::NonNegative);
+    const double settling = c.settle_s > 0.0 ? (c.until_at_rest ? c.settle_longest_s : c.settle_s) : 0.0;
+    if (lc.at_s > 0.0 && !(lc.at_s < settling))
+      l->fail("at_s", "the cells would be laced after the settling ends (" + std::to_string(settling) +
+                          " s): lace them earlier, or as laid out (0)");
+    c.lacing = lc;
+  }
   // An impact lasts tens of milliseconds; the series every 0.1 ms; no mass
   // scaling (the test is dynamic).
   c.setup = parseLabSetup(root, 1.0, 0.1, 1e-4);
@@ -123,10 +146,11 @@ StructureCase parseCase(const bridge::JsonDocument& doc, bool whole = true) {
 struct Layout {
   Scene scene;
   Vec3 pitch = Vec3::Zero();  ///< centre-to-centre distance of neighbouring cells (the cell's outer extent)
-  std::size_t blocks_per_cell = 0;
+  std::size_t blocks_per_cell = 0, spheres_per_cell = 0;
   /// Cells of the front (i = 0) and back (i = nx - 1) layers, by index (i + nx (j + ny k)).
   std::vector<std::size_t> front_cells, back_cells;
   std::vector<int> slot_of;     ///< grid index -> place among the cells laid out (-1: not laid out)
+  std::vector<int> grid_of;     ///< place among the cells laid out -> grid index
   std::size_t first_plate = 0;  ///< the scene's wall of a part's first face (StructurePart::faces, in order)
 };
 
@@ -163,6 +187,7 @@ Layout buildLayout(const StructureCase& c, const Sample& sample, const Structure
   const Scene& cell = sample.scene;
   out.pitch = sample.hi - sample.lo;
   out.blocks_per_cell = cell.blocks.size();
+  out.spheres_per_cell = cell.spheres.size();
   Scene& s = out.scene;
   s.gravity_m_s2 = cell.gravity_m_s2;
   s.materials = cell.materials;
@@ -193,6 +218,7 @@ Layout buildLayout(const StructureCase& c, const Sample& sample, const Structure
           s.links.push_back(l);
         }
         out.slot_of[index] = static_cast<int>(slot);
+        out.grid_of.push_back(static_cast<int>(index));
         if (i == 0) out.front_cells.push_back(slot);
         if (i == c.nx - 1) out.back_cells.push_back(slot);
         ++slot;
@@ -204,6 +230,43 @@ Layout buildLayout(const StructureCase& c, const Sample& sample, const Structure
   if (part)
     for (const StructurePart::Face& f : part->faces) s.walls.push_back(facePlate(f, c, out, sample));
   return out;
+}
+
+/// Laces every two neighbouring cells laid out (both resolved) along the
+/// edges where their faces meet, with the bodies where `scene` has them (the
+/// layout's, or a settling's state: the same spheres in the same order).
+/// Returns what it did, for the summary.
+nlohmann::json laceCells(const StructureCase& c, const Layout& l, const Sample& sample, Scene& scene) {
+  const StructureCase::Lacing& lc = *c.lacing;
+  double node_radius = 0.0;
+  for (const LinkSpec& k : sample.scene.links)
+    node_radius = std::max({node_radius, sample.scene.spheres[k.a].radius_m, sample.scene.spheres[k.b].radius_m});
+  const double band = lc.edge_band_m > 0.0 ? lc.edge_band_m : 1.5 * node_radius;
+  const CellEdges edges = cellEdges(sample.scene, band);
+  LacingParams params = lc.params;
+  params.min_length_m = 2.0 * node_radius;  // (a loop around both wires; nodes in touch are laced slack)
+  std::size_t links = 0, unlaced = 0, faces = 0;
+  for (std::size_t slot = 0; slot < l.grid_of.size(); ++slot) {
+    const int g = l.grid_of[slot];
+    const int idx[3] = {g % c.nx, (g / c.nx) % c.ny, g / (c.nx * c.ny)};
+    const int n[3] = {c.nx, c.ny, c.nz}, stride[3] = {1, c.nx, c.nx * c.ny};
+    for (int axis = 0; axis < 3; ++axis) {
+      if (idx[axis] + 1 >= n[axis]) continue;
+      const int other = l.slot_of[static_cast<std::size_t>(g + stride[axis])];
+      if (other < 0) continue;
+      const LacedFaces f = laceFaces(scene, edges, slot * l.spheres_per_cell,
+                                     static_cast<std::size_t>(other) * l.spheres_per_cell, axis, params);
+      scene.links.insert(scene.links.end(), f.links.begin(), f.links.end());
+      links += f.links.size(), unlaced += f.unlaced, ++faces;
+    }
+  }
+  return {{"at_s", lc.at_s},
+          {"wire_diameter_m", lc.params.wire_diameter_m},
+          {"max_gap_m", lc.params.max_gap_m},
+          {"edge_band_m", band},
+          {"faces_laced", faces},
+          {"links", links},
+          {"edge_nodes_unlaced", unlaced}};
 }
 
 /// The settling's scene (c.settle_s > 0): the laid-out structure for the
@@ -303,6 +366,9 @@ bridge::RunOutcome runOne(const StructureCase& c, const Sample& sample, const br
                           const std::string& file, const StructurePart* part = nullptr) {
   Layout layout = buildLayout(c, sample, part);
   checkAim(c, layout, file);
+  // Laced as laid out, or once landed (in the settling, below).
+  nlohmann::json lacing_results;
+  if (c.lacing && c.lacing->at_s == 0.0) lacing_results = laceCells(c, layout, sample, layout.scene);
   Vec3 aim = aimPoint(c, layout);  // (laid out; lowered with the struck cell where settle.aim says)
   // (the cells laid out: the whole structure's, or a hybrid's resolved ones)
   const std::size_t laid_out = layout.blocks_per_cell > 0 ? layout.scene.blocks.size() / layout.blocks_per_cell : 0;
@@ -321,6 +387,7 @@ bridge::RunOutcome runOne(const StructureCase& c, const Sample& sample, const br
   Scene standing = layout.scene;
   if (c.settle_s > 0.0) {
     Scene s = settleScene(c, layout, sample, part);
+    const double longest_settling = s.run.duration_s;
     bridge::RunContext sub = ctx;
     sub.outdir = ctx.outdir / "settle";
     std::filesystem::create_directories(sub.outdir);
@@ -333,13 +400,16 @@ bridge::RunOutcome runOne(const StructureCase& c, const Sample& sample, const br
     };
     SceneRunHooks hooks;
     hooks.label = "micro.structure settle";
+    // (a settling in two runs, the cells laced between them, counts its
+    // time from the first's start)
+    double t_offset = 0.0;
     hooks.record = [&](const Engine& e, double time) {
-      t.push_back(time);
+      t.push_back(t_offset + time);
       u.push_back(e.energy().gravity_potential_J);
     };
     if (c.until_at_rest)
       hooks.done = [&](const Engine& e) {
-        return e.time() >= c.settle_s && descentSpeed(t, u, weight) <= c.at_rest_m_s &&
+        return t_offset + e.time() >= c.settle_s && descentSpeed(t, u, weight) <= c.at_rest_m_s &&
                (c.at_rest_rms_m_s <= 0.0 || rmsSpeed(e.energy().kinetic_translational_J) <= c.at_rest_rms_m_s);
       };
     hooks.archive = [&](bridge::StateArchive& a) { a("time_s", t), a("gravity_potential_J", u); };
@@ -392,7 +462,39 @@ bridge::RunOutcome runOne(const StructureCase& c, const Sample& sample, const br
       };
     }
     double settled_at = NAN;
-    hooks.end = [&](const Engine& e, const Scene& in) { standing = stateScene(in, e), settled_at = e.time(); };
+    hooks.end = [&](const Engine& e, const Scene& in) {
+      standing = stateScene(in, e), settled_at = t_offset + e.time();
+    };
+    if (c.lacing && c.lacing->at_s > 0.0) {
+      // The cells land unlaced (for lacing.at_s, to the end: the test of rest
+      // comes after), then are laced where they landed and settle on.
+      Scene landing = s;
+      landing.run.duration_s = c.lacing->at_s;
+      landing.run.output_interval_s = c.lacing->at_s;
+      SceneRunHooks first = hooks;
+      first.label = "micro.structure landing";
+      first.done = nullptr;
+      bridge::RunContext land = ctx;
+      land.outdir = ctx.outdir / "landing";
+      std::filesystem::create_directories(land.outdir);
+      bridge::RunOutcome landed = runScene(std::move(landing), file, land, first);
+      if (landed.status != bridge::RunOutcome::Status::Ok) {
+        landed.message = "landing the structure before its lacing: " + landed.message;
+        return landed;
+      }
+      lacing_results = laceCells(c, layout, sample, standing);
+      lacing_results["landed_in_s"] = settled_at;
+      if (ctx.progress)
+        std::cerr << "micro.structure: landed in " << settled_at << " s; laced "
+                  << lacing_results["faces_laced"].get<std::size_t>() << " pairs of faces with "
+                  << lacing_results["links"].get<std::size_t>() << " wires ("
+                  << lacing_results["edge_nodes_unlaced"].get<std::size_t>() << " edge nodes left unlaced)\n";
+      Scene rest = std::move(standing);  // (the settling's materials, runs and wall programs: stateScene keeps them)
+      rest.run.duration_s = longest_settling - settled_at;
+      rest.run.output_interval_s = rest.run.duration_s / 4.0;
+      t_offset = settled_at;
+      s = std::move(rest);
+    }
     bridge::RunOutcome settled = runScene(std::move(s), file, sub, hooks);
     if (settled.status != bridge::RunOutcome::Status::Ok) {
       settled.message = "settling the structure: " + settled.message;
@@ -533,6 +635,7 @@ bridge::RunOutcome runOne(const StructureCase& c, const Sample& sample, const br
   bridge::RunOutcome out = runScene(std::move(scene), file, ctx, hooks);
   nlohmann::json& r = out.results;
   if (!settle_results.is_null()) r["settle"] = settle_results;
+  if (!lacing_results.is_null()) r["lacing"] = lacing_results;
   r["cells"] = {c.nx, c.ny, c.nz};
   r["cell_pitch_m"] = {layout.pitch.x(), layout.pitch.y(), layout.pitch.z()};
   r["aim_point_m"] = {aim.y(), aim.z()};

@@ -328,6 +328,71 @@ TEST(ResolvedStructure, SettlesUntilAtRestAndResumesToTheSameWall) {
   expectRefused(dir, c, "/settle/longest_s");
 }
 
+// The mean x of the blocks of cell `slot` (blocks_per_cell each, after the
+// spheres) at the first and last snapshot of the run in `dir`.
+std::pair<double, double> cellX(const std::filesystem::path& dir, std::size_t slot, std::size_t blocks_per_cell) {
+  const gabion::bridge::H5Reader h(dir / "result.h5");
+  const auto t = h.read("/bodies/time_s"), x = h.read("/bodies/position_m");
+  const std::size_t bodies = x.size() / (3 * t.size());
+  const std::size_t first_block = bodies - 2 * blocks_per_cell;  // (two cells' blocks close the body list)
+  double x0 = 0.0, x1 = 0.0;
+  for (std::size_t b = 0; b < blocks_per_cell; ++b) {
+    const std::size_t k = first_block + slot * blocks_per_cell + b;
+    x0 += x[3 * k], x1 += x[3 * ((t.size() - 1) * bodies + k)];
+  }
+  return {x0 / blocks_per_cell, x1 / blocks_per_cell};
+}
+
+// Neighbouring cells laced once they have landed (lacing.at_s): two cells
+// side by side, free at the back, the boulder striking the first. The
+// lacing joins their facing edges where they landed (the small cell's
+// upper ones, laid out at the cell's extent, land after about 0.1 s), and
+// the settling goes on from there, its time counted from the start.
+// Laced, the cell beside the struck one is dragged back with it (34 mm at
+// the test's writing) and holds the struck one back; unlaced only friction
+// between the nettings drags it (7 mm).
+TEST(ResolvedStructure, LacedCellsDragTheirNeighbourAlong) {
+  const auto dir = scratchDir("resolved_laced");
+  writeFile(dir / "cell.json", gabion::testing::smallCellCase());
+  ASSERT_EQ(runGabion("run -q " + (dir / "cell.json").string() + " -o " + (dir / "cell").string()).exit_code, 0);
+  nlohmann::json c = nlohmann::json::parse(kStructure);
+  c["structure"] = {{"cells", {1, 2, 1}}, {"support", {{"back", "none"}}}};
+  c["boulder"]["aim_face_fraction"] = {0.25, 0.5};
+  c["settle"] = {{"duration_s", 0.12}, {"until_at_rest", false}};
+  c["run"]["duration_s"] = 0.1;
+  writeFile(dir / "plain.json", c.dump());
+  c["lacing"] = {{"at_s", 0.1}};
+  writeFile(dir / "laced.json", c.dump());
+  for (const char* name : {"plain", "laced"}) {
+    const auto r =
+        runGabion("run -q " + (dir / (std::string(name) + ".json")).string() + " -o " + (dir / name).string());
+    ASSERT_EQ(r.exit_code, 0) << name << ": " << r.output;
+  }
+  const nlohmann::json plain = summaryOf(dir / "plain"), laced = summaryOf(dir / "laced");
+  EXPECT_FALSE(plain.contains("lacing"));
+  const nlohmann::json& l = laced["lacing"];
+  EXPECT_EQ(l["faces_laced"], 1);
+  EXPECT_GE(l["links"].get<int>(), 10) << l.dump();
+  EXPECT_NEAR(l["landed_in_s"].get<double>(), 0.1, 1e-4);
+  EXPECT_TRUE(std::filesystem::exists(dir / "laced" / "landing" / "result.h5"));
+  // (the settling's time from the landing's start: the same 0.12 s as unlaced)
+  EXPECT_NEAR(laced["settle"]["duration_s"].get<double>(), plain["settle"]["duration_s"].get<double>(), 1e-4);
+  EXPECT_TRUE(laced["touched"].get<bool>());
+  // The neighbour (cell 1, along y) moves back along x.
+  const std::size_t bpc = summaryOf(dir / "cell")["blocks"].get<std::size_t>();
+  const auto [p0, p1] = cellX(dir / "plain", 1, bpc);
+  const auto [l0, l1] = cellX(dir / "laced", 1, bpc);
+  const auto [s0, s1] = cellX(dir / "laced", 0, bpc);
+  const auto [q0, q1] = cellX(dir / "plain", 0, bpc);
+  EXPECT_GT(l1 - l0, 2.5 * (p1 - p0)) << "laced " << l1 - l0 << " m against " << p1 - p0 << " m unlaced";
+  EXPECT_LT(s1 - s0, q1 - q0) << "the struck cell, laced, moves back less";
+  EXPECT_GT(s1 - s0, 0.1) << "the struck cell moves back";
+
+  // Laced after the settling ends: refused, naming the field.
+  c["lacing"]["at_s"] = 0.12;
+  expectRefused(dir, c, "/lacing/at_s");
+}
+
 // The hybrid: a macro.impact case with "resolve". The struck front cell is
 // resolved; the cell behind it is a macro node whose front face is a plate
 // in the fine scene. The work the plate does on the bodies and the work its

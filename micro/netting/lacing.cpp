@@ -1,0 +1,111 @@
+#include "micro/netting/lacing.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <stdexcept>
+#include <tuple>
+
+namespace gabion::micro {
+namespace {
+
+double median(std::vector<double> v) {
+  const std::size_t h = v.size() / 2;
+  std::nth_element(v.begin(), v.begin() + static_cast<std::ptrdiff_t>(h), v.end());
+  if (v.size() % 2 == 1) return v[h];
+  const double upper = v[h];
+  return 0.5 * (upper + *std::max_element(v.begin(), v.begin() + static_cast<std::ptrdiff_t>(h)));
+}
+
+}  // namespace
+
+CellEdges cellEdges(const Scene& cell, double band_m) {
+  if (!(band_m > 0.0)) throw std::invalid_argument("cellEdges: the band must be > 0");
+  CellEdges out;
+  out.band_m = band_m;
+  out.faces.assign(cell.spheres.size(), 0);
+  std::vector<std::size_t> nodes;
+  {
+    std::vector<bool> is_node(cell.spheres.size(), false);
+    for (const LinkSpec& l : cell.links) {
+      if (l.a < is_node.size()) is_node[l.a] = true;
+      if (l.b < is_node.size()) is_node[l.b] = true;
+    }
+    for (std::size_t k = 0; k < is_node.size(); ++k)
+      if (is_node[k]) nodes.push_back(k);
+  }
+  if (nodes.empty()) return out;
+  // Start from the nodes' extent, then each plane at the median of the
+  // nodes nearest to it, until the assignment stands (a few rounds).
+  for (int a = 0; a < 3; ++a) {
+    double lo = std::numeric_limits<double>::infinity(), hi = -lo;
+    for (const std::size_t k : nodes) lo = std::min(lo, cell.spheres[k].center_m[a]), hi = std::max(hi, cell.spheres[k].center_m[a]);
+    out.plane[static_cast<std::size_t>(faceIndex(a, 0))] = lo;
+    out.plane[static_cast<std::size_t>(faceIndex(a, 1))] = hi;
+  }
+  const auto distance = [&](std::size_t k, int f) {
+    return std::fabs(cell.spheres[k].center_m[f % 3] - out.plane[static_cast<std::size_t>(f)]);
+  };
+  std::vector<int> nearest(nodes.size(), -1);
+  for (int round = 0; round < 20; ++round) {
+    bool changed = false;
+    std::array<std::vector<double>, 6> members;
+    for (std::size_t n = 0; n < nodes.size(); ++n) {
+      int best = 0;
+      for (int f = 1; f < 6; ++f)
+        if (distance(nodes[n], f) < distance(nodes[n], best)) best = f;
+      changed |= best != nearest[n];
+      nearest[n] = best;
+      members[static_cast<std::size_t>(best)].push_back(cell.spheres[nodes[n]].center_m[best % 3]);
+    }
+    if (!changed) break;
+    for (int f = 0; f < 6; ++f)
+      if (!members[static_cast<std::size_t>(f)].empty())
+        out.plane[static_cast<std::size_t>(f)] = median(members[static_cast<std::size_t>(f)]);
+  }
+  for (const std::size_t k : nodes)
+    for (int f = 0; f < 6; ++f)
+      if (distance(k, f) <= band_m) out.faces[k] |= static_cast<std::uint8_t>(1u << f);
+  return out;
+}
+
+LacedFaces laceFaces(const Scene& scene, const CellEdges& edges, std::size_t first_a, std::size_t first_b, int axis,
+                     const LacingParams& params) {
+  const std::size_t n = edges.faces.size();
+  if (axis < 0 || axis > 2) throw std::invalid_argument("laceFaces: axis must be 0, 1 or 2");
+  if (std::max(first_a, first_b) + n > scene.spheres.size())
+    throw std::invalid_argument("laceFaces: a cell's spheres run past the scene's");
+  const int fa = faceIndex(axis, 1), fb = faceIndex(axis, 0);
+  std::vector<std::size_t> as, bs;
+  for (std::size_t k = 0; k < n; ++k) {
+    if (edges.onEdgeOf(k, fa)) as.push_back(k);
+    if (edges.onEdgeOf(k, fb)) bs.push_back(k);
+  }
+  // Every pair within reach, nearest first (ties in index order).
+  std::vector<std::tuple<double, std::size_t, std::size_t>> pairs;
+  for (const std::size_t ka : as)
+    for (const std::size_t kb : bs) {
+      const double d = (scene.spheres[first_a + ka].center_m - scene.spheres[first_b + kb].center_m).norm();
+      if (d <= params.max_gap_m && d > 0.0) pairs.emplace_back(d, ka, kb);
+    }
+  std::sort(pairs.begin(), pairs.end());
+  std::vector<bool> used_a(n, false), used_b(n, false);
+  LacedFaces out;
+  const bridge::WireCurve curve = bridge::wireCurve(params.table, params.wire_diameter_m);
+  for (const auto& [d, ka, kb] : pairs) {
+    if (used_a[ka] || used_b[kb]) continue;
+    used_a[ka] = used_b[kb] = true;
+    LinkSpec l;
+    l.a = first_a + ka;
+    l.b = first_b + kb;
+    l.law = LinkSpec::Law::Wire;
+    l.wire.curve = curve;
+    l.wire.rest_length_m = std::max(d, params.min_length_m);
+    out.links.push_back(l);
+  }
+  for (const std::size_t ka : as) out.unlaced += used_a[ka] ? 0 : 1;
+  for (const std::size_t kb : bs) out.unlaced += used_b[kb] ? 0 : 1;
+  return out;
+}
+
+}  // namespace gabion::micro
