@@ -7,7 +7,8 @@
 RESOLVED_DIR is a micro.structure run (or a macro.resolved run's
 `resolved/` folder): its case (case.json, or run.json's) names the cell
 file and the wall's cells, its settle/result.h5 holds the bodies laid out
-(first snapshot) and settled (last). For each pair of cells one above the other, the sink of the upper
+(first snapshot; landing/result.h5's first where the cells were laced once
+landed) and settled (last). For each pair of cells one above the other, the sink of the upper
 cell's blocks onto the lower cell's blocks (their mean heights' drops,
 upper less lower) is cut into three parts that add up to it:
 
@@ -79,6 +80,10 @@ def main():
     pos = f["bodies/position_m"]
     t = f["bodies/time_s"][:]
     first, last = pos[0], pos[-1]
+    if (folder / "landing" / "result.h5").exists():  # (laced once landed: laid out at the landing's start)
+        landing = h5py.File(folder / "landing" / "result.h5", "r")
+        first = landing["bodies/position_m"][0]
+        t = t + landing["series/time_s"][-1]
     cells = nx * ny * nz
     if pos.shape[1] != cells * (spheres + blocks):
         sys.exit(f"{folder}: {pos.shape[1]} bodies, not {cells} cells of {spheres} spheres and {blocks} blocks")
