@@ -4,6 +4,7 @@
 // a few thousand steps), as CI runs it.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <filesystem>
 #include <fstream>
@@ -387,6 +388,33 @@ TEST(ResolvedStructure, LacedCellsDragTheirNeighbourAlong) {
   EXPECT_GT(l1 - l0, 2.5 * (p1 - p0)) << "laced " << l1 - l0 << " m against " << p1 - p0 << " m unlaced";
   EXPECT_LT(s1 - s0, q1 - q0) << "the struck cell, laced, moves back less";
   EXPECT_GT(s1 - s0, 0.1) << "the struck cell moves back";
+
+  // Killed in the settling after the lacing, resumed: the landing runs
+  // again, the settling goes on from its checkpoint, and the wall stands
+  // as the whole run's stood when the boulder came (struck for 0.01 s
+  // only: the impact's first snapshot and its forces over that time).
+  const auto killed = dir / "killed";
+  const std::string out =
+      gabion::testing::signalWhenThere("run -q " + (dir / "laced.json").string() + " -o " + killed.string() +
+                                           " --set run.checkpoint_every_s=0.005 --set run.duration_s=0.01",
+                                       killed / "settle" / "checkpoint" / "state.h5", "KILL");
+  ASSERT_NE(out.find("exit=137"), std::string::npos) << out;
+  const auto resumed = runGabion("run --resume " + killed.string());
+  ASSERT_EQ(resumed.exit_code, 0) << resumed.output;
+  EXPECT_NE(resumed.output.find("micro.structure settle: continuing from the checkpoint"), std::string::npos)
+      << resumed.output;
+  EXPECT_EQ(summaryOf(killed)["lacing"], l);
+  EXPECT_EQ(summaryOf(killed)["settle"]["energy"], laced["settle"]["energy"]);
+  const gabion::bridge::H5Reader a(dir / "laced" / "result.h5"), b(killed / "result.h5");
+  const auto whole = a.read("/bodies/position_m"), again = b.read("/bodies/position_m");
+  const std::size_t snapshot = whole.size() / a.read("/bodies/time_s").size();
+  ASSERT_GE(again.size(), snapshot);
+  EXPECT_TRUE(std::equal(again.begin(), again.begin() + static_cast<std::ptrdiff_t>(snapshot), whole.begin()));
+  const auto f_whole = a.read("/curves/impact/force_N"), f_again = b.read("/curves/impact/force_N");
+  ASSERT_GT(f_again.size(), 50u);
+  ASSERT_GE(f_whole.size(), f_again.size());
+  // (all but the last sample, taken at the shorter run's last step)
+  EXPECT_TRUE(std::equal(f_again.begin(), f_again.end() - 1, f_whole.begin()));
 
   // Laced after the settling ends: refused, naming the field.
   c["lacing"]["at_s"] = 0.12;
