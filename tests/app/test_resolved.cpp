@@ -80,6 +80,18 @@ nlohmann::json struckCellResolved(const std::vector<int>& cells) {
             {"run", {{"duration_s", 0.02}}}}}};
 }
 
+// Runs `gabion <args>` into `killed`, kills it (SIGKILL) once its settling
+// has written a checkpoint, and resumes it to the end: the resumed run
+// says it continued the settling from there.
+void killInTheSettlingAndResume(const std::string& args, const std::filesystem::path& killed) {
+  const std::string out = gabion::testing::signalWhenThere(args, killed / "settle" / "checkpoint" / "state.h5", "KILL");
+  ASSERT_NE(out.find("exit=137"), std::string::npos) << out;
+  const auto resumed = runGabion("run --resume " + killed.string());
+  ASSERT_EQ(resumed.exit_code, 0) << resumed.output;
+  EXPECT_NE(resumed.output.find("micro.structure settle: continuing from the checkpoint"), std::string::npos)
+      << resumed.output;
+}
+
 const char* kStructure = R"({"format": "gabion.case/1", "kind": "micro.structure", "cell": "cell/cell.h5",
  "structure": {"cells": [2, 1, 1]}, "boulder": {"diameter_m": 0.25, "velocity_m_s": 8},
  "settle": {"duration_s": 0.01, "until_at_rest": false}, "run": {"duration_s": 0.03}})";
@@ -307,14 +319,8 @@ TEST(ResolvedStructure, SettlesUntilAtRestAndResumesToTheSameWall) {
   }
   // Killed in the settling (after its first checkpoint), resumed.
   const auto killed = dir / "killed";
-  const std::string out =
-      gabion::testing::signalWhenThere(args + killed.string() + " --set run.checkpoint_every_s=0.05",
-                                       killed / "settle" / "checkpoint" / "state.h5", "KILL");
-  ASSERT_NE(out.find("exit=137"), std::string::npos) << out;
-  const auto resumed = runGabion("run --resume " + killed.string());
-  ASSERT_EQ(resumed.exit_code, 0) << resumed.output;
-  EXPECT_NE(resumed.output.find("micro.structure settle: continuing from the checkpoint"), std::string::npos)
-      << resumed.output;
+  ASSERT_NO_FATAL_FAILURE(
+      killInTheSettlingAndResume(args + killed.string() + " --set run.checkpoint_every_s=0.05", killed));
   const nlohmann::json k = summaryOf(killed);
   EXPECT_EQ(k["settle"]["duration_s"], settle["duration_s"]);
   EXPECT_EQ(k["settle"]["descent_speed_m_s"], settle["descent_speed_m_s"]);
@@ -394,15 +400,10 @@ TEST(ResolvedStructure, LacedCellsDragTheirNeighbourAlong) {
   // as the whole run's stood when the boulder came (struck for 0.01 s
   // only: the impact's first snapshot and its forces over that time).
   const auto killed = dir / "killed";
-  const std::string out =
-      gabion::testing::signalWhenThere("run -q " + (dir / "laced.json").string() + " -o " + killed.string() +
-                                           " --set run.checkpoint_every_s=0.005 --set run.duration_s=0.01",
-                                       killed / "settle" / "checkpoint" / "state.h5", "KILL");
-  ASSERT_NE(out.find("exit=137"), std::string::npos) << out;
-  const auto resumed = runGabion("run --resume " + killed.string());
-  ASSERT_EQ(resumed.exit_code, 0) << resumed.output;
-  EXPECT_NE(resumed.output.find("micro.structure settle: continuing from the checkpoint"), std::string::npos)
-      << resumed.output;
+  ASSERT_NO_FATAL_FAILURE(
+      killInTheSettlingAndResume("run -q " + (dir / "laced.json").string() + " -o " + killed.string() +
+                                     " --set run.checkpoint_every_s=0.005 --set run.duration_s=0.01",
+                                 killed));
   EXPECT_EQ(summaryOf(killed)["lacing"], l);
   EXPECT_EQ(summaryOf(killed)["settle"]["energy"], laced["settle"]["energy"]);
   const gabion::bridge::H5Reader a(dir / "laced" / "result.h5"), b(killed / "result.h5");
