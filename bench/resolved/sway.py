@@ -2,7 +2,7 @@
 """How a resolved wall settles: how fast its bodies still move, and how far
 each row of cells moved over the settling.
 
-    python3 bench/resolved/sway.py RESOLVED_DIR
+    python3 bench/resolved/sway.py [LABEL=]RESOLVED_DIR... [--png FIGURE]
 
 RESOLVED_DIR is a micro.structure run (or a macro.resolved run's
 `resolved/` folder), finished or still settling: its case (case.json, or
@@ -18,6 +18,9 @@ landed (`lacing`, docs/resolved.md). It prints
     the settling (the mean position of its blocks, first snapshot against
     last): the row's mean along x (out of the front face is negative), y
     (along the wall) and z, and the least and largest over its cells.
+
+With --png, the rms speeds of every run given are drawn against time into
+FIGURE (log scale; matplotlib), each named LABEL where given.
 """
 import json
 import sys
@@ -41,9 +44,35 @@ def case_of(folder):
 
 
 def main():
-    if len(sys.argv) != 2:
+    args = sys.argv[1:]
+    png = None
+    if "--png" in args:
+        k = args.index("--png")
+        if k + 1 >= len(args):
+            sys.exit(__doc__)
+        png = args[k + 1]
+        del args[k:k + 2]
+    if not args:
         sys.exit(__doc__)
-    folder = Path(sys.argv[1])
+    curves = [(a.split("=", 1)[0] if "=" in a else a, *sway(Path(a.split("=", 1)[-1]))[1:]) for a in args]
+    if png:
+        import matplotlib
+        matplotlib.use("Agg")
+        import matplotlib.pyplot as plt
+        fig, ax = plt.subplots(figsize=(7, 4))
+        for label, t, rms in curves:
+            ax.semilogy(t, rms, label=label)
+        ax.set_xlabel("time from the laid-out wall (s)")
+        ax.set_ylabel("rms speed of the bodies (m/s)")
+        ax.grid(True, which="both", alpha=0.3)
+        ax.legend(fontsize=8)
+        fig.tight_layout()
+        fig.savefig(png, dpi=120)
+        print(f"\nwrote {png}")
+
+
+def sway(folder):
+    """Prints one run's settling; returns (folder, time, rms speed)."""
     case = case_of(folder)
     cell = h5py.File(case["cell"], "r")
     spheres, blocks = len(cell["spheres/center_m"]), len(cell["blocks/position_m"])
@@ -89,6 +118,7 @@ def main():
         cols = "".join(f"  {moves[:, a].mean():6.1f} ({moves[:, a].min():6.1f} .. {moves[:, a].max():6.1f})"
                        for a in range(3))
         print(f"{k:3d} {cols}")
+    return folder, t, rms
 
 
 if __name__ == "__main__":
