@@ -26,9 +26,13 @@
 # 10-cell hybrid through the depth with the macro nodes along x, y and z, as
 # it is and with the plates across x giving (resolve.macro_motion "xyz",
 # resolve.across "gives"), in place of the variants above;
+# with --laced, every wall's cells are laced once landed (micro.structure
+# "lacing" at 0.15 s, docs/resolved.md, Laced) and settled until their
+# bodies' rms speed is under 0.02 m/s, and so are the resolved cells of its
+# hybrids (they take the wall's micro keys);
 # then one table, and a chart of each hybrid's largest error against how
 # many times faster than its resolved wall it ran (OUT/figures/wide_error_vs_speed_up.png).
-#   bench/resolved/wide.sh [--out DIR] [--threads N] [--walls "54 90 150 210"] [--pipeline DIR]
+#   bench/resolved/wide.sh [--out DIR] [--threads N] [--walls "54 90 150 210"] [--pipeline DIR] [--laced]
 # About two hours for wall_54 on 2 cores, most of it the resolved wall
 # settling (1 s); with --pipeline of the denser cell (docs/resolved.md, A
 # denser cell) about 50 minutes, the wall at rest after 0.28 s. wall_90's
@@ -40,9 +44,10 @@
 set -euo pipefail
 here=$(cd "$(dirname "$0")" && pwd)
 root=$(cd "$here/../.." && pwd)
-out=$root/results/wide threads=2 walls="54 210" pipeline=
+out=$root/results/wide threads=2 walls="54 210" pipeline= laced=false
 while [ $# -gt 0 ]; do
   case $1 in
+    --laced) laced=true; shift ;;
     --out) out=$2; shift 2 ;;
     --threads) threads=$2; shift 2 ;;
     --walls) walls=$2; shift 2 ;;
@@ -58,6 +63,10 @@ if [ -n "$pipeline" ]; then
     { echo "$pipeline: no law.json or 1_cell/cell.h5 (a pipeline's results)" >&2; exit 2; }
   cell=(--set "law_file=$pipeline/law.json" --set "cell=$pipeline/1_cell/cell.h5")
 fi
+# (laced walls, with --laced: the hybrids' cases written by macro.resolved carry the same keys)
+if $laced; then
+  cell+=(--set 'resolved.lacing={"at_s": 0.15}' --set resolved.settle.at_rest_rms_speed_m_s=0.02)
+fi
 for w in $walls; do
   case $w in
     54)
@@ -72,7 +81,7 @@ for w in $walls; do
         fi
         continue
       fi
-      run_once wall_54 "$root/cases/macro_resolved.json" --set 'structure.cells=[2,9,3]' --set 'hybrid.within_m=[0.25]'
+      run_once wall_54 "$root/cases/macro_resolved.json" "${cell[@]}" --set 'structure.cells=[2,9,3]' --set 'hybrid.within_m=[0.25]'
       h=$out/wall_54/hybrid_0/case.json
       if [ -f "$h" ]; then
         run_once wall_54_more/reach_0.5 "$h" --set resolve.within_m=0.5
