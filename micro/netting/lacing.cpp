@@ -39,7 +39,8 @@ CellEdges cellEdges(const Scene& cell, double band_m) {
   // nodes nearest to it, until the assignment stands (a few rounds).
   for (int a = 0; a < 3; ++a) {
     double lo = std::numeric_limits<double>::infinity(), hi = -lo;
-    for (const std::size_t k : nodes) lo = std::min(lo, cell.spheres[k].center_m[a]), hi = std::max(hi, cell.spheres[k].center_m[a]);
+    for (const std::size_t k : nodes)
+      lo = std::min(lo, cell.spheres[k].center_m[a]), hi = std::max(hi, cell.spheres[k].center_m[a]);
     out.plane[static_cast<std::size_t>(faceIndex(a, 0))] = lo;
     out.plane[static_cast<std::size_t>(faceIndex(a, 1))] = hi;
   }

@@ -26,7 +26,9 @@ namespace gabion::micro {
 
 /// Face numbers: axis + 3 side, side 0 at the lower end along the axis (x-,
 /// y-, z-), 1 at the upper (x+, y+, z+).
-constexpr int faceIndex(int axis, int upper) { return axis + 3 * upper; }
+constexpr int faceIndex(int axis, int upper) {
+  return axis + 3 * upper;
+}
 
 /// Where a cell's netting nodes lie, found from the cell's spheres alone.
 struct CellEdges {

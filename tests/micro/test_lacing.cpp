@@ -15,8 +15,8 @@ namespace {
 using gabion::micro::CellEdges;
 using gabion::micro::cellEdges;
 using gabion::micro::faceIndex;
-using gabion::micro::LacingParams;
 using gabion::micro::laceFaces;
+using gabion::micro::LacingParams;
 using gabion::micro::LinkSpec;
 using gabion::micro::Scene;
 using gabion::micro::SphereSpec;
