@@ -769,10 +769,20 @@ void check(const bridge::JsonDocument& doc) {
 /// settle.longest_s, then the impact, each with its own step and outputs.
 std::optional<bridge::Estimate> estimateRuns(const StructureCase& c, const std::string& file,
                                              const StructurePart* part = nullptr) {
-  return estimateReplicates(c.setup, c.settle_s > 0.0 ? 2 : 1, [&](const Sample& s, std::size_t run) {
+  // (a settling laced once landed is two runs: the landing, to lacing.at_s, then the rest)
+  const bool landing = c.settle_s > 0.0 && c.lacing && c.lacing->at_s > 0.0;
+  const std::size_t runs = c.settle_s > 0.0 ? (landing ? 3 : 2) : 1;
+  return estimateReplicates(c.setup, runs, [&](const Sample& s, std::size_t run) {
     const Layout l = buildLayout(c, s, part);
     std::size_t boulder = 0;
-    return run == 1 ? settleScene(c, l, s, part) : impactScene(c, l.scene, s, aimPoint(c, l), file, boulder);
+    if (run == 0) return impactScene(c, l.scene, s, aimPoint(c, l), file, boulder);
+    Scene settle = settleScene(c, l, s, part);
+    if (landing) {
+      const double longest = settle.run.duration_s, at = c.lacing->at_s;
+      settle.run.duration_s = run == 2 ? at : longest - at;
+      settle.run.output_interval_s = run == 2 ? at : settle.run.duration_s / 4.0;
+    }
+    return settle;
   });
 }
 

@@ -382,6 +382,10 @@ TEST(ResolvedStructure, LacedCellsDragTheirNeighbourAlong) {
   EXPECT_GE(l["links"].get<int>(), 10) << l.dump();
   EXPECT_NEAR(l["landed_in_s"].get<double>(), 0.1, 1e-4);
   EXPECT_TRUE(std::filesystem::exists(dir / "laced" / "landing" / "result.h5"));
+  EXPECT_EQ(laced["estimate"]["runs"], 3) << "the landing, the rest of the settling, the impact";
+  EXPECT_EQ(plain["estimate"]["runs"], 2);
+  // (the same steps, but for rounding at the split)
+  EXPECT_NEAR(laced["estimate"]["steps"].get<double>(), plain["estimate"]["steps"].get<double>(), 2.0);
   // (the settling's time from the landing's start: the same 0.12 s as unlaced)
   EXPECT_NEAR(laced["settle"]["duration_s"].get<double>(), plain["settle"]["duration_s"].get<double>(), 1e-4);
   EXPECT_TRUE(laced["touched"].get<bool>());
