@@ -484,6 +484,8 @@ bridge::RunOutcome runOne(const StructureCase& c, const Sample& sample, const br
       }
       lacing_results = laceCells(c, layout, sample, standing);
       lacing_results["landed_in_s"] = settled_at;
+      // (the settle keys are the second part's: its steps and energies)
+      if (landed.results.contains("steps")) lacing_results["landing_steps"] = landed.results["steps"];
       if (ctx.progress)
         std::cerr << "micro.structure: landed in " << settled_at << " s; laced "
                   << lacing_results["faces_laced"].get<std::size_t>() << " pairs of faces with "

@@ -381,6 +381,9 @@ TEST(ResolvedStructure, LacedCellsDragTheirNeighbourAlong) {
   EXPECT_EQ(l["faces_laced"], 1);
   EXPECT_GE(l["links"].get<int>(), 10) << l.dump();
   EXPECT_NEAR(l["landed_in_s"].get<double>(), 0.1, 1e-4);
+  // (the landing's steps and the rest's make the unlaced settling's, but for rounding at the split)
+  EXPECT_NEAR(l["landing_steps"].get<double>() + laced["settle"]["steps"].get<double>(),
+              plain["settle"]["steps"].get<double>(), 2.0);
   EXPECT_TRUE(std::filesystem::exists(dir / "laced" / "landing" / "result.h5"));
   EXPECT_EQ(laced["estimate"]["runs"], 3) << "the landing, the rest of the settling, the impact";
   EXPECT_EQ(plain["estimate"]["runs"], 2);
