@@ -269,6 +269,14 @@ nlohmann::json laceCells(const StructureCase& c, const Layout& l, const Sample& 
           {"edge_nodes_unlaced", unlaced}};
 }
 
+/// Lacing needs a netting: a cell whose spheres no links join has no edges to lace.
+void checkLacing(const StructureCase& c, const Sample& sample, const std::string& file) {
+  if (c.lacing && sample.netting_nodes == 0)
+    throw bridge::InputError(file, "/lacing",
+                             "the cell (" + sample.cell_file.string() +
+                                 ") has no netting to lace: no links join its spheres; leave lacing out");
+}
+
 /// The settling's scene (c.settle_s > 0): the laid-out structure for the
 /// longest the settling may take, five snapshots, its series at least ten.
 /// A part's plate under cells stacked above its resolved cell presses on it
@@ -364,6 +372,7 @@ Vec3 meanBlockPosition(const Engine& e, std::size_t spheres, std::size_t first, 
 
 bridge::RunOutcome runOne(const StructureCase& c, const Sample& sample, const bridge::RunContext& ctx,
                           const std::string& file, const StructurePart* part = nullptr) {
+  checkLacing(c, sample, file);
   Layout layout = buildLayout(c, sample, part);
   checkAim(c, layout, file);
   // Laced as laid out, or once landed (in the settling, below).
@@ -759,6 +768,7 @@ void check(const bridge::JsonDocument& doc) {
   checkCells(c.setup);
   if (!c.setup.cells.front().generate.empty()) return;
   const Sample sample = loadSample(c.setup.cells.front().file, c.setup);
+  checkLacing(c, sample, doc.file());
   const Layout l = buildLayout(c, sample);
   checkAim(c, l, doc.file());
   std::size_t boulder = 0;
@@ -810,6 +820,7 @@ void checkStructurePart(const bridge::JsonDocument& doc, const StructurePart& pa
   const StructureCase c = parseCase(doc, false);
   checkPart(c, part, doc.file());
   const Sample sample = partSample(c, doc);
+  checkLacing(c, sample, doc.file());
   const Layout l = buildLayout(c, sample, &part);
   checkAim(c, l, doc.file());
   std::size_t boulder = 0;

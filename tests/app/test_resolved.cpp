@@ -429,6 +429,37 @@ TEST(ResolvedStructure, LacedCellsDragTheirNeighbourAlong) {
   expectRefused(dir, c, "/lacing/at_s");
 }
 
+// Lacing a cell that has no netting (two spheres saved as a cell, no links)
+// is refused before anything runs, naming the field and the cell; without
+// lacing the same case passes its check.
+TEST(ResolvedStructure, LacingACellWithoutANettingIsRefused) {
+  const auto dir = scratchDir("resolved_no_netting");
+  writeFile(dir / "make.json", R"({"format": "gabion.case/1", "kind": "micro.scene", "gravity_m_s2": [0, 0, -9.81],
+ "materials": {"rock": {"density_kg_m3": 2600, "normal_stiffness_N_m": 1e6, "shear_stiffness_N_m": 2.5e5,
+               "friction": 0.5}},
+ "spheres": [{"center_m": [0, 0, 0.05], "radius_m": 0.02, "material": "rock"},
+             {"center_m": [0.03, 0, 0.1], "radius_m": 0.02, "material": "rock"}],
+ "walls": [{"point_m": [0, 0, 0], "normal": [0, 0, 1], "material": "rock"}],
+ "save_cell": true, "run": {"duration_s": 0.05}})");
+  ASSERT_EQ(runGabion("run -q " + (dir / "make.json").string() + " -o " + (dir / "made").string()).exit_code, 0);
+  nlohmann::json c = {{"format", "gabion.case/1"},
+                      {"kind", "micro.structure"},
+                      {"cell", "made/cell.h5"},
+                      {"structure", {{"cells", {1, 2, 1}}}},
+                      {"boulder", {{"diameter_m", 0.05}, {"velocity_m_s", 2}}},
+                      {"settle", {{"duration_s", 0.01}, {"until_at_rest", false}}},
+                      {"run", {{"duration_s", 0.01}}}};
+  writeFile(dir / "plain.json", c.dump());
+  const auto plain = runGabion("check " + (dir / "plain.json").string());
+  EXPECT_EQ(plain.exit_code, 0) << plain.output;
+  c["lacing"] = {{"at_s", 0.0}};
+  expectRefused(dir, c, "/lacing: the cell");
+  writeFile(dir / "laced.json", c.dump());
+  const auto run = runGabion("run -q " + (dir / "laced.json").string() + " -o " + (dir / "laced").string());
+  EXPECT_EQ(run.exit_code, 2) << run.output;
+  EXPECT_NE(run.output.find("has no netting to lace"), std::string::npos) << run.output;
+}
+
 // The hybrid: a macro.impact case with "resolve". The struck front cell is
 // resolved; the cell behind it is a macro node whose front face is a plate
 // in the fine scene. The work the plate does on the bodies and the work its
