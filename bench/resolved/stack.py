@@ -31,6 +31,8 @@ from pathlib import Path
 
 import numpy as np
 
+from sway import case_of  # (the case a resolved run ran, as sway.py reads it)
+
 try:
     import h5py
 except ImportError:
@@ -43,12 +45,8 @@ def main():
     folder = Path(sys.argv[1])
     if folder.suffix == ".h5":  # (a cell file alone: its lid)
         case = {"cell": str(folder)}
-    elif (folder / "case.json").exists():  # (a macro.resolved run's resolved/)
-        case = json.loads((folder / "case.json").read_text())
-    else:  # (a micro.structure run of its own: the case as it ran, beside its file)
-        run = json.loads((folder / "run.json").read_text())
-        case = run["case"]
-        case["cell"] = str(Path(run["case_file"]).parent / case["cell"])
+    else:
+        case = case_of(folder)
     cell = h5py.File(case["cell"], "r")
     x = cell["spheres/center_m"][:]
     r = cell["spheres/radius_m"][:]

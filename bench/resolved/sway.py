@@ -35,6 +35,7 @@ except ImportError:
 
 
 def case_of(folder):
+    """The case a resolved run ran: case.json, or a plain run's run.json (its cell beside the case file)."""
     if (folder / "case.json").exists():  # (a macro.resolved run's resolved/)
         return json.loads((folder / "case.json").read_text())
     run = json.loads((folder / "run.json").read_text())  # (a micro.structure run of its own)

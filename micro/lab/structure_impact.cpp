@@ -277,6 +277,14 @@ void checkLacing(const StructureCase& c, const Sample& sample, const std::string
                                  ") has no netting to lace: no links join its spheres; leave lacing out");
 }
 
+/// A laced settling's parts (from_s to to_s of the settling, lacing.at_s
+/// between them): the landing with one snapshot at its end, the rest with
+/// four. The run and the estimate split it alike.
+void settlingPart(RunSpec& run, double from_s, double to_s, bool landing) {
+  run.duration_s = to_s - from_s;
+  run.output_interval_s = landing ? run.duration_s : run.duration_s / 4.0;
+}
+
 /// The settling's scene (c.settle_s > 0): the laid-out structure for the
 /// longest the settling may take, five snapshots, its series at least ten.
 /// A part's plate under cells stacked above its resolved cell presses on it
@@ -478,8 +486,7 @@ bridge::RunOutcome runOne(const StructureCase& c, const Sample& sample, const br
       // The cells land unlaced (for lacing.at_s, to the end: the test of rest
       // comes after), then are laced where they landed and settle on.
       Scene landing = s;
-      landing.run.duration_s = c.lacing->at_s;
-      landing.run.output_interval_s = c.lacing->at_s;
+      settlingPart(landing.run, 0.0, c.lacing->at_s, true);
       SceneRunHooks first = hooks;
       first.label = "micro.structure landing";
       first.done = nullptr;
@@ -501,8 +508,7 @@ bridge::RunOutcome runOne(const StructureCase& c, const Sample& sample, const br
                   << lacing_results["links"].get<std::size_t>() << " wires ("
                   << lacing_results["edge_nodes_unlaced"].get<std::size_t>() << " edge nodes left unlaced)\n";
       Scene rest = std::move(standing);  // (the settling's materials, runs and wall programs: stateScene keeps them)
-      rest.run.duration_s = longest_settling - settled_at;
-      rest.run.output_interval_s = rest.run.duration_s / 4.0;
+      settlingPart(rest.run, settled_at, longest_settling, false);
       t_offset = settled_at;
       s = std::move(rest);
     }
@@ -791,8 +797,10 @@ std::optional<bridge::Estimate> estimateRuns(const StructureCase& c, const std::
     Scene settle = settleScene(c, l, s, part);
     if (landing) {
       const double longest = settle.run.duration_s, at = c.lacing->at_s;
-      settle.run.duration_s = run == 2 ? at : longest - at;
-      settle.run.output_interval_s = run == 2 ? at : settle.run.duration_s / 4.0;
+      if (run == 2)
+        settlingPart(settle.run, 0.0, at, true);
+      else
+        settlingPart(settle.run, at, longest, false);
     }
     return settle;
   });
