@@ -650,6 +650,7 @@ void Engine::advanceLinkedNodes(bool measure) {
     if (links_.hasBeams()) nodes_.addBeams(links_, k0, k1);
   });
   nodes_rebuilds_ = rebuilds_;
+  if (nodes_.hasRiders()) nodes_.ride(walls_, dt_);
   const double h = dt_ / substeps_;
   for (int k = 0; k < substeps_; ++k) {
     const bool last = k + 1 == substeps_, m = measure && last;
@@ -670,6 +671,7 @@ void Engine::advanceLinkedNodes(bool measure) {
     else
       for (const SphereSums& p : part_sums) s.add(p);  // (in part order)
     nodes_.addDrivenWork(k, substeps_, h, energy_.driven_work);
+    if (nodes_.hasRiders()) nodes_.addRiderForces(substeps_);
     sums_.local += s.local, sums_.finite += s.finite, sums_.max_d2 = std::max(sums_.max_d2, s.max_d2);
     if (m) sums_.ke_t += s.ke_t, sums_.ke_r += s.ke_r, sums_.pe += s.pe, sums_.ke_now += s.ke_now;
   }
@@ -707,14 +709,21 @@ void Engine::applyWallsAndLoads(bool measure) {
       fail(StepStatus::Overlap, m.str());
     }
   }
+  // The links of the spheres that ride the walls pull them too: with the
+  // force of their last step (they act inside the step, after the walls
+  // moved), whose work the ledger has as the riders' (driven_work).
+  rider_force_.assign(walls_.size(), Vec3::Zero());
+  if (nodes_.hasRiders()) nodes_.addWallForces(rider_force_);
   driveWalls();
+  for (std::size_t w = 0; w < walls_.size(); ++w) walls_[w].force_N += rider_force_[w];
 }
 
 void Engine::driveWalls() {
   if (!driver_ || status_ != StepStatus::Ok) return;
   driven_force_.clear();
-  for (const Wall& w : walls_)
-    if (w.program.kind == WallProgram::Kind::Driven) driven_force_.push_back(w.force_N);
+  for (std::size_t w = 0; w < walls_.size(); ++w)
+    if (walls_[w].program.kind == WallProgram::Kind::Driven)
+      driven_force_.push_back(walls_[w].force_N + rider_force_[w]);
   if (driven_force_.empty()) return;
   driven_move_.assign(driven_force_.size(), Vec3::Zero());
   driver_(time_, dt_, driven_force_, driven_move_);
@@ -723,7 +732,8 @@ void Engine::driveWalls() {
     if (w.program.kind != WallProgram::Kind::Driven) continue;
     const Vec3& d = driven_move_[k++];
     // The contacts counted the work at the last step's velocity; the wall
-    // moves by d: its work on the bodies is -F . d.
+    // moves by d: its work on the bodies is -F . d (F the contacts' force:
+    // the riders' work is theirs).
     energy_.wall_work -= w.force_N.dot(d - w.velocity * dt_);
     w.step_displacement = d;
     w.velocity = d / dt_;

@@ -129,7 +129,11 @@ class Engine {
   /// forces and before the bodies move, with the force the bodies exert on
   /// each driven wall at this step (walls in index order); it fills each one's
   /// displacement over the step (m). The walls' work in the energy ledger is
-  /// then -force . displacement, exactly what a coupled model receives.
+  /// then -force . displacement, exactly what a coupled model receives. A
+  /// wall that spheres ride (SphereSpec::rides_wall) also passes on their
+  /// links' force of the last step: the ledger counts their work at this
+  /// step's force (as the riders' driven work), so that share of the
+  /// coupling lags a step.
   using WallDriver =
       std::function<void(double t, double dt, const std::vector<Vec3>& forces_N, std::vector<Vec3>& displacements_m)>;
   /// Installs (or, with an empty function, removes: the walls stand still)
@@ -205,6 +209,7 @@ class Engine {
 
   Particles p_;  // every sphere in contact detection, in cell order
   WallDriver driver_;
+  std::vector<Vec3> rider_force_;  // per wall: the force of its riders' links at the last step (LinkedNodes)
   std::vector<Vec3> driven_force_, driven_move_;  // the driver's arguments (kept: no allocation per step)
   std::size_t sphere_count_ = 0;
   std::vector<std::uint32_t> driven_;  // ids of the fixed spheres that move

@@ -24,10 +24,38 @@ LinkedNodes::LinkedNodes(const Scene& scene, const Links& links, Particles& p) {
     n_.mass[k] = p.mass[i], n_.inv_mass[k] = p.inv_mass[i], n_.inv_inertia[k] = p.inv_inertia[i];
     n_.alpha[k] = p.alpha[i];
     const SphereSpec& spec = scene.spheres[id];
-    if (spec.fixed && spec.velocity_m_s != Vec3::Zero()) driven_.push_back(static_cast<std::uint32_t>(k));
+    if (spec.rides_wall >= 0) {
+      riders_.push_back(static_cast<std::uint32_t>(k));
+      rider_wall_.push_back(static_cast<std::uint32_t>(spec.rides_wall));
+    }
+    // (a rider moves with its wall: its work on the rest is a driven node's)
+    if (spec.fixed && (spec.velocity_m_s != Vec3::Zero() || spec.rides_wall >= 0))
+      driven_.push_back(static_cast<std::uint32_t>(k));
     // The store's free-sphere pass must not move them on its own.
     p.mass[i] = p.inv_mass[i] = p.inv_inertia[i] = p.alpha[i] = 0.0;
   }
+  rider_force_.assign(riders_.size(), Vec3::Zero());
+}
+
+void LinkedNodes::ride(const std::vector<Wall>& walls, double dt) {
+  for (std::size_t r = 0; r < riders_.size(); ++r) {
+    const std::uint32_t k = riders_[r];
+    const Vec3 v = walls[rider_wall_[r]].step_displacement / dt;
+    n_.vx[k] = v.x(), n_.vy[k] = v.y(), n_.vz[k] = v.z();
+    rider_force_[r].setZero();
+  }
+}
+
+void LinkedNodes::addRiderForces(int substeps) {
+  const double share = 1.0 / substeps;
+  for (std::size_t r = 0; r < riders_.size(); ++r) {
+    const std::uint32_t k = riders_[r];
+    rider_force_[r] += share * Vec3(lfx_[k], lfy_[k], lfz_[k]);
+  }
+}
+
+void LinkedNodes::addWallForces(std::vector<Vec3>& forces_N) const {
+  for (std::size_t r = 0; r < riders_.size(); ++r) forces_N[rider_wall_[r]] += rider_force_[r];
 }
 
 void LinkedNodes::hold(const Particles& p, bool rebuilt, std::size_t k0, std::size_t k1) {
@@ -140,6 +168,7 @@ void LinkedNodes::archive(bridge::StateArchive& a) {
   a("held_fx", hfx_), a("held_fy", hfy_), a("held_fz", hfz_), a("held_tx", htx_), a("held_ty", hty_);
   a("held_tz", htz_), a("start_x", sx_), a("start_y", sy_), a("start_z", sz_), a("turn_x", rx_), a("turn_y", ry_);
   a("turn_z", rz_), a("link_fx", lfx_), a("link_fy", lfy_), a("link_fz", lfz_);
+  if (!riders_.empty()) a("rider_force", rider_force_);  // (a scene without riders keeps its checkpoint's keys)
 }
 
 }  // namespace gabion::micro

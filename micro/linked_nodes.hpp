@@ -25,6 +25,7 @@
 #include "micro/links.hpp"
 #include "micro/particles.hpp"
 #include "micro/scene.hpp"
+#include "micro/walls.hpp"
 #include "micro/worker_scratch.hpp"
 
 namespace gabion::micro {
@@ -74,6 +75,19 @@ class LinkedNodes {
   /// they act once per step, as an impulse, like the contacts. For nodes
   /// [k0, k1) (ranges in parallel).
   void addBeams(const Links& links, std::size_t k0, std::size_t k1);
+  /// The riders (nodes of spheres that ride a wall, SphereSpec::rides_wall):
+  /// before the step's sub-steps, each takes its wall's displacement over the
+  /// step as its velocity (displacement / dt), so that it moves with the wall
+  /// exactly, and its force sum starts again from zero.
+  void ride(const std::vector<Wall>& walls, double dt);
+  /// After sub-step k of `substeps` (advance of every node): adds each
+  /// rider's link force to its mean over the step.
+  void addRiderForces(int substeps);
+  /// The mean force of their links on each wall's riders over the last step
+  /// (N), added to forces_N (one per wall).
+  void addWallForces(std::vector<Vec3>& forces_N) const;
+  bool hasRiders() const { return !riders_.empty(); }
+
   /// Each node's turn over the last step (rad), until hold.
   const double* turnX() const { return rx_.data(); }
   const double* turnY() const { return ry_.data(); }
@@ -93,6 +107,8 @@ class LinkedNodes {
   std::vector<double> rx_, ry_, rz_;                       // turn over the step so far (rad)
   std::vector<double> lfx_, lfy_, lfz_;                    // the links' force of the last sub-step
   std::vector<std::uint32_t> driven_;                      // nodes that are fixed and move
+  std::vector<std::uint32_t> riders_, rider_wall_;         // nodes that ride a wall (also driven), and their walls
+  std::vector<Vec3> rider_force_;                          // their links' mean force over the last step
 };
 
 /// The critical step of the link nodes against their links alone (s): min

@@ -1,5 +1,6 @@
 #include "micro/scene.hpp"
 
+#include <algorithm>
 #include <cmath>
 #include <filesystem>
 #include <map>
@@ -391,6 +392,7 @@ void validateScene(const Scene& s, const std::string& file) {
     if (g < 0 || g >= kGroupCount) fail(p, "contact groups are 0 .. " + std::to_string(kGroupCount - 1));
   };
   if (s.spheres.empty() && s.blocks.empty()) fail("", "the scene has no spheres and no blocks");
+  std::vector<bool> link_end;  // (which spheres links join, when one rides a wall)
   for (std::size_t k = 0; k < s.spheres.size(); ++k) {
     const SphereSpec& sp = s.spheres[k];
     if (!finite(sp.center_m)) fail(at("spheres", k, "center_m"), "must be finite");
@@ -403,6 +405,18 @@ void validateScene(const Scene& s, const std::string& file) {
     if (!(sp.mass_scale >= 1.0 && std::isfinite(sp.mass_scale))) fail(at("spheres", k, "mass_scale"), "must be >= 1");
     material(sp.material, at("spheres", k, "material"));
     group(sp.group, at("spheres", k, "group"));
+    if (sp.rides_wall != -1) {
+      const std::string key = at("spheres", k, "rides_wall");
+      if (sp.rides_wall < 0 || static_cast<std::size_t>(sp.rides_wall) >= s.walls.size())
+        fail(key, "no such wall: the scene has " + std::to_string(s.walls.size()));
+      if (!sp.fixed) fail(key, "a sphere that rides a wall must be fixed (the wall moves it)");
+      if (link_end.empty()) {  // (once, for the first sphere that rides)
+        link_end.assign(s.spheres.size(), false);
+        for (const LinkSpec& l : s.links)
+          if (l.a < link_end.size() && l.b < link_end.size()) link_end[l.a] = link_end[l.b] = true;
+      }
+      if (!link_end[k]) fail(key, "a sphere that rides a wall must be an end of a link (it ties the link to the wall)");
+    }
   }
   for (std::size_t k = 0; k < s.blocks.size(); ++k) {
     const BlockSpec& b = s.blocks[k];

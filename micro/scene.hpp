@@ -82,6 +82,12 @@ struct SphereSpec {
   /// run then takes a step sqrt(mass_scale) times longer on this sphere's
   /// account and ends in the same equilibrium (docs/micro.md, Mass scaling).
   double mass_scale = 1.0;
+  /// >= 0: a fixed sphere that rides wall `rides_wall` (its index in
+  /// Scene::walls): each step it moves as that wall does, and the force of
+  /// its links on it acts on the wall (Wall::force_N, from the next step on:
+  /// the links act inside the step, after the wall has moved). An end of a
+  /// link only: the point of a plate a lacing wire is tied to. -1: none.
+  int rides_wall = -1;
 };
 
 /// A rigid multi-sphere block. Member centres are in body coordinates; the

@@ -6,6 +6,7 @@
 #include <random>
 
 #include "bridge/cost.hpp"
+#include "bridge/errors.hpp"
 #include "micro/engine.hpp"
 #include "micro/scene_run.hpp"
 #include "micro_test_util.hpp"
@@ -18,6 +19,8 @@ using gabion::micro::Scene;
 using gabion::micro::SphereSpec;
 using gabion::micro::StepStatus;
 using gabion::micro::Vec3;
+using gabion::micro::WallProgram;
+using gabion::micro::WallSpec;
 using gabion::micro::test::kPi;
 using gabion::micro::test::sphere;
 const auto rock = [] { return gabion::micro::test::material(); };
@@ -306,6 +309,78 @@ TEST(MicroLinkSubsteps, StoneOnAWireChainKeepsTheEnergyAndTheRestingPlace) {
   EXPECT_LT(b_coarse, 1e-3);
   EXPECT_NEAR(z_coarse, z_fine, 0.01 * sag)
       << "fine " << z_fine << " coarse " << z_coarse << "; balance fine " << b_fine << " coarse " << b_coarse;
+}
+
+// A fixed sphere that rides a wall (SphereSpec::rides_wall: a point of a
+// plate a lacing wire is tied to) moves with it exactly, and its link pulls
+// the wall: the wall's force at each step is the link's force on the rider
+// at the step before (the link acts inside the step, after the wall moved).
+// The wall swings along y by a sinusoid (10 mm at 5 Hz) and drags a free
+// sphere on a spring (44 Hz, one sub-step, omega dt 0.006): the rider's
+// place is the program's closed form to round-off (10,000 increments of at
+// most 7e-6 m: error ~ 1e-18 m each), the force the spring's law to
+// round-off, and the energy the wall pumps in is the riders' driven work
+// (leapfrog's balance error ~ (omega dt)^2 = 4e-5; the bound is 1e-3).
+TEST(MicroLinks, ASphereThatRidesAWallMovesWithItAndPullsIt) {
+  const double k = 100.0, L0 = 0.05, r = 0.005, amp = 0.01, f = 5.0;
+  Scene s;
+  s.gravity_m_s2.setZero();
+  s.materials = {rock()};
+  WallSpec plate;
+  plate.name = "plate";
+  plate.point_m = Vec3(-1.0, 0, 0);  // (far from both spheres: no contact)
+  plate.normal = Vec3::UnitX();
+  plate.program.kind = WallProgram::Kind::Sinusoid;
+  plate.program.direction = Vec3::UnitY();
+  plate.program.amplitude_m = amp;
+  plate.program.frequency_hz = f;
+  s.walls = {plate};
+  SphereSpec rider = sphere(Vec3(0, 0, 0), r, true);
+  rider.rides_wall = 0;
+  s.spheres = {rider, sphere(Vec3(L0 + 0.002, 0, 0), r)};
+  s.links = {link(0, 1, k, L0)};
+  Engine e(s, 1);
+  e.setDt(2e-5);
+  ASSERT_EQ(e.linkSubsteps(), 1);
+  Vec3 expected = Vec3::Zero();  // the link's force on the rider at the last step
+  double worst_place = 0.0, worst_force = 0.0, worst_balance = 0.0, pull = 0.0;
+  for (int n = 0; n < 10000; ++n) {
+    const Vec3 a = e.body(0).position_m, b = e.body(1).position_m;  // (the step's start: where the link acts)
+    ASSERT_EQ(e.step(n % 50 == 0), StepStatus::Ok) << e.failure();
+    worst_force = std::max(worst_force, (e.wallForce(0) - expected).norm());
+    pull = std::max(pull, std::fabs(e.wallForce(0).y()));
+    const Vec3 d = b - a;
+    expected = k * (d.norm() - L0) * d.normalized();
+    const Vec3 at = Vec3(0, amp * std::sin(2.0 * kPi * f * e.time()), 0);
+    worst_place = std::max(worst_place, (e.body(0).position_m - at).norm());
+    if (n % 50 == 0) worst_balance = std::max(worst_balance, std::fabs(e.energy().balance_rel_error));
+  }
+  EXPECT_LT(worst_place, 1e-12);
+  EXPECT_LT(worst_force, 1e-9 * k * amp);
+  EXPECT_GT(pull, 0.01 * k * amp) << "the spring pulls the plate along y";
+  EXPECT_GT(e.energy().kinetic_translational_J + e.energy().elastic_link_J, 1e-4 * k * amp * amp)
+      << "the plate pumped energy into the sphere";
+  EXPECT_LT(worst_balance, 1e-3);
+  EXPECT_NE(e.energy().driven_work_J, 0.0);
+
+  // A sphere that rides must be fixed, an end of a link, on a wall that exists.
+  const auto refused = [&](Scene bad, const std::string& why) {
+    try {
+      gabion::micro::validateScene(bad, "rides.json");
+      ADD_FAILURE() << why << ": not refused";
+    } catch (const gabion::bridge::InputError& x) {
+      EXPECT_EQ(x.pointer(), "/spheres/0/rides_wall") << why;
+    }
+  };
+  Scene loose = s;
+  loose.spheres[0].fixed = false;
+  refused(loose, "not fixed");
+  Scene unlinked = s;
+  unlinked.links.clear();
+  refused(unlinked, "no link");
+  Scene nowhere = s;
+  nowhere.spheres[0].rides_wall = 1;
+  refused(nowhere, "no such wall");
 }
 
 }  // namespace
