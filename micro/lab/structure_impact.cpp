@@ -5,6 +5,7 @@
 #include <cmath>
 #include <iostream>
 #include <limits>
+#include <map>
 #include <optional>
 #include <sstream>
 
@@ -23,6 +24,9 @@ using bridge::Check;
 using bridge::JsonReader;
 
 constexpr int kBoulderGroup = 2;  // (rock 0, netting 1)
+/// The anchors of the lacing tied to a part's plates (lacing.to_plates):
+/// points that ride the plates and touch nothing.
+constexpr int kPlateAnchorGroup = 3;
 constexpr long long kMaxCells = kMaxResolvedCells;
 /// A stack whose centre of mass still comes down faster than this (m/s) at
 /// the end of its settling has not come to rest: 1.5 mm over an impact of
@@ -73,6 +77,9 @@ struct StructureCase {
     LacingParams params;
     double at_s = 0.15;
     double edge_band_m = 0.0;  // 0: 1.5 node radii
+    // A hybrid's resolved cells also laced to the plates that stand for
+    // their macro neighbours (each edge node to a point riding the plate).
+    bool to_plates = false;
   };
   std::optional<Lacing> lacing;
 };
@@ -129,6 +136,7 @@ StructureCase parseCase(const bridge::JsonDocument& doc, bool whole = true) {
     lc.params.max_gap_m = l->number("max_gap_m", lc.params.max_gap_m, Check::Positive);
     lc.at_s = l->number("at_s", lc.at_s, Check::NonNegative);
     lc.edge_band_m = l->number("edge_band_m", lc.edge_band_m, Check::NonNegative);
+    lc.to_plates = l->boolean("to_plates", lc.to_plates);
     const double settling = c.settle_s > 0.0 ? (c.until_at_rest ? c.settle_longest_s : c.settle_s) : 0.0;
     if (lc.at_s > 0.0 && !(lc.at_s < settling))
       l->fail("at_s", "the cells would be laced after the settling ends (" + std::to_string(settling) +
@@ -236,7 +244,8 @@ Layout buildLayout(const StructureCase& c, const Sample& sample, const Structure
 /// edges where their faces meet, with the bodies where `scene` has them (the
 /// layout's, or a settling's state: the same spheres in the same order).
 /// Returns what it did, for the summary.
-nlohmann::json laceCells(const StructureCase& c, const Layout& l, const Sample& sample, Scene& scene) {
+nlohmann::json laceCells(const StructureCase& c, const Layout& l, const Sample& sample, Scene& scene,
+                         const StructurePart* part) {
   const StructureCase::Lacing& lc = *c.lacing;
   double node_radius = 0.0;
   for (const LinkSpec& k : sample.scene.links)
@@ -260,17 +269,42 @@ nlohmann::json laceCells(const StructureCase& c, const Layout& l, const Sample& 
       links += f.links.size(), unlaced += f.unlaced, ++faces;
     }
   }
-  return {{"at_s", lc.at_s},
-          {"wire_diameter_m", lc.params.wire_diameter_m},
-          {"max_gap_m", lc.params.max_gap_m},
-          {"edge_band_m", band},
-          {"faces_laced", faces},
-          {"links", links},
-          {"edge_nodes_unlaced", unlaced}};
+  nlohmann::json out = {{"at_s", lc.at_s},
+                        {"wire_diameter_m", lc.params.wire_diameter_m},
+                        {"max_gap_m", lc.params.max_gap_m},
+                        {"edge_band_m", band},
+                        {"faces_laced", faces},
+                        {"links", links},
+                        {"edge_nodes_unlaced", unlaced}};
+  if (!part || !lc.to_plates) return out;
+  // Each face a resolved cell shares with a macro cell is laced to its
+  // plate (or its tiles), as the macro cell's netting would be: the plate
+  // then pulls and drags its macro node as a laced neighbour would.
+  for (int g = 0; g < 32; ++g) scene.no_contact_groups.emplace_back(kPlateAnchorGroup, g);
+  std::map<std::pair<std::size_t, int>, std::vector<bool>> taken;  // (per cell and face: a node once, over tiles)
+  std::size_t plate_links = 0, plate_unlaced = 0, plates = 0;
+  for (std::size_t k = 0; k < part->faces.size(); ++k) {
+    const StructurePart::Face& f = part->faces[k];
+    const auto slot = static_cast<std::size_t>(l.slot_of[static_cast<std::size_t>(f.cell)]);
+    const int face = faceIndex(f.axis, f.side > 0 ? 1 : 0);
+    const LacedPlate p = lacePlate(scene, edges, slot * l.spheres_per_cell, face, l.first_plate + k, kPlateAnchorGroup,
+                                   params, taken[{slot, face}]);
+    plate_links += p.links, plate_unlaced += p.unlaced, ++plates;
+  }
+  out["to_plates"] = true;
+  out["plates_laced"] = plates;
+  out["links_to_plates"] = plate_links;
+  out["edge_nodes_unlaced_at_plates"] = plate_unlaced;
+  return out;
 }
 
 /// Lacing needs a netting: a cell whose spheres no links join has no edges to lace.
-void checkLacing(const StructureCase& c, const Sample& sample, const std::string& file) {
+void checkLacing(const StructureCase& c, const Sample& sample, const std::string& file,
+                 const StructurePart* part = nullptr) {
+  if (c.lacing && c.lacing->to_plates && !part)
+    throw bridge::InputError(file, "/lacing/to_plates",
+                             "a structure resolved whole has no plates to lace its cells to: to_plates is for a "
+                             "hybrid's resolved cells (resolve.lacing)");
   if (c.lacing && sample.netting_nodes == 0)
     throw bridge::InputError(file, "/lacing",
                              "the cell (" + sample.cell_file.string() +
@@ -380,12 +414,12 @@ Vec3 meanBlockPosition(const Engine& e, std::size_t spheres, std::size_t first, 
 
 bridge::RunOutcome runOne(const StructureCase& c, const Sample& sample, const bridge::RunContext& ctx,
                           const std::string& file, const StructurePart* part = nullptr) {
-  checkLacing(c, sample, file);
+  checkLacing(c, sample, file, part);
   Layout layout = buildLayout(c, sample, part);
   checkAim(c, layout, file);
   // Laced as laid out, or once landed (in the settling, below).
   nlohmann::json lacing_results;
-  if (c.lacing && c.lacing->at_s == 0.0) lacing_results = laceCells(c, layout, sample, layout.scene);
+  if (c.lacing && c.lacing->at_s == 0.0) lacing_results = laceCells(c, layout, sample, layout.scene, part);
   Vec3 aim = aimPoint(c, layout);  // (laid out; lowered with the struck cell where settle.aim says)
   // (the cells laid out: the whole structure's, or a hybrid's resolved ones)
   const std::size_t laid_out = layout.blocks_per_cell > 0 ? layout.scene.blocks.size() / layout.blocks_per_cell : 0;
@@ -435,9 +469,9 @@ bridge::RunOutcome runOne(const StructureCase& c, const Sample& sample, const br
     // far), and the plates that give come down as the top of the cell under
     // them would (Face::gives): neither has a state of its own, so both
     // go on the same after a resume.
-    std::vector<std::size_t> driven;  // the part's faces whose plates are driven here, in wall order
-    std::vector<double> z0, wz0;      // their cells' blocks' mean height and their plates' height, laid out
-    const std::size_t n_spheres = s.spheres.size();
+    std::vector<std::size_t> driven;           // the part's faces whose plates are driven here, in wall order
+    std::vector<double> z0, wz0;               // their cells' blocks' mean height and their plates' height, laid out
+    std::size_t n_spheres = s.spheres.size();  // (the blocks' bodies come after the spheres)
     const bool any_gives =
         part && std::any_of(part->faces.begin(), part->faces.end(), [](const auto& f) { return f.gives; });
     if (part && (part->beside_follow || any_gives)) {
@@ -456,8 +490,8 @@ bridge::RunOutcome runOne(const StructureCase& c, const Sample& sample, const br
       // one cell's weight.
       const double max_speed = 0.5, gain = max_speed / (sample.mass_kg * s.gravity_m_s2.norm());
       const bool follow = part->beside_follow;
-      hooks.start = [&, first, n_spheres, blocksOf, max_speed, gain, follow](Engine& e) {
-        e.setWallDriver([&, first, n_spheres, blocksOf, max_speed, gain, follow](
+      hooks.start = [&, first, blocksOf, max_speed, gain, follow](Engine& e) {
+        e.setWallDriver([&, first, blocksOf, max_speed, gain, follow](
                             double, double dt, const std::vector<Vec3>& forces, std::vector<Vec3>& moves) {
           for (std::size_t q = 0; q < driven.size(); ++q) {
             const StructurePart::Face& f = part->faces[driven[q]];
@@ -498,7 +532,8 @@ bridge::RunOutcome runOne(const StructureCase& c, const Sample& sample, const br
         landed.message = "landing the structure before its lacing: " + landed.message;
         return landed;
       }
-      lacing_results = laceCells(c, layout, sample, standing);
+      lacing_results = laceCells(c, layout, sample, standing, part);
+      n_spheres = standing.spheres.size();  // (the anchors of a lacing to the plates come after the cells')
       lacing_results["landed_in_s"] = settled_at;
       // (the settle keys are the second part's: its steps and energies)
       if (landed.results.contains("steps")) lacing_results["landing_steps"] = landed.results["steps"];
@@ -506,7 +541,12 @@ bridge::RunOutcome runOne(const StructureCase& c, const Sample& sample, const br
         std::cerr << "micro.structure: landed in " << settled_at << " s; laced "
                   << lacing_results["faces_laced"].get<std::size_t>() << " pairs of faces with "
                   << lacing_results["links"].get<std::size_t>() << " wires ("
-                  << lacing_results["edge_nodes_unlaced"].get<std::size_t>() << " edge nodes left unlaced)\n";
+                  << lacing_results["edge_nodes_unlaced"].get<std::size_t>() << " edge nodes left unlaced)";
+      if (ctx.progress && lacing_results.contains("links_to_plates"))
+        std::cerr << "; " << lacing_results["links_to_plates"].get<std::size_t>() << " wires to "
+                  << lacing_results["plates_laced"].get<std::size_t>() << " plates ("
+                  << lacing_results["edge_nodes_unlaced_at_plates"].get<std::size_t>() << " edge nodes left unlaced)";
+      if (ctx.progress) std::cerr << "\n";
       Scene rest = std::move(standing);  // (the settling's materials, runs and wall programs: stateScene keeps them)
       settlingPart(rest.run, settled_at, longest_settling, false);
       t_offset = settled_at;
@@ -828,7 +868,7 @@ void checkStructurePart(const bridge::JsonDocument& doc, const StructurePart& pa
   const StructureCase c = parseCase(doc, false);
   checkPart(c, part, doc.file());
   const Sample sample = partSample(c, doc);
-  checkLacing(c, sample, doc.file());
+  checkLacing(c, sample, doc.file(), &part);
   const Layout l = buildLayout(c, sample, &part);
   checkAim(c, l, doc.file());
   std::size_t boulder = 0;

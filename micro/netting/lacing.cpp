@@ -70,6 +70,67 @@ CellEdges cellEdges(const Scene& cell, double band_m) {
   return out;
 }
 
+namespace {
+bridge::WireCurve wireCurveOf(const LacingParams& params) {
+  return bridge::wireCurve(params.table, params.wire_diameter_m);
+}
+
+LinkSpec lacingWire(std::size_t a, std::size_t b, double distance, const LacingParams& params,
+                    const bridge::WireCurve& curve) {
+  LinkSpec l;
+  l.a = a;
+  l.b = b;
+  l.law = LinkSpec::Law::Wire;
+  l.wire.curve = curve;
+  l.wire.rest_length_m = std::max(distance, params.min_length_m);
+  return l;
+}
+}  // namespace
+
+LinkSpec lacingWire(std::size_t a, std::size_t b, double distance, const LacingParams& params) {
+  return lacingWire(a, b, distance, params, wireCurveOf(params));
+}
+
+LacedPlate lacePlate(Scene& scene, const CellEdges& edges, std::size_t first, int face, std::size_t wall,
+                     int anchor_group, const LacingParams& params, std::vector<bool>& taken) {
+  const std::size_t n = edges.faces.size();
+  if (face < 0 || face > 5) throw std::invalid_argument("lacePlate: faces are 0 .. 5");
+  if (first + n > scene.spheres.size())
+    throw std::invalid_argument("lacePlate: the cell's spheres run past the scene's");
+  if (wall >= scene.walls.size() || !scene.walls[wall].bounded)
+    throw std::invalid_argument("lacePlate: the plate must be a bounded wall of the scene");
+  taken.resize(n, false);
+  const WallSpec& plate = scene.walls[wall];
+  const Vec3 nrm = plate.normal, u = plate.axis_u, v = nrm.cross(u);
+  const bridge::WireCurve curve = wireCurveOf(params);
+  LacedPlate out;
+  for (std::size_t k = 0; k < n; ++k) {
+    if (taken[k] || !edges.onEdgeOf(k, face)) continue;
+    const SphereSpec& node = scene.spheres[first + k];
+    const Vec3 rel = node.center_m - plate.point_m;
+    if (std::fabs(rel.dot(u)) > plate.half_u_m || std::fabs(rel.dot(v)) > plate.half_v_m) continue;
+    taken[k] = true;
+    // (the plate's normal points into the cell: the neighbour's node stands
+    // behind the plate, a node radius past it)
+    const double gap = rel.dot(nrm) + node.radius_m;
+    if (!(gap > 0.0 && gap <= params.max_gap_m)) {  // (too far, or through the plate)
+      ++out.unlaced;
+      continue;
+    }
+    SphereSpec anchor;
+    anchor.center_m = node.center_m - gap * nrm;
+    anchor.radius_m = node.radius_m;
+    anchor.material = node.material;
+    anchor.fixed = true;
+    anchor.group = anchor_group;
+    anchor.rides_wall = static_cast<int>(wall);
+    scene.links.push_back(lacingWire(first + k, scene.spheres.size(), gap, params, curve));
+    scene.spheres.push_back(anchor);
+    ++out.links;
+  }
+  return out;
+}
+
 LacedFaces laceFaces(const Scene& scene, const CellEdges& edges, std::size_t first_a, std::size_t first_b, int axis,
                      const LacingParams& params) {
   const std::size_t n = edges.faces.size();
@@ -92,17 +153,11 @@ LacedFaces laceFaces(const Scene& scene, const CellEdges& edges, std::size_t fir
   std::sort(pairs.begin(), pairs.end());
   std::vector<bool> used_a(n, false), used_b(n, false);
   LacedFaces out;
-  const bridge::WireCurve curve = bridge::wireCurve(params.table, params.wire_diameter_m);
+  const bridge::WireCurve curve = wireCurveOf(params);
   for (const auto& [d, ka, kb] : pairs) {
     if (used_a[ka] || used_b[kb]) continue;
     used_a[ka] = used_b[kb] = true;
-    LinkSpec l;
-    l.a = first_a + ka;
-    l.b = first_b + kb;
-    l.law = LinkSpec::Law::Wire;
-    l.wire.curve = curve;
-    l.wire.rest_length_m = std::max(d, params.min_length_m);
-    out.links.push_back(l);
+    out.links.push_back(lacingWire(first_a + ka, first_b + kb, d, params, curve));
   }
   for (const std::size_t ka : as) out.unlaced += used_a[ka] ? 0 : 1;
   for (const std::size_t kb : bs) out.unlaced += used_b[kb] ? 0 : 1;

@@ -67,6 +67,31 @@ struct LacedFaces {
   std::size_t unlaced = 0;
 };
 
+/// A lacing wire between spheres a and b of a scene, `distance` apart (m):
+/// the netting's wire law at the lacing wire's diameter, its rest length
+/// the distance but at least params.min_length_m.
+LinkSpec lacingWire(std::size_t a, std::size_t b, double distance, const LacingParams& params);
+
+/// What lacing a face to a plate made: the anchors (spheres that ride the
+/// plate) and their wires are in the scene; `unlaced`, the edge nodes over
+/// the plate further than max_gap_m from their anchor.
+struct LacedPlate {
+  std::size_t links = 0, unlaced = 0;
+};
+
+/// Laces the edge nodes of face `face` of a cell (its spheres those of
+/// `edges`' cell, from `first` in `scene`, where they are now) to the plate
+/// `wall` of `scene` (a bounded wall, standing for the neighbouring cell's
+/// netting): each edge node over the plate's rectangle, and not yet
+/// `taken` (a face cut in tiles: one plate each), is joined to an anchor,
+/// a fixed sphere of the node's radius in contact group `anchor_group`
+/// (which should touch nothing) that rides the plate
+/// (SphereSpec::rides_wall), where the neighbour's node would stand: at the
+/// node's projection on the plate, one node radius behind it. Anchors are
+/// appended to scene.spheres, their wires to scene.links.
+LacedPlate lacePlate(Scene& scene, const CellEdges& edges, std::size_t first, int face, std::size_t wall,
+                     int anchor_group, const LacingParams& params, std::vector<bool>& taken);
+
 /// Laces the face of cell a at the upper end along `axis` to the facing face
 /// of cell b (its neighbour along +axis): the cells' spheres are those of
 /// `edges`' cell, starting at `first_a` and `first_b` in `scene`, where they

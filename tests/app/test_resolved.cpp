@@ -698,6 +698,76 @@ TEST(HybridStructure, StruckCellResolvedTheCellBehindAMacroNode) {
   refused(bad, "/resolve/boulder");
 }
 
+// A resolved cell laced to its plates (lacing.to_plates) drags the macro
+// node beside it: on a 1 x 2 x 1 wall struck on one cell, resolved alone,
+// the plate on its side face stands for the other cell's netting. Unlaced,
+// only friction on that plate pulls the macro node back along x, and lets
+// go once the struck cell slides past (about 30 N at the end, of a 1.5 kN
+// peak); laced, the wires tied to points riding the plate keep pulling
+// (about 0.9 kN), as the laced wall's neighbour is pulled
+// (ResolvedStructure.LacedCellsDragTheirNeighbourAlong): the plate's
+// impulse along x doubles (12.6 against 6.5 N s) and the node, held by its
+// law against the fixed back, moves further. The plate's force reaches
+// the node a step late (the wires act after it moved), the interface's two
+// sides still the same products, and the balance within its bound. A
+// structure resolved whole has no plates: to_plates there is refused.
+TEST(HybridStructure, ACellLacedToItsPlatesDragsTheMacroNodeBeside) {
+  const auto dir = scratchDir("hybrid_laced_plates");
+  nlohmann::json laws = smallCellAndLaws(dir);
+  ASSERT_FALSE(laws.is_null());
+  writeFile(dir / "laws.json", laws.dump());
+  nlohmann::json c = struckCellResolved({1, 2, 1});
+  c["run"] = {{"duration_s", 0.03}};  // (the macro run: the impact's length is resolve.run's)
+  writeFile(dir / "plain.json", c.dump());
+  c["resolve"]["lacing"] = {{"at_s", 0.0}, {"to_plates", true}};
+  writeFile(dir / "laced.json", c.dump());
+  for (const char* name : {"plain", "laced"}) {
+    const auto r =
+        runGabion("run -q " + (dir / (std::string(name) + ".json")).string() + " -o " + (dir / name).string());
+    ASSERT_EQ(r.exit_code, 0) << name << ": " << r.output;
+  }
+  const nlohmann::json plain = summaryOf(dir / "plain"), laced = summaryOf(dir / "laced");
+  const nlohmann::json& l = laced["lacing"];
+  EXPECT_EQ(l["faces_laced"], 0) << "one resolved cell: no two to lace";
+  EXPECT_EQ(l["to_plates"], true);
+  EXPECT_EQ(l["plates_laced"], 1);
+  EXPECT_GE(l["links_to_plates"].get<int>(), 5) << l.dump();
+  ASSERT_EQ(laced["hybrid"]["interfaces"].size(), 1u);
+  EXPECT_EQ(laced["hybrid"]["interfaces"][0]["axis"], "y");
+  // The macro node beside (front and back layer at once) moves back along x.
+  const auto macroMove = [](const nlohmann::json& s) {
+    return s["max_face_displacement_by_part_m"]["front"]["macro"].get<double>();
+  };
+  EXPECT_GT(macroMove(laced), macroMove(plain))
+      << "laced " << macroMove(laced) << " m against " << macroMove(plain) << " m unlaced";
+  EXPECT_GT(macroMove(plain), 0.0);
+  const auto impulse = [&](const char* name) {  // (the plate's, along x, over the impact: N s)
+    const gabion::bridge::H5Reader h5(dir / name / "result.h5");
+    const std::vector<double> t = h5.read("/series/time_s"), f = h5.read("/series/walls/interface_1_y_minus/force_N");
+    double sum = 0.0;
+    for (std::size_t k = 1; k < t.size() && 3 * k < f.size(); ++k)
+      sum += 0.5 * (f[3 * k] + f[3 * k - 3]) * (t[k] - t[k - 1]);
+    return sum;
+  };
+  EXPECT_GT(impulse("laced"), 1.5 * impulse("plain"))
+      << "laced " << impulse("laced") << " N s against " << impulse("plain") << " N s unlaced";
+  EXPECT_GT(impulse("plain"), 0.0);
+  const nlohmann::json& h = laced["hybrid"];
+  const double to_macro = std::fabs(h["work_on_macro_part_J"].get<double>());
+  EXPECT_NEAR(h["work_on_fine_part_J"].get<double>(), -h["work_on_macro_part_J"].get<double>(), 1e-9 * to_macro);
+  EXPECT_LT(std::fabs(h["balance_rel_error"].get<double>()), 0.02);
+  // Whole: no plates.
+  nlohmann::json whole = {{"format", "gabion.case/1"},
+                          {"kind", "micro.structure"},
+                          {"cell", "cell/cell.h5"},
+                          {"structure", {{"cells", {1, 2, 1}}}},
+                          {"boulder", {{"diameter_m", 0.25}, {"velocity_m_s", 8}}},
+                          {"settle", {{"duration_s", 0.01}, {"until_at_rest", false}}},
+                          {"lacing", {{"at_s", 0.0}, {"to_plates", true}}},
+                          {"run", {{"duration_s", 0.01}}}};
+  expectRefused(dir, whole, "/lacing/to_plates");
+}
+
 // Across: a wall one cell deep and three wide, struck on its middle cell,
 // resolved alone; its side faces meet the macro cells beside it. With
 // across "gives" (their axial law made linear, k), the plates on those
