@@ -128,6 +128,9 @@ Plan plan(const JsonDocument& doc) {
       p.hybrids.push_back(c);
     }
   }
+  // (a lacing to the plates is the hybrids': the wall resolved whole has no plates)
+  if (json* l = p.resolved.contains("lacing") ? &p.resolved["lacing"] : nullptr; l && l->is_object())
+    l->erase("to_plates");
   return p;
 }
 

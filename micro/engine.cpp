@@ -230,7 +230,7 @@ Engine::Engine(const Scene& scene, int threads) {
 
   dt_critical_ = criticalStep(scene, block_props);
   dt_link_critical_ = criticalLinkStep(scene);
-  dt_safety_ = scene.run.dt_safety;
+  link_dt_safety_ = linkDtSafety(scene.run);
 
   pool_ = std::make_unique<WorkerPool>(threads);
   scratch_.resize(static_cast<std::size_t>(pool_->size()));
@@ -247,7 +247,7 @@ Engine::~Engine() = default;
 
 void Engine::setDt(double dt_s) {
   dt_ = dt_s;
-  substeps_ = micro::linkSubsteps(dt_s, dt_safety_, dt_link_critical_);
+  substeps_ = micro::linkSubsteps(dt_s, link_dt_safety_, dt_link_critical_);
 }
 
 // ---------------------------------------------------------------------------

@@ -244,7 +244,7 @@ class Engine {
   std::size_t rebuilds_ = 0;
 
   Vec3 gravity_;
-  double dt_ = 0.0, dt_critical_ = 0.0, dt_link_critical_ = 0.0, dt_safety_ = 0.2, time_ = 0.0;
+  double dt_ = 0.0, dt_critical_ = 0.0, dt_link_critical_ = 0.0, link_dt_safety_ = 0.2, time_ = 0.0;
   double max_overlap_ratio_ = 0.5, runaway_factor_ = 10.0, max_balance_error_ = 0.05;
   static constexpr long long kBalanceWarmup = 20;  ///< measurements before run.max_balance_error applies
   long long measurements_ = 0;

@@ -102,6 +102,11 @@ RunSpec parseRun(const JsonReader& run, double default_duration_s) {
   if (run.has("dt_s")) rs.dt_s = run.number("dt_s", Check::Positive);
   rs.dt_safety = run.number("dt_safety", 0.2, Check::Positive);
   if (rs.dt_safety > 1.0) run.fail("dt_safety", "must be <= 1 (a fraction of the critical step)");
+  if (run.has("link_dt_safety")) {
+    rs.link_dt_safety = run.number("link_dt_safety", Check::Positive);
+    if (rs.link_dt_safety > 1.0)
+      run.fail("link_dt_safety", "must be <= 1 (a fraction of the link nodes' critical step)");
+  }
   rs.allow_dt_above_critical = run.boolean("allow_dt_above_critical", false);
   rs.output_interval_s = run.number("output_interval_s", rs.duration_s / 100.0, Check::Positive);
   rs.series_interval_s = run.number("series_interval_s", rs.output_interval_s, Check::Positive);
@@ -508,6 +513,8 @@ void validateScene(const Scene& s, const std::string& file) {
   if (!(rs.duration_s >= 0.0 && std::isfinite(rs.duration_s))) fail("/run/duration_s", "must be > 0");
   if (!(rs.dt_s >= 0.0 && std::isfinite(rs.dt_s))) fail("/run/dt_s", "must be > 0");
   if (!(rs.dt_safety > 0.0 && rs.dt_safety <= 1.0)) fail("/run/dt_safety", "must be in (0, 1]");
+  if (!(rs.link_dt_safety >= 0.0 && rs.link_dt_safety <= 1.0))
+    fail("/run/link_dt_safety", "must be in (0, 1] (0: dt_safety)");
   if (!(rs.max_overlap_ratio > 0.0 && rs.max_overlap_ratio <= 1.0)) fail("/run/max_overlap_ratio", "must be in (0, 1]");
   if (!(rs.energy_runaway_factor > 1.0)) fail("/run/energy_runaway_factor", "must be > 1");
   if (!(rs.max_balance_error > 0.0)) fail("/run/max_balance_error", "must be > 0");

@@ -194,8 +194,11 @@ struct PorosityBox {
 /// Run settings (`run` object). Defaults in docs/micro.md.
 struct RunSpec {
   double duration_s = 0.0;
-  double dt_s = 0.0;                     ///< 0: dt_safety * critical
-  double dt_safety = 0.2;                ///< fraction of the critical step used when dt_s is absent
+  double dt_s = 0.0;       ///< 0: dt_safety * critical
+  double dt_safety = 0.2;  ///< fraction of the critical step used when dt_s is absent
+  /// Fraction of the link nodes' critical step a link sub-step may take
+  /// (micro/linked_nodes.hpp); 0: dt_safety.
+  double link_dt_safety = 0.0;
   bool allow_dt_above_critical = false;  ///< run a given dt_s even above the critical step
   double output_interval_s = 0.0;        ///< body snapshots (0: duration / 100)
   double series_interval_s = 0.0;        ///< scalar series (0: output_interval_s)
@@ -206,6 +209,12 @@ struct RunSpec {
   /// Wall-clock seconds between checkpoints (micro/checkpoint.hpp); 0: none.
   double checkpoint_every_s = 600.0;
 };
+
+/// The fraction of the link nodes' critical step their sub-steps take:
+/// link_dt_safety, or dt_safety where it is not given.
+inline double linkDtSafety(const RunSpec& run) {
+  return run.link_dt_safety > 0.0 ? run.link_dt_safety : run.dt_safety;
+}
 
 /// A whole scene.
 struct Scene {

@@ -81,7 +81,7 @@ bridge::Estimate sceneEstimate(const Scene& scene, double dt) {
   // (the links' stage: each link once per sub-step of the link nodes)
   const double link_substeps = scene.links.empty() ? 0.0
                                                    : static_cast<double>(scene.links.size()) *
-                                                         linkSubsteps(dt, rs.dt_safety, criticalLinkStep(scene));
+                                                         linkSubsteps(dt, linkDtSafety(rs), criticalLinkStep(scene));
   // (a snapshot holds each sphere and each block once)
   const double records = static_cast<double>(scene.spheres.size() + scene.blocks.size());
   return bridge::microRun(

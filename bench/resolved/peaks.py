@@ -1,7 +1,7 @@
 #!/usr/bin/env python3
 """The impact force's peak over windows, and when the boulder stopped.
 
-    python3 bench/resolved/peaks.py REFERENCE_DIR RUN_DIR...
+    python3 bench/resolved/peaks.py REFERENCE_DIR RUN_DIR... [--png FIG]
 
 Each folder is a micro.structure run or a hybrid's (its result.h5 holds
 /curves/impact: time_s, force_N, boulder_velocity_m_s, penetration_m). For
@@ -10,7 +10,8 @@ the largest mean over windows of 1, 2 and 5 ms (a peak that one granular
 spike does not set), the time from first contact to the deepest
 penetration (when the boulder stopped), and when the force last fell
 below 5 % of its peak; then each run's relative differences from the
-first folder's.
+first folder's. With --png, FIG shows each run's force and penetration
+against the time from first contact ([LABEL=]DIR names a curve LABEL).
 """
 import sys
 from pathlib import Path
@@ -42,9 +43,52 @@ def measures(folder):
     return out
 
 
+def curves(folder):
+    c = h5py.File(Path(folder) / "result.h5", "r")["curves/impact"]
+    t, f, pen = c["time_s"][:], c["force_N"][:], c["penetration_m"][:]
+    first = np.argmax(f > 0.0)
+    return 1e3 * (t - t[first]), 1e-3 * f, 1e3 * pen
+
+
+def figure(runs, png):
+    try:
+        import matplotlib
+        matplotlib.use("Agg")
+        import matplotlib.pyplot as plt
+    except ImportError:
+        sys.exit("--png needs matplotlib (apt-get install python3-matplotlib)")
+    fig, (top, bottom) = plt.subplots(2, 1, sharex=True, figsize=(7.5, 6.5))
+    for k, (label, folder) in enumerate(runs):
+        t, f, pen = curves(folder)
+        style = dict(lw=2.2 if k == 0 else 1.2, color="black" if k == 0 else None)
+        top.plot(t, f, label=label, **style)
+        bottom.plot(t, pen, label=label, **style)
+    top.set_ylabel("force on the boulder (kN)")
+    bottom.set_ylabel("penetration (mm)")
+    bottom.set_xlabel("time from first contact (ms)")
+    top.set_xlim(left=-2)
+    for ax in (top, bottom):
+        ax.grid(alpha=0.3)
+    top.legend(fontsize=8)
+    fig.tight_layout()
+    fig.savefig(png, dpi=110)
+    print(f"figure: {png}")
+
+
 def main():
-    if len(sys.argv) < 2:
+    args, png = sys.argv[1:], None
+    if "--png" in args:
+        k = args.index("--png")
+        if k + 1 >= len(args):
+            sys.exit("--png needs a file name")
+        png = args[k + 1]
+        del args[k:k + 2]
+    if not args:
         sys.exit(__doc__)
+    runs = [(a.split("=", 1) if "=" in a else (a, a)) for a in args]
+    sys.argv = [sys.argv[0]] + [folder for _, folder in runs]
+    if png:
+        figure(runs, png)
     names = ["peak kN", "1 ms kN", "2 ms kN", "5 ms kN", "to stop ms", "above 5 % ms"]
     scale = [1e-3] * 4 + [1e3] * 2
     rows = [(f, measures(f)) for f in sys.argv[1:]]

@@ -29,7 +29,9 @@
 # with --laced, every wall's cells are laced once landed (micro.structure
 # "lacing" at 0.15 s, docs/resolved.md, Laced) and settled until their
 # bodies' rms speed is under 0.02 m/s, and so are the resolved cells of its
-# hybrids (they take the wall's micro keys);
+# hybrids (they take the wall's micro keys), and each wall's xyz/gives
+# hybrids run once more with their resolved cells laced to their plates
+# too (resolve.lacing.to_plates, into *_more/plates_xyz_gives_*);
 # then one table, and a chart of each hybrid's largest error against how
 # many times faster than its resolved wall it ran (OUT/figures/wide_error_vs_speed_up.png).
 #   bench/resolved/wide.sh [--out DIR] [--threads N] [--walls "54 90 150 210"] [--pipeline DIR] [--laced]
@@ -78,6 +80,8 @@ for w in $walls; do
           run_once wall_54_more/reach_0.25 "$h" --set resolve.depth=reach
           run_once wall_54_more/whole_xyz_0.25 "$h" --set resolve.macro_motion=xyz
           run_once wall_54_more/whole_xyz_gives_0.25 "$h" --set resolve.macro_motion=xyz --set resolve.across=gives
+          $laced && run_once wall_54_more/plates_xyz_gives_0.25 "$h" --set resolve.macro_motion=xyz \
+            --set resolve.across=gives --set resolve.lacing.to_plates=true
         fi
         continue
       fi
@@ -105,6 +109,12 @@ for w in $walls; do
         run_once wall_90_more/whole_xyz_gives_0.25 "$h" --set resolve.macro_motion=xyz --set resolve.across=gives
         run_once wall_90_more/whole_xyz_gives_0.5 "$h" --set resolve.within_m=0.5 --set resolve.macro_motion=xyz \
           --set resolve.across=gives
+        if $laced; then
+          run_once wall_90_more/plates_xyz_gives_0.25 "$h" --set resolve.macro_motion=xyz --set resolve.across=gives \
+            --set resolve.lacing.to_plates=true
+          run_once wall_90_more/plates_xyz_gives_0.5 "$h" --set resolve.within_m=0.5 --set resolve.macro_motion=xyz \
+            --set resolve.across=gives --set resolve.lacing.to_plates=true
+        fi
       fi
       ;;
     150)
@@ -113,6 +123,8 @@ for w in $walls; do
       h=$out/wall_150/hybrid_0/case.json
       [ -f "$h" ] && run_once wall_150_more/whole_xyz_gives_0.5 "$h" --set resolve.macro_motion=xyz \
         --set resolve.across=gives
+      [ -f "$h" ] && $laced && run_once wall_150_more/plates_xyz_gives_0.5 "$h" --set resolve.macro_motion=xyz \
+        --set resolve.across=gives --set resolve.lacing.to_plates=true
       ;;
     210)
       run_once wall_210 "$root/cases/macro_resolved.json" "${cell[@]}" --set 'structure.cells=[2,15,7]' \

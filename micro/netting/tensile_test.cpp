@@ -162,7 +162,7 @@ bridge::RunOutcome run(const bridge::JsonDocument& doc, const bridge::RunContext
   const double dt = chooseDt(scene, criticalTimeStep(scene), doc.file());
   const auto steps = static_cast<long long>(std::ceil(scene.run.duration_s / dt - 1e-9));
   // The other engine integrates the wires at the step the nodes take here (a sub-step of dt).
-  const int substeps = linkSubsteps(dt, scene.run.dt_safety, criticalLinkStep(scene));
+  const int substeps = linkSubsteps(dt, linkDtSafety(scene.run), criticalLinkStep(scene));
   bridge::writeJsonAtomic(ctx.outdir / "netting.json", exchangeFile(c, net, scene, dt / substeps, steps * substeps));
 
   // The pulling force: what the netting exerts on the pulled nodes, against the pull.

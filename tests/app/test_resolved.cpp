@@ -766,6 +766,15 @@ TEST(HybridStructure, ACellLacedToItsPlatesDragsTheMacroNodeBeside) {
                           {"lacing", {{"at_s", 0.0}, {"to_plates", true}}},
                           {"run", {{"duration_s", 0.01}}}};
   expectRefused(dir, whole, "/lacing/to_plates");
+  // In macro.resolved the lacing to the plates goes to the hybrids alone.
+  writeFile(dir / "both.json", R"({"format": "gabion.case/1", "kind": "macro.resolved", "law_file": "laws.json",
+ "cell": "cell/cell.h5", "structure": {"cells": [1, 2, 1], "material": {"front": "front", "core": "front"}},
+ "boulder": {"diameter_m": 0.25, "velocity_m_s": 8},
+ "resolved": {"settle": {"duration_s": 0.01, "until_at_rest": false}, "run": {"duration_s": 0.03},
+              "lacing": {"at_s": 0, "to_plates": true}},
+ "hybrid": {"within_m": [0]}})");
+  const auto both = runGabion("check " + (dir / "both.json").string());
+  EXPECT_EQ(both.exit_code, 0) << both.output;
 }
 
 // Across: a wall one cell deep and three wide, struck on its middle cell,

@@ -240,6 +240,35 @@ TEST(MicroLinkSubsteps, TheCostEstimateCountsEachLinkAtEachSubStep) {
               gabion::bridge::kMicroSecondsPerBodyStep * bodies * steps, 1e-12 * est.wall_time_s);
 }
 
+// run.link_dt_safety sets the sub-steps apart from run.dt_safety: four times
+// the fraction, a quarter of the sub-steps, in the engine and in the cost
+// estimate alike; beyond 1 it is refused.
+TEST(MicroLinkSubsteps, TheirFractionOfTheCriticalStepIsItsOwn) {
+  Scene s;
+  s.materials = {rock()};
+  s.spheres = {sphere(Vec3(0, 0, 0), 0.005, true), sphere(Vec3(0.05, 0, 0), 0.005)};
+  s.links = {link(0, 1, 1e3, 0.05)};
+  s.run.duration_s = 1.0;
+  Engine probe(s, 1);
+  const double dt = 20 * s.run.dt_safety * probe.linkCriticalDt();
+  s.run.link_dt_safety = 4.0 * s.run.dt_safety;
+  Engine e(s, 1);
+  e.setDt(dt);
+  EXPECT_EQ(e.linkSubsteps(), 5);
+  const double steps = std::ceil(1.0 / dt);
+  EXPECT_NEAR(gabion::micro::sceneEstimate(s, dt).wall_time_s,
+              gabion::bridge::kMicroSecondsPerBodyStep * 2.0 * steps +
+                  gabion::bridge::kMicroSecondsPerLinkSubstep * 5.0 * steps,
+              1e-9 * steps);
+  s.run.link_dt_safety = 1.5;
+  try {
+    gabion::micro::validateScene(s, "fraction.json");
+    ADD_FAILURE() << "a link_dt_safety over 1 was not refused";
+  } catch (const gabion::bridge::InputError& x) {
+    EXPECT_EQ(x.pointer(), "/run/link_dt_safety");
+  }
+}
+
 // The rates hold while a scene fits the core's cache (about one cell's
 // bodies) and grow with the bodies past that, as measured on one cell and
 // on the resolved 12-cell and 54-cell walls (bridge/cost.hpp): the walls'

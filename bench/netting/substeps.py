@@ -1,0 +1,140 @@
+#!/usr/bin/env python3
+"""How long a link sub-step may be: speed against error over run.link_dt_safety.
+
+    python3 bench/netting/substeps.py CELL_H5 [--out DIR] [--safety 0.2,0.3,0.5,0.7,1]
+                                      [--gabion build/gabion] [--threads N] [--png FIG]
+
+The nodes of a netting advance in sub-steps of each engine step, each a
+fraction `run.link_dt_safety` of their critical step (docs/micro.md, Link
+sub-steps; it defaults to run.dt_safety, 0.2). This runs the cell's
+confined compression (cases/micro_cc.json: quasi-static, its netting's
+mass scaled 8 times) and its unconfined impact at 15 m/s
+(cases/micro_uci.json: dynamic, no scaling) at each fraction, one after
+the other, into DIR/<test>_<fraction>/, and prints for each run:
+
+  - the link sub-steps per step, the step loop's wall time and its speed-up
+    on the first fraction's (the runs' own `step_loop_wall_time_s`);
+  - the energy ledger's balance error at the end;
+  - against the first fraction's run: the peak force, and the force
+    curve's root-mean-square difference over its peak (the compression's
+    force against the lid's displacement, the impact's against time,
+    both interpolated onto the first run's samples); the compression's
+    lateral reaction coefficient, the impact's largest penetration.
+
+With --png, FIG draws each test's curve error and speed-up against the
+fraction. Run it alone on the machine: the speed-ups are wall times.
+"""
+import argparse
+import json
+import subprocess
+import sys
+from pathlib import Path
+
+import numpy as np
+
+try:
+    import h5py
+except ImportError:
+    sys.exit("needs h5py (apt-get install python3-h5py)")
+
+ROOT = Path(__file__).resolve().parents[2]
+TESTS = {
+    # name: (case file, extra --set arguments, whether the case has a run object, curve x, curve y)
+    "cc": ("cases/micro_cc.json", [], False, "curves/axial/displacement_m", "curves/axial/force_N"),
+    "uci_15": ("cases/micro_uci.json", ["--set", "velocities_m_s=[15]"], True, "curves/impact/time_s",
+               "curves/impact/force_N"),
+}
+
+
+def run(gabion, test, cell, fraction, out, threads):
+    case, extra, has_run, _, _ = TESTS[test]
+    folder = out / f"{test}_{fraction:g}"
+    if not (folder / "summary.json").exists():
+        # (--set makes no object: a case without `run` gets one with the fraction alone, its defaults kept)
+        fraction_set = f"run.link_dt_safety={fraction}" if has_run else f'run={{"link_dt_safety": {fraction}}}'
+        cmd = [gabion, "run", "-q", str(ROOT / case), "--set", f"cell={cell}", *extra,
+               "--set", fraction_set, "--threads", str(threads), "-o", str(folder)]
+        done = subprocess.run(cmd, capture_output=True, text=True)
+        if done.returncode != 0:
+            sys.exit(f"{' '.join(cmd)}\nfailed ({done.returncode}):\n{done.stdout}{done.stderr}")
+    return folder
+
+
+def measures(test, folder):
+    """The run's summary and its force curve, from one run or a replicate set's single run."""
+    summary = json.loads((folder / "summary.json").read_text())
+    h5 = folder / "result.h5"
+    if not h5.exists():  # (micro.uci writes one folder per velocity)
+        subs = sorted(p for p in folder.iterdir() if (p / "result.h5").exists())
+        if len(subs) != 1:
+            sys.exit(f"{folder}: expected one run's result.h5")
+        h5, summary = subs[0] / "result.h5", json.loads((subs[0] / "summary.json").read_text())
+    _, _, _, xs, ys = TESTS[test]
+    with h5py.File(h5, "r") as f:
+        x, y = f[xs][:], f[ys][:]
+    return summary, x, y
+
+
+def main():
+    ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    ap.add_argument("cell")
+    ap.add_argument("--out", default=str(ROOT / "results" / "substeps"))
+    ap.add_argument("--safety", default="0.2,0.3,0.5,0.7,1")
+    ap.add_argument("--gabion", default=str(ROOT / "build" / "gabion"))
+    ap.add_argument("--threads", type=int, default=2)
+    ap.add_argument("--png")
+    a = ap.parse_args()
+    fractions = [float(s) for s in a.safety.split(",")]
+    out = Path(a.out)
+    out.mkdir(parents=True, exist_ok=True)
+    cell = str(Path(a.cell).resolve())
+    rows = {}
+    for test in TESTS:
+        for s in fractions:
+            rows[(test, s)] = measures(test, run(a.gabion, test, cell, s, out, a.threads))
+    print("| test | link_dt_safety | sub-steps | step loop s | speed-up | balance | peak kN | peak error | "
+          "curve rms / peak | other |")
+    print("|---" * 10 + "|")
+    errors = {t: [] for t in TESTS}
+    for test in TESTS:
+        ref_summary, rx, ry = rows[(test, fractions[0])]
+        t0 = ref_summary["step_loop_wall_time_s"]
+        for s in fractions:
+            summary, x, y = rows[(test, s)]
+            # (onto the first run's samples, within the range both cover)
+            inside = (rx >= x.min()) & (rx <= x.max())
+            order = np.argsort(x, kind="stable")
+            rms = np.sqrt(np.mean((np.interp(rx[inside], x[order], y[order]) - ry[inside]) ** 2)) / ry.max()
+            if test == "cc":
+                other = f"lateral coefficient {summary['lateral_reaction_coefficient']:.4f}"
+            else:
+                other = f"penetration {1e3 * summary['max_penetration_m']:.1f} mm"
+            speed = t0 / summary["step_loop_wall_time_s"]
+            errors[test].append((s, rms, speed))
+            print(f"| {test} | {s:g} | {summary['link_substeps']} | {summary['step_loop_wall_time_s']:.1f} | "
+                  f"{speed:.2f} | {summary['energy']['balance_rel_error']:.1e} | {1e-3 * summary['peak_force_N']:.2f} | "
+                  f"{100 * (summary['peak_force_N'] / ref_summary['peak_force_N'] - 1):+.2f} % | {100 * rms:.2f} % | "
+                  f"{other} |")
+    if a.png:
+        import matplotlib
+        matplotlib.use("Agg")
+        import matplotlib.pyplot as plt
+        fig, (left, right) = plt.subplots(1, 2, figsize=(10, 4))
+        for test, e in errors.items():
+            s = [v[0] for v in e]
+            left.plot(s[1:], [100 * v[1] for v in e[1:]], "o-", label=test)
+            right.plot(s, [v[2] for v in e], "o-", label=test)
+        left.set_xlabel("run.link_dt_safety")
+        left.set_ylabel(f"force curve rms difference from {fractions[0]:g} (% of peak)")
+        right.set_xlabel("run.link_dt_safety")
+        right.set_ylabel(f"step loop speed-up on {fractions[0]:g}")
+        for ax in (left, right):
+            ax.grid(alpha=0.3)
+            ax.legend()
+        fig.tight_layout()
+        fig.savefig(a.png, dpi=110)
+        print(f"figure: {a.png}")
+
+
+if __name__ == "__main__":
+    main()
