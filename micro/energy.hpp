@@ -31,8 +31,8 @@ struct EnergyTotals {
   double link_rupture_dissipation_J = 0.0;  ///< energy held by links when they broke
   double link_plastic_dissipation_J = 0.0;  ///< plastic work of the wires (bridge/laws/wire.hpp)
   double wall_work_J = 0.0;                 ///< work done by moving walls on the bodies
-  double driven_work_J = 0.0;               ///< work done by driven spheres (fixed, moving) on the bodies
-  double total_J = 0.0;                     ///< E above
+  double driven_work_J = 0.0;  ///< work done by driven spheres (fixed, moving) and wires pulled tight on the bodies
+  double total_J = 0.0;        ///< E above
   double balance_rel_error = 0.0;
 };
 

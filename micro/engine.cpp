@@ -613,7 +613,8 @@ void Engine::advanceLinkedNodes(bool measure) {
   std::vector<SphereSums>& part_sums = node_sums_;
   part_sums.resize(node_parts);
   const auto overLinks = [&](const auto& job) {  // job(scratch, first link, end)
-    for (WorkerScratch& s : scratch_) s.link_elastic = s.link_rupture = s.link_plastic = 0.0, s.link_events.clear();
+    for (WorkerScratch& s : scratch_)
+      s.link_elastic = s.link_rupture = s.link_plastic = s.link_pull_work = 0.0, s.link_events.clear();
     const auto part = [&](int task) {
       const auto t = static_cast<std::size_t>(task);
       const Range r = evenPart(nl, t, parts);
@@ -660,6 +661,7 @@ void Engine::advanceLinkedNodes(bool measure) {
     for (const WorkerScratch& s : scratch_) {
       if (m) energy_.elastic_link += s.link_elastic, energy_.link_plastic += s.link_plastic;
       energy_.link_rupture += s.link_rupture;
+      energy_.driven_work += s.link_pull_work;  // (the pull's work: an agent outside the bodies, as a driven sphere's)
       link_events_.insert(link_events_.end(), s.link_events.begin(), s.link_events.end());
     }
     overNodes([&](std::size_t t, std::size_t k0, std::size_t k1) {

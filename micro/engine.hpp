@@ -147,6 +147,8 @@ class Engine {
   bridge::WireBeamState linkBeamState(std::size_t l) const { return links_.beamState(l); }
   /// Tension of link l at the last step (N).
   double linkTension(std::size_t l) const { return links_.tension(l); }
+  /// Rest length of link l now (m): a wire being pulled tight, as it would be tied now.
+  double linkRestLength(std::size_t l) const { return links_.restLength(l); }
   /// The sphere indices (input order) link l joins.
   std::pair<std::size_t, std::size_t> linkEnds(std::size_t l) const { return {links_.idA(l), links_.idB(l)}; }
   /// Every link that broke so far, in the order they broke (link order within a step).

@@ -26,6 +26,12 @@ Links::Links(const std::vector<LinkSpec>& specs, std::size_t particles) : partic
     wire_rest_.push_back(s.wire.rest_length_m);
   }
   for (const double L0 : wire_rest_) wire_inv_rest_.push_back(L0 > 0.0 ? 1.0 / L0 : 0.0);
+  pulled_.assign(specs.size(), 0);
+  for (std::size_t l = 0; l < specs.size(); ++l)
+    if (specs[l].pulled()) {
+      pull_.push_back({static_cast<std::uint32_t>(l), specs[l].pull_force_N, specs[l].pull_min_m, 0.0});
+      pulled_[l] = 1;
+    }
   const std::size_t n = a_.size();
   // Each wire's constants side by side, for the elastic pass (evaluate).
   for (std::size_t l = 0; l < n; ++l) {
@@ -34,7 +40,7 @@ Links::Links(const std::vector<LinkSpec>& specs, std::size_t particles) : partic
     wire_elastic_.push_back(wire ? c->elasticForce() : 0.0);
     wire_first_.push_back(wire ? c->strain()[0] : 0.0);
     wire_rupture_.push_back(wire ? c->ruptureStrain() : 0.0);
-    general_.push_back(wire ? 0 : 1);
+    general_.push_back(wire && !pulled_[l] ? 0 : 1);
   }
   slow_.assign(n, 0);
   wire_state_.clear();
@@ -181,8 +187,11 @@ void Links::evaluate(const double* X, const double* Y, const double* Z, std::siz
   // breaking, a broken link, a linear spring) then take the whole law, in
   // link order, as do all links on a measuring step (their energies are
   // summed in link order).
+  // (a wire being pulled tight slides through its loops: its law waits, pull)
+  const std::uint8_t* PULLED = pulled_.data();
   if (measure) {
-    for (std::size_t l = l0; l < l1; ++l) evaluateOne(l, X, Y, Z, time_s, measure, elastic, rupture, plastic, s);
+    for (std::size_t l = l0; l < l1; ++l)
+      if (!PULLED[l]) evaluateOne(l, X, Y, Z, time_s, measure, elastic, rupture, plastic, s);
   } else {
     const double *len = len_.data(), *ux = ux_.data(), *uy = uy_.data(), *uz = uz_.data();
     const double *IR = wire_inv_rest_.data(), *L0 = wire_rest_.data(), *E = wire_elastic_.data();
@@ -201,11 +210,47 @@ void Links::evaluate(const double* X, const double* Y, const double* Z, std::siz
       T[l] = f;
     }
     for (std::size_t l = l0; l < l1; ++l)
-      if (slow[l]) evaluateOne(l, X, Y, Z, time_s, measure, elastic, rupture, plastic, s);
+      if (slow[l] && !PULLED[l]) evaluateOne(l, X, Y, Z, time_s, measure, elastic, rupture, plastic, s);
   }
+  if (!pull_.empty()) pull(l0, l1, s);
   s.link_elastic += elastic;
   s.link_rupture += rupture;
   s.link_plastic += plastic;
+}
+
+void Links::pull(std::size_t l0, std::size_t l1, WorkerScratch& s) {
+  const auto first =
+      std::lower_bound(pull_.begin(), pull_.end(), l0, [](const Pull& p, std::size_t l) { return p.link < l; });
+  double work = 0.0;
+  for (auto p = first; p != pull_.end() && p->link < l1; ++p) {
+    const std::uint32_t l = p->link;
+    if (!pulled_[l]) continue;  // (tied)
+    const double L = len_[l];
+    // (the pull's potential is F max(L, shortest): exact for any move)
+    if (p->last_m > 0.0) work += p->force_N * (std::max(p->last_m, p->min_m) - std::max(L, p->min_m));
+    p->last_m = L;
+    const double f = L > p->min_m ? p->force_N : 0.0;
+    fx_[l] = f * ux_[l], fy_[l] = f * uy_[l], fz_[l] = f * uz_[l];
+    tension_[l] = f;
+    if (f == 0.0) tie(*p);  // closed: tied at its shortest, its law acts from the next evaluation
+  }
+  s.link_pull_work += work;
+}
+
+void Links::tie(Pull& p) {
+  const std::uint32_t l = p.link;
+  pulled_[l] = 0, general_[l] = 0;
+  wire_rest_[l] = p.min_m, wire_inv_rest_[l] = 1.0 / p.min_m;
+  p.last_m = -1.0;
+}
+
+double Links::restLength(std::size_t l) const {
+  if (pulled_[l]) {
+    const auto p =
+        std::lower_bound(pull_.begin(), pull_.end(), l, [](const Pull& q, std::size_t k) { return q.link < k; });
+    return std::max(p->min_m, len_[l] > 0.0 ? len_[l] : wire_rest_[l]);
+  }
+  return law_[l] == LinkSpec::Law::Wire ? wire_rest_[l] : linear_[law_index_[l]].rest_length_m;
 }
 
 void Links::evaluateBeams(const double* X, const double* Y, const double* Z, const double* RX, const double* RY,
@@ -278,6 +323,20 @@ void Links::archive(bridge::StateArchive& a) {
   for (std::size_t l = 0; l < n; ++l)
     eps_p[l] = wire_state_[l].plastic_strain, eps_r[l] = wire_state_[l].reached_strain;
   a("wire_plastic_strain", eps_p), a("wire_reached_strain", eps_r);
+  if (!pull_.empty()) {  // (a netting without them keeps its checkpoint's keys)
+    std::vector<double> last;
+    for (const Pull& p : pull_) last.push_back(p.last_m);
+    a("pulled_last_length_m", last);  // (-1: tied)
+    if (a.loading()) {
+      if (last.size() != pull_.size())
+        throw std::invalid_argument("checkpoint: lengths of another count than this run's wires pulled tight");
+      for (std::size_t k = 0; k < pull_.size(); ++k)
+        if (last[k] < 0.0)
+          tie(pull_[k]);
+        else
+          pull_[k].last_m = last[k];
+    }
+  }
   a("broken", broken_);
   a("fx", fx_), a("fy", fy_), a("fz", fz_), a("tension", tension_);
   a("length", len_), a("ux", ux_), a("uy", uy_), a("uz", uz_);

@@ -49,6 +49,12 @@ class Links {
   /// plastic work so far into s.link_plastic, when `measure`.
   void evaluate(const double* X, const double* Y, const double* Z, std::size_t l0, std::size_t l1, double time_s,
                 bool measure, WorkerScratch& s);
+  /// Whether any wire is being pulled tight (LinkSpec::pulled).
+  bool pulls() const { return !pull_.empty(); }
+  /// Rest length of link l now (m): a wire being pulled tight, as it would
+  /// be tied now (the distance it closed to, at least its shortest).
+  double restLength(std::size_t l) const;
+
   /// Pass 2, nodes [k0, k1): the axial force of its links on each node (N),
   /// summed in link order, into FX, FY, FZ (indexed by node).
   void nodeForces(double* FX, double* FY, double* FZ, std::size_t k0, std::size_t k1) const;
@@ -84,6 +90,16 @@ class Links {
   void archive(bridge::StateArchive& a);
 
  private:
+  /// Links [l0, l1), their lengths len_ now: each wire being pulled tight
+  /// takes its pull's force in place of its law's while its nodes are
+  /// further apart than its shortest, none closer; the pull's work since
+  /// the last evaluation (the force times the distance closed above the
+  /// shortest) into s.link_pull_work.
+  void pull(std::size_t l0, std::size_t l1, WorkerScratch& s);
+  struct Pull;
+  /// A wire pulled until its nodes came to its shortest length is tied
+  /// there: its law acts from then on, at that rest length.
+  void tie(Pull& p);
   void evaluateOne(std::size_t l, const double* X, const double* Y, const double* Z, double time_s, bool measure,
                    double& elastic, double& rupture, double& plastic, WorkerScratch& s);
   std::size_t particles_ = 0;
@@ -97,6 +113,15 @@ class Links {
   std::vector<bridge::WireCurve> wires_;
   std::vector<double> wire_rest_, wire_inv_rest_;
   std::vector<bridge::WireState> wire_state_;
+  // The wires being pulled tight, in link order: link, force, shortest
+  // length, length at the last evaluation (0 before the first); and which
+  // links they are (their laws wait).
+  struct Pull {
+    std::uint32_t link;
+    double force_N, min_m, last_m;
+  };
+  std::vector<Pull> pull_;
+  std::vector<std::uint8_t> pulled_;
   // Each link's wire constants for the elastic pass (E A, first and rupture
   // strains of its curve), whether it always takes the whole law (a linear
   // spring: law_ again, as bytes beside broken_ so that the pass vectorises;

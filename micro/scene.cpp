@@ -481,6 +481,9 @@ void validateScene(const Scene& s, const std::string& file) {
       bridge::WireStressStrain as_table{l.wire.curve.strain(), l.wire.curve.force()};
       const bridge::WireTableIssue issue = bridge::checkWireTable(as_table);
       if (!issue.message.empty()) fail(at("links", k, "stress_strain"), "wire curve: " + issue.message);
+      if (l.pull_force_N != 0.0 &&
+          !(l.pull_force_N > 0.0 && std::isfinite(l.pull_force_N) && l.pull_min_m > 0.0 && std::isfinite(l.pull_min_m)))
+        fail(at("links", k, "pull_force_N"), "a wire pulled tight needs a force > 0 and a shortest length > 0");
       continue;
     }
     if (!(l.linear.stiffness_N_m > 0.0 && std::isfinite(l.linear.stiffness_N_m)))

@@ -120,6 +120,16 @@ struct LinkSpec {
   /// default: a pin-jointed wire), and the beam's state at the start.
   bridge::WireBeamParams beam;
   bridge::WireBeamState beam_state;
+  /// Law::Wire: a lacing wire being pulled tight (> 0): while its nodes
+  /// are further apart than pull_min_m it slides through its loops under
+  /// this tension (N), pulling them together (a constant force: its work,
+  /// the force times the distance closed, is EnergyTotals::driven_work_J),
+  /// and its own law does not act; closer, it pulls no more. Tied (a state
+  /// taken from the engine, stateScene), its rest length is the distance
+  /// it closed to, at least pull_min_m. 0: an ordinary wire.
+  double pull_force_N = 0.0;
+  double pull_min_m = 0.0;
+  bool pulled() const { return law == Law::Wire && pull_force_N > 0.0; }
   /// Elastic stiffness (N/m), for the critical time step.
   double stiffness() const { return law == Law::Wire ? wire.stiffness() : linear.stiffness_N_m; }
 };

@@ -114,6 +114,7 @@ struct WorkerScratch {
   double wall_fail_ratio = 0.0;
   // links of this worker's range
   double link_elastic = 0.0, link_rupture = 0.0, link_plastic = 0.0;
+  double link_pull_work = 0.0;  // the work of pulling wires tight over this sub-step (J)
   std::vector<LinkEvent> link_events;
   // integration of the free spheres of its partition
   SphereSums spheres;

@@ -58,6 +58,9 @@ Scene stateScene(const Scene& in, const Engine& engine) {
     if (in.links[l].law == LinkSpec::Law::Wire) {
       s.links.back().wire_state = engine.linkWireState(l);
       s.links.back().beam_state = engine.linkBeamState(l);
+      // (a wire being pulled tight is tied where it got to: no one pulls it on)
+      s.links.back().wire.rest_length_m = engine.linkRestLength(l);
+      s.links.back().pull_force_N = 0.0;
     }
   }
   s.generated = nlohmann::json::object();

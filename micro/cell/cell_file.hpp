@@ -16,7 +16,8 @@ namespace gabion::micro {
 /// The engine's current state of the bodies of `input` (the scene the engine
 /// was built from) as a scene: the input's materials, walls, links and run,
 /// with the bodies and walls where the engine has them (a wall's program
-/// starts again from there) and the wires in their states.
+/// starts again from there) and the wires in their states (a wire being
+/// pulled tight tied at the length it closed to, no longer pulled).
 /// Broken links are left out (the others keep their indices' spheres).
 Scene stateScene(const Scene& input, const Engine& engine);
 

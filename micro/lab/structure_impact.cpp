@@ -137,6 +137,7 @@ StructureCase parseCase(const bridge::JsonDocument& doc, bool whole = true) {
     lc.at_s = l->number("at_s", lc.at_s, Check::NonNegative);
     lc.edge_band_m = l->number("edge_band_m", lc.edge_band_m, Check::NonNegative);
     lc.to_plates = l->boolean("to_plates", lc.to_plates);
+    if (l->has("pull_N")) lc.params.pull_N = l->number("pull_N", Check::Positive);
     const double settling = c.settle_s > 0.0 ? (c.until_at_rest ? c.settle_longest_s : c.settle_s) : 0.0;
     if (lc.at_s > 0.0 && !(lc.at_s < settling))
       l->fail("at_s", "the cells would be laced after the settling ends (" + std::to_string(settling) +
@@ -276,6 +277,7 @@ nlohmann::json laceCells(const StructureCase& c, const Layout& l, const Sample& 
                         {"faces_laced", faces},
                         {"links", links},
                         {"edge_nodes_unlaced", unlaced}};
+  if (params.pull_N > 0.0) out["pull_N"] = params.pull_N, out["shortest_m"] = params.min_length_m;
   if (!part || !lc.to_plates) return out;
   // Each face a resolved cell shares with a macro cell is laced to its
   // plate (or its tiles), as the macro cell's netting would be: the plate
@@ -419,7 +421,12 @@ bridge::RunOutcome runOne(const StructureCase& c, const Sample& sample, const br
   checkAim(c, layout, file);
   // Laced as laid out, or once landed (in the settling, below).
   nlohmann::json lacing_results;
-  if (c.lacing && c.lacing->at_s == 0.0) lacing_results = laceCells(c, layout, sample, layout.scene, part);
+  // (the lacing's wires are the scene's links from here on, as laced)
+  std::size_t first_lacing = std::numeric_limits<std::size_t>::max();
+  if (c.lacing && c.lacing->at_s == 0.0) {
+    first_lacing = layout.scene.links.size();
+    lacing_results = laceCells(c, layout, sample, layout.scene, part);
+  }
   Vec3 aim = aimPoint(c, layout);  // (laid out; lowered with the struck cell where settle.aim says)
   // (the cells laid out: the whole structure's, or a hybrid's resolved ones)
   const std::size_t laid_out = layout.blocks_per_cell > 0 ? layout.scene.blocks.size() / layout.blocks_per_cell : 0;
@@ -513,8 +520,27 @@ bridge::RunOutcome runOne(const StructureCase& c, const Sample& sample, const br
       };
     }
     double settled_at = NAN;
+    // How tight the lacing got, where it is pulled tight: its wires' rest
+    // lengths as the settling began and as it ended (mean, least, largest).
+    nlohmann::json tightened;
     hooks.end = [&](const Engine& e, const Scene& in) {
       standing = stateScene(in, e), settled_at = t_offset + e.time();
+      if (!(c.lacing && c.lacing->params.pull_N > 0.0 && first_lacing < in.links.size())) return;
+      double before = 0.0, after = 0.0, least = INFINITY, most = 0.0;
+      std::size_t n = 0, shortest = 0;
+      for (std::size_t l = first_lacing; l < in.links.size(); ++l) {
+        if (e.linkBroken(l)) continue;
+        const double r = e.linkRestLength(l);
+        before += in.links[l].wire.rest_length_m, after += r, ++n;
+        least = std::min(least, r), most = std::max(most, r);
+        if (r <= in.links[l].pull_min_m) ++shortest;
+      }
+      if (n == 0) return;
+      tightened = {{"mean_laced_m", before / n},
+                   {"mean_settled_m", after / n},
+                   {"least_settled_m", least},
+                   {"largest_settled_m", most},
+                   {"at_shortest", shortest}};
     };
     if (c.lacing && c.lacing->at_s > 0.0) {
       // The cells land unlaced (for lacing.at_s, to the end: the test of rest
@@ -532,6 +558,7 @@ bridge::RunOutcome runOne(const StructureCase& c, const Sample& sample, const br
         landed.message = "landing the structure before its lacing: " + landed.message;
         return landed;
       }
+      first_lacing = standing.links.size();
       lacing_results = laceCells(c, layout, sample, standing, part);
       n_spheres = standing.spheres.size();  // (the anchors of a lacing to the plates come after the cells')
       lacing_results["landed_in_s"] = settled_at;
@@ -558,6 +585,7 @@ bridge::RunOutcome runOne(const StructureCase& c, const Sample& sample, const br
       return settled;
     }
     settle_results = settled.results;
+    if (!tightened.is_null()) lacing_results["pulled_tight"] = tightened;
     standing.run = layout.scene.run;              // (the state keeps the settling's run)
     standing.materials = layout.scene.materials;  // (and its local damping)
     // (the plates that pressed with the weight above are driven again, from

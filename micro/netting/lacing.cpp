@@ -83,6 +83,8 @@ LinkSpec lacingWire(std::size_t a, std::size_t b, double distance, const LacingP
   l.law = LinkSpec::Law::Wire;
   l.wire.curve = curve;
   l.wire.rest_length_m = std::max(distance, params.min_length_m);
+  if (params.pull_N > 0.0 && params.min_length_m > 0.0)
+    l.pull_force_N = params.pull_N, l.pull_min_m = params.min_length_m;
   return l;
 }
 }  // namespace

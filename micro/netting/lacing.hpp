@@ -58,6 +58,9 @@ struct LacingParams {
   /// A lacing wire's rest length is at least this (m): nodes laced closer
   /// are slack until they are this far apart.
   double min_length_m = 0.0;
+  /// > 0: each wire is pulled tight with this tension (N) from where it was
+  /// laced, down to min_length_m (LinkSpec::pull_force_N).
+  double pull_N = 0.0;
 };
 
 /// What lacing two faces made: its links, and the edge nodes left without

@@ -429,6 +429,55 @@ TEST(ResolvedStructure, LacedCellsDragTheirNeighbourAlong) {
   expectRefused(dir, c, "/lacing/at_s");
 }
 
+// Lacing pulled tight (lacing.pull_N): two small cells side by side, laced
+// as laid out, the layout's gap between their facing edges closing as each
+// lacing wire slides through its loops under the pull's tension until the
+// settling ends (or its nodes come to two node radii apart). The wires'
+// lengths shrink (`lacing/pulled_tight`), the cells stand closer than
+// laced without the pull, and the wall is struck with the wires tied where
+// they got to.
+TEST(ResolvedStructure, LacingPulledTightDrawsTheCellsTogether) {
+  const auto dir = scratchDir("resolved_pulled");
+  writeFile(dir / "cell.json", gabion::testing::smallCellCase());
+  ASSERT_EQ(runGabion("run -q " + (dir / "cell.json").string() + " -o " + (dir / "cell").string()).exit_code, 0);
+  nlohmann::json c = nlohmann::json::parse(kStructure);
+  c["structure"] = {{"cells", {1, 2, 1}}};
+  c["settle"] = {{"duration_s", 0.06}, {"until_at_rest", false}};
+  c["run"]["duration_s"] = 0.003;
+  c["lacing"] = {{"at_s", 0.0}};
+  writeFile(dir / "laced.json", c.dump());
+  c["lacing"]["pull_N"] = 300.0;
+  writeFile(dir / "pulled.json", c.dump());
+  for (const char* name : {"laced", "pulled"}) {
+    const auto r =
+        runGabion("run -q " + (dir / (std::string(name) + ".json")).string() + " -o " + (dir / name).string());
+    ASSERT_EQ(r.exit_code, 0) << name << ": " << r.output;
+  }
+  const nlohmann::json laced = summaryOf(dir / "laced"), pulled = summaryOf(dir / "pulled");
+  EXPECT_FALSE(laced["lacing"].contains("pulled_tight"));
+  const nlohmann::json& l = pulled["lacing"];
+  EXPECT_EQ(l["pull_N"], 300.0);
+  ASSERT_TRUE(l.contains("pulled_tight")) << l.dump();
+  const nlohmann::json& t = l["pulled_tight"];
+  EXPECT_LT(t["mean_settled_m"].get<double>(), t["mean_laced_m"].get<double>() - 0.002) << t.dump();
+  EXPECT_GE(t["least_settled_m"].get<double>(), l["shortest_m"].get<double>());
+  // The cells' centres along y when the boulder came (the impact's first snapshot).
+  const std::size_t bpc = summaryOf(dir / "cell")["blocks"].get<std::size_t>();
+  const auto gap = [&](const char* name) {
+    const gabion::bridge::H5Reader h(dir / name / "result.h5");
+    const auto times = h.read("/bodies/time_s"), x = h.read("/bodies/position_m");
+    const std::size_t bodies = x.size() / (3 * times.size()), first = bodies - 2 * bpc;
+    double y[2] = {0.0, 0.0};
+    for (std::size_t cell = 0; cell < 2; ++cell)
+      for (std::size_t b = 0; b < bpc; ++b) y[cell] += x[3 * (first + cell * bpc + b) + 1] / static_cast<double>(bpc);
+    return y[1] - y[0];
+  };
+  EXPECT_LT(gap("pulled"), gap("laced") - 0.001)
+      << "pulled " << gap("pulled") << " m apart against " << gap("laced") << " m laced without the pull";
+  EXPECT_LT(std::fabs(pulled["energy"]["balance_rel_error"].get<double>()), 0.05);
+  EXPECT_LT(std::fabs(pulled["settle"]["energy"]["balance_rel_error"].get<double>()), 0.05);
+}
+
 // Lacing a cell that has no netting (two spheres saved as a cell, no links)
 // is refused before anything runs, naming the field and the cell; without
 // lacing the same case passes its check.

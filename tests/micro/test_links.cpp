@@ -7,6 +7,7 @@
 
 #include "bridge/cost.hpp"
 #include "bridge/errors.hpp"
+#include "micro/cell/cell_file.hpp"
 #include "micro/engine.hpp"
 #include "micro/scene_run.hpp"
 #include "micro_test_util.hpp"
@@ -410,6 +411,59 @@ TEST(MicroLinks, ASphereThatRidesAWallMovesWithItAndPullsIt) {
   Scene nowhere = s;
   nowhere.spheres[0].rides_wall = 1;
   refused(nowhere, "no such wall");
+}
+
+// A lacing wire pulled tight (LinkSpec::pull_force_N): a node held by a
+// soft spring (1 kN/m) is laced to a fixed point 0.1 m away, the wire
+// pulled with 50 N. It slides through its loops under that tension, its
+// law waiting, and the node, damped (local damping 0.7: a pull that comes
+// on at once throws a lightly damped node past the spring's place, as a
+// step load does), comes to rest where the spring carries it: 50 mm
+// closer. The pull's work, 50 N times the 50 mm closed, is the ledger's
+// driven work, which closes to 1e-3. Taken from the engine as a state, the
+// wire is tied at the distance it closed to, no longer pulled. Pulled with
+// 100 N, which the spring never reaches (80 N at most), it closes to its
+// shortest length, 20 mm, and is tied there: its law acts from then on.
+TEST(MicroLinks, AWirePulledTightClosesUntilItCarriesThePull) {
+  const auto run = [](double force_N, double& rest, double& x, double& work, double& balance, Scene& state) {
+    Scene s;
+    s.gravity_m_s2.setZero();
+    s.materials = {rock()};
+    s.materials[0].local_damping = 0.7;
+    SphereSpec node = sphere(Vec3(0.1, 0, 0), 0.005);
+    node.mass_kg = 0.01;
+    s.spheres = {sphere(Vec3(0, 0, 0), 0.005, true), node, sphere(Vec3(0.2, 0, 0), 0.005, true)};
+    LinkSpec wire;
+    wire.a = 0, wire.b = 1;
+    wire.law = LinkSpec::Law::Wire;
+    wire.wire.curve = gabion::bridge::wireCurve(gabion::bridge::defaultWireTable(), 0.0022);
+    wire.wire.rest_length_m = 0.1;
+    wire.pull_force_N = force_N, wire.pull_min_m = 0.02;
+    s.links = {wire, link(1, 2, 1e3, 0.1)};
+    Engine e(s, 1);
+    e.setDt(0.2 * e.criticalDt());
+    const auto steps = static_cast<int>(0.6 / e.dt());
+    for (int n = 0; n < steps; ++n) {
+      ASSERT_EQ(e.step(n % 100 == 0 || n + 1 == steps), StepStatus::Ok) << e.failure();
+      balance = std::max(balance, std::fabs(e.energy().balance_rel_error));
+    }
+    rest = e.linkRestLength(0), x = e.body(1).position_m.x(), work = e.energy().driven_work_J;
+    state = gabion::micro::stateScene(s, e);
+  };
+  double rest = 0.0, x = 0.0, work = 0.0, balance = 0.0;
+  Scene state;
+  ASSERT_NO_FATAL_FAILURE(run(50.0, rest, x, work, balance, state));
+  EXPECT_NEAR(x, 0.05, 1e-5);  // the spring carries the pull
+  EXPECT_NEAR(rest, x, 1e-8);  // (the length at the last sub-step's start)
+  EXPECT_NEAR(work, 50.0 * 0.05, 1e-3);
+  EXPECT_LT(balance, 1e-3);
+  EXPECT_EQ(state.links[0].wire.rest_length_m, rest);
+  EXPECT_FALSE(state.links[0].pulled());
+  double r2 = 0.0, x2 = 0.0, w2 = 0.0, b2 = 0.0;
+  ASSERT_NO_FATAL_FAILURE(run(100.0, r2, x2, w2, b2, state));
+  EXPECT_NEAR(x2, 0.02, 1e-3) << "closed to its shortest length";
+  EXPECT_NEAR(r2, 0.02, 1e-3);
+  EXPECT_LT(b2, 1e-3);
 }
 
 }  // namespace
