@@ -249,7 +249,9 @@ void JsonDocument::applySet(const std::string& assignment) {
     const bool last = i + 1 == parts.size();
     if (node->is_object()) {
       ptr += "/" + escapePointerToken(part);
-      if (!last && !node->contains(part)) throw InputError(state_->file, ptr, "--set: no such object in the case");
+      // (an object the case lacks is made: a key no kind reads is then
+      // refused as unknown when the case is read, so a typo still shows)
+      if (!last && !node->contains(part)) (*node)[part] = Json::object();
       node = &(*node)[part];
     } else if (node->is_array()) {
       std::size_t idx = 0;

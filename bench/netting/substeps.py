@@ -43,21 +43,19 @@ except ImportError:
 
 ROOT = Path(__file__).resolve().parents[2]
 TESTS = {
-    # name: (case file, extra --set arguments, whether the case has a run object, curve x, curve y)
-    "cc": ("cases/micro_cc.json", [], False, "curves/axial/time_s", "curves/axial/force_N"),
-    "uci_15": ("cases/micro_uci.json", ["--set", "velocities_m_s=[15]"], True, "curves/impact/time_s",
+    # name: (case file, extra --set arguments, curve x, curve y)
+    "cc": ("cases/micro_cc.json", [], "curves/axial/time_s", "curves/axial/force_N"),
+    "uci_15": ("cases/micro_uci.json", ["--set", "velocities_m_s=[15]"], "curves/impact/time_s",
                "curves/impact/force_N"),
 }
 
 
 def run(gabion, test, cell, fraction, out, threads, suffix=""):
-    case, extra, has_run, _, _ = TESTS[test]
+    case, extra, _, _ = TESTS[test]
     folder = out / f"{test}_{fraction:g}{suffix}"
     if not (folder / "summary.json").exists():
-        # (--set makes no object: a case without `run` gets one with the fraction alone, its defaults kept)
-        fraction_set = f"run.link_dt_safety={fraction}" if has_run else f'run={{"link_dt_safety": {fraction}}}'
         cmd = [gabion, "run", "-q", str(ROOT / case), "--set", f"cell={cell}", *extra,
-               "--set", fraction_set, "--threads", str(threads), "-o", str(folder)]
+               "--set", f"run.link_dt_safety={fraction}", "--threads", str(threads), "-o", str(folder)]
         done = subprocess.run(cmd, capture_output=True, text=True)
         if done.returncode != 0:
             sys.exit(f"{' '.join(cmd)}\nfailed ({done.returncode}):\n{done.stdout}{done.stderr}")
@@ -73,7 +71,7 @@ def measures(test, folder):
         if len(subs) != 1:
             sys.exit(f"{folder}: expected one run's result.h5")
         h5, summary = subs[0] / "result.h5", json.loads((subs[0] / "summary.json").read_text())
-    _, _, _, xs, ys = TESTS[test]
+    _, _, xs, ys = TESTS[test]
     with h5py.File(h5, "r") as f:
         x, y = f[xs][:], f[ys][:]
     return summary, x, y

@@ -142,9 +142,14 @@ TEST(JsonReader, SetOverridesNestedValueAndArrayElement) {
   EXPECT_DOUBLE_EQ(d.root().object("boulder").number("velocity_m_s"), 25.0);
   EXPECT_DOUBLE_EQ(d.root().objects("list")[1].number("v"), 7.5);
   EXPECT_EQ(d.root().object("boulder").string("name"), "rock");
-  EXPECT_THROW(d.applySet("missing.key=1"), InputError);
   EXPECT_THROW(d.applySet("list.5.v=1"), InputError);
   EXPECT_THROW(d.applySet("novalue"), InputError);
+  EXPECT_THROW(d.applySet("boulder.velocity_m_s.x=1"), InputError);  // (not an object)
+  // An object the case lacks is made; if no reader takes it, it is unknown.
+  EXPECT_NO_THROW(d.applySet("lacing.at_s=0.15"));
+  EXPECT_DOUBLE_EQ(d.root().object("lacing").number("at_s"), 0.15);
+  EXPECT_NO_THROW(d.applySet("lacng.at_s=0.15"));
+  EXPECT_EQ(errorOf([&] { d.finish(); }), "case.json: /lacng: unknown key 'lacng'");
 }
 
 TEST(JsonReader, UnreadableAndInvalidFiles) {
