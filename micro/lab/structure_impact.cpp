@@ -137,7 +137,12 @@ StructureCase parseCase(const bridge::JsonDocument& doc, bool whole = true) {
     lc.at_s = l->number("at_s", lc.at_s, Check::NonNegative);
     lc.edge_band_m = l->number("edge_band_m", lc.edge_band_m, Check::NonNegative);
     lc.to_plates = l->boolean("to_plates", lc.to_plates);
-    if (l->has("pull_N")) lc.params.pull_N = l->number("pull_N", Check::Positive);
+    if (l->has("pull_N")) {
+      lc.params.pull_N = l->number("pull_N", Check::Positive);
+      // (the wires are pulled while the structure settles, and tied for the impact)
+      if (!(c.settle_s > 0.0))
+        l->fail("pull_N", "the lacing is pulled tight while the structure settles: give settle.duration_s > 0");
+    }
     const double settling = c.settle_s > 0.0 ? (c.until_at_rest ? c.settle_longest_s : c.settle_s) : 0.0;
     if (lc.at_s > 0.0 && !(lc.at_s < settling))
       l->fail("at_s", "the cells would be laced after the settling ends (" + std::to_string(settling) +

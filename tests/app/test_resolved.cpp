@@ -439,7 +439,7 @@ TEST(ResolvedStructure, LacedCellsDragTheirNeighbourAlong) {
 // settling ends (or its nodes come to two node radii apart). The wires'
 // lengths shrink (`lacing/pulled_tight`), the cells stand closer than
 // laced without the pull, and the wall is struck with the wires tied where
-// they got to.
+// they got to. Without a settling to pull it in, the pull is refused.
 TEST(ResolvedStructure, LacingPulledTightDrawsTheCellsTogether) {
   const auto dir = scratchDir("resolved_pulled");
   writeFile(dir / "cell.json", gabion::testing::smallCellCase());
@@ -476,6 +476,9 @@ TEST(ResolvedStructure, LacingPulledTightDrawsTheCellsTogether) {
       << "pulled " << gap("pulled") << " m apart against " << gap("laced") << " m laced without the pull";
   EXPECT_LT(std::fabs(pulled["energy"]["balance_rel_error"].get<double>()), 0.05);
   EXPECT_LT(std::fabs(pulled["settle"]["energy"]["balance_rel_error"].get<double>()), 0.05);
+  // Pulled with no settling to pull it in: refused, naming the field.
+  c["settle"]["duration_s"] = 0.0;
+  expectRefused(dir, c, "/lacing/pull_N");
 }
 
 // Lacing a cell that has no netting (two spheres saved as a cell, no links)
