@@ -232,10 +232,11 @@ TEST(Cli, AnOutputFolderIsCommittedAsASet) {
       << r.output;
 
   // A run killed in the folder: the manifest is gone with the set it vouched for.
-  r = gabion::testing::runCommand("sh -c '" + std::string(GABION_BINARY) + " run " + source +
-                                  "/cases/micro_block_fill.json -q -o " + out.string() +
-                                  " & p=$!; sleep 1; kill -KILL $p; wait $p; echo exit=$?'");
-  EXPECT_NE(r.output.find("exit=137"), std::string::npos) << r.output;
+  // (killed once it writes its result, not after a set time: on a loaded
+  // machine a second was not always enough for it to start)
+  const std::string killed = gabion::testing::signalWhenThere(
+      "run " + source + "/cases/micro_block_fill.json -q -o " + out.string(), out / "result.h5.part", "KILL");
+  EXPECT_NE(killed.find("exit=137"), std::string::npos) << killed;
   EXPECT_FALSE(std::filesystem::exists(out / "manifest.json"));
   r = runGabion("plot " + (out / "result.h5").string());
   EXPECT_EQ(r.exit_code, 2) << r.output;
