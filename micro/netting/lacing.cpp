@@ -75,6 +75,10 @@ bridge::WireCurve wireCurveOf(const LacingParams& params) {
   return bridge::wireCurve(params.table, params.wire_diameter_m);
 }
 
+// A lacing wire between spheres a and b, `distance` apart (m): the
+// netting's wire law at the lacing wire's diameter (`curve`), its rest
+// length the distance but at least params.min_length_m, pulled tight
+// where params.pull_N says.
 LinkSpec lacingWire(std::size_t a, std::size_t b, double distance, const LacingParams& params,
                     const bridge::WireCurve& curve) {
   LinkSpec l;
@@ -88,10 +92,6 @@ LinkSpec lacingWire(std::size_t a, std::size_t b, double distance, const LacingP
   return l;
 }
 }  // namespace
-
-LinkSpec lacingWire(std::size_t a, std::size_t b, double distance, const LacingParams& params) {
-  return lacingWire(a, b, distance, params, wireCurveOf(params));
-}
 
 LacedPlate lacePlate(Scene& scene, const CellEdges& edges, std::size_t first, int face, std::size_t wall,
                      int anchor_group, const LacingParams& params, std::vector<bool>& taken) {

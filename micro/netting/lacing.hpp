@@ -70,11 +70,6 @@ struct LacedFaces {
   std::size_t unlaced = 0;
 };
 
-/// A lacing wire between spheres a and b of a scene, `distance` apart (m):
-/// the netting's wire law at the lacing wire's diameter, its rest length
-/// the distance but at least params.min_length_m.
-LinkSpec lacingWire(std::size_t a, std::size_t b, double distance, const LacingParams& params);
-
 /// What lacing a face to a plate made: the anchors (spheres that ride the
 /// plate) and their wires are in the scene; `unlaced`, the edge nodes over
 /// the plate further than max_gap_m from their anchor.
