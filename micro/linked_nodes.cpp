@@ -75,11 +75,7 @@ void LinkedNodes::hold(const Particles& p, bool rebuilt, std::size_t k0, std::si
 }
 
 void LinkedNodes::addBeams(const Links& links, std::size_t k0, std::size_t k1) {
-  for (std::size_t k = k0; k < k1; ++k) {
-    const Vec3 f = links.nodeBeamForce(k), t = links.nodeBeamTorque(k);
-    hfx_[k] += f.x(), hfy_[k] += f.y(), hfz_[k] += f.z();
-    htx_[k] += t.x(), hty_[k] += t.y(), htz_[k] += t.z();
-  }
+  links.addNodeBeams(hfx_.data(), hfy_.data(), hfz_.data(), htx_.data(), hty_.data(), htz_.data(), k0, k1);
 }
 
 SphereSums LinkedNodes::advance(const Links& links, int k, int substeps, double h, const Vec3& g, bool measure,

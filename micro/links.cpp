@@ -47,14 +47,25 @@ Links::Links(const std::vector<LinkSpec>& specs, std::size_t particles) : partic
   for (const LinkSpec& s : specs) wire_state_.push_back(s.wire_state);
   broken_.assign(n, 0);
   beam_of_.assign(n, kNoBeam);
+  Beams& B = beams_;
   for (std::size_t l = 0; l < n; ++l)
     if (specs[l].law == LinkSpec::Law::Wire && specs[l].beam.active()) {
-      beam_of_[l] = static_cast<std::uint32_t>(beams_.size());
-      beams_.push_back(specs[l].beam);
-      beam_state_.push_back(specs[l].beam_state);
+      beam_of_[l] = static_cast<std::uint32_t>(B.size());
+      const bridge::WireBeamParams& p = specs[l].beam;
+      B.link.push_back(static_cast<std::uint32_t>(l));
+      B.params.push_back(p);
+      B.shear_k.push_back(p.shear_N_m), B.bending_k.push_back(p.bending_N_m_rad);
+      B.torsion_k.push_back(p.torsion_N_m_rad());
+      B.plastic_moment.push_back(p.plastic_moment_N_m), B.length.push_back(p.length_m);
+      for (auto* v : {&B.sx, &B.sy, &B.sz, &B.mx, &B.my, &B.mz, &B.dissipated}) v->push_back(0.0);
+      B.setState(B.size() - 1, specs[l].beam_state);
     }
-  beam_chord_.assign(beams_.size(), Vec3::Zero());
-  for (auto* v : {&beam_force_, &torque_a_, &torque_b_}) v->assign(beams_.size(), Vec3::Zero());
+  const std::size_t nb = B.size();
+  for (auto* v : {&B.cx, &B.cy, &B.cz}) v->assign(nb, 0.0);
+  for (auto* v : {&B.fx, &B.fy, &B.fz}) v->assign(nb + 1, 0.0);
+  for (auto* v : {&B.tx, &B.ty, &B.tz}) v->assign(2 * (nb + 1), 0.0);
+  B.slow.assign(nb, 0);
+  B.broken.assign(nb, 0);
   for (auto* v : {&fx_, &fy_, &fz_, &tension_, &len_, &ux_, &uy_, &uz_}) v->assign(n, 0.0);
   // Incidence by particle id, links in increasing order at each node.
   std::vector<std::uint32_t> count(particles + 1, 0);
@@ -94,6 +105,42 @@ Links::Links(const std::vector<LinkSpec>& specs, std::size_t particles) : partic
   std::vector<std::uint32_t> node_of(particles, 0);
   for (std::size_t k = 0; k < node_id_.size(); ++k) node_of[node_id_[k]] = static_cast<std::uint32_t>(k);
   for (std::size_t l = 0; l < n; ++l) ka_.push_back(node_of[a_[l]]), kb_.push_back(node_of[b_[l]]);
+  for (const std::uint32_t l : B.link) B.ka.push_back(ka_[l]), B.kb.push_back(kb_[l]);
+  // Each node's beams, in link order, padded likewise: a's force is minus
+  // the beam's (its sign is that of the link's force on the node), its
+  // torque the first of the beam's pair.
+  if (nb == 0) return;
+  std::vector<std::uint32_t> degree(nodes, 0);
+  for (std::size_t k = 0; k < nodes; ++k)
+    for (std::uint32_t q = node_begin_[k]; q < node_begin_[k + 1]; ++q) degree[k] += beam_of_[node_link_[q]] != kNoBeam;
+  beam_degree_ = *std::max_element(degree.begin(), degree.end());
+  const auto zero = static_cast<std::uint32_t>(nb);
+  beam_force_at_.assign(nodes * beam_degree_, zero);
+  beam_torque_at_.assign(nodes * beam_degree_, zero);
+  beam_sign_.assign(nodes * beam_degree_, 0.0);
+  for (std::size_t k = 0; k < nodes; ++k) {
+    std::size_t at = k * beam_degree_;
+    for (std::uint32_t q = node_begin_[k]; q < node_begin_[k + 1]; ++q) {
+      const std::uint32_t beam = beam_of_[node_link_[q]];
+      if (beam == kNoBeam) continue;
+      const bool is_a = node_sign_[q] > 0.0;
+      beam_force_at_[at] = beam, beam_sign_[at] = is_a ? -1.0 : 1.0;
+      beam_torque_at_[at++] = is_a ? beam : zero + 1 + beam;
+    }
+  }
+}
+
+void Links::Beams::setState(std::size_t b, const bridge::WireBeamState& s) {
+  sx[b] = s.shear_N.x(), sy[b] = s.shear_N.y(), sz[b] = s.shear_N.z();
+  mx[b] = s.moment_N_m.x(), my[b] = s.moment_N_m.y(), mz[b] = s.moment_N_m.z();
+  dissipated[b] = s.dissipated_J;
+}
+
+void Links::Beams::setActions(std::size_t b, const bridge::WireBeamResponse& r) {
+  const std::size_t on_b = size() + 1 + b;
+  fx[b] = r.force_b.x(), fy[b] = r.force_b.y(), fz[b] = r.force_b.z();
+  tx[b] = r.torque_a.x(), ty[b] = r.torque_a.y(), tz[b] = r.torque_a.z();
+  tx[on_b] = r.torque_b.x(), ty[on_b] = r.torque_b.y(), tz[on_b] = r.torque_b.z();
 }
 
 ExcludedPairs Links::excludedPairs() const {
@@ -147,8 +194,11 @@ void Links::evaluateOne(std::size_t l, const double* X, const double* Y, const d
     fx_[l] = fy_[l] = fz_[l] = tension_[l] = 0.0;
     if (beam != kNoBeam) {
       // Its bending goes with it.
-      rupture += bridge::wireBeamElasticEnergy(beams_[beam], beam_state_[beam], Vec3(ux_[l], uy_[l], uz_[l]));
-      beam_state_[beam].shear_N.setZero(), beam_state_[beam].moment_N_m.setZero();
+      bridge::WireBeamState bs = beams_.state(beam);
+      rupture += bridge::wireBeamElasticEnergy(beams_.params[beam], bs, Vec3(ux_[l], uy_[l], uz_[l]));
+      bs.shear_N.setZero(), bs.moment_N_m.setZero();
+      beams_.setState(beam, bs);
+      beams_.broken[beam] = 1;
     }
     const std::uint32_t i = ka_[l];
     const double h = 0.5 * length;
@@ -255,49 +305,97 @@ double Links::restLength(std::size_t l) const {
 
 void Links::evaluateBeams(const double* X, const double* Y, const double* Z, const double* RX, const double* RY,
                           const double* RZ, std::size_t l0, std::size_t l1, bool measure, WorkerScratch& s) {
+  Beams& B = beams_;
+  const auto at = [&](std::size_t l) {
+    return static_cast<std::size_t>(std::lower_bound(B.link.begin(), B.link.end(), l) - B.link.begin());
+  };
+  const std::size_t b0 = at(l0), b1 = at(l1), nb = B.size();
   double elastic = 0.0, plastic = 0.0;
-  for (std::size_t l = l0; l < l1; ++l) {
-    const std::uint32_t beam = beam_of_[l];
-    if (beam == kNoBeam) continue;
-    bridge::WireBeamState& bs = beam_state_[beam];
-    if (measure) plastic += bs.dissipated_J;
-    if (broken_[l]) {
-      beam_force_[beam].setZero(), torque_a_[beam].setZero(), torque_b_[beam].setZero();
-      continue;
+  if (measure)  // (the plastic work before this increment, as the axial laws count theirs)
+    for (std::size_t b = b0; b < b1; ++b) plastic += B.dissipated[b];
+  // Every beam of the range in one vectorised pass, with the twist's series
+  // (bridge::wireBeamSeriesAnswers: nearly every beam at nearly every step).
+  // A beam it cannot answer keeps its state and takes the whole law after.
+  {
+    const std::uint32_t *KA = B.ka.data(), *KB = B.kb.data();
+    const std::uint8_t* BROKEN = B.broken.data();
+    const double *KS = B.shear_k.data(), *KBEND = B.bending_k.data(), *MP = B.plastic_moment.data(),
+                 *LEN = B.length.data();
+    double *SX = B.sx.data(), *SY = B.sy.data(), *SZ = B.sz.data(), *MX = B.mx.data(), *MY = B.my.data(),
+           *MZ = B.mz.data(), *D = B.dissipated.data(), *CX = B.cx.data(), *CY = B.cy.data(), *CZ = B.cz.data();
+    double *FX = B.fx.data(), *FY = B.fy.data(), *FZ = B.fz.data(), *TX = B.tx.data(), *TY = B.ty.data(),
+           *TZ = B.tz.data();
+    std::uint8_t* SLOW = B.slow.data();
+#pragma GCC ivdep
+    for (std::size_t b = b0; b < b1; ++b) {
+      using bridge::BeamVec;
+      const std::uint32_t i = KA[b], j = KB[b];
+      const BeamVec c0(CX[b], CY[b], CZ[b]), c1(X[j] - X[i], Y[j] - Y[i], Z[j] - Z[i]);
+      bridge::WireBeamParams p;
+      p.shear_N_m = KS[b], p.bending_N_m_rad = KBEND[b], p.plastic_moment_N_m = MP[b], p.length_m = LEN[b];
+      bridge::WireBeamActions a{BeamVec(SX[b], SY[b], SZ[b]), BeamVec(MX[b], MY[b], MZ[b]), D[b]};
+      BeamVec ta, tb;
+      double twist = 0.0;
+      const BeamVec f = bridge::wireBeamIncrement(p, a, c0, c1, BeamVec(RX[i], RY[i], RZ[i]),
+                                                  BeamVec(RX[j], RY[j], RZ[j]), bridge::wireTwistSeries, ta, tb, twist);
+      const bool ok = bridge::wireBeamSeriesAnswers(bridge::dot(c0, c0), bridge::dot(c1, c1), twist) && !BROKEN[b];
+      SLOW[b] = ok ? 0 : 1;
+      SX[b] = ok ? a.shear.x : SX[b], SY[b] = ok ? a.shear.y : SY[b], SZ[b] = ok ? a.shear.z : SZ[b];
+      MX[b] = ok ? a.moment.x : MX[b], MY[b] = ok ? a.moment.y : MY[b], MZ[b] = ok ? a.moment.z : MZ[b];
+      D[b] = ok ? a.dissipated : D[b];
+      CX[b] = ok ? c1.x : CX[b], CY[b] = ok ? c1.y : CY[b], CZ[b] = ok ? c1.z : CZ[b];
+      FX[b] = f.x, FY[b] = f.y, FZ[b] = f.z;
+      TX[b] = ta.x, TY[b] = ta.y, TZ[b] = ta.z;
+      TX[nb + 1 + b] = tb.x, TY[nb + 1 + b] = tb.y, TZ[nb + 1 + b] = tb.z;
     }
-    const std::uint32_t i = ka_[l], j = kb_[l];
-    const Vec3 chord(X[j] - X[i], Y[j] - Y[i], Z[j] - Z[i]);
-    Vec3& last = beam_chord_[beam];
-    const bool started = last.squaredNorm() > 0.0;  // (no increment at the first call)
-    const Vec3 c0 = started ? last : chord;
-    last = chord;
-    const Vec3 ta = started ? Vec3(RX[i], RY[i], RZ[i]) : Vec3::Zero(),
-               tb = started ? Vec3(RX[j], RY[j], RZ[j]) : Vec3::Zero();
-    const bridge::WireBeamParams& bp = beams_[beam];
-    const bridge::WireBeamResponse r = bridge::wireBeamStep(bp, bs, c0, chord, ta, tb);
-    beam_force_[beam] = r.force_b, torque_a_[beam] = r.torque_a, torque_b_[beam] = r.torque_b;
-    if (measure) elastic += bridge::wireBeamElasticEnergy(bp, bs, chord.normalized());
   }
+  for (std::size_t b = b0; b < b1; ++b)
+    if (B.slow[b]) evaluateBeam(b, X, Y, Z, RX, RY, RZ);
+  if (measure)
+    for (std::size_t b = b0; b < b1; ++b)
+      if (!B.broken[b])
+        elastic += bridge::wireBeamElasticEnergy(B.params[b], B.state(b), Vec3(B.cx[b], B.cy[b], B.cz[b]).normalized());
   s.link_elastic += elastic;
   s.link_plastic += plastic;
 }
 
-Vec3 Links::nodeBeamForce(std::size_t k) const {
-  Vec3 f = Vec3::Zero();
-  for (std::uint32_t q = node_begin_[k]; q < node_begin_[k + 1]; ++q) {
-    const std::uint32_t beam = beam_of_[node_link_[q]];
-    if (beam != kNoBeam) f += node_sign_[q] > 0.0 ? Vec3(-beam_force_[beam]) : beam_force_[beam];
+void Links::evaluateBeam(std::size_t b, const double* X, const double* Y, const double* Z, const double* RX,
+                         const double* RY, const double* RZ) {
+  Beams& B = beams_;
+  if (B.broken[b]) {
+    B.setActions(b, {});
+    return;
   }
-  return f;
+  const std::uint32_t i = B.ka[b], j = B.kb[b];
+  const Vec3 chord(X[j] - X[i], Y[j] - Y[i], Z[j] - Z[i]), last(B.cx[b], B.cy[b], B.cz[b]);
+  const bool started = last.squaredNorm() > 0.0;  // (no increment at the first call)
+  const Vec3 c0 = started ? last : chord;
+  B.cx[b] = chord.x(), B.cy[b] = chord.y(), B.cz[b] = chord.z();
+  const Vec3 ta = started ? Vec3(RX[i], RY[i], RZ[i]) : Vec3::Zero(),
+             tb = started ? Vec3(RX[j], RY[j], RZ[j]) : Vec3::Zero();
+  bridge::WireBeamState bs = B.state(b);
+  B.setActions(b, bridge::wireBeamStep(B.params[b], bs, c0, chord, ta, tb));
+  B.setState(b, bs);
 }
 
-Vec3 Links::nodeBeamTorque(std::size_t k) const {
-  Vec3 t = Vec3::Zero();
-  for (std::uint32_t q = node_begin_[k]; q < node_begin_[k + 1]; ++q) {
-    const std::uint32_t beam = beam_of_[node_link_[q]];
-    if (beam != kNoBeam) t += node_sign_[q] > 0.0 ? torque_a_[beam] : torque_b_[beam];
+void Links::addNodeBeams(double* FX, double* FY, double* FZ, double* TX, double* TY, double* TZ, std::size_t k0,
+                         std::size_t k1) const {
+  const std::size_t D = beam_degree_;
+  const std::uint32_t *F = beam_force_at_.data(), *T = beam_torque_at_.data();
+  const double* sign = beam_sign_.data();
+  const double *fx = beams_.fx.data(), *fy = beams_.fy.data(), *fz = beams_.fz.data();
+  const double *tx = beams_.tx.data(), *ty = beams_.ty.data(), *tz = beams_.tz.data();
+  for (std::size_t k = k0; k < k1; ++k) {
+    double sx = 0.0, sy = 0.0, sz = 0.0, ux = 0.0, uy = 0.0, uz = 0.0;
+    for (std::size_t q = k * D; q < (k + 1) * D; ++q) {
+      const std::uint32_t f = F[q], t = T[q];
+      const double sg = sign[q];
+      sx += sg * fx[f], sy += sg * fy[f], sz += sg * fz[f];
+      ux += tx[t], uy += ty[t], uz += tz[t];
+    }
+    FX[k] += sx, FY[k] += sy, FZ[k] += sz;
+    TX[k] += ux, TY[k] += uy, TZ[k] += uz;
   }
-  return t;
 }
 
 void Links::nodeForces(double* FX, double* FY, double* FZ, std::size_t k0, std::size_t k1) const {
@@ -340,14 +438,19 @@ void Links::archive(bridge::StateArchive& a) {
   a("broken", broken_);
   a("fx", fx_), a("fy", fy_), a("fz", fz_), a("tension", tension_);
   a("length", len_), a("ux", ux_), a("uy", uy_), a("uz", uz_);
-  std::vector<Vec3> shear(nb), moment(nb);
+  std::vector<Vec3> shear(nb), moment(nb), chord(nb), force(nb), torque_a(nb), torque_b(nb);
   std::vector<double> dissipated(nb);
-  for (std::size_t k = 0; k < nb; ++k)
-    shear[k] = beam_state_[k].shear_N, moment[k] = beam_state_[k].moment_N_m,
-    dissipated[k] = beam_state_[k].dissipated_J;
+  const Beams& B = beams_;
+  for (std::size_t k = 0; k < nb; ++k) {
+    const bridge::WireBeamState st = B.state(k);
+    shear[k] = st.shear_N, moment[k] = st.moment_N_m, dissipated[k] = st.dissipated_J;
+    chord[k] = Vec3(B.cx[k], B.cy[k], B.cz[k]), force[k] = Vec3(B.fx[k], B.fy[k], B.fz[k]);
+    torque_a[k] = Vec3(B.tx[k], B.ty[k], B.tz[k]);
+    torque_b[k] = Vec3(B.tx[nb + 1 + k], B.ty[nb + 1 + k], B.tz[nb + 1 + k]);
+  }
   bridge::StateArchive b = a.group("beams");
   b("shear_N", shear), b("moment_N_m", moment), b("dissipated_J", dissipated);
-  b("chord", beam_chord_), b("force", beam_force_), b("torque_a", torque_a_), b("torque_b", torque_b_);
+  b("chord", chord), b("force", force), b("torque_a", torque_a), b("torque_b", torque_b);
   if (!a.loading()) return;
   // (a checkpoint of another netting: refused before any of it is used)
   const auto same = [&](std::size_t found, std::size_t expect, const char* what) {
@@ -356,10 +459,16 @@ void Links::archive(bridge::StateArchive& a) {
   };
   for (const std::size_t m : {eps_p.size(), eps_r.size(), broken_.size(), fx_.size(), tension_.size(), len_.size()})
     same(m, n, "a link field");
-  for (const std::size_t m : {shear.size(), moment.size(), dissipated.size(), beam_chord_.size(), beam_force_.size()})
+  for (const std::size_t m :
+       {shear.size(), moment.size(), dissipated.size(), chord.size(), force.size(), torque_a.size(), torque_b.size()})
     same(m, nb, "a beam field");
   for (std::size_t l = 0; l < n; ++l) wire_state_[l] = {eps_p[l], eps_r[l]};
-  for (std::size_t k = 0; k < nb; ++k) beam_state_[k] = {shear[k], moment[k], dissipated[k]};
+  for (std::size_t k = 0; k < nb; ++k) {
+    beams_.broken[k] = broken_[beams_.link[k]];
+    beams_.setState(k, {shear[k], moment[k], dissipated[k]});
+    beams_.cx[k] = chord[k].x(), beams_.cy[k] = chord[k].y(), beams_.cz[k] = chord[k].z();
+    beams_.setActions(k, {force[k], torque_a[k], torque_b[k]});
+  }
 }
 
 }  // namespace gabion::micro

@@ -60,16 +60,17 @@ class Links {
   void nodeForces(double* FX, double* FY, double* FZ, std::size_t k0, std::size_t k1) const;
 
   /// Whether any link bends (bridge/laws/wire_beam.hpp).
-  bool hasBeams() const { return !beams_.empty(); }
+  bool hasBeams() const { return beams_.size() > 0; }
   /// The beams' pass, links [l0, l1), once per step: their increments are
   /// the change of each wire's chord since the last call (positions X, Y, Z)
   /// and the turn of its nodes over that time (RX, RY, RZ, rad; indexed by
   /// node). Stored energy and plastic work so far as in evaluate().
   void evaluateBeams(const double* X, const double* Y, const double* Z, const double* RX, const double* RY,
                      const double* RZ, std::size_t l0, std::size_t l1, bool measure, WorkerScratch& s);
-  /// The beams' force (N) and torque (N m) on node k, summed in link order.
-  Vec3 nodeBeamForce(std::size_t k) const;
-  Vec3 nodeBeamTorque(std::size_t k) const;
+  /// Nodes [k0, k1): the beams' force (N) and torque (N m) on each node,
+  /// summed in link order, added to F* and T* (indexed by node).
+  void addNodeBeams(double* FX, double* FY, double* FZ, double* TX, double* TY, double* TZ, std::size_t k0,
+                    std::size_t k1) const;
   std::size_t nodeCount() const { return node_id_.size(); }
   /// The stable particle id of each node, increasing.
   const std::vector<std::uint32_t>& nodeIds() const { return node_id_; }
@@ -83,7 +84,7 @@ class Links {
   const bridge::WireState& wireState(std::size_t l) const { return wire_state_[l]; }
   /// State of link l's beam (zero if it does not bend).
   bridge::WireBeamState beamState(std::size_t l) const {
-    return beam_of_[l] == kNoBeam ? bridge::WireBeamState{} : beam_state_[beam_of_[l]];
+    return beam_of_[l] == kNoBeam ? bridge::WireBeamState{} : beams_.state(beam_of_[l]);
   }
   /// The links' state (wires, beams, broken flags, this step's forces), into
   /// or out of a checkpoint.
@@ -140,14 +141,43 @@ class Links {
   std::size_t node_degree_ = 0;
   std::vector<std::uint32_t> padded_link_;
   std::vector<double> padded_sign_;
-  // Beams: link l bends if beam_of_[l] != kNoBeam; its parameters, state,
-  // chord at the last evaluation, and actions at this step.
+  // Beams: link l bends if beam_of_[l] != kNoBeam. They are numbered in
+  // link order, each field an array over them (evaluateBeams' vectorised
+  // pass).
   static constexpr std::uint32_t kNoBeam = 0xffffffffu;
   std::vector<std::uint32_t> beam_of_;
-  std::vector<bridge::WireBeamParams> beams_;
-  std::vector<bridge::WireBeamState> beam_state_;
-  std::vector<Vec3> beam_chord_;                        // zero before the first evaluation
-  std::vector<Vec3> beam_force_, torque_a_, torque_b_;  // force on b, torques on a and b
+  struct Beams {
+    std::vector<std::uint32_t> link, ka, kb;            // its link and that link's nodes
+    std::vector<bridge::WireBeamParams> params;         // (for the whole law)
+    std::vector<double> shear_k, bending_k, torsion_k;  // the same, side by side
+    std::vector<double> plastic_moment, length;
+    std::vector<double> sx, sy, sz, mx, my, mz, dissipated;  // state: shear force, moment, plastic work
+    std::vector<double> cx, cy, cz;                          // chord at the last evaluation (zero before the first)
+    // Actions at this step: the force on b (-it on a), one entry more (zero,
+    // the padding's); the torques on a, then on b (as many again).
+    std::vector<double> fx, fy, fz, tx, ty, tz;
+    std::vector<std::uint8_t> broken;  // its wire broke (as broken_ of its link)
+    std::vector<std::uint8_t> slow;    // took the whole law at this evaluation
+    std::size_t size() const { return link.size(); }
+    bridge::WireBeamState state(std::size_t b) const {
+      return {Vec3(sx[b], sy[b], sz[b]), Vec3(mx[b], my[b], mz[b]), dissipated[b]};
+    }
+    void setState(std::size_t b, const bridge::WireBeamState& s);
+    void setActions(std::size_t b, const bridge::WireBeamResponse& r);
+  };
+  Beams beams_;
+  // Each node's beams for addNodeBeams, padded to the same count at every
+  // node: the index of the force (into Beams::fx) and of the torque (into
+  // Beams::tx), and the force's sign on the node; a padding entry points at
+  // the zero entries.
+  std::size_t beam_degree_ = 0;
+  std::vector<std::uint32_t> beam_force_at_, beam_torque_at_;
+  std::vector<double> beam_sign_;
+  /// The whole law of beam b (a first evaluation, a wire of no length, a
+  /// large twist, a broken wire), as evaluateBeams' vectorised pass would
+  /// give it where it can.
+  void evaluateBeam(std::size_t b, const double* X, const double* Y, const double* Z, const double* RX,
+                    const double* RY, const double* RZ);
 };
 
 }  // namespace gabion::micro

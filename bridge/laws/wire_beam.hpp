@@ -80,44 +80,149 @@ inline WireBeamParams wireBeam(double youngs_modulus_Pa, double yield_stress_Pa,
   return p;
 }
 
-/// Elastic energy held by a beam whose wire lies along the unit vector n
-/// (J): |F_s|^2 / (2 k_s) + |M_b|^2 / (2 k_b) + T^2 / (2 k_t).
-inline double wireBeamElasticEnergy(const WireBeamParams& p, const WireBeamState& s, const Eigen::Vector3d& n) {
-  const double t = s.moment_N_m.dot(n);
-  return 0.5 * s.shear_N.squaredNorm() / p.shear_N_m + 0.5 * (s.moment_N_m.squaredNorm() - t * t) / p.bending_N_m_rad +
-         0.5 * t * t / p.torsion_N_m_rad();
-}
-
 struct WireBeamResponse {
   Eigen::Vector3d force_b = Eigen::Vector3d::Zero();   ///< on b (N); a takes minus it
   Eigen::Vector3d torque_a = Eigen::Vector3d::Zero();  ///< on a (N m)
   Eigen::Vector3d torque_b = Eigen::Vector3d::Zero();  ///< on b (N m)
 };
 
-/// The turn of a wire from n0 to n1 (unit vectors): the minimal rotation
-/// taking n0 to n1, then `twist` rad about n1. Applied to vectors normal to
-/// the wire.
-struct WireTurn {
-  Eigen::Vector3d n1, axis;   // axis = n0 x n1
-  double c = 1.0, k = 0.5;    // n0 . n1, 1 / (1 + c)
-  double ct = 1.0, st = 0.0;  // cos and sin of the twist
-  WireTurn(const Eigen::Vector3d& n0, const Eigen::Vector3d& to, double twist)
-      : n1(to), axis(n0.cross(to)), c(n0.dot(to)) {
-    k = c > -0.999 ? 1.0 / (1.0 + c) : 0.0;
-    if (std::fabs(twist) < 1e-3) {  // (a step's twist: the series is exact to rounding)
-      const double t2 = twist * twist;
-      ct = 1.0 - 0.5 * t2 * (1.0 - t2 / 12.0), st = twist * (1.0 - t2 / 6.0);
-    } else {
-      ct = std::cos(twist), st = std::sin(twist);
-    }
+/// The cosine and sine of a step's twist: below 1e-3 rad the series, exact
+/// to rounding there (the next terms are below 1e-19 of the leading one),
+/// without a transcendental call; a loop over beams that takes only the
+/// series vectorises (wireBeamSeriesAnswers).
+constexpr double kWireTwistSeries = 1e-3;
+[[gnu::always_inline]] inline void wireTwistSeries(double twist, double& ct, double& st) {
+  const double t2 = twist * twist;
+  ct = 1.0 - 0.5 * t2 * (1.0 - t2 / 12.0), st = twist * (1.0 - t2 / 6.0);
+}
+inline void wireTwistTrig(double twist, double& ct, double& st) {
+  if (std::fabs(twist) < kWireTwistSeries) {
+    wireTwistSeries(twist, ct, st);
+  } else {
+    ct = std::cos(twist), st = std::sin(twist);
   }
-  Eigen::Vector3d operator()(const Eigen::Vector3d& v) const {
-    // Rodrigues with the unnormalised axis: c v + a x v + a (a . v) / (1 + c).
-    Eigen::Vector3d w = k > 0.0 ? Eigen::Vector3d(c * v + axis.cross(v) + axis * (axis.dot(v) * k)) : v;
-    w -= w.dot(n1) * n1;  // stays normal to the wire (rounding)
-    return ct * w + st * n1.cross(w);
-  }
+}
+
+/// A vector of three doubles for the beam's arithmetic: plain members, so
+/// that a loop over beams keeps each in registers and vectorises (Eigen's
+/// fixed vectors are copied there as aggregates, which stops it). Dot and
+/// cross products in Eigen's order of operations.
+struct BeamVec {
+  double x = 0.0, y = 0.0, z = 0.0;
+  BeamVec() = default;
+  BeamVec(double x_, double y_, double z_) : x(x_), y(y_), z(z_) {}
+  explicit BeamVec(const Eigen::Vector3d& v) : x(v.x()), y(v.y()), z(v.z()) {}
+  Eigen::Vector3d eigen() const { return {x, y, z}; }
 };
+[[gnu::always_inline]] inline BeamVec operator+(const BeamVec& a, const BeamVec& b) {
+  return {a.x + b.x, a.y + b.y, a.z + b.z};
+}
+[[gnu::always_inline]] inline BeamVec operator-(const BeamVec& a, const BeamVec& b) {
+  return {a.x - b.x, a.y - b.y, a.z - b.z};
+}
+[[gnu::always_inline]] inline BeamVec operator-(const BeamVec& a) {
+  return {-a.x, -a.y, -a.z};
+}
+[[gnu::always_inline]] inline BeamVec operator*(double s, const BeamVec& a) {
+  return {s * a.x, s * a.y, s * a.z};
+}
+[[gnu::always_inline]] inline BeamVec operator/(const BeamVec& a, double s) {
+  return {a.x / s, a.y / s, a.z / s};
+}
+[[gnu::always_inline]] inline double dot(const BeamVec& a, const BeamVec& b) {
+  return a.x * b.x + a.y * b.y + a.z * b.z;
+}
+[[gnu::always_inline]] inline BeamVec cross(const BeamVec& a, const BeamVec& b) {
+  return {a.y * b.z - a.z * b.y, a.z * b.x - a.x * b.z, a.x * b.y - a.y * b.x};
+}
+
+/// The turn of a wire from n0 to n1 (unit vectors) applied to v, normal to
+/// the wire: the minimal rotation taking n0 to n1 (axis = n0 x n1, c = n0 .
+/// n1, k = 1 / (1 + c), or 0 for a wire turned back on itself: no turn),
+/// then a twist about n1 of cosine ct and sine st. Branch-free.
+[[gnu::always_inline]] inline BeamVec wireTurn(const BeamVec& v, const BeamVec& n1, const BeamVec& axis, double c,
+                                               double k, double ct, double st) {
+  // Rodrigues with the unnormalised axis: c v + a x v + a (a . v) / (1 + c).
+  const BeamVec r = c * v + cross(axis, v) + (dot(axis, v) * k) * axis;
+  const bool turns = k > 0.0;
+  BeamVec w(turns ? r.x : v.x, turns ? r.y : v.y, turns ? r.z : v.z);
+  w = w - dot(w, n1) * n1;  // stays normal to the wire (rounding)
+  return ct * w + st * cross(n1, w);
+}
+
+/// A beam's actions (BeamVec) while an increment is computed.
+struct WireBeamActions {
+  BeamVec shear, moment;
+  double dissipated = 0.0;
+};
+
+/// Elastic energy of actions on a wire along the unit vector n (J).
+[[gnu::always_inline]] inline double wireBeamElasticEnergy(const WireBeamParams& p, const WireBeamActions& s,
+                                                           const BeamVec& n) {
+  const double t = dot(s.moment, n);
+  return 0.5 * dot(s.shear, s.shear) / p.shear_N_m + 0.5 * (dot(s.moment, s.moment) - t * t) / p.bending_N_m_rad +
+         0.5 * t * t / p.torsion_N_m_rad();
+}
+
+/// Elastic energy held by a beam whose wire lies along the unit vector n
+/// (J): |F_s|^2 / (2 k_s) + |M_b|^2 / (2 k_b) + T^2 / (2 k_t).
+inline double wireBeamElasticEnergy(const WireBeamParams& p, const WireBeamState& s, const Eigen::Vector3d& n) {
+  return wireBeamElasticEnergy(p, WireBeamActions{BeamVec(s.shear_N), BeamVec(s.moment_N_m), s.dissipated_J},
+                               BeamVec(n));
+}
+
+/// One increment of the beam, the arithmetic of every path: the chord (a
+/// -> b) went from c0 to c1 (both of some length), the nodes turned by
+/// dtheta_a and dtheta_b; `trig(twist, ct, st)` gives the cosine and sine
+/// of the step's twist (wireTwistTrig, or wireTwistSeries where the caller
+/// checks the twist after). The actions are turned with the wire, the
+/// increments added, the plastic hinge's cap applied. Branch-free (selects
+/// only), so that a loop over beams vectorises. Returns the force on b; the
+/// torques on a and b into torque_a and torque_b, the twist into `twist`.
+template <class Trig>
+[[gnu::always_inline]] inline BeamVec wireBeamIncrement(const WireBeamParams& p, WireBeamActions& s, const BeamVec& c0,
+                                                        const BeamVec& c1, const BeamVec& dtheta_a,
+                                                        const BeamVec& dtheta_b, Trig trig, BeamVec& torque_a,
+                                                        BeamVec& torque_b, double& twist) {
+  const double L1 = std::sqrt(dot(c1, c1));
+  const BeamVec n0 = c0 / std::sqrt(dot(c0, c0)), n1 = c1 / L1, mid = 0.5 * (c0 + c1);
+  const BeamVec sum = dtheta_a + dtheta_b, rel = dtheta_b - dtheta_a;
+  // (the mean spin about the wire's middle direction, to second order)
+  twist = 0.25 * dot(sum, n0 + n1);
+  double ct = 1.0, st = 0.0;
+  trig(twist, ct, st);
+  const BeamVec axis = cross(n0, n1);
+  const double c = dot(n0, n1), k = c > -0.999 ? 1.0 / (1.0 + c) : 0.0;
+  // (bending turned, torsion along the wire)
+  s.moment = wireTurn(s.moment, n1, axis, c, k, ct, st) + dot(s.moment, n0) * n1;
+  s.shear = wireTurn(s.shear, n1, axis, c, k, ct, st);
+  // The wire's mid-point as each node carries it: b's relative to a's.
+  BeamVec slip = (c1 - c0) - 0.5 * cross(sum, mid);
+  slip = slip - dot(slip, n1) * n1;
+  s.shear = s.shear - p.shear_N_m * slip;
+  const double spin = dot(rel, n1);
+  s.moment = s.moment - (p.bending_N_m_rad * (rel - spin * n1) + (p.torsion_N_m_rad() * spin) * n1);
+  const BeamVec lever = (0.5 * L1) * cross(n1, s.shear);
+  const BeamVec up = s.moment + lever, down = s.moment - lever;
+  const double peak2 = std::max(dot(up, up), dot(down, down));
+  const bool yields = peak2 > p.plastic_moment_N_m * p.plastic_moment_N_m;
+  const double scale = yields ? p.plastic_moment_N_m / std::sqrt(peak2) : 1.0;
+  const double lost = (1.0 - scale * scale) * wireBeamElasticEnergy(p, s, n1);
+  s.dissipated = yields ? s.dissipated + lost : s.dissipated;
+  s.shear = scale * s.shear;  // (by 1: unchanged)
+  s.moment = scale * s.moment;
+  const BeamVec lv = (0.5 * L1) * cross(n1, s.shear);
+  torque_a = -s.moment - lv;
+  torque_b = s.moment - lv;
+  return s.shear;
+}
+
+/// Whether an increment is one that the series path answers exactly as
+/// wireBeamStep does: a chord of some length before and after, a twist
+/// within the series' range.
+[[gnu::always_inline]] inline bool wireBeamSeriesAnswers(double c0_squared, double c1_squared, double twist) {
+  return c0_squared > 0.0 && c1_squared > 0.0 && std::fabs(twist) < kWireTwistSeries;
+}
 
 /// One increment of the beam between a and b: the wire's chord (a -> b)
 /// went from c0 to c1; the nodes turned by `dtheta_a` and `dtheta_b` (rad,
@@ -128,34 +233,15 @@ struct WireTurn {
 inline WireBeamResponse wireBeamStep(const WireBeamParams& p, WireBeamState& s, const Eigen::Vector3d& c0,
                                      const Eigen::Vector3d& c1, const Eigen::Vector3d& dtheta_a,
                                      const Eigen::Vector3d& dtheta_b) {
-  const double L1sq = c1.squaredNorm(), L0sq = c0.squaredNorm();
-  if (!(L1sq > 0.0) || !(L0sq > 0.0)) return {};  // a wire of no length has no direction
-  const double L1 = std::sqrt(L1sq);
-  const Eigen::Vector3d n0 = c0 / std::sqrt(L0sq), n1 = c1 / L1, mid = 0.5 * (c0 + c1);
-  const Eigen::Vector3d sum = dtheta_a + dtheta_b, rel = dtheta_b - dtheta_a;
-  // (the mean spin about the wire's middle direction, to second order)
-  const WireTurn turn(n0, n1, 0.25 * sum.dot(n0 + n1));
-  s.shear_N = turn(s.shear_N);
-  s.moment_N_m = turn(s.moment_N_m) + s.moment_N_m.dot(n0) * n1;  // (bending turned, torsion along the wire)
-  // The wire's mid-point as each node carries it: b's relative to a's.
-  Eigen::Vector3d slip = (c1 - c0) - 0.5 * sum.cross(mid);
-  slip -= slip.dot(n1) * n1;
-  s.shear_N -= p.shear_N_m * slip;
-  const double spin = rel.dot(n1);
-  s.moment_N_m -= p.bending_N_m_rad * (rel - spin * n1) + p.torsion_N_m_rad() * spin * n1;
-  const Eigen::Vector3d lever = 0.5 * L1 * n1.cross(s.shear_N);
-  const double peak2 = std::max((s.moment_N_m + lever).squaredNorm(), (s.moment_N_m - lever).squaredNorm());
-  if (peak2 > p.plastic_moment_N_m * p.plastic_moment_N_m) {
-    const double scale = p.plastic_moment_N_m / std::sqrt(peak2);
-    s.dissipated_J += (1.0 - scale * scale) * wireBeamElasticEnergy(p, s, n1);
-    s.shear_N *= scale;
-    s.moment_N_m *= scale;
-  }
+  if (!(c1.squaredNorm() > 0.0) || !(c0.squaredNorm() > 0.0)) return {};  // a wire of no length has no direction
+  WireBeamActions a{BeamVec(s.shear_N), BeamVec(s.moment_N_m), s.dissipated_J};
+  BeamVec ta, tb;
+  double twist = 0.0;
+  const BeamVec f = wireBeamIncrement(p, a, BeamVec(c0), BeamVec(c1), BeamVec(dtheta_a), BeamVec(dtheta_b),
+                                      wireTwistTrig, ta, tb, twist);
+  s.shear_N = a.shear.eigen(), s.moment_N_m = a.moment.eigen(), s.dissipated_J = a.dissipated;
   WireBeamResponse r;
-  const Eigen::Vector3d lv = 0.5 * L1 * n1.cross(s.shear_N);
-  r.force_b = s.shear_N;
-  r.torque_a = -s.moment_N_m - lv;
-  r.torque_b = s.moment_N_m - lv;
+  r.force_b = f.eigen(), r.torque_a = ta.eigen(), r.torque_b = tb.eigen();
   return r;
 }
 
