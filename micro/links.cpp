@@ -55,7 +55,6 @@ Links::Links(const std::vector<LinkSpec>& specs, std::size_t particles) : partic
       B.link.push_back(static_cast<std::uint32_t>(l));
       B.params.push_back(p);
       B.shear_k.push_back(p.shear_N_m), B.bending_k.push_back(p.bending_N_m_rad);
-      B.torsion_k.push_back(p.torsion_N_m_rad());
       B.plastic_moment.push_back(p.plastic_moment_N_m), B.length.push_back(p.length_m);
       for (auto* v : {&B.sx, &B.sy, &B.sz, &B.mx, &B.my, &B.mz, &B.dissipated}) v->push_back(0.0);
       B.setState(B.size() - 1, specs[l].beam_state);

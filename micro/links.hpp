@@ -147,9 +147,9 @@ class Links {
   static constexpr std::uint32_t kNoBeam = 0xffffffffu;
   std::vector<std::uint32_t> beam_of_;
   struct Beams {
-    std::vector<std::uint32_t> link, ka, kb;            // its link and that link's nodes
-    std::vector<bridge::WireBeamParams> params;         // (for the whole law)
-    std::vector<double> shear_k, bending_k, torsion_k;  // the same, side by side
+    std::vector<std::uint32_t> link, ka, kb;     // its link and that link's nodes
+    std::vector<bridge::WireBeamParams> params;  // (for the whole law)
+    std::vector<double> shear_k, bending_k;      // the same, side by side
     std::vector<double> plastic_moment, length;
     std::vector<double> sx, sy, sz, mx, my, mz, dissipated;  // state: shear force, moment, plastic work
     std::vector<double> cx, cy, cz;                          // chord at the last evaluation (zero before the first)

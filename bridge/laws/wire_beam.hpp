@@ -54,7 +54,7 @@ struct WireBeamParams {
   double length_m = 0.0;                                                ///< L, the lever of the shear force (m)
   bool active() const { return bending_N_m_rad > 0.0; }
   /// Torsional stiffness (N m/rad): G J / L = E I / ((1 + nu) L), nu = 0.3.
-  double torsion_N_m_rad() const { return bending_N_m_rad / 1.3; }
+  double torsion_N_m_rad() const { return bending_N_m_rad * (1.0 / 1.3); }
   /// Rotational stiffness at one end with the other held (N m/rad): 4 E I / L.
   double endStiffness() const { return bending_N_m_rad + 0.25 * shear_N_m * length_m * length_m; }
 };
@@ -126,9 +126,6 @@ struct BeamVec {
 [[gnu::always_inline]] inline BeamVec operator*(double s, const BeamVec& a) {
   return {s * a.x, s * a.y, s * a.z};
 }
-[[gnu::always_inline]] inline BeamVec operator/(const BeamVec& a, double s) {
-  return {a.x / s, a.y / s, a.z / s};
-}
 [[gnu::always_inline]] inline double dot(const BeamVec& a, const BeamVec& b) {
   return a.x * b.x + a.y * b.y + a.z * b.z;
 }
@@ -159,9 +156,11 @@ struct WireBeamActions {
 /// Elastic energy of actions on a wire along the unit vector n (J).
 [[gnu::always_inline]] inline double wireBeamElasticEnergy(const WireBeamParams& p, const WireBeamActions& s,
                                                            const BeamVec& n) {
+  // (the bending part |M|^2 - T^2 over k_b and the torsion's T^2 over k_t
+  // = k_b / 1.3 in one division: a beam's loop is bound by its divisions)
   const double t = dot(s.moment, n);
-  return 0.5 * dot(s.shear, s.shear) / p.shear_N_m + 0.5 * (dot(s.moment, s.moment) - t * t) / p.bending_N_m_rad +
-         0.5 * t * t / p.torsion_N_m_rad();
+  return 0.5 * dot(s.shear, s.shear) / p.shear_N_m +
+         0.5 * (dot(s.moment, s.moment) + 0.3 * (t * t)) / p.bending_N_m_rad;
 }
 
 /// Elastic energy held by a beam whose wire lies along the unit vector n
@@ -185,7 +184,7 @@ template <class Trig>
                                                         const BeamVec& dtheta_b, Trig trig, BeamVec& torque_a,
                                                         BeamVec& torque_b, double& twist) {
   const double L1 = std::sqrt(dot(c1, c1));
-  const BeamVec n0 = c0 / std::sqrt(dot(c0, c0)), n1 = c1 / L1, mid = 0.5 * (c0 + c1);
+  const BeamVec n0 = (1.0 / std::sqrt(dot(c0, c0))) * c0, n1 = (1.0 / L1) * c1, mid = 0.5 * (c0 + c1);
   const BeamVec sum = dtheta_a + dtheta_b, rel = dtheta_b - dtheta_a;
   // (the mean spin about the wire's middle direction, to second order)
   twist = 0.25 * dot(sum, n0 + n1);
