@@ -32,9 +32,13 @@
 # hybrids (they take the wall's micro keys), and each wall's xyz/gives
 # hybrids run once more with their resolved cells laced to their plates
 # too (resolve.lacing.to_plates, into *_more/plates_xyz_gives_*);
+# with --pull N (implies --laced), every lacing wire is pulled tight with N
+# newtons while the settling goes on (lacing.pull_N; docs/resolved.md,
+# Laced, Pulled tight), in the walls and their hybrids alike;
 # then one table, and a chart of each hybrid's largest error against how
 # many times faster than its resolved wall it ran (OUT/figures/wide_error_vs_speed_up.png).
 #   bench/resolved/wide.sh [--out DIR] [--threads N] [--walls "54 90 150 210"] [--pipeline DIR] [--laced]
+#                         [--pull N]
 # About two hours for wall_54 on 2 cores, most of it the resolved wall
 # settling (1 s); with --pipeline of the denser cell (docs/resolved.md, A
 # denser cell) about 50 minutes, the wall at rest after 0.28 s. wall_90's
@@ -46,10 +50,11 @@
 set -euo pipefail
 here=$(cd "$(dirname "$0")" && pwd)
 root=$(cd "$here/../.." && pwd)
-out=$root/results/wide threads=2 walls="54 210" pipeline= laced=false
+out=$root/results/wide threads=2 walls="54 210" pipeline= laced=false pull=
 while [ $# -gt 0 ]; do
   case $1 in
     --laced) laced=true; shift ;;
+    --pull) laced=true pull=$2; shift 2 ;;
     --out) out=$2; shift 2 ;;
     --threads) threads=$2; shift 2 ;;
     --walls) walls=$2; shift 2 ;;
@@ -68,6 +73,7 @@ fi
 # (laced walls, with --laced: the hybrids' cases written by macro.resolved carry the same keys)
 if $laced; then
   cell+=(--set 'resolved.lacing={"at_s": 0.15}' --set resolved.settle.at_rest_rms_speed_m_s=0.02)
+  if [ -n "$pull" ]; then cell+=(--set "resolved.lacing.pull_N=$pull"); fi
 fi
 for w in $walls; do
   case $w in
