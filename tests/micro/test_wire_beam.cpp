@@ -135,8 +135,9 @@ TEST(WireBeamLaw, PlasticHingeHoldsThePlasticMomentAndDissipatesTheRest) {
 // a first call, a twist beyond 1e-3 rad, a wire of no length, a broken wire.
 // A chain of 40 beams, moved and turned at random for 60 steps (a few
 // turns large, some beams yielding, two wires broken on the way), against
-// the whole law beam by beam: the same states and node sums. (Native builds
-// may fuse multiply-adds in one loop and not the other: a few ulps.)
+// the whole law beam by beam: the same states and node sums, the links
+// taken in two ranges as two workers take them. (Native builds may fuse
+// multiply-adds in one loop and not the other: a few ulps.)
 TEST(MicroWireBeam, TheVectorisedPassGivesTheWholeLawsAnswer) {
   using gabion::micro::Links;
   const int n = 41;
@@ -168,7 +169,10 @@ TEST(MicroWireBeam, TheVectorisedPassGivesTheWholeLawsAnswer) {
       if (step > 0) X[k] += 2e-4 * u(rng), Y[k] += 2e-4 * u(rng), Z[k] += 2e-4 * u(rng);
     }
     if (step == 20) X[n - 1] += 0.5 * L, X[12] += 0.5 * L;  // (pulls wires 11 and 39 past rupture)
-    links.evaluateBeams(X.data(), Y.data(), Z.data(), RX.data(), RY.data(), RZ.data(), 0, links.size(), false, scratch);
+    // (in two ranges of links, as two workers take them)
+    links.evaluateBeams(X.data(), Y.data(), Z.data(), RX.data(), RY.data(), RZ.data(), 0, 17, false, scratch);
+    links.evaluateBeams(X.data(), Y.data(), Z.data(), RX.data(), RY.data(), RZ.data(), 17, links.size(), false,
+                        scratch);
     std::vector<double> fx(n, 0.0), fy(n, 0.0), fz(n, 0.0), tx(n, 0.0), ty(n, 0.0), tz(n, 0.0);
     links.addNodeBeams(fx.data(), fy.data(), fz.data(), tx.data(), ty.data(), tz.data(), 0, n);
     std::vector<Vec3> f(n, Vec3::Zero()), t(n, Vec3::Zero());
