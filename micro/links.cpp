@@ -335,8 +335,9 @@ void Links::evaluateBeams(const double* X, const double* Y, const double* Z, con
       bridge::WireBeamActions a{BeamVec(SX[b], SY[b], SZ[b]), BeamVec(MX[b], MY[b], MZ[b]), D[b]};
       BeamVec ta, tb;
       double twist = 0.0;
-      const BeamVec f = bridge::wireBeamIncrement(p, a, c0, c1, BeamVec(RX[i], RY[i], RZ[i]),
-                                                  BeamVec(RX[j], RY[j], RZ[j]), bridge::wireTwistSeries, ta, tb, twist);
+      const BeamVec f =
+          bridge::wireBeamIncrement(p, a, c0, c1, BeamVec(RX[i], RY[i], RZ[i]), BeamVec(RX[j], RY[j], RZ[j]),
+                                    bridge::smallAngleSinCos, ta, tb, twist);
       const bool ok = bridge::wireBeamSeriesAnswers(bridge::dot(c0, c0), bridge::dot(c1, c1), twist) && !BROKEN[b];
       SLOW[b] = ok ? 0 : 1;
       SX[b] = ok ? a.shear.x : SX[b], SY[b] = ok ? a.shear.y : SY[b], SZ[b] = ok ? a.shear.z : SZ[b];

@@ -9,6 +9,8 @@
 #include <stdexcept>
 #include <string>
 
+#include "bridge/small_angle.hpp"
+
 namespace gabion::micro {
 namespace {
 
@@ -446,24 +448,12 @@ std::vector<Eigen::Vector3d> principalFrameOffsets(const MassProperties& props,
 
 namespace {
 
-/// A step turns a block by far less than 1e-3 rad: there the series is
-/// exact to rounding (the first term left out is below 2e-21 of the result)
-/// and costs a few multiplications where sin and cos cost a call each.
-inline void sinCosOfSmall(double x, double& s, double& c) {
-  if (std::fabs(x) < 1e-3) {
-    const double x2 = x * x;
-    s = x * (1.0 - x2 / 6.0 * (1.0 - x2 / 20.0)), c = 1.0 - 0.5 * x2 * (1.0 - x2 / 12.0);
-  } else {
-    s = std::sin(x), c = std::cos(x);
-  }
-}
-
 /// Exact flow of L_i^2/(2 I_i) for a time with body-axis rotation angle
 /// `angle`: the body turns about its axis i (q <- q * rot_i(angle)) while the
 /// body-frame momentum turns the other way so that q Lb stays the same.
 inline void rotateAboutBodyAxis(int i, double angle, Eigen::Quaterniond& q, Eigen::Vector3d& Lb) {
   double sh = 0.0, ch = 1.0;
-  sinCosOfSmall(0.5 * angle, sh, ch);
+  bridge::stepSinCos(0.5 * angle, sh, ch);  // (a step turns a block by far less than 1e-3 rad)
   // q * (ch, sh e_i): (w ch - sh u_i, ch u + sh (w e_i + u x e_i)).
   const int j = (i + 1) % 3, k = (i + 2) % 3;
   const double w = q.w(), ui = q.vec()[i], uj = q.vec()[j], uk = q.vec()[k];

@@ -45,6 +45,8 @@
 #include <cmath>
 #include <limits>
 
+#include "bridge/small_angle.hpp"
+
 namespace gabion::bridge {
 
 struct WireBeamParams {
@@ -85,23 +87,6 @@ struct WireBeamResponse {
   Eigen::Vector3d torque_a = Eigen::Vector3d::Zero();  ///< on a (N m)
   Eigen::Vector3d torque_b = Eigen::Vector3d::Zero();  ///< on b (N m)
 };
-
-/// The cosine and sine of a step's twist: below 1e-3 rad the series, exact
-/// to rounding there (the next terms are below 1e-19 of the leading one),
-/// without a transcendental call; a loop over beams that takes only the
-/// series vectorises (wireBeamSeriesAnswers).
-constexpr double kWireTwistSeries = 1e-3;
-[[gnu::always_inline]] inline void wireTwistSeries(double twist, double& ct, double& st) {
-  const double t2 = twist * twist;
-  ct = 1.0 - 0.5 * t2 * (1.0 - t2 / 12.0), st = twist * (1.0 - t2 / 6.0);
-}
-inline void wireTwistTrig(double twist, double& ct, double& st) {
-  if (std::fabs(twist) < kWireTwistSeries) {
-    wireTwistSeries(twist, ct, st);
-  } else {
-    ct = std::cos(twist), st = std::sin(twist);
-  }
-}
 
 /// A vector of three doubles for the beam's arithmetic: plain members, so
 /// that a loop over beams keeps each in registers and vectorises (Eigen's
@@ -172,9 +157,9 @@ inline double wireBeamElasticEnergy(const WireBeamParams& p, const WireBeamState
 
 /// One increment of the beam, the arithmetic of every path: the chord (a
 /// -> b) went from c0 to c1 (both of some length), the nodes turned by
-/// dtheta_a and dtheta_b; `trig(twist, ct, st)` gives the cosine and sine
-/// of the step's twist (wireTwistTrig, or wireTwistSeries where the caller
-/// checks the twist after). The actions are turned with the wire, the
+/// dtheta_a and dtheta_b; `trig(twist, st, ct)` gives the sine and cosine
+/// of the step's twist (bridge/small_angle.hpp: stepSinCos, or
+/// smallAngleSinCos where the caller checks the twist after). The actions are turned with the wire, the
 /// increments added, the plastic hinge's cap applied. Branch-free (selects
 /// only), so that a loop over beams vectorises. Returns the force on b; the
 /// torques on a and b into torque_a and torque_b, the twist into `twist`.
@@ -189,7 +174,7 @@ template <class Trig>
   // (the mean spin about the wire's middle direction, to second order)
   twist = 0.25 * dot(sum, n0 + n1);
   double ct = 1.0, st = 0.0;
-  trig(twist, ct, st);
+  trig(twist, st, ct);
   const BeamVec axis = cross(n0, n1);
   const double c = dot(n0, n1), k = c > -0.999 ? 1.0 / (1.0 + c) : 0.0;
   // (bending turned, torsion along the wire)
@@ -220,7 +205,7 @@ template <class Trig>
 /// wireBeamStep does: a chord of some length before and after, a twist
 /// within the series' range.
 [[gnu::always_inline]] inline bool wireBeamSeriesAnswers(double c0_squared, double c1_squared, double twist) {
-  return c0_squared > 0.0 && c1_squared > 0.0 && std::fabs(twist) < kWireTwistSeries;
+  return c0_squared > 0.0 && c1_squared > 0.0 && std::fabs(twist) < kSmallAngle;
 }
 
 /// One increment of the beam between a and b: the wire's chord (a -> b)
@@ -236,8 +221,8 @@ inline WireBeamResponse wireBeamStep(const WireBeamParams& p, WireBeamState& s, 
   WireBeamActions a{BeamVec(s.shear_N), BeamVec(s.moment_N_m), s.dissipated_J};
   BeamVec ta, tb;
   double twist = 0.0;
-  const BeamVec f = wireBeamIncrement(p, a, BeamVec(c0), BeamVec(c1), BeamVec(dtheta_a), BeamVec(dtheta_b),
-                                      wireTwistTrig, ta, tb, twist);
+  const BeamVec f = wireBeamIncrement(p, a, BeamVec(c0), BeamVec(c1), BeamVec(dtheta_a), BeamVec(dtheta_b), stepSinCos,
+                                      ta, tb, twist);
   s.shear_N = a.shear.eigen(), s.moment_N_m = a.moment.eigen(), s.dissipated_J = a.dissipated;
   WireBeamResponse r;
   r.force_b = f.eigen(), r.torque_a = ta.eigen(), r.torque_b = tb.eigen();
