@@ -209,7 +209,8 @@ int finishRun(const Options& o, const gabion::bridge::CaseKind& kind, gabion::br
   summary["status"] = gabion::bridge::statusName(outcome.status);
   if (!outcome.message.empty()) summary["message"] = outcome.message;
   summary["version"] = gabion::kVersion;
-  summary["wall_time_s"] = wall;
+  summary["wall_time_s"] = gabion::bridge::wholeWallTime(wall, outcome.results);
+  if (outcome.results.contains(gabion::bridge::kWallTimeBeforeResume)) summary["wall_time_this_process_s"] = wall;
   summary["threads"] = o.threads;
   summary["case_file"] = o.case_file;
   if (estimate)

@@ -227,6 +227,10 @@ bridge::RunOutcome run(const JsonDocument& doc, const bridge::RunContext& ctx) {
   }
   r["outcome"] = res.value("outcome", "unknown");
   r["wall_time_s_resolved"] = res_wall;
+  // (parts resumed from checkpoints: the time their stopped runs stepped, bridge/run.hpp)
+  double before_resume_s = bridge::wholeWallTime(0.0, twin) + bridge::wholeWallTime(0.0, res);
+  for (const SubCase& h : hp) before_resume_s += bridge::wholeWallTime(0.0, h.summary);
+  if (before_resume_s > 0.0) r[bridge::kWallTimeBeforeResume] = before_resume_s;
   macro["outcome"] = twin.value("outcome", "unknown");
   macro["wall_time_s"] = twin_wall;
   r["macro_twin"] = macro;

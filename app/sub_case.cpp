@@ -20,7 +20,8 @@ SubCase runSubCase(const nlohmann::json& case_value, const std::string& expected
   const auto t0 = std::chrono::steady_clock::now();
   const bridge::RunOutcome ran = k.run(doc, ctx);
   SubCase out;
-  out.wall_time_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  const double process_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  out.wall_time_s = bridge::wholeWallTime(process_s, ran.results);
   out.status = ran.status;
   out.message = ran.message;
   out.summary = ran.results;
@@ -29,6 +30,7 @@ SubCase runSubCase(const nlohmann::json& case_value, const std::string& expected
   out.summary["status"] = bridge::statusName(ran.status);
   if (!ran.message.empty()) out.summary["message"] = ran.message;
   out.summary["wall_time_s"] = out.wall_time_s;
+  if (ran.results.contains(bridge::kWallTimeBeforeResume)) out.summary["wall_time_this_process_s"] = process_s;
   out.summary["case"] = doc.json();
   bridge::writeJsonAtomic(dir / "summary.json", out.summary);
   return out;

@@ -113,6 +113,20 @@ struct Estimate {
   bool partial = false;       ///< some of its work cannot be costed before it runs (a pipeline's lab tests)
 };
 
+/// The results' key with the wall-clock seconds that runs stopped by a
+/// signal spent before the checkpoints a resumed run continued from (summed
+/// over its stages). The summary's `wall_time_s` adds them to the process's
+/// own time, so that a run resumed once or many times reports the time of
+/// the whole run (`wall_time_this_process_s`: the process's alone).
+inline constexpr const char* kWallTimeBeforeResume = "wall_time_before_resume_s";
+
+/// The summary's wall time of a run whose process took `process_s` and
+/// gave `results`: the process's, plus what its resumed checkpoints carried.
+inline double wholeWallTime(double process_s, const nlohmann::json& results) {
+  const auto it = results.find(kWallTimeBeforeResume);
+  return process_s + (it != results.end() && it->is_number() ? it->get<double>() : 0.0);
+}
+
 /// The summary's "status": "ok", "numerical_failure" or "interrupted".
 inline const char* statusName(RunOutcome::Status s) {
   switch (s) {

@@ -77,6 +77,10 @@ std::uint64_t StateArchive::digest() const {
   return b_->hash;
 }
 
+bool StateArchive::has(const std::string& name) const {
+  return b_->mode != Mode::Load || b_->reader->has(path(name));
+}
+
 std::string StateArchive::path(const std::string& name) const {
   return prefix_ + "/" + name;
 }

@@ -45,6 +45,10 @@ class StateArchive {
   StateArchive group(const std::string& name) const;
   /// The digest of everything hashed so far (Digest mode).
   std::uint64_t digest() const;
+  /// Whether field `name` is there to load (Load mode: a field that a
+  /// checkpoint written by an older build lacks; saving and hashing: true).
+  /// A field added to a part's list loads through it, with a fallback.
+  bool has(const std::string& name) const;
 
   void operator()(const std::string& name, double& v);
   void operator()(const std::string& name, bool& v);

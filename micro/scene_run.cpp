@@ -211,9 +211,18 @@ bridge::RunOutcome runScene(Scene scene, const std::string& file, const bridge::
     }
   };
 
+  // The wall-clock seconds stepped by the runs stopped before this one (their
+  // checkpoints carry them on): a resumed run's wall time is the whole run's.
+  double earlier_s = 0.0;
+  auto t0 = std::chrono::steady_clock::now();
+
   // The run's own state for a checkpoint: its series so far, its snapshot
-  // times and link tables, and the kind's state.
+  // times and link tables, the seconds stepped so far, and the kind's state.
   const auto loop_state = [&](bridge::StateArchive& a) {
+    double stepped_s =
+        a.loading() ? 0.0 : earlier_s + std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+    if (a.has("stepped_wall_time_s")) a("stepped_wall_time_s", stepped_s);  // (older checkpoints: 0)
+    if (a.loading()) earlier_s = stepped_s;
     bridge::StateArchive sa = a.group("series");
     sa("time_s", series.time);
     for (std::size_t k = 0; k < energyTerms().size(); ++k) sa(energyTerms()[k].first, series.energy[k]);
@@ -250,7 +259,7 @@ bridge::RunOutcome runScene(Scene scene, const std::string& file, const bridge::
   StepStatus status = StepStatus::Ok;
   bool ended = false;    // the kind's test is over before the duration
   bool stopped = false;  // SIGINT or SIGTERM asked the run to stop
-  const auto t0 = std::chrono::steady_clock::now();
+  t0 = std::chrono::steady_clock::now();
   for (long long n = first; n < steps && !ended; ++n) {
     const bool measure = n % series_every == 0 || n + 1 == steps;
     const double t = engine.time();
@@ -341,7 +350,10 @@ bridge::RunOutcome runScene(Scene scene, const std::string& file, const bridge::
   out.results["broken_links"] = engine.linkEvents().size();
   out.results["size_classes"] = engine.sizeClassCount();
   out.results["step_status"] = statusName(status);
-  if (resumed) out.results["resumed_from_step"] = first;
+  if (resumed) {
+    out.results["resumed_from_step"] = first;
+    out.results[bridge::kWallTimeBeforeResume] = earlier_s;
+  }
   out.results["checkpoints"] = checkpoints.saved();
   for (const auto& [key, report] : scene.generated.items()) out.results[key] = report;
   if (scene.generated.contains("block_fills")) writeGradingFigures(ctx.outdir, scene.generated["block_fills"]);

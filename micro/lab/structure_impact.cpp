@@ -436,6 +436,7 @@ bridge::RunOutcome runOne(const StructureCase& c, const Sample& sample, const br
   // (the cells laid out: the whole structure's, or a hybrid's resolved ones)
   const std::size_t laid_out = layout.blocks_per_cell > 0 ? layout.scene.blocks.size() / layout.blocks_per_cell : 0;
   nlohmann::json settle_results;
+  double before_resume_s = 0.0;  // (the seconds the stopped runs of the landing and the settling stepped)
   // The struck cell (the front cell the aim point is on, laid out): the
   // boulder's penetration less that cell's own move is its indentation.
   const int struck = [&] {
@@ -563,6 +564,7 @@ bridge::RunOutcome runOne(const StructureCase& c, const Sample& sample, const br
         landed.message = "landing the structure before its lacing: " + landed.message;
         return landed;
       }
+      before_resume_s += bridge::wholeWallTime(0.0, landed.results);
       first_lacing = standing.links.size();
       lacing_results = laceCells(c, layout, sample, standing, part);
       n_spheres = standing.spheres.size();  // (the anchors of a lacing to the plates come after the cells')
@@ -587,9 +589,12 @@ bridge::RunOutcome runOne(const StructureCase& c, const Sample& sample, const br
     bridge::RunOutcome settled = runScene(std::move(s), file, sub, hooks);
     if (settled.status != bridge::RunOutcome::Status::Ok) {
       settled.message = "settling the structure: " + settled.message;
+      if (before_resume_s > 0.0)
+        settled.results[bridge::kWallTimeBeforeResume] = bridge::wholeWallTime(before_resume_s, settled.results);
       return settled;
     }
     settle_results = settled.results;
+    before_resume_s += bridge::wholeWallTime(0.0, settled.results);
     if (!tightened.is_null()) lacing_results["pulled_tight"] = tightened;
     standing.run = layout.scene.run;              // (the state keeps the settling's run)
     standing.materials = layout.scene.materials;  // (and its local damping)
@@ -725,6 +730,9 @@ bridge::RunOutcome runOne(const StructureCase& c, const Sample& sample, const br
   bridge::RunOutcome out = runScene(std::move(scene), file, ctx, hooks);
   nlohmann::json& r = out.results;
   if (!settle_results.is_null()) r["settle"] = settle_results;
+  // (a resumed run's time is its stages' whole: bridge/run.hpp)
+  if (before_resume_s > 0.0 || r.contains(bridge::kWallTimeBeforeResume))
+    r[bridge::kWallTimeBeforeResume] = bridge::wholeWallTime(before_resume_s, r);
   if (!lacing_results.is_null()) r["lacing"] = lacing_results;
   r["cells"] = {c.nx, c.ny, c.nz};
   r["cell_pitch_m"] = {layout.pitch.x(), layout.pitch.y(), layout.pitch.z()};

@@ -331,6 +331,14 @@ TEST(ResolvedStructure, SettlesUntilAtRestAndResumesToTheSameWall) {
       killInTheSettlingAndResume(args + killed.string() + " --set run.checkpoint_every_s=0.05", killed));
   const nlohmann::json k = summaryOf(killed);
   EXPECT_EQ(k["settle"]["duration_s"], settle["duration_s"]);
+  {
+    // Its wall time counts the killed run's settling up to its checkpoint:
+    // the settling's, carried up to the structure's whole time.
+    const double before = k["settle"].value("wall_time_before_resume_s", 0.0);
+    EXPECT_GT(before, 0.0);
+    EXPECT_EQ(k.value("wall_time_before_resume_s", 0.0), before);
+    EXPECT_EQ(k["wall_time_s"].get<double>(), k["wall_time_this_process_s"].get<double>() + before);
+  }
   EXPECT_EQ(k["settle"]["descent_speed_m_s"], settle["descent_speed_m_s"]);
   for (const char* key : {"peak_force_N", "max_penetration_m", "max_back_face_displacement_m"})
     EXPECT_EQ(k[key], s[key]) << key;

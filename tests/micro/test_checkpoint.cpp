@@ -68,6 +68,11 @@ TEST(MicroCheckpoint, AnEngineLoadedFromACheckpointStepsOnAsTheOneSaved) {
     b.archive(l);
     EXPECT_EQ(digest(b), at_save);
     EXPECT_EQ(b.steps(), 700);
+    // A field a newer build adds is not in this file: has() says so, and
+    // only when loading (a part then keeps its fallback).
+    EXPECT_FALSE(l.has("no_such_field"));
+    EXPECT_FALSE(l.group("links").has("no_such_field"));
+    EXPECT_TRUE(StateArchive::digesting().has("no_such_field"));
     steps(b, 700, 1500);
     EXPECT_EQ(digest(b), digest(a)) << threads << " threads: the loaded engine went its own way";
     EXPECT_EQ(b.time(), a.time());
@@ -164,9 +169,20 @@ TEST(MicroCheckpoint, AKilledOrStoppedSceneResumesToTheSameArrays) {
   EXPECT_NE(stop.find("gabion run --resume continues it"), std::string::npos) << stop;
   EXPECT_EQ(summaryOf(stopped).at("status"), "interrupted");
   ASSERT_TRUE(std::filesystem::exists(stopped / "checkpoint" / "state.h5"));
+  const double stepped_before = summaryOf(stopped).at("step_loop_wall_time_s").get<double>();
   const auto again = runGabion("run -q --resume " + stopped.string());
   ASSERT_EQ(again.exit_code, 0) << again.output;
   expectSameArrays(dir / "whole" / "result.h5", stopped / "result.h5", kSceneArrays);
+  // Its wall time is the whole run's: the stopped run's stepping (up to its
+  // checkpoint, within that run's step loop) and the resumed process's.
+  {
+    const nlohmann::json s = summaryOf(stopped);
+    const double before = s.at("wall_time_before_resume_s").get<double>();
+    EXPECT_GT(before, 0.0);
+    EXPECT_LE(before, stepped_before);
+    EXPECT_EQ(s.at("wall_time_s").get<double>(), s.at("wall_time_this_process_s").get<double>() + before);
+  }
+  EXPECT_FALSE(summaryOf(dir / "whole").contains("wall_time_before_resume_s"));
 
   // Another case into a folder with a checkpoint: not continued (it is not
   // this run's), and replaced by this run's end.
