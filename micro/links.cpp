@@ -53,7 +53,6 @@ Links::Links(const std::vector<LinkSpec>& specs, std::size_t particles) : partic
       beam_of_[l] = static_cast<std::uint32_t>(B.size());
       const bridge::WireBeamParams& p = specs[l].beam;
       B.link.push_back(static_cast<std::uint32_t>(l));
-      B.params.push_back(p);
       B.shear_k.push_back(p.shear_N_m), B.bending_k.push_back(p.bending_N_m_rad);
       B.plastic_moment.push_back(p.plastic_moment_N_m), B.length.push_back(p.length_m);
       for (auto* v : {&B.sx, &B.sy, &B.sz, &B.mx, &B.my, &B.mz, &B.dissipated}) v->push_back(0.0);
@@ -194,7 +193,7 @@ void Links::evaluateOne(std::size_t l, const double* X, const double* Y, const d
     if (beam != kNoBeam) {
       // Its bending goes with it.
       bridge::WireBeamState bs = beams_.state(beam);
-      rupture += bridge::wireBeamElasticEnergy(beams_.params[beam], bs, Vec3(ux_[l], uy_[l], uz_[l]));
+      rupture += bridge::wireBeamElasticEnergy(beams_.params(beam), bs, Vec3(ux_[l], uy_[l], uz_[l]));
       bs.shear_N.setZero(), bs.moment_N_m.setZero();
       beams_.setState(beam, bs);
       beams_.broken[beam] = 1;
@@ -354,7 +353,7 @@ void Links::evaluateBeams(const double* X, const double* Y, const double* Z, con
   if (measure)
     for (std::size_t b = b0; b < b1; ++b)
       if (!B.broken[b])
-        elastic += bridge::wireBeamElasticEnergy(B.params[b], B.state(b), Vec3(B.cx[b], B.cy[b], B.cz[b]).normalized());
+        elastic += bridge::wireBeamElasticEnergy(B.params(b), B.state(b), Vec3(B.cx[b], B.cy[b], B.cz[b]).normalized());
   s.link_elastic += elastic;
   s.link_plastic += plastic;
 }
@@ -374,7 +373,7 @@ void Links::evaluateBeam(std::size_t b, const double* X, const double* Y, const 
   const Vec3 ta = started ? Vec3(RX[i], RY[i], RZ[i]) : Vec3::Zero(),
              tb = started ? Vec3(RX[j], RY[j], RZ[j]) : Vec3::Zero();
   bridge::WireBeamState bs = B.state(b);
-  B.setActions(b, bridge::wireBeamStep(B.params[b], bs, c0, chord, ta, tb));
+  B.setActions(b, bridge::wireBeamStep(B.params(b), bs, c0, chord, ta, tb));
   B.setState(b, bs);
 }
 

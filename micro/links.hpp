@@ -147,9 +147,8 @@ class Links {
   static constexpr std::uint32_t kNoBeam = 0xffffffffu;
   std::vector<std::uint32_t> beam_of_;
   struct Beams {
-    std::vector<std::uint32_t> link, ka, kb;     // its link and that link's nodes
-    std::vector<bridge::WireBeamParams> params;  // (for the whole law)
-    std::vector<double> shear_k, bending_k;      // the same, side by side
+    std::vector<std::uint32_t> link, ka, kb;  // its link and that link's nodes
+    std::vector<double> shear_k, bending_k;   // its parameters, side by side for the vectorised pass
     std::vector<double> plastic_moment, length;
     std::vector<double> sx, sy, sz, mx, my, mz, dissipated;  // state: shear force, moment, plastic work
     std::vector<double> cx, cy, cz;                          // chord at the last evaluation (zero before the first)
@@ -159,6 +158,13 @@ class Links {
     std::vector<std::uint8_t> broken;  // its wire broke (as broken_ of its link)
     std::vector<std::uint8_t> slow;    // took the whole law at this evaluation
     std::size_t size() const { return link.size(); }
+    /// Beam b's parameters, for the whole law, its energy and its rupture.
+    bridge::WireBeamParams params(std::size_t b) const {
+      bridge::WireBeamParams p;
+      p.shear_N_m = shear_k[b], p.bending_N_m_rad = bending_k[b];
+      p.plastic_moment_N_m = plastic_moment[b], p.length_m = length[b];
+      return p;
+    }
     bridge::WireBeamState state(std::size_t b) const {
       return {Vec3(sx[b], sy[b], sz[b]), Vec3(mx[b], my[b], mz[b]), dissipated[b]};
     }
