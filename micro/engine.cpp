@@ -179,6 +179,7 @@ Engine::Engine(const Scene& scene, int threads) {
     b.offsets = principalFrameOffsets(props, spec.member_centers_m);
     b.q = (spec.orientation * props.principal_axes).normalized();
     b.x = spec.position_m + spec.orientation * props.center_m;
+    b.markListBuild();  // (as its members' x0, until the first build)
     b.fixed = spec.fixed;
     b.alpha = scene.materials[static_cast<std::size_t>(spec.material)].local_damping;
     if (!b.fixed) {
@@ -367,6 +368,7 @@ void Engine::updateNeighbours() {
   partitionWallCandidates();
   restoreContacts(saved);
   p_.x0 = p_.x, p_.y0 = p_.y, p_.z0 = p_.z;  // reference for the displacement test
+  for (RigidBlock& b : blocks_) b.markListBuild();
   need_rebuild_ = false;
   just_rebuilt_ = true;
   ++rebuilds_;
@@ -847,19 +849,24 @@ void Engine::checkStep(bool measure) {
   // that moved more than the smallest radius (and the skin) in it can pass
   // through a sphere with no step in contact (two spheres closing at
   // 1,000 m/s). (A move between half the skin and that is caught otherwise:
-  // a contact the list missed for a step shows as a deep overlap.)
+  // a contact the list missed for a step shows as a deep overlap.) The
+  // members' own x - x0 confirms (a block's moves come from its state, a
+  // rounding apart) and names the body.
   if (just_rebuilt_ && sum.max_d2 > tunnel_m_ * tunnel_m_) {
     double worst = -1.0;
-    std::string who;
+    std::size_t who = 0;
     for (std::size_t i = 0; i < n; ++i) {
       const double dx = p_.x[i] - p_.x0[i], dy = p_.y[i] - p_.y0[i], dz = p_.z[i] - p_.z0[i];
-      if (dx * dx + dy * dy + dz * dz > worst) worst = dx * dx + dy * dy + dz * dz, who = bodyName(p_.id[i]);
+      if (dx * dx + dy * dy + dz * dz > worst) worst = dx * dx + dy * dy + dz * dz, who = i;
     }
-    std::ostringstream m;
-    m << "tunnelling: " << who << " moved " << std::sqrt(worst) << " m in one step, more than the smallest radius ("
-      << tunnel_m_ << " m): bodies can pass through each other unseen; lower run.dt_s (or run.dt_safety)";
-    fail(StepStatus::Tunnelling, m.str());
-    return;
+    if (worst > tunnel_m_ * tunnel_m_) {
+      std::ostringstream m;
+      m << "tunnelling: " << bodyName(p_.id[who]) << " moved " << std::sqrt(worst)
+        << " m in one step, more than the smallest radius (" << tunnel_m_
+        << " m): bodies can pass through each other unseen; lower run.dt_s (or run.dt_safety)";
+      fail(StepStatus::Tunnelling, m.str());
+      return;
+    }
   }
   just_rebuilt_ = false;
   const double half = 0.5 * skin_m_;
@@ -926,22 +933,27 @@ void Engine::archive(bridge::StateArchive& a) {
   p_.archive(pa);
   {
     const std::size_t nb = blocks_.size();
-    std::vector<Vec3> x(nb), v(nb), L(nb), omega(nb);
-    std::vector<double> q(4 * nb);
+    std::vector<Vec3> x(nb), v(nb), L(nb), omega(nb), x0(nb);
+    std::vector<double> q(4 * nb), R0(9 * nb);
     for (std::size_t b = 0; b < nb; ++b) {
       const RigidBlock& k = blocks_[b];
-      x[b] = k.x, v[b] = k.v, L[b] = k.L, omega[b] = k.omega;
+      x[b] = k.x, v[b] = k.v, L[b] = k.L, omega[b] = k.omega, x0[b] = k.x0;
       q[4 * b] = k.q.w(), q[4 * b + 1] = k.q.x(), q[4 * b + 2] = k.q.y(), q[4 * b + 3] = k.q.z();
+      Eigen::Map<Eigen::Matrix3d> r0(&R0[9 * b]);
+      r0 = k.R0;
     }
     bridge::StateArchive ba = a.group("blocks");
     ba("x", x), ba("v", v), ba("L", L), ba("omega", omega), ba("q", q);
+    ba("x_at_list_build", x0), ba("rotation_at_list_build", R0);
     if (a.loading()) {
-      if (x.size() != nb || v.size() != nb || L.size() != nb || omega.size() != nb || q.size() != 4 * nb)
+      if (x.size() != nb || v.size() != nb || L.size() != nb || omega.size() != nb || q.size() != 4 * nb ||
+          x0.size() != nb || R0.size() != 9 * nb)
         throw std::invalid_argument("checkpoint: blocks of another number than this run's");
       for (std::size_t b = 0; b < nb; ++b) {
         RigidBlock& k = blocks_[b];
-        k.x = x[b], k.v = v[b], k.L = L[b], k.omega = omega[b];
+        k.x = x[b], k.v = v[b], k.L = L[b], k.omega = omega[b], k.x0 = x0[b];
         k.q = Eigen::Quaterniond(q[4 * b], q[4 * b + 1], q[4 * b + 2], q[4 * b + 3]);
+        k.R0 = Eigen::Map<const Eigen::Matrix3d>(&R0[9 * b]);
       }
     }
   }

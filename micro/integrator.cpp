@@ -217,14 +217,19 @@ SphereSums integrateBlock(RigidBlock& b, Particles& p, double dt, const Vec3& g,
   }
   s.finite = b.x.sum() + b.v.sum() + b.L.sum();
   const Eigen::Matrix3d R = b.q.toRotationMatrix();  // (once for all the members)
+  // A member's move since the list build, from the block's: no reading of
+  // the members' x0, scattered over the store.
+  const Eigen::Matrix3d turn = R - b.R0;
+  const Vec3 moved = b.x - b.x0;
   for (std::size_t k = 0; k < b.ids.size(); ++k) {
     const std::uint32_t i = p.slot[b.ids[k]];
-    const Vec3 arm = R * b.offsets[k];
+    const Vec3& o = b.offsets[k];
+    const Vec3 arm = R * o;
     const Vec3 vm = b.v + b.omega.cross(arm);
     p.x[i] = b.x.x() + arm.x(), p.y[i] = b.x.y() + arm.y(), p.z[i] = b.x.z() + arm.z();
     p.vx[i] = vm.x(), p.vy[i] = vm.y(), p.vz[i] = vm.z();
     p.wx[i] = b.omega.x(), p.wy[i] = b.omega.y(), p.wz[i] = b.omega.z();
-    s.max_d2 = std::max(s.max_d2, Vec3(p.x[i] - p.x0[i], p.y[i] - p.y0[i], p.z[i] - p.z0[i]).squaredNorm());
+    s.max_d2 = std::max(s.max_d2, (moved + turn * o).squaredNorm());
   }
   return s;
 }

@@ -28,6 +28,13 @@ struct RigidBlock {
   std::vector<Vec3> offsets;                                           ///< member centres in the principal frame (m)
   std::vector<std::uint32_t> ids;                                      ///< stable ids of the members
   bool fixed = false;
+  /// Where the block was at the last neighbour-list build (its members'
+  /// x0 are x0 + R0 offsets): a member's move since is (x - x0) + (R - R0)
+  /// offset, from the block's own state and the offsets already read.
+  Vec3 x0 = Vec3::Zero();
+  Eigen::Matrix3d R0 = Eigen::Matrix3d::Identity();
+  /// Takes the block's state now as the list build's reference.
+  void markListBuild() { x0 = x, R0 = q.toRotationMatrix(); }
 };
 
 /// Advances the free spheres [b, e) of `p` by one step under gravity g.
