@@ -331,7 +331,17 @@ TEST(MicroLab, ThePapersTrendsHoldOnASmallCell) {
   // carries less.)
   EXPECT_EQ(plain["energy"]["plastic_dissipation_J"].get<double>(), 0.0);
   EXPECT_GT(capped["energy"]["plastic_dissipation_J"].get<double>(), 0.0);
-  EXPECT_LT(capped["final_force_N"].get<double>(), 0.9 * plain["final_force_N"].get<double>());
+  // (what it carries over the loading, the work of the lid's force: a small
+  // cell's final force swings with one chain's collapse, the uncapped
+  // cell's from 7.8 to 5.1 kN over its last steps in one build)
+  const auto work = [&](const std::string& name) {
+    const gabion::bridge::H5Reader h(dir / name / "result.h5");
+    const auto f = h.read("/curves/axial/force_N"), d = h.read("/curves/axial/displacement_m");
+    double w = 0.0;
+    for (std::size_t k = 1; k < f.size(); ++k) w += 0.5 * (f[k] + f[k - 1]) * (d[k] - d[k - 1]);
+    return w;
+  };
+  EXPECT_LT(work("cc_flim"), 0.9 * work("cc"));
   EXPECT_LT(std::fabs(capped["energy"]["balance_rel_error"].get<double>()), 0.01);
 
   const std::string uc = R"(, "loading": {"velocity_m_s": 0.2, "strain": 0.15})";
