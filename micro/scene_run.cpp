@@ -120,6 +120,11 @@ double chooseDt(const Scene& scene, double critical, const std::string& file) {
   return dt;
 }
 
+void removeKeptEnd(const std::filesystem::path& outdir) {
+  std::error_code ec;
+  std::filesystem::remove_all(outdir / "checkpoint", ec);
+}
+
 bridge::RunOutcome runScene(Scene scene, const std::string& file, const bridge::RunContext& ctx,
                             const SceneRunHooks& hooks) {
   const std::size_t sphere_count = scene.spheres.size();
@@ -215,6 +220,7 @@ bridge::RunOutcome runScene(Scene scene, const std::string& file, const bridge::
   // checkpoints carry them on): a resumed run's wall time is the whole run's.
   double earlier_s = 0.0;
   auto t0 = std::chrono::steady_clock::now();
+  bool ended = false;  // the kind's test is over before the duration
 
   // The run's own state for a checkpoint: its series so far, its snapshot
   // times and link tables, the seconds stepped so far, and the kind's state.
@@ -232,6 +238,7 @@ bridge::RunOutcome runScene(Scene scene, const std::string& file, const bridge::
       wa("force_N", series.wall_force[w]), wa("position_m", series.wall_position[w]);
     }
     a("snapshot_time_s", snap_t);
+    if (a.has("ended")) a("ended", ended);  // (a kept end: micro/scene_run.hpp keep_end)
     bridge::StateArchive la = a.group("link_tables");
     la("per_snapshot", lines.dataset), la("count", lines.count), la("tables", tables);
     la("broken_in_table", broken_in_table);
@@ -247,17 +254,20 @@ bridge::RunOutcome runScene(Scene scene, const std::string& file, const bridge::
   if (found == Checkpoints::Found::Other)
     std::cerr << hooks.label << ": the checkpoint in " << checkpoints.dir().string()
               << " is of another run (case, threads or version): starting from the beginning\n";
+  bool at_end = false;  // the checkpoint is the end this run kept (keep_end): nothing to step
   if (resumed) {
     checkpoints.load(engine, log, loop_state);
     first = engine.steps();
-    std::cerr << hooks.label << ": continuing from the checkpoint of step " << first << " (t = " << engine.time()
-              << " s) in " << checkpoints.dir().string() << "\n";
+    at_end = ended || first >= steps;
+    std::cerr << hooks.label
+              << (at_end ? ": taking its end from the checkpoint of step "
+                         : ": continuing from the checkpoint of step ")
+              << first << " (t = " << engine.time() << " s) in " << checkpoints.dir().string() << "\n";
   } else {
     snapshot(0.0);
   }
   bridge::Progress progress(ctx, hooks.label);
   StepStatus status = StepStatus::Ok;
-  bool ended = false;    // the kind's test is over before the duration
   bool stopped = false;  // SIGINT or SIGTERM asked the run to stop
   t0 = std::chrono::steady_clock::now();
   for (long long n = first; n < steps && !ended; ++n) {
@@ -284,6 +294,8 @@ bridge::RunOutcome runScene(Scene scene, const std::string& file, const bridge::
   progress.finish();
   const bool ok = status == StepStatus::Ok && !stopped;
   if (!ok) snapshot(engine.time());
+  // (a stage's end, kept for the longer run it is part of)
+  if (ok && hooks.keep_end && !at_end) checkpoints.save(engine, log, loop_state);
 
   // Result files (the snapshots are in h5 already).
   {
@@ -395,7 +407,9 @@ bridge::RunOutcome runScene(Scene scene, const std::string& file, const bridge::
     writeCellFile(ctx.outdir / "cell.h5", scene, engine, summary);
   }
   if (ok && hooks.end) hooks.end(engine, scene);
-  if (!stopped) checkpoints.remove();  // (a run that ended, ok or failed, has nothing to continue)
+  // (a run that ended, ok or failed, has nothing to continue; a stage's end
+  // is kept for the run it is part of)
+  if (!stopped && !(ok && hooks.keep_end)) checkpoints.remove();
   if (stopped) {
     std::ostringstream m;
     m << "interrupted by " << bridge::signalName(bridge::interruptSignal()) << " at step " << engine.steps()

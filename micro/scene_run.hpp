@@ -5,6 +5,7 @@
 /// written to result.h5 / result.xdmf, and the summary every micro case
 /// kind shares (docs/micro.md, Output). The lab tests and the netting test
 /// are scenes with hooks: series of their own, an end of their own.
+#include <filesystem>
 #include <functional>
 #include <string>
 
@@ -39,7 +40,17 @@ struct SceneRunHooks {
   /// At the end of a run that did not fail, with the scene the engine was
   /// built from (e.g. to take its state, micro/cell/cell_file.hpp stateScene).
   std::function<void(const Engine&, const Scene&)> end;
+  /// A stage of a longer run (micro.structure's landing and settling): at
+  /// its end, if it did not fail, its state is saved as a checkpoint and
+  /// kept, so that the longer run, stopped in a later stage and resumed,
+  /// takes this stage's end from it (the same arrays, `end` called on the
+  /// engine loaded) instead of running it again. The kind removes it when
+  /// the whole run is over (removeKeptEnd).
+  bool keep_end = false;
 };
+
+/// Removes the end state a stage run into `outdir` kept (keep_end).
+void removeKeptEnd(const std::filesystem::path& outdir);
 
 /// The step to use: run.dt_s if given (refused above the critical step unless
 /// run.allow_dt_above_critical, the error naming `file`), else

@@ -464,6 +464,7 @@ bridge::RunOutcome runOne(const StructureCase& c, const Sample& sample, const br
     };
     SceneRunHooks hooks;
     hooks.label = "micro.structure settle";
+    hooks.keep_end = true;  // (a run stopped in its impact takes the landing's and settling's ends back)
     // (a settling in two runs, the cells laced between them, counts its
     // time from the first's start)
     double t_offset = 0.0;
@@ -589,6 +590,7 @@ bridge::RunOutcome runOne(const StructureCase& c, const Sample& sample, const br
     bridge::RunOutcome settled = runScene(std::move(s), file, sub, hooks);
     if (settled.status != bridge::RunOutcome::Status::Ok) {
       settled.message = "settling the structure: " + settled.message;
+      if (settled.status != bridge::RunOutcome::Status::Interrupted) removeKeptEnd(ctx.outdir / "landing");
       if (before_resume_s > 0.0)
         settled.results[bridge::kWallTimeBeforeResume] = bridge::wholeWallTime(before_resume_s, settled.results);
       return settled;
@@ -728,6 +730,8 @@ bridge::RunOutcome runOne(const StructureCase& c, const Sample& sample, const br
     }
   };
   bridge::RunOutcome out = runScene(std::move(scene), file, ctx, hooks);
+  if (out.status != bridge::RunOutcome::Status::Interrupted)
+    for (const char* stage : {"landing", "settle"}) removeKeptEnd(ctx.outdir / stage);
   nlohmann::json& r = out.results;
   if (!settle_results.is_null()) r["settle"] = settle_results;
   // (a resumed run's time is its stages' whole: bridge/run.hpp)

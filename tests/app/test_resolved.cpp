@@ -90,14 +90,16 @@ nlohmann::json struckCellResolved(const std::vector<int>& cells) {
 
 // Runs `gabion <args>` into `killed`, kills it (SIGKILL) once its settling
 // has written a checkpoint, and resumes it to the end: the resumed run
-// says it continued the settling from there.
-void killInTheSettlingAndResume(const std::string& args, const std::filesystem::path& killed) {
+// says it continued the settling from there (its output into `said`).
+void killInTheSettlingAndResume(const std::string& args, const std::filesystem::path& killed,
+                                std::string* said = nullptr) {
   const std::string out = gabion::testing::signalWhenThere(args, killed / "settle" / "checkpoint" / "state.h5", "KILL");
   ASSERT_NE(out.find("exit=137"), std::string::npos) << out;
   const auto resumed = runGabion("run --resume " + killed.string());
   ASSERT_EQ(resumed.exit_code, 0) << resumed.output;
   EXPECT_NE(resumed.output.find("micro.structure settle: continuing from the checkpoint"), std::string::npos)
       << resumed.output;
+  if (said) *said = resumed.output;
 }
 
 const char* kStructure = R"({"format": "gabion.case/1", "kind": "micro.structure", "cell": "cell/cell.h5",
@@ -345,6 +347,38 @@ TEST(ResolvedStructure, SettlesUntilAtRestAndResumesToTheSameWall) {
   const gabion::bridge::H5Reader a(dir / "whole" / "result.h5"), b(killed / "result.h5");
   for (const char* name : {"/bodies/position_m", "/curves/impact/force_N"})
     EXPECT_EQ(a.read(name), b.read(name)) << name;
+  EXPECT_FALSE(std::filesystem::exists(killed / "settle" / "checkpoint")) << "an ended run keeps no state";
+
+  // Stopped (SIGINT) in the impact, once the settling has ended: the
+  // settling's end is kept, and the resumed run takes it from there instead
+  // of settling again, then goes on with the impact: the same wall struck.
+  {
+    const auto late = dir / "late";
+    const std::string out = gabion::testing::signalWhenThere(args + late.string(), late / "result.h5.part", "INT");
+    ASSERT_NE(out.find("exit=130"), std::string::npos) << out;
+    ASSERT_TRUE(std::filesystem::exists(late / "settle" / "checkpoint" / "state.h5"))
+        << "the settling's end is kept while the run is not over";
+    const auto resumed = runGabion("run --resume " + late.string());
+    ASSERT_EQ(resumed.exit_code, 0) << resumed.output;
+    EXPECT_NE(resumed.output.find("micro.structure settle: taking its end from the checkpoint"), std::string::npos)
+        << resumed.output;
+    EXPECT_NE(resumed.output.find("micro.structure: continuing from the checkpoint"), std::string::npos)
+        << resumed.output;
+    EXPECT_FALSE(std::filesystem::exists(late / "settle" / "checkpoint")) << "removed once the run is over";
+    const nlohmann::json l = summaryOf(late);
+    EXPECT_EQ(l["settle"]["energy"], settle["energy"]);
+    EXPECT_EQ(l["settle"]["duration_s"], settle["duration_s"]);
+    // (its settling's time is the stopped run's, carried by the kept end)
+    EXPECT_GT(l["settle"]["wall_time_before_resume_s"].get<double>(), 0.0);
+    for (const char* key : {"peak_force_N", "max_penetration_m", "max_back_face_displacement_m"})
+      EXPECT_EQ(l[key], s[key]) << key;
+    const gabion::bridge::H5Reader c2(late / "result.h5");
+    for (const char* name : {"/bodies/position_m", "/curves/impact/force_N"})
+      EXPECT_EQ(a.read(name), c2.read(name)) << name;
+    EXPECT_EQ(gabion::bridge::H5Reader(dir / "whole" / "settle" / "result.h5").read("/bodies/position_m"),
+              gabion::bridge::H5Reader(late / "settle" / "result.h5").read("/bodies/position_m"))
+        << "the settling's result file, rewritten from its kept end";
+  }
 
   // A longest settling shorter than the shortest is refused, named.
   c["settle"] = {{"duration_s", 0.2}, {"longest_s", 0.1}};
@@ -414,15 +448,19 @@ TEST(ResolvedStructure, LacedCellsDragTheirNeighbourAlong) {
   EXPECT_LT(s1 - s0, q1 - q0) << "the struck cell, laced, moves back less";
   EXPECT_GT(s1 - s0, 0.1) << "the struck cell moves back";
 
-  // Killed in the settling after the lacing, resumed: the landing runs
-  // again, the settling goes on from its checkpoint, and the wall stands
-  // as the whole run's stood when the boulder came (struck for 0.01 s
-  // only: the impact's first snapshot and its forces over that time).
+  // Killed in the settling after the lacing, resumed: the landing is
+  // taken from the end it kept, the settling goes on from its checkpoint,
+  // and the wall stands as the whole run's stood when the boulder came
+  // (struck for 0.01 s only: the impact's first snapshot and its forces
+  // over that time).
   const auto killed = dir / "killed";
+  std::string said;
   ASSERT_NO_FATAL_FAILURE(
       killInTheSettlingAndResume("run -q " + (dir / "laced.json").string() + " -o " + killed.string() +
                                      " --set run.checkpoint_every_s=0.005 --set run.duration_s=0.01",
-                                 killed));
+                                 killed, &said));
+  EXPECT_NE(said.find("micro.structure landing: taking its end from the checkpoint"), std::string::npos) << said;
+  EXPECT_FALSE(std::filesystem::exists(killed / "landing" / "checkpoint")) << "an ended run keeps no state";
   EXPECT_EQ(summaryOf(killed)["lacing"], l);
   EXPECT_EQ(summaryOf(killed)["settle"]["energy"], laced["settle"]["energy"]);
   const gabion::bridge::H5Reader a(dir / "laced" / "result.h5"), b(killed / "result.h5");
