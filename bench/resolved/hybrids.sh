@@ -13,7 +13,8 @@
 #   bench/resolved/hybrids.sh [--out DIR] [--threads N]
 # About 15 minutes on 2 cores. Needs bench/resolved/run.sh's scenarios (their
 # hybrid_1/case.json) and, for the last run, in_place.sh's law.
-# A run whose summary.json exists is not run again (delete it to rerun).
+# A run whose summary.json exists is not run again (delete it to rerun);
+# one stopped by SIGTERM or Ctrl-C (its summary "interrupted") is resumed.
 set -euo pipefail
 here=$(cd "$(dirname "$0")" && pwd)
 root=$(cd "$here/../.." && pwd)

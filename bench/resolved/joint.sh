@@ -50,7 +50,8 @@
 # About 25 minutes on 2 cores, 20 more with the 54-cell wall. Needs the
 # pipeline's results (README, command 1) and bench/resolved/run.sh's
 # centre_10_m_s (its hybrid_1/case.json).
-# A run whose summary.json exists is not run again (delete it to rerun).
+# A run whose summary.json exists is not run again (delete it to rerun);
+# one stopped by SIGTERM or Ctrl-C (its summary "interrupted") is resumed.
 set -euo pipefail
 here=$(cd "$(dirname "$0")" && pwd)
 root=$(cd "$here/../.." && pwd)

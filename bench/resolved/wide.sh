@@ -46,7 +46,8 @@
 # 6.4 h on one thread with the longest settling); wall_210 needs a denser
 # cell to stand at rest (docs/resolved.md, What is left).
 # Needs the pipeline's cell and laws (README, command 1: results/pipeline).
-# A run whose summary.json exists is not run again (delete it to rerun).
+# A run whose summary.json exists is not run again (delete it to rerun);
+# one stopped by SIGTERM or Ctrl-C (its summary "interrupted") is resumed.
 set -euo pipefail
 here=$(cd "$(dirname "$0")" && pwd)
 root=$(cd "$here/../.." && pwd)
