@@ -14,7 +14,8 @@
 #   wall_150  2 x 15 x 5 cells: resolved, macro twin, and the hybrid within
 #             0.5 m through the depth (the 3 x 3 front cells around the aim
 #             and those behind them, 18 cells), as it is and with the macro
-#             nodes moving along x, y and z and the plates across x giving;
+#             nodes moving along x, y and z and the plates across x giving,
+#             and the latter within 0.25 m (10 cells);
 #   wall_210  2 x 15 x 7 cells: resolved, macro twin, and hybrids within
 #             0.25 and 0.36 m through the depth;
 #   wall_90   2 x 15 x 3 cells: resolved, macro twin, and the hybrid within
@@ -130,6 +131,8 @@ for w in $walls; do
       h=$out/wall_150/hybrid_0/case.json
       [ -f "$h" ] && run_once wall_150_more/whole_xyz_gives_0.5 "$h" --set resolve.macro_motion=xyz \
         --set resolve.across=gives
+      [ -f "$h" ] && run_once wall_150_more/whole_xyz_gives_0.25 "$h" --set resolve.within_m=0.25 \
+        --set resolve.macro_motion=xyz --set resolve.across=gives
       [ -f "$h" ] && $laced && run_once wall_150_more/plates_xyz_gives_0.5 "$h" --set resolve.macro_motion=xyz \
         --set resolve.across=gives --set resolve.lacing.to_plates=true
       ;;
