@@ -220,6 +220,7 @@ int finishRun(const Options& o, const gabion::bridge::CaseKind& kind, gabion::br
                            {"wall_time_s", estimate->wall_time_s},
                            {"memory_bytes", estimate->memory_bytes},
                            {"output_bytes", estimate->output_bytes},
+                           {"checkpoint_bytes", estimate->checkpoint_bytes},
                            {"partial", estimate->partial}};
   summary["case"] = nlohmann::json::parse(case_text);
   for (auto it = outcome.results.begin(); it != outcome.results.end(); ++it) summary[it.key()] = it.value();
@@ -321,7 +322,7 @@ int commandRun(Options& o, gabion::app::RankPool* workers) {
                            "); reduce the case, or run it anyway with --force");
     if (!why.empty() || estimate->wall_time_s > gabion::bridge::kAnnounceWallTimeS ||
         estimate->memory_bytes > gabion::bridge::kAnnounceBytes ||
-        estimate->output_bytes > gabion::bridge::kAnnounceBytes)
+        estimate->output_bytes + estimate->checkpoint_bytes > gabion::bridge::kAnnounceBytes)
       std::cerr << "gabion: this run: " << gabion::bridge::describe(*estimate) << "\n";
   }
   makeOutdir(outdir.string());

@@ -42,6 +42,8 @@ Estimate microRun(double bodies, double steps, double snapshots, double snapshot
   e.memory_bytes = kBaseBytes + kMicroBytesPerBody * bodies;
   // (the series: about 40 columns of doubles)
   e.output_bytes = kMicroSnapshotBytesPerBody * snapshot_records * snapshots + 40.0 * 8.0 * series;
+  // (saved on a signal if not before: the state, and the rows so far, at most the run's)
+  e.checkpoint_bytes = kMicroCheckpointBytesPerBody * bodies + e.output_bytes;
   e.wall_time_s =
       microSecondsPerBodyStep(bodies) * e.body_steps + microSecondsPerLinkSubstep(bodies) * link_substeps * steps;
   return e;
@@ -64,6 +66,7 @@ void addRun(Estimate& to, const Estimate& run) {
   to.snapshots += run.snapshots;
   to.memory_bytes = std::max(to.memory_bytes, run.memory_bytes);
   to.output_bytes += run.output_bytes;
+  to.checkpoint_bytes = std::max(to.checkpoint_bytes, run.checkpoint_bytes);
   to.wall_time_s += run.wall_time_s;
   to.partial = to.partial || run.partial;
 }
@@ -108,6 +111,7 @@ std::string describe(const Estimate& e) {
   if (e.runs > 1) os << " over " << e.runs << " runs";
   os << ", up to " << duration(e.wall_time_s) << " on one thread, " << bytes(e.memory_bytes) << " of memory, "
      << bytes(e.output_bytes) << " of files";
+  if (e.checkpoint_bytes > 0.0) os << " (and up to " << bytes(e.checkpoint_bytes) << " of checkpoints while it runs)";
   if (e.partial) os << " (and what cannot be costed before it runs)";
   return os.str();
 }
@@ -123,9 +127,11 @@ std::string overLimits(const Estimate& e, const std::filesystem::path& outdir) {
   std::filesystem::path probe = outdir;
   while (!probe.empty() && !std::filesystem::exists(probe, ec)) probe = probe.parent_path();
   const auto space = std::filesystem::space(probe.empty() ? std::filesystem::path(".") : probe, ec);
-  if (!ec && e.output_bytes > static_cast<double>(space.available))
-    why << (why.tellp() > 0 ? "; " : "") << "it writes " << bytes(e.output_bytes) << " of files, and the disk of "
-        << outdir.string() << " has " << bytes(static_cast<double>(space.available)) << " free";
+  const double disk = e.output_bytes + e.checkpoint_bytes;
+  if (!ec && disk > static_cast<double>(space.available))
+    why << (why.tellp() > 0 ? "; " : "") << "it writes " << bytes(e.output_bytes) << " of files"
+        << (e.checkpoint_bytes > 0.0 ? " and up to " + bytes(e.checkpoint_bytes) + " of checkpoints" : "")
+        << ", and the disk of " << outdir.string() << " has " << bytes(static_cast<double>(space.available)) << " free";
   return why.str();
 }
 

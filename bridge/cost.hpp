@@ -17,6 +17,11 @@ namespace gabion::bridge {
 constexpr double kMicroSecondsPerBodyStep = 2.8e-8;
 constexpr double kMicroBytesPerBody = 1000.0;
 constexpr double kMicroSnapshotBytesPerBody = 100.0;
+/// Fine DEM: bytes per body of a checkpoint's engine state (bodies,
+/// contact histories, neighbour list, links), on top of the result rows it
+/// copies: 174 MB for the 494,911 bodies of the 54-cell wall laced (351 a
+/// body), rounded up (docs/getting-started.md, What a run will cost).
+constexpr double kMicroCheckpointBytesPerBody = 400.0;
 /// Fine DEM: seconds per link per sub-step of the link nodes, on one thread,
 /// on top of the body-steps (a cell's 1,578 links at 8 sub-steps: 0.28 ms a
 /// step of its confined compression).
@@ -54,18 +59,19 @@ Estimate microRun(double bodies, double steps, double snapshots, double snapshot
 /// `samples` samples of its 14 series.
 Estimate macroRun(double cells, double steps, double samples);
 /// Adds a run that follows `to` in the same process: steps, body-steps,
-/// runs, snapshots, files and time add up; bodies and memory are the larger.
+/// runs, snapshots, files and time add up; bodies, memory and checkpoints
+/// are the larger (a run removes its checkpoint as it ends).
 void addRun(Estimate& to, const Estimate& run);
 /// `runs` copies of `one`, run in turn.
 Estimate times(const Estimate& one, double runs);
 
 /// "7,920 bodies, at most 48,000 steps, about 16 s on one thread, 40 MB of
-/// memory, 120 MB of files".
+/// memory, 120 MB of files (and up to 9 MB of checkpoints while it runs)".
 std::string describe(const Estimate& e);
 
 /// The limits: a run is refused (unless --force) past one day on one thread,
-/// past 80 % of the machine's memory, or with more files than the free
-/// space of the output folder's disk.
+/// past 80 % of the machine's memory, or with more files and checkpoints
+/// than the free space of the output folder's disk.
 constexpr double kMaxWallTimeS = 24.0 * 3600.0;
 constexpr double kMaxMemoryFraction = 0.8;
 /// Beyond these the run says what it will cost before it starts.

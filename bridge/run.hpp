@@ -109,8 +109,13 @@ struct Estimate {
   double snapshots = 0.0;     ///< body snapshots or series samples written, over its runs
   double memory_bytes = 0.0;  ///< peak memory of the process
   double output_bytes = 0.0;  ///< result files
-  double wall_time_s = 0.0;   ///< on one thread, at the rates measured on the reference machine
-  bool partial = false;       ///< some of its work cannot be costed before it runs (a pipeline's lab tests)
+  /// the checkpoints on disk at one time while it runs (a micro run's state
+  /// and the result rows written so far, micro/checkpoint.hpp; removed as
+  /// its runs end): the largest run's, or a structure's stages' together,
+  /// whose landing and settling keep their ends until its impact is over
+  double checkpoint_bytes = 0.0;
+  double wall_time_s = 0.0;  ///< on one thread, at the rates measured on the reference machine
+  bool partial = false;      ///< some of its work cannot be costed before it runs (a pipeline's lab tests)
 };
 
 /// The results' key with the wall-clock seconds that runs stopped by a

@@ -345,16 +345,21 @@ nlohmann::json scatterOf(const std::vector<double>& v) {
 
 }  // namespace
 
-std::optional<bridge::Estimate> estimateReplicates(const LabSetup& setup, std::size_t variants, const ScenePlan& plan) {
+std::optional<bridge::Estimate> estimateReplicates(const LabSetup& setup, std::size_t variants, const ScenePlan& plan,
+                                                   bool stages_keep_ends) {
   const CellSource& first = setup.cells.front();
   if (!first.generate.empty()) return std::nullopt;
   const Sample sample = loadSample(first.file, setup);
   bridge::Estimate e;
+  double kept = 0.0;  // (the stages' checkpoints, all on disk at the last stage's end)
   for (std::size_t v = 0; v < variants; ++v) {
     const Scene scene = plan(sample, v);
     const double dt = scene.run.dt_s > 0.0 ? scene.run.dt_s : chooseDt(scene, criticalTimeStep(scene), setup.file);
-    bridge::addRun(e, sceneEstimate(scene, dt));
+    const bridge::Estimate one = sceneEstimate(scene, dt);
+    kept += one.checkpoint_bytes;
+    bridge::addRun(e, one);
   }
+  if (stages_keep_ends) e.checkpoint_bytes = kept;
   return bridge::times(e, static_cast<double>(setup.cells.size()));
 }
 

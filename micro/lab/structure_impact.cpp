@@ -437,6 +437,22 @@ bridge::RunOutcome runOne(const StructureCase& c, const Sample& sample, const br
   const std::size_t laid_out = layout.blocks_per_cell > 0 ? layout.scene.blocks.size() / layout.blocks_per_cell : 0;
   nlohmann::json settle_results;
   double before_resume_s = 0.0;  // (the seconds the stopped runs of the landing and the settling stepped)
+  // The landing's and settling's kept ends go once the run is over, ended,
+  // failed or thrown out of (an input found wrong once landed); only a run
+  // stopped by a signal keeps them, to take them back when resumed.
+  struct KeptEnds {
+    std::filesystem::path dir;
+    bool stopped = false;
+    KeptEnds(const KeptEnds&) = delete;
+    KeptEnds& operator=(const KeptEnds&) = delete;
+    ~KeptEnds() {
+      if (!stopped)
+        for (const char* stage : {"landing", "settle"}) removeKeptEnd(dir / stage);
+    }
+  } kept{ctx.outdir};
+  const auto stoppedBy = [&kept](const bridge::RunOutcome& o) {
+    if (o.status == bridge::RunOutcome::Status::Interrupted) kept.stopped = true;
+  };
   // The struck cell (the front cell the aim point is on, laid out): the
   // boulder's penetration less that cell's own move is its indentation.
   const int struck = [&] {
@@ -561,6 +577,7 @@ bridge::RunOutcome runOne(const StructureCase& c, const Sample& sample, const br
       land.outdir = ctx.outdir / "landing";
       std::filesystem::create_directories(land.outdir);
       bridge::RunOutcome landed = runScene(std::move(landing), file, land, first);
+      stoppedBy(landed);
       if (landed.status != bridge::RunOutcome::Status::Ok) {
         landed.message = "landing the structure before its lacing: " + landed.message;
         return landed;
@@ -588,9 +605,9 @@ bridge::RunOutcome runOne(const StructureCase& c, const Sample& sample, const br
       s = std::move(rest);
     }
     bridge::RunOutcome settled = runScene(std::move(s), file, sub, hooks);
+    stoppedBy(settled);
     if (settled.status != bridge::RunOutcome::Status::Ok) {
       settled.message = "settling the structure: " + settled.message;
-      if (settled.status != bridge::RunOutcome::Status::Interrupted) removeKeptEnd(ctx.outdir / "landing");
       if (before_resume_s > 0.0)
         settled.results[bridge::kWallTimeBeforeResume] = bridge::wholeWallTime(before_resume_s, settled.results);
       return settled;
@@ -730,8 +747,7 @@ bridge::RunOutcome runOne(const StructureCase& c, const Sample& sample, const br
     }
   };
   bridge::RunOutcome out = runScene(std::move(scene), file, ctx, hooks);
-  if (out.status != bridge::RunOutcome::Status::Interrupted)
-    for (const char* stage : {"landing", "settle"}) removeKeptEnd(ctx.outdir / stage);
+  stoppedBy(out);
   nlohmann::json& r = out.results;
   if (!settle_results.is_null()) r["settle"] = settle_results;
   // (a resumed run's time is its stages' whole: bridge/run.hpp)
@@ -875,20 +891,23 @@ std::optional<bridge::Estimate> estimateRuns(const StructureCase& c, const std::
   // (a settling laced once landed is two runs: the landing, to lacing.at_s, then the rest)
   const bool landing = c.settle_s > 0.0 && c.lacing && c.lacing->at_s > 0.0;
   const std::size_t runs = c.settle_s > 0.0 ? (landing ? 3 : 2) : 1;
-  return estimateReplicates(c.setup, runs, [&](const Sample& s, std::size_t run) {
-    const Layout l = buildLayout(c, s, part);
-    std::size_t boulder = 0;
-    if (run == 0) return impactScene(c, l.scene, s, aimPoint(c, l), file, boulder);
-    Scene settle = settleScene(c, l, s, part);
-    if (landing) {
-      const double longest = settle.run.duration_s, at = c.lacing->at_s;
-      if (run == 2)
-        settlingPart(settle.run, 0.0, at, true);
-      else
-        settlingPart(settle.run, at, longest, false);
-    }
-    return settle;
-  });
+  return estimateReplicates(
+      c.setup, runs,
+      [&](const Sample& s, std::size_t run) {
+        const Layout l = buildLayout(c, s, part);
+        std::size_t boulder = 0;
+        if (run == 0) return impactScene(c, l.scene, s, aimPoint(c, l), file, boulder);
+        Scene settle = settleScene(c, l, s, part);
+        if (landing) {
+          const double longest = settle.run.duration_s, at = c.lacing->at_s;
+          if (run == 2)
+            settlingPart(settle.run, 0.0, at, true);
+          else
+            settlingPart(settle.run, at, longest, false);
+        }
+        return settle;
+      },
+      /*stages_keep_ends=*/true);
 }
 
 std::optional<bridge::Estimate> estimate(const bridge::JsonDocument& doc) {

@@ -358,6 +358,19 @@ TEST(ResolvedStructure, SettlesUntilAtRestAndResumesToTheSameWall) {
     ASSERT_NE(out.find("exit=130"), std::string::npos) << out;
     ASSERT_TRUE(std::filesystem::exists(late / "settle" / "checkpoint" / "state.h5"))
         << "the settling's end is kept while the run is not over";
+    {
+      // The checkpoints on disk then, the settling's kept end and the
+      // impact's own, are within the estimate's, which counts every
+      // stage's checkpoint as it would be at the stage's end (the impact's
+      // here holds its state and no rows yet).
+      double on_disk = 0.0;
+      for (const auto& d : {late / "settle" / "checkpoint", late / "checkpoint"})
+        for (const auto& f : std::filesystem::recursive_directory_iterator(d))
+          if (f.is_regular_file()) on_disk += static_cast<double>(f.file_size());
+      const double announced = s["estimate"]["checkpoint_bytes"].get<double>();
+      EXPECT_GE(announced, on_disk);
+      EXPECT_LE(announced, 3.0 * on_disk);
+    }
     const auto resumed = runGabion("run --resume " + late.string());
     ASSERT_EQ(resumed.exit_code, 0) << resumed.output;
     EXPECT_NE(resumed.output.find("micro.structure settle: taking its end from the checkpoint"), std::string::npos)
