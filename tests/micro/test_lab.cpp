@@ -90,12 +90,18 @@ TEST(MicroLab, TheFourTestsRunOnASmallCellAndKeepTheirBalances) {
     EXPECT_LT(std::fabs(r["energy"]["balance_rel_error"].get<double>()), 0.01);
     // Vertical balance at the end, the lateral plates frictionless: the base
     // carries the lid's force and the cell's weight, to within the cell's
-    // inertia (a kinetic/work ratio of a few per cent).
+    // inertia. Over the last 50 samples (the last tenth of the loading) the
+    // cell's momentum changes little and its inertia averages out; at one
+    // sample it need not: natively a slip at the last one takes 114 N off
+    // the base's excess over the lid, and 15 N over the 50.
     const gabion::bridge::H5Reader h(dir / "cc" / "result.h5");
     const auto lid = h.read("/curves/axial/force_N"), base = h.read("/curves/axial/base_force_N");
     const double weight = 9.81 * r["mass_kg"].get<double>();
-    EXPECT_NEAR(base.back() - lid.back(), weight, 0.05 * lid.back())
-        << "lid " << lid.back() << ", base " << base.back();
+    ASSERT_GE(lid.size(), 100u);
+    double excess = 0.0, pressed = 0.0;
+    for (std::size_t k = lid.size() - 50; k < lid.size(); ++k)
+      excess += (base[k] - lid[k]) / 50.0, pressed += lid[k] / 50.0;
+    EXPECT_NEAR(excess, weight, 0.05 * pressed) << "lid " << pressed << ", base " << pressed + excess;
     EXPECT_EQ(h.read("/curves/lateral/axial_force_N"), lid);
     EXPECT_TRUE(std::filesystem::exists(dir / "cc" / "cc_curve.png"));
   }
