@@ -35,9 +35,12 @@ struct Plan {
   macro::ImpactCase c;
   macro::Structure structure;  ///< the macro part: no node for a resolved cell
   double within_m = 0.0;
+  double behind_within_m =
+      0.0;  ///< `resolve.behind_within_m`: the reach of the layers behind the front one (depth "whole")
   bool whole_depth = false;    ///< `resolve.depth` "whole": every cell behind a resolved front cell too
   bool cells_below = false;    ///< `resolve.below` "cells": every cell under a resolved one too, down to the base
   bool below_gives = false;    ///< `resolve.below` "gives": a plate over a macro cell gives as its top would, settling
+  bool lid_below = false;      ///< `resolve.below` "lid": a plate over a macro cell at the height of a cell's lid
   bool weight_above = false;   ///< `resolve.above` "weight": an upper plate presses with the cells above, settling
   bool beside_follow = false;  ///< `resolve.beside` "follow": the plates beside come down with their cell, settling
   bool across_gives = false;  ///< `resolve.across` "gives": the plates across x give as their macro cells would, struck
@@ -78,8 +81,23 @@ Plan plan(const JsonDocument& doc) {
   const JsonReader rs = root.object("resolve");
   p.within_m = rs.number("within_m", 0.0, Check::NonNegative);
   p.whole_depth = rs.choice("depth", {"reach", "whole"}, "reach") == "whole";
-  const std::string below = rs.choice("below", {"plates", "cells", "gives"}, "plates");
+  p.behind_within_m = p.within_m;
+  if (rs.has("behind_within_m")) {
+    if (!p.whole_depth)
+      rs.fail("behind_within_m", "a reach of its own for the layers behind the front one needs depth \"whole\"");
+    p.behind_within_m = rs.number("behind_within_m", p.within_m, Check::NonNegative);
+    // (a cell behind reached and the one in front of it not: a resolved cell
+    // behind a macro node, which the macro part does not couple)
+    if (p.behind_within_m > p.within_m) {
+      std::ostringstream m;
+      m << "the layers behind reach at most as far as the front one (within_m " << p.within_m
+        << "): a resolved cell behind a macro cell is not coupled";
+      rs.fail("behind_within_m", m.str());
+    }
+  }
+  const std::string below = rs.choice("below", {"plates", "cells", "gives", "lid"}, "plates");
   p.cells_below = below == "cells";
+  p.lid_below = below == "lid";
   p.below_gives = below == "gives";
   p.weight_above = rs.choice("above", {"fixed", "weight"}, "fixed") == "weight";
   p.beside_follow = rs.choice("beside", {"fixed", "follow"}, "fixed") == "follow";
@@ -106,7 +124,8 @@ Plan plan(const JsonDocument& doc) {
     if (off != 0) root.fail("structure", "a hybrid structure has a plane front face (no front_offset_cells)");
 
   // The aim, on the whole structure; then which cells are within reach
-  // (with depth "whole": which columns, by their front cell).
+  // (with depth "whole": which columns, by their front cell; the layers
+  // behind the front one within their own reach, behind_within_m).
   const macro::Structure whole = macro::buildCaseStructure(doc, p.c);
   macro::resolveAims(doc, p.c, whole);
   const int nx = whole.nx, ny = whole.ny, nz = whole.nz;
@@ -114,7 +133,8 @@ Plan plan(const JsonDocument& doc) {
   for (int k = 0; k < nz; ++k)
     for (int j = 0; j < ny; ++j)
       for (int i = 0; i < nx; ++i)
-        if (distanceToCell(p.whole_depth ? 0 : i, j, k, e, b.aim_y_m, b.aim_z_m) <= p.within_m)
+        if (distanceToCell(p.whole_depth ? 0 : i, j, k, e, b.aim_y_m, b.aim_z_m) <=
+            (i > 0 ? p.behind_within_m : p.within_m))
           p.resolved.push_back(i + nx * (j + ny * k));
   // With below "cells", a resolved cell stands on resolved cells down to
   // the base, as in the wall, not on the plate of a macro cell that does
@@ -209,8 +229,9 @@ Plan plan(const JsonDocument& doc) {
       {"boulder", boulder},
       {"rebound_restitution", p.c.run.rebound_restitution}};
   for (const auto& [key, value] : root.raw("resolve").items()) {
-    if (key == "cell" || key == "within_m" || key == "depth" || key == "below" || key == "above" || key == "beside" ||
-        key == "across" || key == "joint" || key == "joint_tiles" || key == "macro_motion")
+    if (key == "cell" || key == "within_m" || key == "behind_within_m" || key == "depth" || key == "below" ||
+        key == "above" || key == "beside" || key == "across" || key == "joint" || key == "joint_tiles" ||
+        key == "macro_motion")
       continue;
     if (key == "structure" || key == "boulder")
       rs.fail(key, "the hybrid's structure and boulder are the macro case's: give them there");
@@ -497,6 +518,7 @@ StructurePart partOf(const Plan& p, Coupler* coupler) {
   part.cells = p.resolved;
   part.faces = p.faces;
   part.beside_follow = p.beside_follow;
+  part.lid_plates = p.lid_below;
   if (coupler) {
     part.drive = [coupler](double t, double dt, const std::vector<Vec3>& f, std::vector<Vec3>& d) {
       coupler->drive(t, dt, f, d);
@@ -532,7 +554,8 @@ bridge::RunOutcome run(const JsonDocument& doc, const bridge::RunContext& ctx) {
   json h = coupler->report(energy);
   h["within_m"] = p.within_m;
   h["depth"] = p.whole_depth ? "whole" : "reach";
-  h["below"] = p.cells_below ? "cells" : p.below_gives ? "gives" : "plates";
+  if (p.whole_depth) h["behind_within_m"] = p.behind_within_m;
+  h["below"] = p.cells_below ? "cells" : p.below_gives ? "gives" : p.lid_below ? "lid" : "plates";
   h["above"] = p.weight_above ? "weight" : "fixed";
   h["beside"] = p.beside_follow ? "follow" : "fixed";
   h["across"] = p.across_gives ? "gives" : "fixed";
@@ -564,8 +587,10 @@ bridge::RunOutcome run(const JsonDocument& doc, const bridge::RunContext& ctx) {
   std::ostringstream a;
   a.precision(3);
   a << "hybrid: " << p.resolved.size() << " of " << p.structure.nx * p.structure.ny * p.structure.nz
-    << " cells resolved (within " << p.within_m << " m of the aim" << (p.whole_depth ? ", through the depth" : "")
-    << (p.cells_below ? ", and the cells below them" : "") << (p.below_gives ? ", the plates under them giving" : "")
+    << " cells resolved (within " << p.within_m << " m of the aim" << (p.whole_depth ? ", through the depth" : "");
+  if (p.whole_depth && p.behind_within_m != p.within_m) a << ", within " << p.behind_within_m << " m behind the front";
+  a << (p.cells_below ? ", and the cells below them" : "") << (p.below_gives ? ", the plates under them giving" : "")
+    << (p.lid_below ? ", the plates under them at the lids below" : "")
     << (p.weight_above ? ", the weight of the cells above on them" : "")
     << (p.beside_follow ? ", the plates beside coming down with them" : "")
     << (p.across_gives ? ", the plates across x giving" : "") << (p.joints ? ", joints closing at the x faces" : "")

@@ -168,10 +168,26 @@ struct Layout {
   std::size_t first_plate = 0;  ///< the scene's wall of a part's first face (StructurePart::faces, in order)
 };
 
+}  // namespace
+
+double lidClearance(const Sample& sample) {
+  const Scene& cell = sample.scene;
+  double node_radius = 0.0;
+  for (const LinkSpec& k : cell.links)
+    node_radius = std::max({node_radius, cell.spheres[k.a].radius_m, cell.spheres[k.b].radius_m});
+  if (node_radius <= 0.0) return 0.0;  // (no netting: no lid)
+  // (the lid's plane as the lacing finds it: the median of the nodes nearest the top)
+  const double lid = cellEdges(cell, node_radius).plane[static_cast<std::size_t>(faceIndex(2, 1))] + node_radius;
+  return std::max(0.0, sample.hi.z() - lid);
+}
+
+namespace {
+
 /// The plate on a face of a resolved cell (StructurePart::Face), driven by
 /// the coupled model: the cell's extent there, its normal into the cell, of
 /// the netting's material (it stands for the next cell's netting).
-WallSpec facePlate(const StructurePart::Face& f, const StructureCase& c, const Layout& l, const Sample& sample) {
+WallSpec facePlate(const StructurePart::Face& f, const StructureCase& c, const Layout& l, const Sample& sample,
+                   double lowered_m) {
   const int idx[3] = {f.cell % c.nx, (f.cell / c.nx) % c.ny, f.cell / (c.nx * c.ny)};
   const int a = f.axis, b = (a + 1) % 3, d = (a + 2) % 3;
   // (a tile's centre: its place (u, v) of tiles x tiles across the face)
@@ -180,6 +196,7 @@ WallSpec facePlate(const StructurePart::Face& f, const StructureCase& c, const L
   centre[a] = (idx[a] + (f.side > 0 ? 1.0 : 0.0)) * l.pitch[a];
   centre[b] = (idx[b] + in_u) * l.pitch[b];
   centre[d] = (idx[d] + in_v) * l.pitch[d];
+  if (a == 2 && f.side < 0) centre[2] -= lowered_m;  // (a plate under the cell at the lid below, lid_plates)
   WallSpec w;
   w.name = "interface_" + std::to_string(f.cell) + "_" + "xyz"[a] + (f.side > 0 ? "_plus" : "_minus");
   if (f.tiles > 1) w.name += "_tile_" + std::to_string(f.tile % f.tiles) + "_" + std::to_string(f.tile / f.tiles);
@@ -241,8 +258,10 @@ Layout buildLayout(const StructureCase& c, const Sample& sample, const Structure
   if (c.fixed_back)
     s.walls.push_back(fixedWall("back", Vec3(c.nx * out.pitch.x(), 0, 0), -Vec3::UnitX(), sample.plate_material));
   out.first_plate = s.walls.size();
-  if (part)
-    for (const StructurePart::Face& f : part->faces) s.walls.push_back(facePlate(f, c, out, sample));
+  if (part) {
+    const double lowered = part->lid_plates ? lidClearance(sample) : 0.0;
+    for (const StructurePart::Face& f : part->faces) s.walls.push_back(facePlate(f, c, out, sample, lowered));
+  }
   return out;
 }
 
@@ -632,6 +651,7 @@ bridge::RunOutcome runOne(const StructureCase& c, const Sample& sample, const br
     if (c.at_rest_rms_m_s > 0.0) settle_results["at_rest_rms_speed_m_s"] = c.at_rest_rms_m_s;
     if (c.settle_local_damping) settle_results["local_damping"] = *c.settle_local_damping;
     settle_results["duration_s"] = settled_at;
+    if (part && part->lid_plates) settle_results["plates_under_lowered_m"] = lidClearance(sample);
     settle_results["until_at_rest"] = c.until_at_rest;
     // How far the stack came down, and the struck cell's blocks: the aim,
     // set on the laid-out wall, meets the settled cell this far above its

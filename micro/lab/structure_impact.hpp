@@ -21,6 +21,7 @@
 #include "bridge/run.hpp"
 #include "bridge/state_archive.hpp"
 #include "micro/engine.hpp"
+#include "micro/lab/lab_setup.hpp"
 
 namespace gabion::micro::lab {
 
@@ -63,6 +64,11 @@ struct StructurePart {
     int tile = 0;
   };
   std::vector<Face> faces;
+  /// The plates under the resolved cells (lower faces, on macro cells)
+  /// stand at the height of a cell's lid, lidClearance under the cell's
+  /// extent, where a cell above comes to rest on a real cell; false: at
+  /// the extent, which one upright block under the lid sets.
+  bool lid_plates = false;
   /// While the part settles, the plates beside its cells (x and y faces)
   /// come down with the cell they touch (its blocks' mean height), as the
   /// macro cell they stand for would sink beside it; false: they stand still.
@@ -87,6 +93,15 @@ struct StructurePart {
   /// then ends `perforated`, with this message.
   std::function<std::string()> failure;
 };
+
+/// How far a cell's lid lies under its extent (m): the extent's top less
+/// the lid's top, the plane of its netting's top face (the median height of
+/// the nodes nearest it, as the lacing finds its faces: cellEdges) plus a
+/// node's radius; 0 for a cell without a netting. The clearance a cell
+/// stacked on it falls through before it rests on the lid, one upright
+/// block under the lid setting the extent (docs/resolved.md, Why a stacked
+/// cell sinks).
+double lidClearance(const Sample& sample);
 
 /// Checks a micro.structure document run as `part` (the cell file, the
 /// scene with the part's plates), as `gabion check` would.

@@ -663,6 +663,24 @@ TEST(HybridStructure, StruckCellResolvedTheCellBehindAMacroNode) {
   wide["resolve"]["depth"] = "whole";
   EXPECT_GT(reach, 0.0);
   EXPECT_DOUBLE_EQ(bodies(wide) - 1.0, 2.0 * (reach - 1.0));
+  // The layers behind with a reach of their own: on a 2 x 3 x 1 wall struck
+  // on its middle front cell, the front row within 0.25 m (3 cells) and,
+  // behind it, the struck cell's alone (4 of 6 cells, against 3 within
+  // reach); behind reaching further than the front, or without depth
+  // "whole", is refused.
+  nlohmann::json row = c;
+  row["structure"]["cells"] = {2, 3, 1};
+  row["resolve"]["within_m"] = 0.25;
+  const double front_row = bodies(row);
+  row["resolve"]["depth"] = "whole";
+  row["resolve"]["behind_within_m"] = 0.0;
+  EXPECT_DOUBLE_EQ(bodies(row) - 1.0, 4.0 / 3.0 * (front_row - 1.0));
+  bad = row;
+  bad["resolve"]["behind_within_m"] = 0.5;
+  refused(bad, "/resolve/behind_within_m");
+  bad = row;
+  bad["resolve"]["depth"] = "reach";
+  refused(bad, "/resolve/behind_within_m");
   // Below: on a 2 x 1 x 2 wall struck on its upper front cell, the cell under
   // it is resolved too (2 cells, against 1); on a wall one cell high,
   // nothing is below.
@@ -798,6 +816,32 @@ TEST(HybridStructure, StruckCellResolvedTheCellBehindAMacroNode) {
     EXPECT_NEAR(gives.force, 1e5 * gives.descent + weight * gives.speed / 0.5, 0.02 * weight)
         << "descent " << gives.descent << " speed " << gives.speed;
     EXPECT_EQ(lowerPlate("plates").end, 0.0);
+    // With below "lid" the plate stands where the lid of the cell below
+    // would, lidClearance under that cell's extent (settle/
+    // plates_under_lowered_m), and stays there: the cell on it comes down
+    // further than on a plate at the extent, towards the lid (in the
+    // settling's 0.05 s, by at least half of what it can fall freely in
+    // that time, or of the clearance where that is less).
+    const auto plateHeight = [&](const std::filesystem::path& out) {
+      const std::vector<double> z =
+          gabion::bridge::H5Reader(out / "settle" / "result.h5").read("/series/walls/interface_1_z_minus/position_m");
+      return std::make_pair(z.size() >= 6 ? z[2] : NAN, z.size() >= 6 ? z[z.size() - 1] : NAN);
+    };
+    const std::filesystem::path at_extent = dir / "stack_plates";  // (lowerPlate("plates")'s run)
+    const nlohmann::json extent_summary = summaryOf(at_extent);
+    const auto [at_lid, lid_summary] = settledVariant(col, "below", "lid", "stack");
+    ASSERT_TRUE(lid_summary["settle"].contains("plates_under_lowered_m"));
+    EXPECT_FALSE(extent_summary["settle"].contains("plates_under_lowered_m"));
+    const double lowered = lid_summary["settle"]["plates_under_lowered_m"].get<double>();
+    EXPECT_GT(lowered, 0.005) << "the small cell's lid is uneven too";
+    EXPECT_LT(lowered, 0.5 * 0.3) << "less than half the cell";
+    const auto [extent_start, extent_end] = plateHeight(at_extent);
+    const auto [lid_start, lid_end] = plateHeight(at_lid);
+    EXPECT_NEAR(extent_start - lid_start, lowered, 1e-12);
+    EXPECT_EQ(lid_end, lid_start) << "the plate stands still";
+    const double further = lid_summary["settle"]["struck_cell_drop_m"].get<double>() -
+                           extent_summary["settle"]["struck_cell_drop_m"].get<double>();
+    EXPECT_GT(further, 0.5 * std::min(lowered, 0.5 * 9.81 * 0.05 * 0.05)) << "the cell on it came down further";
     bad = col;
     bad["resolve"]["below"] = "soft";
     refused(bad, "/resolve/below");

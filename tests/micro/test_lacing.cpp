@@ -7,6 +7,7 @@
 #include <cmath>
 #include <set>
 
+#include "micro/lab/structure_impact.hpp"
 #include "micro/netting/lacing.hpp"
 #include "micro/netting/mesh.hpp"
 
@@ -86,6 +87,39 @@ TEST(Lacing, FindsTheFacesOfACellsNettingFromItsNodes) {
     if (lifted.onEdgeOf(k, faceIndex(2, 1))) found.insert(k);
   EXPECT_EQ(found, lid_edge);
   EXPECT_THROW(cellEdges(cell, 0.0), std::invalid_argument);
+}
+
+// A cell's lid lies under its extent by the lift of its highest node
+// (micro::lab::lidClearance, where a hybrid's plates under its resolved
+// cells stand with resolve.below "lid"): 0 on a flat box; with the lid's
+// middle pushed up (up to 80 mm), that node's lift (the lid's plane stays
+// where most of the lid is); 0 without a netting.
+TEST(Lacing, ALidLiesUnderTheCellsExtentByItsHighestNodesLift) {
+  gabion::micro::lab::Sample sample;
+  sample.scene = boxCell();
+  const auto extent = [&] {
+    sample.lo = Vec3::Constant(1e9), sample.hi = Vec3::Constant(-1e9);
+    for (const SphereSpec& s : sample.scene.spheres) {
+      sample.lo = sample.lo.cwiseMin(s.center_m - Vec3::Constant(s.radius_m));
+      sample.hi = sample.hi.cwiseMax(s.center_m + Vec3::Constant(s.radius_m));
+    }
+  };
+  extent();
+  EXPECT_NEAR(gabion::micro::lab::lidClearance(sample), 0.0, 1e-12);
+  double lift = 0.0;  // (the highest node's)
+  for (SphereSpec& s : sample.scene.spheres) {
+    Vec3& x = s.center_m;
+    const double u = std::fabs(x.x() - 0.5 * kEdge), v = std::fabs(x.y() - 0.5 * kEdge);
+    if (std::fabs(x.z() - kEdge) < 1e-9 && u < 0.15 && v < 0.15) {
+      const double up = 0.08 * (1.0 - std::max(u, v) / 0.15);
+      x.z() += up, lift = std::max(lift, up);
+    }
+  }
+  extent();
+  EXPECT_GT(lift, 0.07);
+  EXPECT_NEAR(gabion::micro::lab::lidClearance(sample), lift, 1e-12);
+  sample.scene.links.clear();
+  EXPECT_EQ(gabion::micro::lab::lidClearance(sample), 0.0);
 }
 
 // Two boxes side by side along each axis, `gap` apart: every lacing wire
