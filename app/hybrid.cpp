@@ -86,14 +86,6 @@ Plan plan(const JsonDocument& doc) {
     if (!p.whole_depth)
       rs.fail("behind_within_m", "a reach of its own for the layers behind the front one needs depth \"whole\"");
     p.behind_within_m = rs.number("behind_within_m", p.within_m, Check::NonNegative);
-    // (a cell behind reached and the one in front of it not: a resolved cell
-    // behind a macro node, which the macro part does not couple)
-    if (p.behind_within_m > p.within_m) {
-      std::ostringstream m;
-      m << "the layers behind reach at most as far as the front one (within_m " << p.within_m
-        << "): a resolved cell behind a macro cell is not coupled";
-      rs.fail("behind_within_m", m.str());
-    }
   }
   const std::string below = rs.choice("below", {"plates", "cells", "gives", "lid"}, "plates");
   p.cells_below = below == "cells";
@@ -421,7 +413,7 @@ class Coupler {
     if (last_force_.size() == settled_.size()) {
       double axial = 0.0;
       for (std::size_t k = 0; k < faces_.size(); ++k)
-        if (faces_[k].axis == 0) axial += last_force_[k].x() - settled_[k].x();
+        if (faces_[k].axis == 0 && faces_[k].side > 0) axial += last_force_[k].x() - settled_[k].x();
       if (axial > peak_axial_N_) peak_axial_N_ = axial, at_peak_ = last_force_;
     }
     const macro::Energy& m = model_.energy();

@@ -168,9 +168,16 @@ Structure buildStructure(const StructureSpec& spec, const bridge::LawFile& laws)
         }
         cell_material[static_cast<std::size_t>(i + s.nx * (j + s.ny * k))] = materialIndex(name);
         if (isResolved(i, j, k)) {
-          if (i > s.front_offset_cells[static_cast<std::size_t>(k)] && !isResolved(i - 1, j, k))
+          // (behind a macro cell of the front layer, whose front face is
+          // free: that node meets it at its rear face, below; behind a
+          // macro cell with another in front, the link between those two
+          // would span one and a half cells)
+          const int front = s.front_offset_cells[static_cast<std::size_t>(k)];
+          if (i > front + 1 && !isResolved(i - 1, j, k))
             throw std::invalid_argument("resolved cell (" + std::to_string(i) + ", " + std::to_string(j) + ", " +
-                                        std::to_string(k) + ") is behind a macro cell: resolve the cells in front too");
+                                        std::to_string(k) +
+                                        ") is behind a macro cell that is not in the front layer: resolve the cells "
+                                        "in front too, or only those of the front layer");
           continue;
         }
         const int node = static_cast<int>(s.gi.size());
@@ -211,7 +218,12 @@ Structure buildStructure(const StructureSpec& spec, const bridge::LawFile& laws)
     // link spans the whole of its cell)
     const bool whole = isResolved(i - 1, j, k);
     const AxialLawParams rear = whole ? cellLengthLaw(ma.axial, 2.0) : ma.axial;
-    if (const int b = s.nodeAt(i + 1, j, k); b >= 0) {
+    if (isResolved(i + 1, j, k)) {
+      // A front node with a resolved cell behind it meets that cell at its
+      // rear face: no link behind it, the plate on the resolved cell's
+      // front face moves with it (its cell a rigid mass along x between
+      // its free front face and that plate).
+    } else if (const int b = s.nodeAt(i + 1, j, k); b >= 0) {
       const auto& mb = s.materials[static_cast<std::size_t>(s.material[static_cast<std::size_t>(b)])];
       s.axial.a.push_back(a);
       s.axial.b.push_back(b);
