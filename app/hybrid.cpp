@@ -35,8 +35,9 @@ struct Plan {
   macro::ImpactCase c;
   macro::Structure structure;  ///< the macro part: no node for a resolved cell
   double within_m = 0.0;
-  double behind_within_m =
-      0.0;  ///< `resolve.behind_within_m`: the reach of the layers behind the front one (depth "whole")
+  /// `resolve.behind_within_m`: the reach of the layers behind the front one (depth "whole"); further than
+  /// within_m, macro cells of the front layer stand in front of resolved cells
+  double behind_within_m = 0.0;
   bool whole_depth = false;    ///< `resolve.depth` "whole": every cell behind a resolved front cell too
   bool cells_below = false;    ///< `resolve.below` "cells": every cell under a resolved one too, down to the base
   bool below_gives = false;    ///< `resolve.below` "gives": a plate over a macro cell gives as its top would, settling
