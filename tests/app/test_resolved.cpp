@@ -680,6 +680,21 @@ TEST(HybridStructure, StruckCellResolvedTheCellBehindAMacroNode) {
   wider_behind["resolve"]["within_m"] = 0.0;
   wider_behind["resolve"]["behind_within_m"] = 0.25;
   EXPECT_DOUBLE_EQ(bodies(wider_behind) - 1.0, 4.0 / 3.0 * (front_row - 1.0));
+  {  // (and it runs: the two cells behind macro front cells face them through a plate each)
+    nlohmann::json cs = wider_behind;
+    cs["resolve"]["settle"] = {{"duration_s", 0.02}, {"until_at_rest", false}};
+    cs["resolve"]["run"] = {{"duration_s", 0.002}};
+    writeFile(dir / "behind.json", cs.dump());
+    const auto run = runGabion("run -q " + (dir / "behind.json").string() + " -o " + (dir / "behind").string());
+    ASSERT_EQ(run.exit_code, 0) << run.output;
+    const nlohmann::json behind = summaryOf(dir / "behind")["hybrid"];
+    EXPECT_EQ(behind["resolved_cells"].size(), 4u);
+    EXPECT_EQ(behind["behind_within_m"], 0.25);
+    int in_front = 0;
+    for (const auto& face : behind["interfaces"]) in_front += face["axis"] == "x" && face["side"] == -1 ? 1 : 0;
+    EXPECT_EQ(in_front, 2);
+    EXPECT_LT(std::fabs(behind["balance_rel_error"].get<double>()), 0.02);
+  }
   bad = row;
   bad["resolve"]["depth"] = "reach";
   refused(bad, "/resolve/behind_within_m");
