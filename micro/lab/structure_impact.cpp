@@ -163,18 +163,24 @@ struct Layout {
   std::size_t blocks_per_cell = 0, spheres_per_cell = 0;
   /// Cells of the front (i = 0) and back (i = nx - 1) layers, by index (i + nx (j + ny k)).
   std::vector<std::size_t> front_cells, back_cells;
-  std::vector<int> slot_of;     ///< grid index -> place among the cells laid out (-1: not laid out)
-  std::vector<int> grid_of;     ///< place among the cells laid out -> grid index
-  std::size_t first_plate = 0;  ///< the scene's wall of a part's first face (StructurePart::faces, in order)
+  std::vector<int> slot_of;             ///< grid index -> place among the cells laid out (-1: not laid out)
+  std::vector<int> grid_of;             ///< place among the cells laid out -> grid index
+  std::size_t first_plate = 0;          ///< the scene's wall of a part's first face (StructurePart::faces, in order)
+  double plates_under_lowered_m = 0.0;  ///< the part's plates under its cells, below the extent (lid_plates)
 };
+
+/// The netting's node radius (m): the largest of the spheres its links join; 0 without a netting.
+double nettingNodeRadius(const Scene& cell) {
+  double r = 0.0;
+  for (const LinkSpec& k : cell.links) r = std::max({r, cell.spheres[k.a].radius_m, cell.spheres[k.b].radius_m});
+  return r;
+}
 
 }  // namespace
 
 double lidClearance(const Sample& sample) {
   const Scene& cell = sample.scene;
-  double node_radius = 0.0;
-  for (const LinkSpec& k : cell.links)
-    node_radius = std::max({node_radius, cell.spheres[k.a].radius_m, cell.spheres[k.b].radius_m});
+  const double node_radius = nettingNodeRadius(cell);
   if (node_radius <= 0.0) return 0.0;  // (no netting: no lid)
   // (the lid's plane as the lacing finds it: the median of the nodes nearest the top)
   const double lid = cellEdges(cell, node_radius).plane[static_cast<std::size_t>(faceIndex(2, 1))] + node_radius;
@@ -186,8 +192,7 @@ namespace {
 /// The plate on a face of a resolved cell (StructurePart::Face), driven by
 /// the coupled model: the cell's extent there, its normal into the cell, of
 /// the netting's material (it stands for the next cell's netting).
-WallSpec facePlate(const StructurePart::Face& f, const StructureCase& c, const Layout& l, const Sample& sample,
-                   double lowered_m) {
+WallSpec facePlate(const StructurePart::Face& f, const StructureCase& c, const Layout& l, const Sample& sample) {
   const int idx[3] = {f.cell % c.nx, (f.cell / c.nx) % c.ny, f.cell / (c.nx * c.ny)};
   const int a = f.axis, b = (a + 1) % 3, d = (a + 2) % 3;
   // (a tile's centre: its place (u, v) of tiles x tiles across the face)
@@ -196,7 +201,7 @@ WallSpec facePlate(const StructurePart::Face& f, const StructureCase& c, const L
   centre[a] = (idx[a] + (f.side > 0 ? 1.0 : 0.0)) * l.pitch[a];
   centre[b] = (idx[b] + in_u) * l.pitch[b];
   centre[d] = (idx[d] + in_v) * l.pitch[d];
-  if (a == 2 && f.side < 0) centre[2] -= lowered_m;  // (a plate under the cell at the lid below, lid_plates)
+  if (a == 2 && f.side < 0) centre[2] -= l.plates_under_lowered_m;  // (at the lid below, lid_plates)
   WallSpec w;
   w.name = "interface_" + std::to_string(f.cell) + "_" + "xyz"[a] + (f.side > 0 ? "_plus" : "_minus");
   if (f.tiles > 1) w.name += "_tile_" + std::to_string(f.tile % f.tiles) + "_" + std::to_string(f.tile / f.tiles);
@@ -259,8 +264,8 @@ Layout buildLayout(const StructureCase& c, const Sample& sample, const Structure
     s.walls.push_back(fixedWall("back", Vec3(c.nx * out.pitch.x(), 0, 0), -Vec3::UnitX(), sample.plate_material));
   out.first_plate = s.walls.size();
   if (part) {
-    const double lowered = part->lid_plates ? lidClearance(sample) : 0.0;
-    for (const StructurePart::Face& f : part->faces) s.walls.push_back(facePlate(f, c, out, sample, lowered));
+    if (part->lid_plates) out.plates_under_lowered_m = lidClearance(sample);
+    for (const StructurePart::Face& f : part->faces) s.walls.push_back(facePlate(f, c, out, sample));
   }
   return out;
 }
@@ -272,9 +277,7 @@ Layout buildLayout(const StructureCase& c, const Sample& sample, const Structure
 nlohmann::json laceCells(const StructureCase& c, const Layout& l, const Sample& sample, Scene& scene,
                          const StructurePart* part) {
   const StructureCase::Lacing& lc = *c.lacing;
-  double node_radius = 0.0;
-  for (const LinkSpec& k : sample.scene.links)
-    node_radius = std::max({node_radius, sample.scene.spheres[k.a].radius_m, sample.scene.spheres[k.b].radius_m});
+  const double node_radius = nettingNodeRadius(sample.scene);
   const double band = lc.edge_band_m > 0.0 ? lc.edge_band_m : 1.5 * node_radius;
   const CellEdges edges = cellEdges(sample.scene, band);
   LacingParams params = lc.params;
@@ -651,7 +654,7 @@ bridge::RunOutcome runOne(const StructureCase& c, const Sample& sample, const br
     if (c.at_rest_rms_m_s > 0.0) settle_results["at_rest_rms_speed_m_s"] = c.at_rest_rms_m_s;
     if (c.settle_local_damping) settle_results["local_damping"] = *c.settle_local_damping;
     settle_results["duration_s"] = settled_at;
-    if (part && part->lid_plates) settle_results["plates_under_lowered_m"] = lidClearance(sample);
+    if (part && part->lid_plates) settle_results["plates_under_lowered_m"] = layout.plates_under_lowered_m;
     settle_results["until_at_rest"] = c.until_at_rest;
     // How far the stack came down, and the struck cell's blocks: the aim,
     // set on the laid-out wall, meets the settled cell this far above its
