@@ -44,6 +44,9 @@ struct Plan {
   bool lid_below = false;      ///< `resolve.below` "lid": a plate over a macro cell at the height of a cell's lid
   bool weight_above = false;   ///< `resolve.above` "weight": an upper plate presses with the cells above, settling
   bool beside_follow = false;  ///< `resolve.beside` "follow": the plates beside come down with their cell, settling
+  /// `resolve.in_plane`: "follow", every plate moves in its plane with its cell, "free", slides along x and y as
+  /// the bodies push it, settling
+  StructurePart::InPlane in_plane = StructurePart::InPlane::Still;
   bool across_gives = false;  ///< `resolve.across` "gives": the plates across x give as their macro cells would, struck
   bool joints = false;        ///< `resolve.joint` "law": the plates on x faces give as the joint law closes, struck
   int joint_tiles = 1;        ///< `resolve.joint_tiles`: with joints, each x face's plate cut in n x n tiles
@@ -94,6 +97,10 @@ Plan plan(const JsonDocument& doc) {
   p.below_gives = below == "gives";
   p.weight_above = rs.choice("above", {"fixed", "weight"}, "fixed") == "weight";
   p.beside_follow = rs.choice("beside", {"fixed", "follow"}, "fixed") == "follow";
+  const std::string in_plane = rs.choice("in_plane", {"still", "follow", "free"}, "still");
+  p.in_plane = in_plane == "follow" ? StructurePart::InPlane::Follow
+               : in_plane == "free" ? StructurePart::InPlane::Free
+                                    : StructurePart::InPlane::Still;
   p.across_gives = rs.choice("across", {"fixed", "gives"}, "fixed") == "gives";
   p.joints = rs.choice("joint", {"none", "law"}, "none") == "law";
   p.joint_tiles = static_cast<int>(rs.integer("joint_tiles", 1, 1));
@@ -223,8 +230,8 @@ Plan plan(const JsonDocument& doc) {
       {"rebound_restitution", p.c.run.rebound_restitution}};
   for (const auto& [key, value] : root.raw("resolve").items()) {
     if (key == "cell" || key == "within_m" || key == "behind_within_m" || key == "depth" || key == "below" ||
-        key == "above" || key == "beside" || key == "across" || key == "joint" || key == "joint_tiles" ||
-        key == "macro_motion")
+        key == "above" || key == "beside" || key == "in_plane" || key == "across" || key == "joint" ||
+        key == "joint_tiles" || key == "macro_motion")
       continue;
     if (key == "structure" || key == "boulder")
       rs.fail(key, "the hybrid's structure and boulder are the macro case's: give them there");
@@ -511,6 +518,7 @@ StructurePart partOf(const Plan& p, Coupler* coupler) {
   part.cells = p.resolved;
   part.faces = p.faces;
   part.beside_follow = p.beside_follow;
+  part.in_plane = p.in_plane;
   part.lid_plates = p.lid_below;
   if (coupler) {
     part.drive = [coupler](double t, double dt, const std::vector<Vec3>& f, std::vector<Vec3>& d) {
@@ -551,6 +559,9 @@ bridge::RunOutcome run(const JsonDocument& doc, const bridge::RunContext& ctx) {
   h["below"] = p.cells_below ? "cells" : p.below_gives ? "gives" : p.lid_below ? "lid" : "plates";
   h["above"] = p.weight_above ? "weight" : "fixed";
   h["beside"] = p.beside_follow ? "follow" : "fixed";
+  h["in_plane"] = p.in_plane == StructurePart::InPlane::Follow ? "follow"
+                  : p.in_plane == StructurePart::InPlane::Free ? "free"
+                                                               : "still";
   h["across"] = p.across_gives ? "gives" : "fixed";
   h["joint"] = p.joints ? "law" : "none";
   h["joint_tiles"] = p.joint_tiles;
@@ -586,6 +597,8 @@ bridge::RunOutcome run(const JsonDocument& doc, const bridge::RunContext& ctx) {
     << (p.lid_below ? ", the plates under them at the lids below" : "")
     << (p.weight_above ? ", the weight of the cells above on them" : "")
     << (p.beside_follow ? ", the plates beside coming down with them" : "")
+    << (p.in_plane == StructurePart::InPlane::Follow ? ", the plates moving in their planes with them" : "")
+    << (p.in_plane == StructurePart::InPlane::Free ? ", the plates free along x and y" : "")
     << (p.across_gives ? ", the plates across x giving" : "") << (p.joints ? ", joints closing at the x faces" : "")
     << (p.joint_tiles > 1 ? " in " + std::to_string(p.joint_tiles) + " x " + std::to_string(p.joint_tiles) + " tiles"
                           : "")

@@ -35,12 +35,13 @@ struct Plan {
   json twin, resolved;
   std::vector<json> hybrids;  ///< macro.impact cases with "resolve", one per `hybrid/within_m`
   std::vector<double> within_m;
-  std::string depth = "reach";   ///< `hybrid/depth`: "whole" resolves every cell behind a front one within reach
-  std::string below = "plates";  ///< `hybrid/below`: as a hybrid's `resolve/below` ("plates", "cells", "gives")
-  std::string above = "fixed";   ///< `hybrid/above`: "weight" presses the cells above onto the resolved ones
-  std::string beside = "fixed";  ///< `hybrid/beside`: "follow" brings the plates beside down with their cells
-  std::string across = "fixed";  ///< `hybrid/across`: "gives" lets the plates across x give as their cells would
-  double law_edge_m = 0.0;       ///< the laws' cell edge (0: not known)
+  std::string depth = "reach";     ///< `hybrid/depth`: "whole" resolves every cell behind a front one within reach
+  std::string below = "plates";    ///< `hybrid/below`: as a hybrid's `resolve/below` ("plates", "cells", "gives")
+  std::string above = "fixed";     ///< `hybrid/above`: "weight" presses the cells above onto the resolved ones
+  std::string beside = "fixed";    ///< `hybrid/beside`: "follow" brings the plates beside down with their cells
+  std::string in_plane = "still";  ///< `hybrid/in_plane`: "follow" or "free", as a hybrid's `resolve/in_plane`
+  std::string across = "fixed";    ///< `hybrid/across`: "gives" lets the plates across x give as their cells would
+  double law_edge_m = 0.0;         ///< the laws' cell edge (0: not known)
 };
 
 /// The hybrids' settings other than their reach, in words (" through the depth and below", ...).
@@ -50,6 +51,8 @@ std::string hybridSettings(const Plan& p) {
   if (p.below == "gives") w += ", plates below giving";
   if (p.above == "weight") w += ", weight above";
   if (p.beside == "follow") w += ", plates beside following";
+  if (p.in_plane == "follow") w += ", plates following in plane";
+  if (p.in_plane == "free") w += ", plates free along x and y";
   if (p.across == "gives") w += ", plates across x giving";
   return w;
 }
@@ -116,11 +119,12 @@ Plan plan(const JsonDocument& doc) {
     p.below = h->choice("below", {"plates", "cells", "gives"}, "plates");
     p.above = h->choice("above", {"fixed", "weight"}, "fixed");
     p.beside = h->choice("beside", {"fixed", "follow"}, "fixed");
+    p.in_plane = h->choice("in_plane", {"still", "follow", "free"}, "still");
     p.across = h->choice("across", {"fixed", "gives"}, "fixed");
     for (const double w : p.within_m) {
       json c = p.twin;
-      json resolve = {{"cell", cell.string()}, {"within_m", w},      {"depth", p.depth},  {"below", p.below},
-                      {"above", p.above},      {"beside", p.beside}, {"across", p.across}};
+      json resolve = {{"cell", cell.string()}, {"within_m", w},      {"depth", p.depth},       {"below", p.below},
+                      {"above", p.above},      {"beside", p.beside}, {"in_plane", p.in_plane}, {"across", p.across}};
       for (const auto& [key, value] : p.resolved.items())
         if (key != "format" && key != "kind" && key != "cell" && key != "structure" && key != "boulder")
           resolve[key] = value;
@@ -241,13 +245,10 @@ bridge::RunOutcome run(const JsonDocument& doc, const bridge::RunContext& ctx) {
   json hybrids = json::array();
   for (std::size_t k = 0; k < hp.size(); ++k) {
     const json& h = hp[k].summary;
-    json row = {{"within_m", p.within_m[k]},
-                {"depth", p.depth},
-                {"below", p.below},
-                {"above", p.above},
-                {"beside", p.beside},
-                {"across", p.across},
-                {"folder", "hybrid_" + std::to_string(k)}};
+    json row = {{"within_m", p.within_m[k]}, {"depth", p.depth},
+                {"below", p.below},          {"above", p.above},
+                {"beside", p.beside},        {"in_plane", p.in_plane},
+                {"across", p.across},        {"folder", "hybrid_" + std::to_string(k)}};
     if (hp[k].status != bridge::RunOutcome::Status::Ok) {
       row["status"] = "failed";
       row["message"] = hp[k].message;

@@ -14,7 +14,10 @@ j, then k; a hybrid's its `hybrid/resolved_cells`). It prints
 
   - for each hybrid, each resolved cell (i, j, k) at the impact's start:
     its place less the wall's same cell's (mm, x y z), the cells beside
-    the struck column being the ones a plate under them holds up;
+    the struck column being the ones a plate under them holds up; and
+    the furthest back it came in the impact (its place at the start plus
+    its largest move back) less the wall's same cell's (mm, x): a cell
+    that starts further back and moves back less may still come as far;
   - for the wall and each hybrid, each layer's grid of cells (rows from
     the top, j along the wall): how far the cell moved back along x in
     the impact, the largest over the snapshots (mm; `---` for a macro
@@ -66,11 +69,13 @@ def main(argv):
     for d in argv[1:]:
         hybrid, _ = cells(Path(d))
         runs.append((d, hybrid))
-        print(f"{d}: each resolved cell at the impact's start, less the wall's (mm, x y z)")
+        print(f"{d}: each resolved cell at the impact's start, less the wall's (mm, x y z),"
+              " and the furthest back it came, less the wall's (mm)")
         for key in sorted(hybrid, key=lambda c: (c[2], c[1], c[0])):
             if key in wall:
                 d_mm = 1e3 * (hybrid[key][0] - wall[key][0])
-                print(f"  {key}: {d_mm[0]:6.1f} {d_mm[1]:6.1f} {d_mm[2]:6.1f}")
+                furthest = d_mm[0] + 1e3 * (hybrid[key][1] - wall[key][1])
+                print(f"  {key}: {d_mm[0]:6.1f} {d_mm[1]:6.1f} {d_mm[2]:6.1f}   {furthest:6.1f}")
     for d, run in runs:
         print(f"{d}: each cell's largest move back along x in the impact (mm)")
         for i in range(n[0]):

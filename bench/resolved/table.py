@@ -49,6 +49,7 @@ def settings(depth, info):
             (" and below" if info.get("below") == "cells" else "") +
             (", weight above" if info.get("above") == "weight" else "") +
             (", plates beside following" if info.get("beside") == "follow" else "") +
+            (", plates following in plane" if info.get("in_plane") == "follow" else "") +
             {"xy": ", macro nodes along x and y", "xyz": ", macro nodes along x, y and z"}.get(
                 info.get("macro_motion"), "") +
             (", plates across x giving" if info.get("across") == "gives" else "") +

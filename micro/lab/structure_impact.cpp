@@ -428,11 +428,16 @@ Scene impactScene(const StructureCase& c, Scene structure, const Sample& sample,
   return structure;
 }
 
-/// The mean height of blocks first .. first + count - 1 of a scene (a cell's, laid out or settled).
+/// The mean position of blocks first .. first + count - 1 of a scene (a cell's, laid out or settled).
+Vec3 meanBlockPosition(const Scene& sc, std::size_t first, std::size_t count) {
+  Vec3 x = Vec3::Zero();
+  for (std::size_t b = first; b < first + count; ++b) x += sc.blocks[b].position_m;
+  return count > 0 ? Vec3(x / static_cast<double>(count)) : x;
+}
+
+/// Their mean height.
 double meanBlockHeight(const Scene& sc, std::size_t first, std::size_t count) {
-  double z = 0.0;
-  for (std::size_t b = first; b < first + count; ++b) z += sc.blocks[b].position_m.z();
-  return count > 0 ? z / static_cast<double>(count) : z;
+  return meanBlockPosition(sc, first, count).z();
 }
 
 Vec3 meanBlockPosition(const Engine& e, std::size_t spheres, std::size_t first, std::size_t count) {
@@ -518,15 +523,18 @@ bridge::RunOutcome runOne(const StructureCase& c, const Sample& sample, const br
     hooks.archive = [&](bridge::StateArchive& a) { a("time_s", t), a("gravity_potential_J", u); };
     // The plates beside the part's cells come down with them (each step the
     // plate's height offset is set to its cell's blocks' mean descent so
-    // far), and the plates that give come down as the top of the cell under
-    // them would (Face::gives): neither has a state of its own, so both
-    // go on the same after a resume.
+    // far), with in_plane Follow every plate moves in its plane with its
+    // cell (its offset across its normal set to the blocks' mean move), with
+    // Free it slides along x and y as the bodies push it, and
+    // the plates that give come down as the top of the cell under them would
+    // (Face::gives): none has a state of its own, so all go on the same
+    // after a resume.
     std::vector<std::size_t> driven;           // the part's faces whose plates are driven here, in wall order
-    std::vector<double> z0, wz0;               // their cells' blocks' mean height and their plates' height, laid out
+    std::vector<Vec3> cell0, wall0;            // their cells' blocks' mean position and their plates' place, laid out
     std::size_t n_spheres = s.spheres.size();  // (the blocks' bodies come after the spheres)
     const bool any_gives =
         part && std::any_of(part->faces.begin(), part->faces.end(), [](const auto& f) { return f.gives; });
-    if (part && (part->beside_follow || any_gives)) {
+    if (part && (part->beside_follow || part->in_plane != StructurePart::InPlane::Still || any_gives)) {
       const std::size_t first = layout.first_plate;
       for (std::size_t k = 0; k < part->faces.size(); ++k)
         if (s.walls[first + k].program.kind == WallProgram::Kind::Driven) driven.push_back(k);
@@ -534,32 +542,41 @@ bridge::RunOutcome runOne(const StructureCase& c, const Sample& sample, const br
         return static_cast<std::size_t>(layout.slot_of[static_cast<std::size_t>(cell)]) * layout.blocks_per_cell;
       };
       for (const std::size_t k : driven) {
-        z0.push_back(meanBlockHeight(s, blocksOf(part->faces[k].cell), layout.blocks_per_cell));
-        wz0.push_back(s.walls[first + k].point_m.z());
+        cell0.push_back(meanBlockPosition(s, blocksOf(part->faces[k].cell), layout.blocks_per_cell));
+        wall0.push_back(s.walls[first + k].point_m);
       }
       // A giving plate's servo: as the plates that press with the weight
       // above (settleScene), at most 0.5 m/s, that speed at a force error of
       // one cell's weight.
       const double max_speed = 0.5, gain = max_speed / (sample.mass_kg * s.gravity_m_s2.norm());
-      const bool follow = part->beside_follow;
-      hooks.start = [&, first, blocksOf, max_speed, gain, follow](Engine& e) {
-        e.setWallDriver([&, first, blocksOf, max_speed, gain, follow](
+      const bool follow = part->beside_follow, in_plane = part->in_plane == StructurePart::InPlane::Follow,
+                 free = part->in_plane == StructurePart::InPlane::Free;
+      hooks.start = [&, first, blocksOf, max_speed, gain, follow, in_plane, free](Engine& e) {
+        e.setWallDriver([&, first, blocksOf, max_speed, gain, follow, in_plane, free](
                             double, double dt, const std::vector<Vec3>& forces, std::vector<Vec3>& moves) {
           for (std::size_t q = 0; q < driven.size(); ++q) {
             const StructurePart::Face& f = part->faces[driven[q]];
             const std::size_t w = first + driven[q];
+            const Vec3 wall_moved = e.wallPosition(w) - wall0[q];
             moves[q].setZero();
             if (f.gives) {
               // The load is what the bodies press down with; the cell's top
               // resists with its law at the plate's descent so far.
-              const double descent = std::max(0.0, wz0[q] - e.wallPosition(w).z());
+              const double descent = std::max(0.0, -wall_moved.z());
               const double excess = -forces[q].z() - bridge::axialResponse(f.law, descent, 0.0).force_N;
               moves[q].z() = -dt * std::clamp(gain * excess, 0.0, max_speed);
-              continue;
             }
-            if (!follow || f.axis == 2) continue;  // (a plate under or over the cell stands still)
-            const double sink = meanBlockPosition(e, n_spheres, blocksOf(f.cell), layout.blocks_per_cell).z() - z0[q];
-            moves[q].z() = sink - (e.wallPosition(w).z() - wz0[q]);
+            // (free: along x and y in its plane, with the bodies' push)
+            if (free)
+              for (int a = 0; a < 2; ++a)
+                if (a != f.axis) moves[q][a] = dt * std::clamp(gain * forces[q][a], -max_speed, max_speed);
+            // (a plate beside a cell follows it down; with in_plane every
+            // plate follows it along both axes of its plane)
+            if (!in_plane && (!follow || f.axis == 2)) continue;
+            const Vec3 cell_moved =
+                meanBlockPosition(e, n_spheres, blocksOf(f.cell), layout.blocks_per_cell) - cell0[q];
+            for (int a = 0; a < 3; ++a)
+              if (a != f.axis && (in_plane || a == 2)) moves[q][a] = cell_moved[a] - wall_moved[a];
           }
         });
       };

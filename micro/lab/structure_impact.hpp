@@ -73,12 +73,28 @@ struct StructurePart {
   /// come down with the cell they touch (its blocks' mean height), as the
   /// macro cell they stand for would sink beside it; false: they stand still.
   bool beside_follow = false;
+  /// While the part settles, how the plates it drives (all but those
+  /// pressing with the weight above, a servo along z: Face::cells_above)
+  /// move in their own planes. Along its normal a plate stands still,
+  /// follows or gives as set apart from this.
+  enum class InPlane {
+    Still,   ///< they stand still in their planes
+    Follow,  ///< each moves in its plane with the cell it touches (its blocks' mean move across its normal)
+    /// each is free along x and y in its plane, as the macro cell it stands
+    /// for would be on the wall's frictionless base: a servo that moves it
+    /// with the bodies' tangential push on it, at most 0.5 m/s (that speed
+    /// at a push of one cell's weight), so that its friction holds no
+    /// horizontal force on the cell; along z (a plate beside) as Still
+    Free,
+  };
+  InPlane in_plane = InPlane::Still;
   /// The faces' plates in this order are the engine's Driven walls: each
   /// step, the forces the bodies exert on them (N) in, their displacements
   /// over the step (m) out (Engine::WallDriver). Called in the impact only
   /// (while the part settles the plates stand still, but for those that
   /// carry the weight of cells above, Face::cells_above, those that give,
-  /// Face::gives, and with beside_follow those beside the cells).
+  /// Face::gives, with beside_follow those beside the cells, and with
+  /// in_plane Follow or Free all of them).
   Engine::WallDriver drive;
   /// The largest front and back face displacements (m) of the cells not
   /// resolved, read at each series sample (the summary's face keys take the

@@ -801,6 +801,57 @@ TEST(HybridStructure, StruckCellResolvedTheCellBehindAMacroNode) {
   const double descent = plateDescent("follow", drop);
   EXPECT_GT(drop, 1e-4) << "the cell came down";
   EXPECT_NEAR(descent, drop, 1e-3 * drop);
+  // In plane: with in_plane "follow" that plate moves along y and z as the
+  // cell's blocks do (their mean, the settling's last snapshot against its
+  // first: the blocks are its last bodies), and stands still along x, its
+  // normal; standing still in its plane (above), it stays.
+  {
+    const auto [out, ss] = settledVariant(c, "in_plane", "follow", "plane");
+    EXPECT_EQ(ss["hybrid"]["in_plane"], "follow");
+    const gabion::bridge::H5Reader h5(out / "settle" / "result.h5");
+    const std::vector<double> p = h5.read("/series/walls/interface_0_x_plus/position_m"),
+                              x = h5.read("/bodies/position_m");
+    const std::vector<std::size_t> shape = h5.dims("/bodies/position_m"), blocks = h5.dims("/blocks/orientation");
+    ASSERT_EQ(shape.size(), 3u);
+    ASSERT_EQ(blocks.size(), 3u);
+    ASSERT_GE(p.size(), 6u);
+    const std::size_t frames = shape[0], n = shape[1], nb = blocks[1];
+    ASSERT_GE(frames, 2u);
+    double moved[3] = {0.0, 0.0, 0.0};
+    for (std::size_t b = n - nb; b < n; ++b)
+      for (int a = 0; a < 3; ++a)
+        moved[a] += (x[3 * ((frames - 1) * n + b) + a] - x[3 * b + a]) / static_cast<double>(nb);
+    const std::size_t last = p.size() - 3;
+    EXPECT_EQ(p[last], p[0]) << "along its normal it stands still";
+    const double in_plane = std::hypot(moved[1], moved[2]);
+    EXPECT_GT(in_plane, 1e-4) << "the cell moved in the plate's plane";
+    for (int a = 1; a < 3; ++a) EXPECT_NEAR(p[last + a] - p[a], moved[a], 1e-3 * in_plane) << "axis " << a;
+  }
+  // Free: the plate behind slides along y (x is its normal, z it does not
+  // take) with the bodies' push: 0.5 m/s per cell weight W of push, so its
+  // move is the integral of 0.5 F_y / W over the settling (the series'
+  // trapezoid: the push is sampled every 0.1 ms, the plate moved every step).
+  {
+    const auto [out, ss] = settledVariant(c, "in_plane", "free", "plane");
+    EXPECT_EQ(ss["hybrid"]["in_plane"], "free");
+    const double w = ss["cell_mass_kg"].get<double>() * 9.81;
+    const gabion::bridge::H5Reader h5(out / "settle" / "result.h5");
+    const std::vector<double> t = h5.read("/series/time_s"), p = h5.read("/series/walls/interface_0_x_plus/position_m"),
+                              f = h5.read("/series/walls/interface_0_x_plus/force_N");
+    ASSERT_EQ(p.size(), 3 * t.size());
+    ASSERT_EQ(f.size(), 3 * t.size());
+    const std::size_t last = t.size() - 1;
+    double integral = 0.0;
+    for (std::size_t q = 1; q <= last; ++q)
+      integral += 0.5 * (t[q] - t[q - 1]) * 0.5 * (f[3 * q + 1] + f[3 * (q - 1) + 1]) / w;
+    EXPECT_EQ(p[3 * last], p[0]) << "along its normal it stands still";
+    EXPECT_EQ(p[3 * last + 2], p[2]) << "along z it stands still";
+    EXPECT_GT(std::fabs(integral), 1e-7) << "it was pushed along y";
+    EXPECT_NEAR(p[3 * last + 1] - p[1], integral, 0.1 * std::fabs(integral));
+  }
+  bad = c;
+  bad["resolve"]["in_plane"] = "slide";
+  refused(bad, "/resolve/in_plane");
   // Below: on a 1 x 1 x 2 column struck on its upper cell, the plate under
   // it stands for the macro cell below. With below "gives" (that cell's
   // axial law made linear and soft here, k = 1e5 N/m, so that the weight W
