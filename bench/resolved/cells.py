@@ -21,7 +21,10 @@ j, then k; a hybrid's its `hybrid/resolved_cells`). It prints
   - for the wall and each hybrid, each layer's grid of cells (rows from
     the top, j along the wall): how far the cell moved back along x in
     the impact, the largest over the snapshots (mm; `---` for a macro
-    node).
+    node); and from where it was laid out to where the impact found it,
+    along x (mm, negative: forward, away from the back support), its
+    place laid out from the first snapshot of the settling (landing/ when
+    the cells were laced once landed, else settle/).
 
 The snapshots are coarse (every output interval, 5 ms in the walls of
 docs/resolved.md): the back face's largest move is the summary's
@@ -39,8 +42,20 @@ except ImportError:
     sys.exit("needs h5py (apt-get install python3-h5py)")
 
 
+def laid_out(folder, n_blocks):
+    """The blocks' places as laid out (the settling's first snapshot), or None."""
+    for part in ("landing", "settle"):
+        path = folder / part / "result.h5"
+        if path.exists():
+            with h5py.File(path, "r") as f:
+                p = f["bodies/position_m"][0]
+                return p[p.shape[0] - n_blocks :]
+    return None
+
+
 def cells(folder):
-    """{(i, j, k): (place at the start (3,), largest move back along x)}, the grid's size."""
+    """{(i, j, k): (place at the start (3,), largest move back along x, place laid out (3,) or None)},
+    the grid's size."""
     s = json.loads((folder / "summary.json").read_text())
     n = np.asarray(s["cells"], dtype=int)
     # The cells laid out, in the order of their bodies: a hybrid's resolved
@@ -54,10 +69,12 @@ def cells(folder):
         p = f["bodies/position_m"]
         first_block = p.shape[1] - s["blocks"]  # (the blocks come after every sphere, cell by cell)
         blocks = [p[t][first_block:] for t in range(p.shape[0])]
+    first = laid_out(folder, s["blocks"])
     out = {}
     for c, key in enumerate(laid):
         x = np.array([b[c * per_cell : (c + 1) * per_cell].mean(axis=0) for b in blocks])
-        out[key] = (x[0], float((x[:, 0] - x[0, 0]).max()))
+        x_laid = None if first is None else first[c * per_cell : (c + 1) * per_cell].mean(axis=0)
+        out[key] = (x[0], float((x[:, 0] - x[0, 0]).max()), x_laid)
     return out, n
 
 
@@ -76,13 +93,19 @@ def main(argv):
                 d_mm = 1e3 * (hybrid[key][0] - wall[key][0])
                 furthest = d_mm[0] + 1e3 * (hybrid[key][1] - wall[key][1])
                 print(f"  {key}: {d_mm[0]:6.1f} {d_mm[1]:6.1f} {d_mm[2]:6.1f}   {furthest:6.1f}")
-    for d, run in runs:
-        print(f"{d}: each cell's largest move back along x in the impact (mm)")
+    def grid(run, value):
         for i in range(n[0]):
             print(f"  layer {i} (rows from the top)")
             for k in reversed(range(n[2])):
-                row = [f"{1e3 * run[(i, j, k)][1]:6.1f}" if (i, j, k) in run else "   ---" for j in range(n[1])]
+                row = [f"{value(run[(i, j, k)]):6.1f}" if (i, j, k) in run else "   ---" for j in range(n[1])]
                 print("   " + " ".join(row))
+
+    for d, run in runs:
+        print(f"{d}: each cell's largest move back along x in the impact (mm)")
+        grid(run, lambda c: 1e3 * c[1])
+        if all(c[2] is not None for c in run.values()):
+            print(f"{d}: each cell's move along x from where it was laid out to the impact's start (mm)")
+            grid(run, lambda c: 1e3 * (c[0][0] - c[2][0]))
 
 
 if __name__ == "__main__":

@@ -36,10 +36,13 @@
 # with --pull N (implies --laced), every lacing wire is pulled tight with N
 # newtons while the settling goes on (lacing.pull_N; docs/resolved.md,
 # Laced, Pulled tight), in the walls and their hybrids alike;
+# with --base-friction MU, the walls' base and back support have friction
+# MU (micro.structure "plates", docs/resolved.md, On a base with
+# friction), and so have their hybrids' (resolve.plates, the same keys);
 # then one table, and a chart of each hybrid's largest error against how
 # many times faster than its resolved wall it ran (OUT/figures/wide_error_vs_speed_up.png).
 #   bench/resolved/wide.sh [--out DIR] [--threads N] [--walls "54 90 150 210"] [--pipeline DIR] [--laced]
-#                         [--pull N]
+#                         [--pull N] [--base-friction MU]
 # About two hours for wall_54 on 2 cores, most of it the resolved wall
 # settling (1 s); with --pipeline of the denser cell (docs/resolved.md, A
 # denser cell) about 50 minutes, the wall at rest after 0.28 s. wall_90's
@@ -52,11 +55,12 @@
 set -euo pipefail
 here=$(cd "$(dirname "$0")" && pwd)
 root=$(cd "$here/../.." && pwd)
-out=$root/results/wide threads=2 walls="54 210" pipeline= laced=false pull=
+out=$root/results/wide threads=2 walls="54 210" pipeline= laced=false pull= base_friction=
 while [ $# -gt 0 ]; do
   case $1 in
     --laced) laced=true; shift ;;
     --pull) laced=true pull=$2; shift 2 ;;
+    --base-friction) base_friction=$2; shift 2 ;;
     --out) out=$2; shift 2 ;;
     --threads) threads=$2; shift 2 ;;
     --walls) walls=$2; shift 2 ;;
@@ -77,6 +81,7 @@ if $laced; then
   cell+=(--set 'resolved.lacing={"at_s": 0.15}' --set resolved.settle.at_rest_rms_speed_m_s=0.02)
   if [ -n "$pull" ]; then cell+=(--set "resolved.lacing.pull_N=$pull"); fi
 fi
+if [ -n "$base_friction" ]; then cell+=(--set "resolved.plates={\"friction\": $base_friction}"); fi
 for w in $walls; do
   case $w in
     54)
