@@ -50,6 +50,7 @@ def settings(depth, info):
             (", weight above" if info.get("above") == "weight" else "") +
             (", plates beside following" if info.get("beside") == "follow" else "") +
             (", plates following in plane" if info.get("in_plane") == "follow" else "") +
+            (", plates free along x and y" if info.get("in_plane") == "free" else "") +
             {"xy": ", macro nodes along x and y", "xyz": ", macro nodes along x, y and z"}.get(
                 info.get("macro_motion"), "") +
             (", plates across x giving" if info.get("across") == "gives" else "") +

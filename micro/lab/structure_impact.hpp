@@ -84,7 +84,8 @@ struct StructurePart {
     /// for would be on the wall's frictionless base: a servo that moves it
     /// with the bodies' tangential push on it, at most 0.5 m/s (that speed
     /// at a push of one cell's weight), so that its friction holds no
-    /// horizontal force on the cell; along z (a plate beside) as Still
+    /// horizontal force on the cell; along z (a plate beside) as
+    /// beside_follow says
     Free,
   };
   InPlane in_plane = InPlane::Still;
