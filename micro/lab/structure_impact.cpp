@@ -530,7 +530,10 @@ bridge::RunOutcome runOne(const StructureCase& c, const Sample& sample, const br
     // (Face::gives): none has a state of its own, so all go on the same
     // after a resume.
     std::vector<std::size_t> driven;           // the part's faces whose plates are driven here, in wall order
-    std::vector<Vec3> cell0, wall0;            // their cells' blocks' mean position and their plates' place, laid out
+    std::vector<Vec3> wall0;                   // their plates' place, laid out
+    std::vector<std::size_t> cell_of;          // each driven face's cell among those touched (several faces share one)
+    std::vector<Vec3> cell0, cell_now;         // those cells' blocks' mean position laid out, and in the current step
+    std::vector<char> cell_known;              // (whether cell_now holds this step's)
     std::size_t n_spheres = s.spheres.size();  // (the blocks' bodies come after the spheres)
     const bool any_gives =
         part && std::any_of(part->faces.begin(), part->faces.end(), [](const auto& f) { return f.gives; });
@@ -541,10 +544,18 @@ bridge::RunOutcome runOne(const StructureCase& c, const Sample& sample, const br
       const auto blocksOf = [&](int cell) {
         return static_cast<std::size_t>(layout.slot_of[static_cast<std::size_t>(cell)]) * layout.blocks_per_cell;
       };
+      std::vector<int> touched;  // (the cells, each once)
       for (const std::size_t k : driven) {
-        cell0.push_back(meanBlockPosition(s, blocksOf(part->faces[k].cell), layout.blocks_per_cell));
+        const int cell = part->faces[k].cell;
+        const auto at = std::find(touched.begin(), touched.end(), cell);
+        cell_of.push_back(static_cast<std::size_t>(at - touched.begin()));
+        if (at == touched.end()) {
+          touched.push_back(cell);
+          cell0.push_back(meanBlockPosition(s, blocksOf(cell), layout.blocks_per_cell));
+        }
         wall0.push_back(s.walls[first + k].point_m);
       }
+      cell_now.resize(cell0.size()), cell_known.resize(cell0.size());
       // A giving plate's servo: as the plates that press with the weight
       // above (settleScene), at most 0.5 m/s, that speed at a force error of
       // one cell's weight.
@@ -554,6 +565,7 @@ bridge::RunOutcome runOne(const StructureCase& c, const Sample& sample, const br
       hooks.start = [&, first, blocksOf, max_speed, gain, follow, in_plane, free](Engine& e) {
         e.setWallDriver([&, first, blocksOf, max_speed, gain, follow, in_plane, free](
                             double, double dt, const std::vector<Vec3>& forces, std::vector<Vec3>& moves) {
+          std::fill(cell_known.begin(), cell_known.end(), 0);
           for (std::size_t q = 0; q < driven.size(); ++q) {
             const StructurePart::Face& f = part->faces[driven[q]];
             const std::size_t w = first + driven[q];
@@ -573,8 +585,12 @@ bridge::RunOutcome runOne(const StructureCase& c, const Sample& sample, const br
             // (a plate beside a cell follows it down; with in_plane every
             // plate follows it along both axes of its plane)
             if (!in_plane && (!follow || f.axis == 2)) continue;
-            const Vec3 cell_moved =
-                meanBlockPosition(e, n_spheres, blocksOf(f.cell), layout.blocks_per_cell) - cell0[q];
+            // (a cell's mean once a step, however many of its plates follow it)
+            const std::size_t cq = cell_of[q];
+            if (!cell_known[cq])
+              cell_now[cq] = meanBlockPosition(e, n_spheres, blocksOf(f.cell), layout.blocks_per_cell),
+              cell_known[cq] = 1;
+            const Vec3 cell_moved = cell_now[cq] - cell0[cq];
             for (int a = 0; a < 3; ++a)
               if (a != f.axis && (in_plane || a == 2)) moves[q][a] = cell_moved[a] - wall_moved[a];
           }
