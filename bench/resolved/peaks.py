@@ -9,10 +9,14 @@ each it prints the force's largest value (`peak_force_N` of its summary),
 the largest mean over windows of 1, 2 and 5 ms (a peak that one granular
 spike does not set), the time from first contact to the deepest
 penetration (when the boulder stopped), and when the force last fell
-below 5 % of its peak; then each run's relative differences from the
-first folder's. With --png, FIG shows each run's force and penetration
+below 5 % of its peak and below the boulder's weight (m g, g = 9.81
+m/s2: a boulder at rest in its crater still presses the face with a
+part of its weight, so the contact's end at 1 % of the peak, the
+summary's contact_duration_s, can fall inside that residual); then each
+run's relative differences from the first folder's. With --png, FIG shows each run's force and penetration
 against the time from first contact ([LABEL=]DIR names a curve LABEL).
 """
+import json
 import sys
 from pathlib import Path
 
@@ -24,6 +28,7 @@ except ImportError:
     sys.exit("needs h5py (apt-get install python3-h5py)")
 
 WINDOWS_S = (1e-3, 2e-3, 5e-3)
+G_M_S2 = 9.81
 
 
 def measures(folder):
@@ -38,9 +43,19 @@ def measures(folder):
         out.append(np.convolve(f, np.ones(n) / n, "valid").max())
     first = np.argmax(f > 0.0)
     out.append(t[np.argmax(pen)] - t[first])
-    after = np.where(f[np.argmax(f):] >= 0.05 * f.max())[0]
-    out.append(t[np.argmax(f) + after[-1]] - t[first])
+    for level in (0.05 * f.max(), weight(folder)):
+        after = np.where(f[np.argmax(f):] >= level)[0]
+        out.append(t[np.argmax(f) + after[-1]] - t[first])
     return out
+
+
+def weight(folder):
+    """The boulder's weight (N), from the run's summary.json."""
+    summary = Path(folder) / "summary.json"
+    try:
+        return json.loads(summary.read_text())["boulder_mass_kg"] * G_M_S2
+    except (OSError, KeyError, ValueError) as e:
+        sys.exit(f"{summary}: no boulder_mass_kg ({e})")
 
 
 def curves(folder):
@@ -89,8 +104,8 @@ def main():
     sys.argv = [sys.argv[0]] + [folder for _, folder in runs]
     if png:
         figure(runs, png)
-    names = ["peak kN", "1 ms kN", "2 ms kN", "5 ms kN", "to stop ms", "above 5 % ms"]
-    scale = [1e-3] * 4 + [1e3] * 2
+    names = ["peak kN", "1 ms kN", "2 ms kN", "5 ms kN", "to stop ms", "above 5 % ms", "above weight ms"]
+    scale = [1e-3] * 4 + [1e3] * 3
     rows = [(f, measures(f)) for f in sys.argv[1:]]
     print("| run | " + " | ".join(names) + " |")
     print("|---" * (len(names) + 1) + "|")
