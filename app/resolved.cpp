@@ -134,7 +134,7 @@ Plan plan(const JsonDocument& doc) {
   }
   // (a lacing to the plates is the hybrids': the wall resolved whole has no plates)
   if (json* l = p.resolved.contains("lacing") ? &p.resolved["lacing"] : nullptr; l && l->is_object())
-    l->erase("to_plates");
+    l->erase("to_plates"), l->erase("plate_partners");
   return p;
 }
 

@@ -80,6 +80,10 @@ struct StructureCase {
     // A hybrid's resolved cells also laced to the plates that stand for
     // their macro neighbours (each edge node to a point riding the plate).
     bool to_plates = false;
+    // Which edge nodes of a face on a plate get a wire: every one
+    // (lacePlate), or those the lacing would pair with a neighbouring copy
+    // of the cell (lacePlateAsNeighbour).
+    bool plates_as_neighbour = false;
   };
   std::optional<Lacing> lacing;
 };
@@ -137,6 +141,11 @@ StructureCase parseCase(const bridge::JsonDocument& doc, bool whole = true) {
     lc.at_s = l->number("at_s", lc.at_s, Check::NonNegative);
     lc.edge_band_m = l->number("edge_band_m", lc.edge_band_m, Check::NonNegative);
     lc.to_plates = l->boolean("to_plates", lc.to_plates);
+    if (l->has("plate_partners")) {
+      lc.plates_as_neighbour = l->choice("plate_partners", {"edge_nodes", "neighbour_face"}) == "neighbour_face";
+      if (!lc.to_plates)
+        l->fail("plate_partners", "says how the cells are laced to their plates: it needs to_plates true");
+    }
     if (l->has("pull_N")) {
       lc.params.pull_N = l->number("pull_N", Check::Positive);
       // (the wires are pulled while the structure settles, and tied for the impact)
@@ -311,16 +320,22 @@ nlohmann::json laceCells(const StructureCase& c, const Layout& l, const Sample& 
   // then pulls and drags its macro node as a laced neighbour would.
   for (int g = 0; g < 32; ++g) scene.no_contact_groups.emplace_back(kPlateAnchorGroup, g);
   std::map<std::pair<std::size_t, int>, std::vector<bool>> taken;  // (per cell and face: a node once, over tiles)
+  std::map<std::pair<std::size_t, int>, std::vector<bool>> taken_across;  // (and the neighbour's stand-in's)
   std::size_t plate_links = 0, plate_unlaced = 0, plates = 0;
   for (std::size_t k = 0; k < part->faces.size(); ++k) {
     const StructurePart::Face& f = part->faces[k];
     const auto slot = static_cast<std::size_t>(l.slot_of[static_cast<std::size_t>(f.cell)]);
     const int face = faceIndex(f.axis, f.side > 0 ? 1 : 0);
-    const LacedPlate p = lacePlate(scene, edges, slot * l.spheres_per_cell, face, l.first_plate + k, kPlateAnchorGroup,
-                                   params, taken[{slot, face}]);
+    const std::size_t first = slot * l.spheres_per_cell, wall = l.first_plate + k;
+    const LacedPlate p =
+        lc.plates_as_neighbour
+            ? lacePlateAsNeighbour(scene, edges, first, face, wall, kPlateAnchorGroup, params, l.pitch[f.axis],
+                                   taken[{slot, face}], taken_across[{slot, face}])
+            : lacePlate(scene, edges, first, face, wall, kPlateAnchorGroup, params, taken[{slot, face}]);
     plate_links += p.links, plate_unlaced += p.unlaced, ++plates;
   }
   out["to_plates"] = true;
+  out["plate_partners"] = lc.plates_as_neighbour ? "neighbour_face" : "edge_nodes";
   out["plates_laced"] = plates;
   out["links_to_plates"] = plate_links;
   out["edge_nodes_unlaced_at_plates"] = plate_unlaced;

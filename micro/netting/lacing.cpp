@@ -4,7 +4,9 @@
 #include <cmath>
 #include <limits>
 #include <stdexcept>
+#include <string>
 #include <tuple>
+#include <utility>
 
 namespace gabion::micro {
 namespace {
@@ -93,14 +95,56 @@ LinkSpec lacingWire(std::size_t a, std::size_t b, double distance, const LacingP
 }
 }  // namespace
 
+namespace {
+// Pairs points of a with points of b within max_gap_m of each other,
+// nearest first, each point in one pair at most, ties in index order: the
+// lacing's rule, for two cells' faces and for a face and its neighbour's
+// stand-in alike. Returns (distance, index in a, index in b).
+std::vector<std::tuple<double, std::size_t, std::size_t>> nearestPairs(const std::vector<Vec3>& a,
+                                                                       const std::vector<Vec3>& b, double max_gap_m) {
+  std::vector<std::tuple<double, std::size_t, std::size_t>> pairs, out;
+  for (std::size_t i = 0; i < a.size(); ++i)
+    for (std::size_t j = 0; j < b.size(); ++j) {
+      const double d = (a[i] - b[j]).norm();
+      if (d <= max_gap_m && d > 0.0) pairs.emplace_back(d, i, j);
+    }
+  std::sort(pairs.begin(), pairs.end());
+  std::vector<bool> used_a(a.size(), false), used_b(b.size(), false);
+  for (const auto& [d, i, j] : pairs) {
+    if (used_a[i] || used_b[j]) continue;
+    used_a[i] = used_b[j] = true;
+    out.emplace_back(d, i, j);
+  }
+  return out;
+}
+
+// An anchor for a lacing wire: a fixed sphere like `node`, at `at`, that
+// rides plate `wall` and touches nothing (contact group `group`).
+SphereSpec plateAnchor(const SphereSpec& node, const Vec3& at, std::size_t wall, int group) {
+  SphereSpec anchor;
+  anchor.center_m = at;
+  anchor.radius_m = node.radius_m;
+  anchor.material = node.material;
+  anchor.fixed = true;
+  anchor.group = group;
+  anchor.rides_wall = static_cast<int>(wall);
+  return anchor;
+}
+
+void checkPlate(const Scene& scene, const CellEdges& edges, std::size_t first, int face, std::size_t wall,
+                const char* who) {
+  if (face < 0 || face > 5) throw std::invalid_argument(std::string(who) + ": faces are 0 .. 5");
+  if (first + edges.faces.size() > scene.spheres.size())
+    throw std::invalid_argument(std::string(who) + ": the cell's spheres run past the scene's");
+  if (wall >= scene.walls.size() || !scene.walls[wall].bounded)
+    throw std::invalid_argument(std::string(who) + ": the plate must be a bounded wall of the scene");
+}
+}  // namespace
+
 LacedPlate lacePlate(Scene& scene, const CellEdges& edges, std::size_t first, int face, std::size_t wall,
                      int anchor_group, const LacingParams& params, std::vector<bool>& taken) {
   const std::size_t n = edges.faces.size();
-  if (face < 0 || face > 5) throw std::invalid_argument("lacePlate: faces are 0 .. 5");
-  if (first + n > scene.spheres.size())
-    throw std::invalid_argument("lacePlate: the cell's spheres run past the scene's");
-  if (wall >= scene.walls.size() || !scene.walls[wall].bounded)
-    throw std::invalid_argument("lacePlate: the plate must be a bounded wall of the scene");
+  checkPlate(scene, edges, first, face, wall, "lacePlate");
   taken.resize(n, false);
   const WallSpec& plate = scene.walls[wall];
   const Vec3 nrm = plate.normal, u = plate.axis_u, v = nrm.cross(u);
@@ -119,17 +163,58 @@ LacedPlate lacePlate(Scene& scene, const CellEdges& edges, std::size_t first, in
       ++out.unlaced;
       continue;
     }
-    SphereSpec anchor;
-    anchor.center_m = node.center_m - gap * nrm;
-    anchor.radius_m = node.radius_m;
-    anchor.material = node.material;
-    anchor.fixed = true;
-    anchor.group = anchor_group;
-    anchor.rides_wall = static_cast<int>(wall);
+    const SphereSpec anchor = plateAnchor(node, node.center_m - gap * nrm, wall, anchor_group);
     scene.links.push_back(lacingWire(first + k, scene.spheres.size(), gap, params, curve));
     scene.spheres.push_back(anchor);
     ++out.links;
   }
+  return out;
+}
+
+LacedPlate lacePlateAsNeighbour(Scene& scene, const CellEdges& edges, std::size_t first, int face, std::size_t wall,
+                                int anchor_group, const LacingParams& params, double pitch_m, std::vector<bool>& taken,
+                                std::vector<bool>& taken_across) {
+  const std::size_t n = edges.faces.size();
+  checkPlate(scene, edges, first, face, wall, "lacePlateAsNeighbour");
+  if (!(pitch_m > 0.0)) throw std::invalid_argument("lacePlateAsNeighbour: the pitch must be > 0");
+  taken.resize(n, false), taken_across.resize(n, false);
+  const WallSpec& plate = scene.walls[wall];
+  const Vec3 u = plate.axis_u, v = plate.normal.cross(u);
+  const auto over = [&](const Vec3& x) {  // (over this plate's rectangle: a face in tiles, each node on one)
+    const Vec3 rel = x - plate.point_m;
+    return std::fabs(rel.dot(u)) <= plate.half_u_m && std::fabs(rel.dot(v)) <= plate.half_v_m;
+  };
+  const int axis = face % 3, facing = faceIndex(axis, face < 3 ? 1 : 0);
+  Vec3 shift = Vec3::Zero();
+  shift[axis] = face < 3 ? -pitch_m : pitch_m;
+  // This face's edge nodes over the plate, and the neighbour's facing ones:
+  // this cell's own of the facing face, one pitch over.
+  std::vector<std::size_t> mine, theirs;
+  std::vector<Vec3> at_mine, at_theirs;
+  for (std::size_t k = 0; k < n; ++k) {
+    const Vec3& x = scene.spheres[first + k].center_m;
+    if (!taken[k] && edges.onEdgeOf(k, face) && over(x)) mine.push_back(k), at_mine.push_back(x);
+    if (!taken_across[k] && edges.onEdgeOf(k, facing) && over(x + shift))
+      theirs.push_back(k), at_theirs.push_back(x + shift);
+  }
+  const bridge::WireCurve curve = wireCurveOf(params);
+  LacedPlate out;
+  std::vector<bool> laced(mine.size(), false);
+  // (paired as laceFaces pairs them, the lower cell's face first: the
+  // same wires, in the same order, as with the neighbour there)
+  const bool below_neighbour = face >= 3;  // (its upper face: this cell the lower one)
+  for (auto [d, i, j] :
+       nearestPairs(below_neighbour ? at_mine : at_theirs, below_neighbour ? at_theirs : at_mine, params.max_gap_m)) {
+    if (!below_neighbour) std::swap(i, j);
+    laced[i] = true;
+    taken[mine[i]] = taken_across[theirs[j]] = true;
+    const SphereSpec anchor = plateAnchor(scene.spheres[first + mine[i]], at_theirs[j], wall, anchor_group);
+    scene.links.push_back(lacingWire(first + mine[i], scene.spheres.size(), d, params, curve));
+    scene.spheres.push_back(anchor);
+    ++out.links;
+  }
+  for (std::size_t i = 0; i < mine.size(); ++i)
+    if (!laced[i]) taken[mine[i]] = true, ++out.unlaced;
   return out;
 }
 
@@ -141,28 +226,16 @@ LacedFaces laceFaces(const Scene& scene, const CellEdges& edges, std::size_t fir
     throw std::invalid_argument("laceFaces: a cell's spheres run past the scene's");
   const int fa = faceIndex(axis, 1), fb = faceIndex(axis, 0);
   std::vector<std::size_t> as, bs;
+  std::vector<Vec3> at_a, at_b;
   for (std::size_t k = 0; k < n; ++k) {
-    if (edges.onEdgeOf(k, fa)) as.push_back(k);
-    if (edges.onEdgeOf(k, fb)) bs.push_back(k);
+    if (edges.onEdgeOf(k, fa)) as.push_back(k), at_a.push_back(scene.spheres[first_a + k].center_m);
+    if (edges.onEdgeOf(k, fb)) bs.push_back(k), at_b.push_back(scene.spheres[first_b + k].center_m);
   }
-  // Every pair within reach, nearest first (ties in index order).
-  std::vector<std::tuple<double, std::size_t, std::size_t>> pairs;
-  for (const std::size_t ka : as)
-    for (const std::size_t kb : bs) {
-      const double d = (scene.spheres[first_a + ka].center_m - scene.spheres[first_b + kb].center_m).norm();
-      if (d <= params.max_gap_m && d > 0.0) pairs.emplace_back(d, ka, kb);
-    }
-  std::sort(pairs.begin(), pairs.end());
-  std::vector<bool> used_a(n, false), used_b(n, false);
   LacedFaces out;
   const bridge::WireCurve curve = wireCurveOf(params);
-  for (const auto& [d, ka, kb] : pairs) {
-    if (used_a[ka] || used_b[kb]) continue;
-    used_a[ka] = used_b[kb] = true;
-    out.links.push_back(lacingWire(first_a + ka, first_b + kb, d, params, curve));
-  }
-  for (const std::size_t ka : as) out.unlaced += used_a[ka] ? 0 : 1;
-  for (const std::size_t kb : bs) out.unlaced += used_b[kb] ? 0 : 1;
+  for (const auto& [d, i, j] : nearestPairs(at_a, at_b, params.max_gap_m))
+    out.links.push_back(lacingWire(first_a + as[i], first_b + bs[j], d, params, curve));
+  out.unlaced = as.size() + bs.size() - 2 * out.links.size();
   return out;
 }
 

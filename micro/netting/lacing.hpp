@@ -90,6 +90,20 @@ struct LacedPlate {
 LacedPlate lacePlate(Scene& scene, const CellEdges& edges, std::size_t first, int face, std::size_t wall,
                      int anchor_group, const LacingParams& params, std::vector<bool>& taken);
 
+/// Laces the edge nodes of face `face` of a cell to the plate `wall`, as
+/// lacePlate, but as the wall's lacing would join them to a neighbouring
+/// copy of the cell: the neighbour's facing edge nodes are this cell's own
+/// edge nodes of the opposite face, where they are now, one `pitch_m` (the
+/// layout's cell pitch along the face's axis) over, and the two faces are
+/// paired as laceFaces pairs two cells' (nearest first, each node once,
+/// within max_gap_m). Each pair's anchor stands at the neighbour's node and
+/// rides the plate. So a face on a plate gets the wires a face between two
+/// resolved cells gets, not one per edge node. `taken` and `taken_across`
+/// (this face's nodes and the stand-in's) carry over the tiles of one face.
+LacedPlate lacePlateAsNeighbour(Scene& scene, const CellEdges& edges, std::size_t first, int face, std::size_t wall,
+                                int anchor_group, const LacingParams& params, double pitch_m, std::vector<bool>& taken,
+                                std::vector<bool>& taken_across);
+
 /// Laces the face of cell a at the upper end along `axis` to the facing face
 /// of cell b (its neighbour along +axis): the cells' spheres are those of
 /// `edges`' cell, starting at `first_a` and `first_b` in `scene`, where they

@@ -938,8 +938,11 @@ TEST(HybridStructure, StruckCellResolvedTheCellBehindAMacroNode) {
 // the draw: natively the impulses are 12.8 against 8.9 N s, and the test
 // asks for a quarter more). The plate's force reaches
 // the node a step late (the wires act after it moved), the interface's two
-// sides still the same products, and the balance within its bound. A
-// structure resolved whole has no plates: to_plates there is refused.
+// sides still the same products, and the balance within its bound. Laced
+// as to a neighbouring copy of the cell (plate_partners "neighbour_face"),
+// the face gets fewer wires than one per edge node. A structure resolved
+// whole has no plates: to_plates there is refused, and plate_partners
+// without it, or of an unknown kind.
 TEST(HybridStructure, ACellLacedToItsPlatesDragsTheMacroNodeBeside) {
   const auto dir = scratchDir("hybrid_laced_plates");
   nlohmann::json laws = smallCellAndLaws(dir);
@@ -950,13 +953,26 @@ TEST(HybridStructure, ACellLacedToItsPlatesDragsTheMacroNodeBeside) {
   writeFile(dir / "plain.json", c.dump());
   c["resolve"]["lacing"] = {{"at_s", 0.0}, {"to_plates", true}};
   writeFile(dir / "laced.json", c.dump());
-  ASSERT_NO_FATAL_FAILURE(runEach(dir, {"plain", "laced"}));
+  c["resolve"]["lacing"]["plate_partners"] = "neighbour_face";
+  writeFile(dir / "as_neighbour.json", c.dump());
+  ASSERT_NO_FATAL_FAILURE(runEach(dir, {"plain", "laced", "as_neighbour"}));
   const nlohmann::json plain = summaryOf(dir / "plain"), laced = summaryOf(dir / "laced");
   const nlohmann::json& l = laced["lacing"];
   EXPECT_EQ(l["faces_laced"], 0) << "one resolved cell: no two to lace";
   EXPECT_EQ(l["to_plates"], true);
+  EXPECT_EQ(l["plate_partners"], "edge_nodes");
   EXPECT_EQ(l["plates_laced"], 1);
   EXPECT_GE(l["links_to_plates"].get<int>(), 5) << l.dump();
+  // Laced as to a neighbouring copy of the cell (its stand-in the cell's
+  // own opposite face, one pitch over): laced as laid out, every edge node
+  // of this small cell's face finds its partner on the copy within reach,
+  // one wire each, as with one per edge node (which partners, and where,
+  // Lacing.AFaceLacedToAPlateAsToItsNeighbourGetsTheNeighboursWires).
+  const nlohmann::json as_neighbour = summaryOf(dir / "as_neighbour");
+  const nlohmann::json& n = as_neighbour["lacing"];
+  EXPECT_EQ(n["plate_partners"], "neighbour_face");
+  EXPECT_EQ(n["links_to_plates"], l["links_to_plates"]) << n.dump() << l.dump();
+  EXPECT_EQ(n["edge_nodes_unlaced_at_plates"], 0);
   ASSERT_EQ(laced["hybrid"]["interfaces"].size(), 1u);
   EXPECT_EQ(laced["hybrid"]["interfaces"][0]["axis"], "y");
   // The macro node beside (front and back layer at once) moves back along x.
@@ -966,6 +982,8 @@ TEST(HybridStructure, ACellLacedToItsPlatesDragsTheMacroNodeBeside) {
   EXPECT_GT(macroMove(laced), macroMove(plain))
       << "laced " << macroMove(laced) << " m against " << macroMove(plain) << " m unlaced";
   EXPECT_GT(macroMove(plain), 0.0);
+  EXPECT_GT(macroMove(as_neighbour), macroMove(plain))
+      << "laced as to a neighbour " << macroMove(as_neighbour) << " m against " << macroMove(plain) << " m unlaced";
   const auto impulse = [&](const char* name) {  // (the plate's, along x, over the impact: N s)
     const gabion::bridge::H5Reader h5(dir / name / "result.h5");
     const std::vector<double> t = h5.read("/series/time_s"), f = h5.read("/series/walls/interface_1_y_minus/force_N");
@@ -991,12 +1009,16 @@ TEST(HybridStructure, ACellLacedToItsPlatesDragsTheMacroNodeBeside) {
                           {"lacing", {{"at_s", 0.0}, {"to_plates", true}}},
                           {"run", {{"duration_s", 0.01}}}};
   expectRefused(dir, whole, "/lacing/to_plates");
+  whole["lacing"] = {{"at_s", 0.0}, {"plate_partners", "neighbour_face"}};
+  expectRefused(dir, whole, "/lacing/plate_partners");
+  whole["lacing"] = {{"at_s", 0.0}, {"to_plates", true}, {"plate_partners", "nearest"}};
+  expectRefused(dir, whole, "/lacing/plate_partners");
   // In macro.resolved the lacing to the plates goes to the hybrids alone.
   writeFile(dir / "both.json", R"({"format": "gabion.case/1", "kind": "macro.resolved", "law_file": "laws.json",
  "cell": "cell/cell.h5", "structure": {"cells": [1, 2, 1], "material": {"front": "front", "core": "front"}},
  "boulder": {"diameter_m": 0.25, "velocity_m_s": 8},
  "resolved": {"settle": {"duration_s": 0.01, "until_at_rest": false}, "run": {"duration_s": 0.03},
-              "lacing": {"at_s": 0, "to_plates": true}},
+              "lacing": {"at_s": 0, "to_plates": true, "plate_partners": "neighbour_face"}},
  "hybrid": {"within_m": [0]}})");
   const auto both = runGabion("check " + (dir / "both.json").string());
   EXPECT_EQ(both.exit_code, 0) << both.output;

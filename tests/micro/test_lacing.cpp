@@ -17,11 +17,13 @@ using gabion::micro::CellEdges;
 using gabion::micro::cellEdges;
 using gabion::micro::faceIndex;
 using gabion::micro::laceFaces;
+using gabion::micro::lacePlateAsNeighbour;
 using gabion::micro::LacingParams;
 using gabion::micro::LinkSpec;
 using gabion::micro::Scene;
 using gabion::micro::SphereSpec;
 using gabion::micro::Vec3;
+using gabion::micro::WallSpec;
 
 constexpr double kEdge = 0.5;
 
@@ -173,6 +175,86 @@ TEST(Lacing, LacesTheFacingEdgesOfTwoCellsNodeToNode) {
     EXPECT_TRUE(none.links.empty());
     EXPECT_EQ(none.unlaced, on_a + on_b);
   }
+}
+
+// A face laced to a plate as to a neighbouring copy of the cell
+// (lacePlateAsNeighbour) gets the wires laceFaces gives it with that copy
+// there, one pitch over: the same number, each from the same node, to an
+// anchor where the copy's partner node stands, at the same length, on the
+// upper face and on the lower; the anchors ride the plate and touch
+// nothing. A face cut in two tiles gets them once, split between the
+// tiles.
+TEST(Lacing, AFaceLacedToAPlateAsToItsNeighbourGetsTheNeighboursWires) {
+  const Scene cell = boxCell();
+  const std::size_t n = cell.spheres.size();
+  const double gap = 0.03, pitch = kEdge + gap;
+  const CellEdges edges = cellEdges(cell, 0.016);
+  LacingParams p;
+  p.max_gap_m = 0.06;
+  p.min_length_m = 0.035;
+  for (int axis = 0; axis < 3; ++axis)
+    for (int upper = 0; upper < 2; ++upper) {
+      // The copy beside it, for laceFaces (the lower cell first).
+      Scene two = cell;
+      for (const SphereSpec& s : cell.spheres) {
+        SphereSpec t = s;
+        t.center_m[axis] += upper ? pitch : -pitch;
+        two.spheres.push_back(t);
+      }
+      const std::size_t lower = upper ? 0 : n, higher = upper ? n : 0;
+      const auto pair = laceFaces(two, edges, lower, higher, axis, p);
+      ASSERT_GT(pair.links.size(), 20u);
+      // The plate on that face, its normal into the cell, over the whole face.
+      const auto plateScene = [&](int tiles) {
+        Scene one = cell;
+        for (int t = 0; t < tiles; ++t) {
+          WallSpec w;
+          w.bounded = true;
+          w.normal = Vec3::Zero(), w.normal[axis] = upper ? -1.0 : 1.0;
+          w.axis_u = Vec3::Zero(), w.axis_u[(axis + 1) % 3] = 1.0;
+          w.point_m = Vec3::Constant(0.5 * kEdge), w.point_m[axis] = upper ? kEdge : 0.0;
+          w.half_u_m = 0.5 * kEdge / tiles + 0.05, w.half_v_m = 0.5 * kEdge + 0.05;
+          w.point_m[(axis + 1) % 3] += (t - 0.5 * (tiles - 1)) * kEdge / tiles;
+          one.walls.push_back(w);
+        }
+        return one;
+      };
+      Scene one = plateScene(1);
+      std::vector<bool> taken, taken_across;
+      const int face = faceIndex(axis, upper);
+      const auto laced = lacePlateAsNeighbour(one, edges, 0, face, 0, 3, p, pitch, taken, taken_across);
+      ASSERT_EQ(laced.links, pair.links.size()) << "axis " << axis << (upper ? " upper" : " lower");
+      ASSERT_EQ(one.links.size(), cell.links.size() + laced.links);
+      ASSERT_EQ(one.spheres.size(), n + laced.links);
+      std::size_t on_face = 0;
+      for (std::size_t k = 0; k < n; ++k) on_face += edges.onEdgeOf(k, face) ? 1 : 0;
+      EXPECT_EQ(laced.links + laced.unlaced, on_face);
+      for (std::size_t k = 0; k < laced.links; ++k) {
+        const LinkSpec& mine = one.links[cell.links.size() + k];
+        const LinkSpec& theirs = pair.links[k];
+        // (laceFaces' a is the lower cell's node: this cell's on its upper face)
+        const std::size_t node = upper ? theirs.a : theirs.b, partner = upper ? theirs.b : theirs.a;
+        EXPECT_EQ(mine.a, node);
+        ASSERT_EQ(mine.b, n + k);
+        const SphereSpec& anchor = one.spheres[mine.b];
+        EXPECT_LT((anchor.center_m - two.spheres[partner].center_m).norm(), 1e-12);
+        EXPECT_EQ(mine.wire.rest_length_m, theirs.wire.rest_length_m);
+        EXPECT_TRUE(anchor.fixed);
+        EXPECT_EQ(anchor.rides_wall, 0);
+        EXPECT_EQ(anchor.group, 3);
+      }
+      // In two tiles: every node once, the same wires between them.
+      Scene tiled = plateScene(2);
+      std::vector<bool> t2, a2;
+      const auto first = lacePlateAsNeighbour(tiled, edges, 0, face, 0, 3, p, pitch, t2, a2);
+      const auto second = lacePlateAsNeighbour(tiled, edges, 0, face, 1, 3, p, pitch, t2, a2);
+      EXPECT_GT(first.links, 0u);
+      EXPECT_GT(second.links, 0u);
+      EXPECT_NEAR(static_cast<double>(first.links + second.links), static_cast<double>(laced.links), 0.1 * laced.links);
+      std::set<std::size_t> used;
+      for (std::size_t k = cell.links.size(); k < tiled.links.size(); ++k)
+        EXPECT_TRUE(used.insert(tiled.links[k].a).second) << "a node laced twice";
+    }
 }
 
 }  // namespace
