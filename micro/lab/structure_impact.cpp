@@ -732,6 +732,10 @@ bridge::RunOutcome runOne(const StructureCase& c, const Sample& sample, const br
   } sr;
   double struck0 = NAN;
   double x_contact = NAN, t_contact = NAN, peak = 0.0, t_last_force = NAN;
+  // (and the last time it stood above the boulder's weight: a boulder at
+  // rest in its crater still presses the face, up to about its weight)
+  double t_above_weight = NAN;
+  const double weight = mass * scene.gravity_m_s2.norm();
   // Every cell's mean block position at the start and now, and the largest
   // moves of one along x and across it (the macro model's x-only assumption).
   std::vector<Vec3> cell0, now;
@@ -773,6 +777,7 @@ bridge::RunOutcome runOne(const StructureCase& c, const Sample& sample, const br
     sr.front.push_back(front), sr.back.push_back(back);
     peak = std::max(peak, force);
     if (force > 0.01 * peak) t_last_force = e.time();
+    if (force > weight) t_above_weight = e.time();
   };
   // Over: the boulder has left the face (no force for 5 ms, moving back),
   // come to rest in it (below 1 % of its speed), or passed the back face.
@@ -794,6 +799,7 @@ bridge::RunOutcome runOne(const StructureCase& c, const Sample& sample, const br
     a("front_fine_m", sr.front_fine), a("back_fine_m", sr.back_fine);
     a("front_macro_m", sr.front_macro), a("back_macro_m", sr.back_macro);
     a("x_contact", x_contact), a("t_contact", t_contact), a("peak", peak), a("t_last_force", t_last_force);
+    a("t_above_weight", t_above_weight);
     a("cell0", cell0), a("max_cell_x", max_cell_x), a("max_cell_across", max_cell_across);
     a("indentation_m", sr.indentation), a("struck0", struck0);
     if (part && part->archive) {
@@ -851,6 +857,7 @@ bridge::RunOutcome runOne(const StructureCase& c, const Sample& sample, const br
   r["max_penetration_m"] = max_pen;
   r["final_penetration_m"] = sr.penetration.back();
   r["contact_duration_s"] = touched ? t_last_force - t_contact : 0.0;
+  r["contact_duration_above_weight_s"] = touched && !std::isnan(t_above_weight) ? t_above_weight - t_contact : 0.0;
   r["rebound_velocity_m_s"] = rebound;
   r["max_front_face_displacement_m"] = max_front;
   r["max_back_face_displacement_m"] = max_back;

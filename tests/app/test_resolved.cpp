@@ -137,6 +137,24 @@ TEST(ResolvedStructure, TwoCellsStruckBeforeTheirMacroTwin) {
   EXPECT_GE(s["max_cell_displacement_x_m"].get<double>(), s["max_front_face_displacement_m"].get<double>());
   EXPECT_GE(s["max_cell_displacement_across_m"].get<double>(), 0.0);
   expectMomentumIsImpulse(dir / "structure", s["boulder_mass_kg"].get<double>(), 8.0);
+  // The contact's end above the boulder's weight: from the same first
+  // contact as contact_duration_s (1 % of the peak), to the last sample of
+  // the impact's force above m g, as its curve in result.h5 shows.
+  {
+    const gabion::bridge::H5Reader h5(dir / "structure" / "result.h5");
+    const std::vector<double> t = h5.read("/curves/impact/time_s"), f = h5.read("/curves/impact/force_N");
+    ASSERT_EQ(t.size(), f.size());
+    const double peak = *std::max_element(f.begin(), f.end()), weight = s["boulder_mass_kg"].get<double>() * 9.81;
+    double last_1 = NAN, last_weight = NAN;
+    for (std::size_t k = 0; k < t.size(); ++k) {
+      if (f[k] > 0.01 * peak) last_1 = t[k];
+      if (f[k] > weight) last_weight = t[k];
+    }
+    ASSERT_TRUE(std::isfinite(last_1) && std::isfinite(last_weight)) << "weight " << weight << " N, peak " << peak;
+    const double above_weight = s["contact_duration_above_weight_s"].get<double>();
+    EXPECT_GT(above_weight, 0.0);
+    EXPECT_NEAR(s["contact_duration_s"].get<double>() - above_weight, last_1 - last_weight, 1e-12);
+  }
 
   // Bad input is named before anything runs.
   {
