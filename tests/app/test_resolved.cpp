@@ -205,10 +205,13 @@ TEST(ResolvedStructure, TwoCellsStruckBeforeTheirMacroTwin) {
   ASSERT_EQ(h["status"], "ok") << h.dump();
   EXPECT_EQ(h["resolved_cells"], 1);
   const nlohmann::json hs = summaryOf(dir / "both" / "hybrid_0");
-  for (const char* key : {"peak_force_N", "max_penetration_m"}) {
+  for (const char* key : {"peak_force_N", "max_penetration_m", "contact_duration_above_weight_s"}) {
     const double a = b[key].get<double>(), m = hs[key].get<double>();
+    ASSERT_GT(a, 0.0) << key;
     EXPECT_DOUBLE_EQ(h["relative_error"][key].get<double>(), (m - a) / a) << key;
   }
+  // (the contact above the weight: resolved and hybrids alone, the twin's boulder has none along x)
+  EXPECT_FALSE(b["relative_error"].contains("contact_duration_above_weight_s"));
   EXPECT_GT(h["speed_up"].get<double>(), 0.0);
   EXPECT_NE(both.output.find("hybrid within 0 m"), std::string::npos) << both.output;
 }
