@@ -38,6 +38,21 @@ const std::vector<std::string>& fineKeys() {
   return keys;
 }
 
+/// The keys a hybrid is compared on with the resolved run: both lists.
+const std::vector<std::string>& hybridKeys() {
+  static const std::vector<std::string> keys = [] {
+    std::vector<std::string> k = comparedKeys();
+    k.insert(k.end(), fineKeys().begin(), fineKeys().end());
+    return k;
+  }();
+  return keys;
+}
+
+/// (m - a) / |a|: m's error relative to a, NaN where either is not a number or a is 0.
+double relativeError(double a, double m) {
+  return std::isfinite(a) && std::isfinite(m) && a != 0.0 ? (m - a) / std::fabs(a) : NAN;
+}
+
 /// The two sub-cases of a macro.resolved case, as JSON.
 struct Plan {
   json twin, resolved;
@@ -232,7 +247,7 @@ bridge::RunOutcome run(const JsonDocument& doc, const bridge::RunContext& ctx) {
   for (const std::string& key : comparedKeys()) {
     const double a = number(res, key), m = number(twin, key);
     resolved_value.push_back(a), macro_value.push_back(m);
-    rel.push_back(std::isfinite(a) && std::isfinite(m) && a != 0.0 ? (m - a) / std::fabs(a) : NAN);
+    rel.push_back(relativeError(a, m));
     r[key] = a;
     macro[key] = m;
     error[key] = rel.back();
@@ -265,12 +280,11 @@ bridge::RunOutcome run(const JsonDocument& doc, const bridge::RunContext& ctx) {
       continue;
     }
     json herr = json::object();
-    for (const auto* keys : {&comparedKeys(), &fineKeys()})
-      for (const std::string& key : *keys) {
-        const double a = number(res, key), m = number(h, key);
-        row[key] = m;
-        herr[key] = std::isfinite(a) && std::isfinite(m) && a != 0.0 ? (m - a) / std::fabs(a) : NAN;
-      }
+    for (const std::string& key : hybridKeys()) {
+      const double a = number(res, key), m = number(h, key);
+      row[key] = m;
+      herr[key] = relativeError(a, m);
+    }
     const json info = h.value("hybrid", json::object());
     row["status"] = "ok";
     row["outcome"] = h.value("outcome", "unknown");
@@ -349,15 +363,14 @@ bridge::RunOutcome run(const JsonDocument& doc, const bridge::RunContext& ctx) {
     const std::size_t n = h["resolved_cells"].get<std::size_t>();
     a << n << (n == 1 ? " cell" : " cells") << " resolved, " << h["wall_time_s"].get<double>() << " s ("
       << h["speed_up"].get<double>() << " times faster than resolved); error";
-    for (const auto* keys : {&comparedKeys(), &fineKeys()})
-      for (const std::string& key : *keys) {
-        const json& e = h["relative_error"][key];
-        a << " " << key << " ";
-        if (e.is_number())
-          a << 100.0 * e.get<double>() << " %";
-        else
-          a << "n/a";
-      }
+    for (const std::string& key : hybridKeys()) {
+      const json& e = h["relative_error"][key];
+      a << " " << key << " ";
+      if (e.is_number())
+        a << 100.0 * e.get<double>() << " %";
+      else
+        a << "n/a";
+    }
     a << "; outcome " << h["outcome"].get<std::string>() << "\n";
   }
   out.answer = a.str();

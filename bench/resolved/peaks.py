@@ -12,9 +12,11 @@ penetration (when the boulder stopped), and when the force last fell
 below 5 % of its peak and below the boulder's weight (m g, g = 9.81
 m/s2: a boulder at rest in its crater still presses the face with a
 part of its weight, so the contact's end at 1 % of the peak, the
-summary's contact_duration_s, can fall inside that residual); then each
-run's relative differences from the first folder's. With --png, FIG shows each run's force and penetration
-against the time from first contact ([LABEL=]DIR names a curve LABEL).
+summary's contact_duration_s, can fall inside that residual; nan where
+the force never exceeds it); then each run's relative differences from
+the first folder's. With --png, FIG shows each run's force and
+penetration against the time from first contact ([LABEL=]DIR names a
+curve LABEL).
 """
 import json
 import sys
@@ -45,7 +47,7 @@ def measures(folder):
     out.append(t[np.argmax(pen)] - t[first])
     for level in (0.05 * f.max(), weight(folder)):
         after = np.where(f[np.argmax(f):] >= level)[0]
-        out.append(t[np.argmax(f) + after[-1]] - t[first])
+        out.append(t[np.argmax(f) + after[-1]] - t[first] if after.size else float("nan"))
     return out
 
 

@@ -93,9 +93,7 @@ LinkSpec lacingWire(std::size_t a, std::size_t b, double distance, const LacingP
     l.pull_force_N = params.pull_N, l.pull_min_m = params.min_length_m;
   return l;
 }
-}  // namespace
 
-namespace {
 // Pairs points of a with points of b within max_gap_m of each other,
 // nearest first, each point in one pair at most, ties in index order: the
 // lacing's rule, for two cells' faces and for a face and its neighbour's
