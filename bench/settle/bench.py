@@ -85,6 +85,21 @@ def cpu_model():
     return name
 
 
+def core_round_trip(gabion):
+    """The cache-line round trip between CPUs 0 and 1, from bench_core_round_trip built beside gabion
+    (build/bench/): what every fork and join of a two-thread step pays, several times a step. None
+    where it is not built or the machine has one CPU."""
+    exe = os.path.join(os.path.dirname(os.path.abspath(gabion)), "bench", "bench_core_round_trip")
+    if (os.cpu_count() or 1) < 2 or not os.access(exe, os.X_OK):
+        return None
+    try:
+        out = subprocess.run([exe], capture_output=True, text=True, timeout=60).stdout
+    except (OSError, subprocess.SubprocessError):
+        return None
+    m = re.search(r": (\d+) ns", out)
+    return int(m.group(1)) if m else None
+
+
 def run_measured(cmd, cwd, env, stdout_path, stderr_path, timeout_s):
     """Runs cmd; returns (rc, max_rss_kB or None, elapsed_s, how, cpu_s).
 
@@ -869,7 +884,11 @@ def main():
     os.makedirs(a.workdir, exist_ok=True)
     stamp = datetime.datetime.now(datetime.timezone.utc).strftime("%Y-%m-%d %H:%M UTC")
     log(f"settling benchmark, {stamp}")
-    log(f"machine: {cpu_model()}, {os.cpu_count()} logical CPUs; load average {loadavg()}")
+    machine = f"{cpu_model()}, {os.cpu_count()} logical CPUs"
+    trip_ns = core_round_trip(a.gabion)
+    if trip_ns is not None:
+        machine += f", cache-line round trip between CPUs 0 and 1 {trip_ns} ns (bench_core_round_trip)"
+    log(f"machine: {machine}; load average {loadavg()}")
     log(f"scene {a.scene}: settle N = {a.n if do_settle else '-'}, steps = {settle_steps if do_settle else '-'}; "
         f"mixed steps = {mixed_steps if do_mixed else '-'}; seed = {a.seed}, repeat = {a.repeat}")
 
@@ -1002,7 +1021,7 @@ def main():
                              "label": job_label(job)})
                 rows.append(best)
 
-    info = {"date": stamp, "machine": f"{cpu_model()}, {os.cpu_count()} logical CPUs", "steps": settle_steps,
+    info = {"date": stamp, "machine": machine, "steps": settle_steps,
             "seed": a.seed, "repeat": a.repeat, "rows": rows, "skipped": skipped, "scene": a.scene,
             "initial_mean_z_m": {str(s["n"]): s["initial_mean_z_m"] for s in scenes.values()
                                  if s["name"] == "settle"},

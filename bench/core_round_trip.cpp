@@ -1,0 +1,104 @@
+// How long one cache line takes to go from one core to another and back
+// (docs/performance.md, "Two threads"): two threads, pinned to CPUs A and B,
+// pass a counter back and forth through one atomic on its own cache line.
+// Every hand-over moves the line between the two cores' caches, as a
+// worker pool's start and join do, and as the contact stage's force
+// buffers and the integrator's neighbouring ranges do at each step. Prints
+// the round trip in ns, best of several batches. Not a test: a measurement.
+//   build/bench/bench_core_round_trip [--cpus A,B] [--trips N] [--batches K]
+// Two cores that share a cache level exchange a line in tens of ns; on a
+// virtual machine whose two CPUs lie on separate dies, in hundreds, and
+// every step of a two-thread run pays it several times.
+#include <pthread.h>
+#include <sched.h>
+
+#include <algorithm>
+#include <atomic>
+#include <chrono>
+#include <cstdio>
+#include <cstdlib>
+#include <cstring>
+#include <limits>
+#include <string>
+#include <thread>
+
+namespace {
+
+struct alignas(64) Line {
+  std::atomic<long> value{0};
+};
+
+bool pin(int cpu) {
+  cpu_set_t set;
+  CPU_ZERO(&set);
+  CPU_SET(cpu, &set);
+  return pthread_setaffinity_np(pthread_self(), sizeof set, &set) == 0;
+}
+
+[[noreturn]] void usage(const char* why) {
+  std::fprintf(stderr,
+               "bench_core_round_trip: %s\nusage: bench_core_round_trip [--cpus A,B] [--trips N] [--batches K]\n", why);
+  std::exit(2);
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  int cpu_a = 0, cpu_b = 1;
+  long trips = 200000;
+  int batches = 5;
+  for (int i = 1; i < argc; ++i) {
+    const std::string arg = argv[i];
+    if (i + 1 >= argc) usage(("missing value after " + arg).c_str());
+    const char* v = argv[++i];
+    if (arg == "--cpus") {
+      if (std::sscanf(v, "%d,%d", &cpu_a, &cpu_b) != 2 || cpu_a < 0 || cpu_b < 0 || cpu_a == cpu_b)
+        usage("--cpus wants two different CPU numbers, A,B");
+    } else if (arg == "--trips") {
+      trips = std::atol(v);
+      if (trips < 1000) usage("--trips wants at least 1000");
+    } else if (arg == "--batches") {
+      batches = std::atoi(v);
+      if (batches < 1) usage("--batches wants at least 1");
+    } else {
+      usage(("unknown option " + arg).c_str());
+    }
+  }
+
+  Line line;
+  std::atomic<bool> pinned_b{true};
+  // The partner answers each odd value with the next even one.
+  std::thread partner([&] {
+    pinned_b = pin(cpu_b);
+    const long last = 2 * trips * batches;
+    for (long expect = 1; expect < last; expect += 2) {
+      while (line.value.load(std::memory_order_acquire) != expect) {
+      }
+      line.value.store(expect + 1, std::memory_order_release);
+    }
+  });
+  const bool pinned_a = pin(cpu_a);
+  double best = std::numeric_limits<double>::infinity(), worst = 0.0;
+  long v = 0;
+  for (int b = 0; b < batches; ++b) {
+    const auto start = std::chrono::steady_clock::now();
+    for (long k = 0; k < trips; ++k) {
+      line.value.store(++v, std::memory_order_release);
+      ++v;
+      while (line.value.load(std::memory_order_acquire) != v) {
+      }
+    }
+    const double ns = std::chrono::duration<double, std::nano>(std::chrono::steady_clock::now() - start).count() /
+                      static_cast<double>(trips);
+    best = std::min(best, ns);
+    worst = std::max(worst, ns);
+  }
+  partner.join();
+  if (!pinned_a || !pinned_b) {
+    std::fprintf(stderr, "bench_core_round_trip: could not pin to CPUs %d and %d (not both online?)\n", cpu_a, cpu_b);
+    return 1;
+  }
+  std::printf("cache-line round trip between CPUs %d and %d: %.0f ns (best of %d batches of %ld; worst %.0f ns)\n",
+              cpu_a, cpu_b, best, batches, trips, worst);
+  return 0;
+}
