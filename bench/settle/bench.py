@@ -616,7 +616,52 @@ def render_settle(info, rows):
             targ.append(f"N={n}: " + ", ".join(items))
     if targ:
         out.append("Targets, Gabion on one thread: " + "; ".join(targ) + ".")
+    targ = []
+    for n in ns:
+        def row(engine, threads, n=n):
+            return next((r for r in rows if r["engine"] == engine and r["n"] == n and r["threads"] == threads
+                         and r.get("variant") in (None, "ours")), None)
+        g1, g2, c1, lig = row("gabion", 1), row("gabion", 2), row("ceiling", 1), row("liggghts", 1)
+        items = []
+        v = paired(g1, c1)
+        if v:
+            items.append(paired_words("ceiling / Gabion", v, "<= 1.3", lambda x: x <= 1.3))
+        v = paired(lig, g1)
+        if v:
+            items.append(paired_words("x LIGGGHTS", v, ">= 3", lambda x: x >= 3))
+        v = paired(g1, g2)
+        if v:
+            items.append(paired_words("2 threads / 1", v, ">= 1.6", lambda x: x >= 1.6))
+        v = paired(c1, row("ceiling", 2))
+        if v:
+            items.append(f"the kernel's 2 threads / 1 {v[0]:.2f} ({v[1]:.2f}-{v[2]:.2f})")
+        if items:
+            targ.append(f"N={n}: " + ", ".join(items))
+    if targ:
+        out.append("Targets paired by round (the median over the rounds of each round's ratio; the runs of one "
+                   "round lie seconds apart, so that a drift of the machine's speed over minutes hits both "
+                   "sides alike): " + "; ".join(targ) + ".")
     return out
+
+
+def paired(num, den):
+    """(median, lowest, highest, rounds) of loop(num) / loop(den) over the rounds where both ran, i.e. of
+    den's speed over num's; None with fewer than 2 such rounds. The two runs of one round lie seconds
+    apart, so a drift of the machine's speed over minutes, which the best of each engine's runs does not
+    cancel, hits both alike. num, den: result rows, whose round_loop_s hold each round's loop time."""
+    a, b = (num or {}).get("round_loop_s") or [], (den or {}).get("round_loop_s") or []
+    x = sorted(p / q for p, q in zip(a, b) if p and q)
+    if len(x) < 2:
+        return None
+    mid = len(x) // 2
+    med = x[mid] if len(x) % 2 else 0.5 * (x[mid - 1] + x[mid])
+    return med, x[0], x[-1], len(x)
+
+
+def paired_words(name, value, target, met):
+    med, lo, hi, k = value
+    return (f"{name} {med:.2f} ({lo:.2f}-{hi:.2f} over {k} rounds; target {target}: "
+            f"{'met' if met(med) else 'not met'})")
 
 
 def liggghts_zeta(m_a, m_b=None, gamma_n=1883.0, kn=1.0e5):
@@ -716,6 +761,15 @@ def render_mixed(info, rows):
             targ.append(f"{r['threads']} thread{'s' if r['threads'] > 1 else ''}: " + ", ".join(items))
     if targ:
         out.append("Targets, Gabion: " + "; ".join(targ) + ".")
+    targ = []
+    for r in rows:
+        v = paired(best, r) if r["engine"] == "gabion" else None
+        if v:
+            targ.append(f"{r['threads']} thread{'s' if r['threads'] > 1 else ''}: "
+                        + paired_words("x LIGGGHTS", v, ">= 3", lambda x: x >= 3))
+    if targ:
+        out.append("Targets paired by round (against the best LIGGGHTS setting's run of the same round; the "
+                   "median over the rounds): " + "; ".join(targ) + ".")
     return out
 
 
@@ -969,6 +1023,7 @@ def main():
         # of each is kept.
         jobs = jobs_for(name)
         bests = {j: None for j in jobs}
+        rounds = {j: [] for j in jobs}  # each round's loop s (None: failed), for ratios paired by round
         for r in range(a.repeat):
             for job in jobs:
                 e, t, v = job
@@ -984,6 +1039,7 @@ def main():
                 res["load1"] = la[0]
                 if "error" not in res and res["steps"] != scene["steps"]:
                     res["error"] = f"ran {res['steps']} steps, expected {scene['steps']}"
+                rounds[job].append(None if "error" in res else res["loop_s"])
                 if "error" in res:
                     failures += 1
                     log(f"    FAILED ({res['elapsed_s']:.1f} s): {res['error']}\n    outputs in {rundir}")
@@ -1017,6 +1073,7 @@ def main():
                     log(f"    1-step baseline of {job_label(job)} t={t}: CPU {b['cpu_s']:.2f} s; "
                         f"loop CPU {best['loop_cpu_s']:.2f} s")
             if best is not None:
+                best["round_loop_s"] = rounds[job]
                 best.update({"engine": e, "n": scene["n"], "threads": t, "scene": name, "variant": v,
                              "label": job_label(job)})
                 rows.append(best)
