@@ -65,19 +65,37 @@ int main(int argc, char** argv) {
     }
   }
 
+  if (std::thread::hardware_concurrency() < 2) {
+    std::fprintf(stderr, "bench_core_round_trip: one CPU only: nothing to measure\n");
+    return 1;
+  }
   Line line;
-  std::atomic<bool> pinned_b{true};
-  // The partner answers each odd value with the next even one.
+  std::atomic<int> partner_state{0};  // 1: pinned, 2: could not pin
+  constexpr long kStop = -1;          // the caller could not pin: the partner leaves
+  // The partner answers each odd value with the next even one. Both
+  // threads are pinned before the first hand-over: unpinned on one CPU,
+  // each hand-over would wait for a time slice.
   std::thread partner([&] {
-    pinned_b = pin(cpu_b);
+    const bool pinned = pin(cpu_b);
+    partner_state.store(pinned ? 1 : 2);
+    if (!pinned) return;
     const long last = 2 * trips * batches;
     for (long expect = 1; expect < last; expect += 2) {
-      while (line.value.load(std::memory_order_acquire) != expect) {
-      }
+      long seen;
+      while ((seen = line.value.load(std::memory_order_acquire)) != expect)
+        if (seen == kStop) return;
       line.value.store(expect + 1, std::memory_order_release);
     }
   });
   const bool pinned_a = pin(cpu_a);
+  while (partner_state.load() == 0) {
+  }
+  if (!pinned_a || partner_state.load() != 1) {
+    line.value.store(kStop, std::memory_order_release);
+    partner.join();
+    std::fprintf(stderr, "bench_core_round_trip: could not pin to CPUs %d and %d (not both online?)\n", cpu_a, cpu_b);
+    return 1;
+  }
   double best = std::numeric_limits<double>::infinity(), worst = 0.0;
   long v = 0;
   for (int b = 0; b < batches; ++b) {
@@ -94,10 +112,6 @@ int main(int argc, char** argv) {
     worst = std::max(worst, ns);
   }
   partner.join();
-  if (!pinned_a || !pinned_b) {
-    std::fprintf(stderr, "bench_core_round_trip: could not pin to CPUs %d and %d (not both online?)\n", cpu_a, cpu_b);
-    return 1;
-  }
   std::printf("cache-line round trip between CPUs %d and %d: %.0f ns (best of %d batches of %ld; worst %.0f ns)\n",
               cpu_a, cpu_b, best, batches, trips, worst);
   return 0;
