@@ -1,6 +1,7 @@
 // How long one cache line takes to go from one core to another and back
-// (docs/performance.md, "Two threads"): two threads, pinned to CPUs A and B,
-// pass a counter back and forth through one atomic on its own cache line.
+// (docs/performance.md, settling benchmark, What is timed and Results):
+// two threads, pinned to CPUs A and B, pass a counter back and forth
+// through one atomic on its own cache line.
 // Every hand-over moves the line between the two cores' caches, as a
 // worker pool's start and join do, and as the contact stage's force
 // buffers and the integrator's neighbouring ranges do at each step. Prints
@@ -17,7 +18,6 @@
 #include <chrono>
 #include <cstdio>
 #include <cstdlib>
-#include <cstring>
 #include <limits>
 #include <string>
 #include <thread>
