@@ -17,7 +17,7 @@
 // the halves share one line of each array, which both threads write at
 // every step. That is why the engine's store is line-aligned and its
 // workers' ranges are cut at multiples of eight particles
-// (micro/particles.hpp, Engine::linePart).
+// (micro/particles.hpp, lineStart in micro/engine.cpp).
 #include <atomic>
 #include <chrono>
 #include <cstdio>

@@ -31,12 +31,6 @@ std::uint32_t lineStart(std::size_t k, std::uint32_t previous) {
   return std::max(previous, static_cast<std::uint32_t>(k / kParticlesPerLine * kParticlesPerLine));
 }
 
-// As evenPart, with the inner boundaries on whole cache lines (lineStart).
-Range linePart(std::size_t n, std::size_t t, std::size_t parts) {
-  const auto cut = [&](std::size_t k) { return k == parts ? n : std::size_t{lineStart(n * k / parts, 0)}; };
-  return {cut(t), cut(t + 1)};
-}
-
 // Blocks of the same shape and density (a wall of copies of one cell, each
 // block a copy of its cell's) share one computation: the key is the exact
 // bytes of the shape, so each block gets what it would get alone.
@@ -298,6 +292,12 @@ StageProfile Engine::profile() const {
     // One worker: its partition was busy for the whole stage (no clock reads of its own).
     if (scratch_.size() == 1) p.partition_busy_s[0][k] = p.wall_s[k];
   }
+  // Several: the particle-wall part of each partition's contact job goes under walls.
+  for (std::size_t t = 0; t < scratch_.size() && scratch_.size() > 1; ++t) {
+    const double walls = s * static_cast<double>(scratch_[t].wall_ticks_total);
+    p.partition_busy_s[t][StageProfile::kWalls] += walls;
+    p.partition_busy_s[t][StageProfile::kContacts] -= walls;
+  }
   return p;
 }
 
@@ -365,7 +365,6 @@ void Engine::updateNeighbours() {
   sizeTouchBuffers();
   wallCandidates(p_, walls_, skin_m_, rebuildBlocks(), neighbourBlocks());
   if (laws_.any_viscous) wallDamping(p_, walls_, laws_);
-  partitionWallCandidates();
   restoreContacts(saved);
   p_.x0 = p_.x, p_.y0 = p_.y, p_.z0 = p_.z;  // reference for the displacement test
   for (RigidBlock& b : blocks_) b.markListBuild();
@@ -492,21 +491,27 @@ void Engine::restoreContacts(const SavedContacts& saved) {
   hcur_ = next;
 }
 
-// Row partitions with equal estimated work for the workers: per row, per
-// list entry (touch scan) and per pair that touched at the last step
-// (contact law), in the ratio 1 : 2 : 13 of their costs (per-step partition
-// times of the settling benchmark on two threads, fitted: 1.4, 2.6-2.9 and
-// 17-18 ns). They depend only on the state, so runs stay deterministic for a
-// given thread count.
+// Row partitions with equal estimated work for the workers. A worker takes
+// its rows' contacts, the wall candidates among its particles and, after the
+// join, the integration of its particles (their lines stay in its cache). The
+// work per row (scan and integration), per list entry (touch scan), per pair
+// that touched at the last step (contact law) and per wall candidate is in the
+// ratio 2 : 2 : 13 : 9 of their costs (per-step partition times of the
+// settling benchmark, fitted: 2.5, 2.6-2.9, 17-18 and 12 ns). They depend
+// only on the state, so runs stay deterministic for a given thread count.
 void Engine::partitionRows(const std::vector<std::uint32_t>& from) {
   constexpr std::uint32_t kNone = std::numeric_limits<std::uint32_t>::max();
   const std::size_t n = p_.size(), T = scratch_.size(), nblocks = rebuildBlocks();
   part_begin_.assign(T + 1, static_cast<std::uint32_t>(n));
   part_begin_[0] = 0;
   if (T == 1) return;
-  constexpr std::size_t kRowWeight = 1, kEntryWeight = 2, kTouchWeight = 13;
+  constexpr std::size_t kRowWeight = 2, kEntryWeight = 2, kTouchWeight = 13, kWallWeight = 9;
+  std::vector<std::uint32_t>& cand = wall_candidates_;  // per particle: of how many walls a candidate
+  cand.assign(n, 0);
+  for (const Wall& w : walls_)
+    for (const std::uint32_t i : w.cand) ++cand[i];
   const auto rowWeight = [&](std::size_t i) {
-    std::size_t w = kRowWeight;
+    std::size_t w = kRowWeight + kWallWeight * cand[i];
     for (std::uint32_t k = list_.row_begin[i]; k < list_.row_begin[i + 1]; ++k)
       w += kEntryWeight + (from[k] != kNone ? kTouchWeight : 0);
     return w;
@@ -532,45 +537,36 @@ void Engine::partitionRows(const std::vector<std::uint32_t>& from) {
   }
 }
 
-// Particle ranges with about equal numbers of wall candidates (the
-// candidates crowd into the index ranges of the cells next to the walls; a
-// wall across the slowest axis has all of its own at one end): boundary t is
-// the smallest index with at least total t / T candidates below it.
-void Engine::partitionWallCandidates() {
-  const std::size_t n = p_.size(), workers = scratch_.size();
-  const auto below = [&](std::uint32_t b) {
-    std::size_t c = 0;
-    for (const auto& w : walls_)
-      c += static_cast<std::size_t>(std::lower_bound(w.cand.begin(), w.cand.end(), b) - w.cand.begin());
-    return c;
-  };
-  const std::size_t total = below(static_cast<std::uint32_t>(n));
-  wall_part_.assign(workers + 1, static_cast<std::uint32_t>(n));
-  wall_part_[0] = 0;
-  for (std::size_t t = 1; t < workers; ++t) {
-    std::uint32_t first = wall_part_[t - 1], past = static_cast<std::uint32_t>(n);
-    while (first < past) {
-      const std::uint32_t mid = first + (past - first) / 2;
-      if (below(mid) * workers >= total * t)
-        past = mid;
-      else
-        first = mid + 1;
-    }
-    wall_part_[t] = lineStart(first, wall_part_[t - 1]);
-  }
-}
-
 // ---------------------------------------------------------------------------
-// computeContactForces: particle-particle contacts (micro/contact_kernel.cpp),
-// one row partition per worker; its buffer is added at the start of
-// integrate(), in the same pass over the particles.
+// computeContactForces: each wall's motion over this step planned, then one
+// job per row partition: the particle-particle contacts of its rows
+// (micro/contact_kernel.cpp), then the particle-wall contacts of its
+// particles (micro/walls.cpp, same law). Its particles' forces are its own
+// to add to; those on partners beyond its rows go to its buffer, added at
+// the start of integrate(), in the same pass over the particles. (One join
+// a step fewer than walls on ranges of their own, and the walls' particles
+// are in the cache of the worker that just wrote their forces.)
 
 void Engine::computeContactForces(bool measure) {
+  for (Wall& w : walls_) w.plan(time_, dt_);
   parallel(StageProfile::kContacts, [this, measure](int task) {
     const auto t = static_cast<std::size_t>(task);
-    contactPartition(p_, list_, laws_, dt_, max_overlap_ratio_, part_begin_[t], part_begin_[t + 1], hcur_, measure,
-                     scratch_[t]);
+    const std::uint32_t r0 = part_begin_[t], r1 = part_begin_[t + 1];
+    WorkerScratch& s = scratch_[t];
+    contactPartition(p_, list_, laws_, dt_, max_overlap_ratio_, r0, r1, hcur_, measure, s);
+    const std::uint64_t walls_from = TickClock::now();
+    wallPartition(p_, walls_, laws_, dt_, max_overlap_ratio_, step_, r0, r1, measure, s);
+    s.wall_ticks = TickClock::now() - walls_from;
+    s.wall_ticks_total += s.wall_ticks;
   });
+  // The profile keeps the walls apart: their partitions' part of the job,
+  // and the mean of those of the stage (the step's next lap counts from it:
+  // no partition is then busier in either stage than the stage lasted).
+  std::uint64_t walls = 0;
+  for (const WorkerScratch& s : scratch_) walls += s.wall_ticks;
+  walls /= scratch_.size();
+  ticks_[StageProfile::kWalls] += walls;
+  lap_ += walls;
   hcur_ ^= 1;  // this step's contact sets become the last step's
   contacts_ = 0;
   for (const WorkerScratch& s : scratch_) {
@@ -683,20 +679,12 @@ void Engine::advanceLinkedNodes(bool measure) {
 }
 
 // ---------------------------------------------------------------------------
-// applyWallsAndLoads (micro/walls.cpp): each wall's motion over this step,
-// then the particle-wall contacts (same law), the force on each wall and the
-// work of moving walls. Gravity is applied in integrate().
+// applyWallsAndLoads (micro/walls.cpp): the force on each wall and the work
+// of moving walls from the partitions' particle-wall contacts (summed in
+// partition order), the riders' pull, and the driven walls' move. Gravity is
+// applied in integrate().
 
 void Engine::applyWallsAndLoads(bool measure) {
-  for (Wall& w : walls_) w.plan(time_, dt_);
-  // Each worker takes the candidates of its particle range (particles are
-  // disjoint, so it adds to the global force arrays); wall forces, energies
-  // and work are summed in worker order.
-  parallel(StageProfile::kWalls, [this, measure](int task) {
-    const auto t = static_cast<std::size_t>(task);
-    wallPartition(p_, walls_, laws_, dt_, max_overlap_ratio_, step_, wall_part_[t], wall_part_[t + 1], measure,
-                  scratch_[t]);
-  });
   for (auto& w : walls_) w.force_N.setZero(), w.force_position = w.position;
   for (WorkerScratch& s : scratch_) {
     for (std::size_t w = 0; w < walls_.size(); ++w) walls_[w].force_N += s.wall_force[w];
@@ -745,8 +733,8 @@ void Engine::driveWalls() {
 }
 
 // ---------------------------------------------------------------------------
-// integrate (micro/integrator.cpp): free spheres per worker (the same ranges
-// as the force buffers' pass), blocks in parallel, walls moved; partial sums
+// integrate (micro/integrator.cpp): free spheres per worker (its row
+// partition, in the same pass as the force buffers), blocks in parallel, walls moved; partial sums
 // in a fixed order (deterministic for a given thread count). Also checks for
 // non-finite states and whether the list must be rebuilt.
 
@@ -773,11 +761,10 @@ void Engine::addForceBuffers(std::size_t b, std::size_t e) {
 }
 
 void Engine::integrate(bool measure) {
-  const std::size_t workers = scratch_.size(), n = p_.size();
+  const std::size_t workers = scratch_.size();
   parallel(StageProfile::kIntegrate, [&](int task) {
     const auto t = static_cast<std::size_t>(task);
-    const Range r = linePart(n, t, workers);
-    const std::size_t b = r.first, e = r.end;
+    const std::size_t b = part_begin_[t], e = part_begin_[t + 1];  // (the partition's own particles)
     addForceBuffers(b, e);
     if (all_loose_) {
       scratch_[t].spheres = integrateSpheres(p_, b, e, dt_, gravity_, measure, any_local_damping_, one_body_);
@@ -979,7 +966,7 @@ void Engine::archive(bridge::StateArchive& a) {
   }
   bridge::StateArchive list = a.group("neighbour_list");
   list("row_begin", list_.row_begin), list("neighbour", list_.nbr);
-  list("row_partitions", part_begin_), list("wall_partitions", wall_part_);
+  list("row_partitions", part_begin_);
   // The last step's contacts of each partition, with their history.
   for (std::size_t t = 0; t < scratch_.size(); ++t) {
     ContactSet& cs = scratch_[t].sets[hcur_];
@@ -1011,9 +998,8 @@ void Engine::archive(bridge::StateArchive& a) {
   // compares the digests of the engines first; this guards the rest).
   // (before the first step there is no list yet: the first step builds it)
   const bool listed = rebuilds_ > 0;
-  bool sizes_ok =
-      p_.slot.size() == n && (!listed || (part_begin_.size() == scratch_.size() + 1 &&
-                                          wall_part_.size() == scratch_.size() + 1 && list_.row_begin.size() == n + 1));
+  bool sizes_ok = p_.slot.size() == n &&
+                  (!listed || (part_begin_.size() == scratch_.size() + 1 && list_.row_begin.size() == n + 1));
   p_.forEachStateField([&](const char*, const auto& v) { sizes_ok = sizes_ok && v.size() == n; });
   p_.forEachScratchField([&](const char*, const auto& v) { sizes_ok = sizes_ok && v.size() == n; });
   if (!sizes_ok) throw std::invalid_argument("checkpoint: a state of another scene or number of threads");

@@ -186,7 +186,6 @@ class Engine {
   void reorderParticles(const std::vector<std::uint32_t>& order);
   void restoreContacts(const SavedContacts& saved);
   void partitionRows(const std::vector<std::uint32_t>& from);
-  void partitionWallCandidates();
   void sizeTouchBuffers();
 
   void addForceBuffers(std::size_t b, std::size_t e);
@@ -256,8 +255,8 @@ class Engine {
 
   std::unique_ptr<WorkerPool> pool_;
   std::vector<WorkerScratch> scratch_;
-  std::vector<std::uint32_t> part_begin_;  // row partitions per worker
-  std::vector<std::uint32_t> wall_part_;   // particle ranges per worker with equal wall candidates
+  std::vector<std::uint32_t> part_begin_;       // row partitions per worker
+  std::vector<std::uint32_t> wall_candidates_;  // partitionRows(): per particle, of how many walls a candidate
   std::string failure_;
   StepStatus status_ = StepStatus::Ok;
   std::vector<SphereSums> block_sums_;  // integrate(): each block's sums, added in block order

@@ -108,6 +108,8 @@ struct WorkerScratch {
   ContactEnergy wall_energy;
   double wall_work = 0.0;
   std::size_t wall_contacts = 0;
+  std::uint64_t wall_ticks = 0;  // the wall part of the contact job, this step and in all (stage profile)
+  std::uint64_t wall_ticks_total = 0;
   bool wall_failed = false;  // the candidate that overlaps most: particle, wall, overlap / radius
   std::uint32_t wall_fail_i = 0;
   std::size_t wall_fail_wall = 0;
