@@ -556,7 +556,8 @@ void Engine::computeContactForces(bool measure) {
     contactPartition(p_, list_, laws_, dt_, max_overlap_ratio_, r0, r1, hcur_, measure, s);
     const std::uint64_t walls_from = TickClock::now();
     wallPartition(p_, walls_, laws_, dt_, max_overlap_ratio_, step_, r0, r1, measure, s);
-    s.wall_ticks = TickClock::now() - walls_from;
+    const std::uint64_t walls_to = TickClock::now();
+    s.wall_ticks = walls_to > walls_from ? walls_to - walls_from : 0;  // (0 if moved to a core whose count lags)
     s.wall_ticks_total += s.wall_ticks;
   });
   // The profile keeps the walls apart: their partitions' part of the job,
@@ -564,7 +565,8 @@ void Engine::computeContactForces(bool measure) {
   // no partition is then busier in either stage than the stage lasted).
   std::uint64_t walls = 0;
   for (const WorkerScratch& s : scratch_) walls += s.wall_ticks;
-  walls /= scratch_.size();
+  const std::uint64_t now = TickClock::now();
+  walls = std::min(walls / scratch_.size(), now > lap_ ? now - lap_ : 0);
   ticks_[StageProfile::kWalls] += walls;
   lap_ += walls;
   hcur_ ^= 1;  // this step's contact sets become the last step's
@@ -734,9 +736,10 @@ void Engine::driveWalls() {
 
 // ---------------------------------------------------------------------------
 // integrate (micro/integrator.cpp): free spheres per worker (its row
-// partition, in the same pass as the force buffers), blocks in parallel, walls moved; partial sums
-// in a fixed order (deterministic for a given thread count). Also checks for
-// non-finite states and whether the list must be rebuilt.
+// partition, in the same pass as the force buffers), blocks in parallel,
+// walls moved; partial sums in a fixed order (deterministic for a given
+// thread count). Also checks for non-finite states and whether the list must
+// be rebuilt.
 
 // The contact kernel's partition t left the forces on particles beyond its
 // rows in its buffer (the band [lo, hi], in the groups of eight particles it
