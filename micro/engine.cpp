@@ -506,8 +506,7 @@ void Engine::partitionRows(const std::vector<std::uint32_t>& from) {
   part_begin_[0] = 0;
   if (T == 1) return;
   constexpr std::size_t kRowWeight = 2, kEntryWeight = 2, kTouchWeight = 13, kWallWeight = 9;
-  std::vector<std::uint32_t>& cand = wall_candidates_;  // per particle: of how many walls a candidate
-  cand.assign(n, 0);
+  std::vector<std::uint32_t> cand(n, 0);  // per particle: of how many walls a candidate
   for (const Wall& w : walls_)
     for (const std::uint32_t i : w.cand) ++cand[i];
   const auto rowWeight = [&](std::size_t i) {

@@ -255,8 +255,7 @@ class Engine {
 
   std::unique_ptr<WorkerPool> pool_;
   std::vector<WorkerScratch> scratch_;
-  std::vector<std::uint32_t> part_begin_;       // row partitions per worker
-  std::vector<std::uint32_t> wall_candidates_;  // partitionRows(): per particle, of how many walls a candidate
+  std::vector<std::uint32_t> part_begin_;  // row partitions per worker
   std::string failure_;
   StepStatus status_ = StepStatus::Ok;
   std::vector<SphereSums> block_sums_;  // integrate(): each block's sums, added in block order
