@@ -39,6 +39,7 @@ import math
 import os
 import re
 import shutil
+import statistics
 import subprocess
 import sys
 import time
@@ -509,11 +510,17 @@ def stage_line(rows, prefix):
             "busy time in brackets): " + "; ".join(stages) + ".")
 
 
-def balance_words(rows, n):
-    """The two-thread Gabion run's contact partitions, busiest over mean: the row partitions hold equal
+def settle_row(rows, engine, n, threads):
+    """The row of an engine's run at N and thread count (the kernel's on the benchmark's own cloud); None
+    where it did not run."""
+    return next((r for r in rows if r["engine"] == engine and r["n"] == n and r["threads"] == threads
+                 and r.get("variant") in (None, "ours")), None)
+
+
+def balance_words(r):
+    """A two-thread Gabion run's contact partitions, busiest over mean: the row partitions hold equal
     estimated work, so a value well above 1 points at a CPU that ran slower (docs/performance.md,
     settling Results)."""
-    r = next((r for r in rows if r["engine"] == "gabion" and r["n"] == n and r["threads"] == 2), None)
     busy = ((r or {}).get("profile") or {}).get("partition_busy_time_s", {}).get("contacts") or []
     if len(busy) < 2 or sum(busy) <= 0:
         return ""
@@ -610,12 +617,12 @@ def render_settle(info, rows):
         out.append("Threads over one thread: " + "; ".join(scal) + ".")
     targ = []
     for n in ns:
-        g1 = next((bsps_of(r) for r in rows if r["engine"] == "gabion" and r["n"] == n and r["threads"] == 1), None)
-        if g1 is None:
+        g1_row, g2_row = settle_row(rows, "gabion", n, 1), settle_row(rows, "gabion", n, 2)
+        if g1_row is None:
             continue
+        g1, g2 = bsps_of(g1_row), bsps_of(g2_row) if g2_row else None
         c1 = ceil.get((n, 1))
         lig = ref.get(("liggghts", n))
-        g2 = next((bsps_of(r) for r in rows if r["engine"] == "gabion" and r["n"] == n and r["threads"] == 2), None)
         items = []
         if c1:
             items.append(f"ceiling / Gabion {c1 / g1:.2f} (target <= 1.3: {'met' if c1 / g1 <= 1.3 else 'not met'})")
@@ -623,17 +630,15 @@ def render_settle(info, rows):
             items.append(f"x LIGGGHTS {g1 / lig:.2f} (target >= 3: {'met' if g1 / lig >= 3 else 'not met'})")
         if g2:
             items.append(f"2 threads / 1 {g2 / g1:.2f} (target >= 1.6: {'met' if g2 / g1 >= 1.6 else 'not met'}"
-                         + balance_words(rows, n) + ")")
+                         + balance_words(g2_row) + ")")
         if items:
             targ.append(f"N={n}: " + ", ".join(items))
     if targ:
         out.append("Targets, Gabion on one thread: " + "; ".join(targ) + ".")
     targ = []
     for n in ns:
-        def row(engine, threads, n=n):
-            return next((r for r in rows if r["engine"] == engine and r["n"] == n and r["threads"] == threads
-                         and r.get("variant") in (None, "ours")), None)
-        g1, g2, c1, lig = row("gabion", 1), row("gabion", 2), row("ceiling", 1), row("liggghts", 1)
+        g1, g2 = settle_row(rows, "gabion", n, 1), settle_row(rows, "gabion", n, 2)
+        c1, lig = settle_row(rows, "ceiling", n, 1), settle_row(rows, "liggghts", n, 1)
         items = []
         v = paired(g1, c1)
         if v:
@@ -644,7 +649,7 @@ def render_settle(info, rows):
         v = paired(g1, g2)
         if v:
             items.append(paired_words("2 threads / 1", v, ">= 1.6", lambda x: x >= 1.6))
-        v = paired(c1, row("ceiling", 2))
+        v = paired(c1, settle_row(rows, "ceiling", n, 2))
         if v:
             items.append(f"the kernel's 2 threads / 1 {v[0]:.2f} ({v[1]:.2f}-{v[2]:.2f})")
         if items:
@@ -665,9 +670,7 @@ def paired(num, den):
     x = sorted(p / q for p, q in zip(a, b) if p and q)
     if len(x) < 2:
         return None
-    mid = len(x) // 2
-    med = x[mid] if len(x) % 2 else 0.5 * (x[mid - 1] + x[mid])
-    return med, x[0], x[-1], len(x)
+    return statistics.median(x), x[0], x[-1], len(x)
 
 
 def paired_words(name, value, target, met):
