@@ -41,7 +41,8 @@ struct KernelHistory {
   ContactSet* next;
 };
 /// Where forces go: the global arrays for particles of the partition's own
-/// range (below own_end), the partition's buffer for partners beyond it.
+/// range (below own_end), the partition's buffer for partners beyond it
+/// (particle j at j - own_end).
 struct KernelOut {
   double *FX, *FY, *FZ, *TX, *TY, *TZ;
   double *BFX, *BFY, *BFZ, *BTX, *BTY, *BTZ;
@@ -49,7 +50,8 @@ struct KernelOut {
   std::uint32_t own_end;
   ContactEnergy* energy;
   std::size_t contacts = 0;
-  std::uint32_t hi = 0;  // largest particle index written to the buffer
+  const std::uint32_t* line_partition;    // per line of particles: the partition that owns it
+  std::vector<std::uint32_t>* lines_for;  // per partition: the lines of its particles first written
   bool failed = false;
   std::uint32_t fail_i = 0, fail_j = 0;
   double fail_ratio = 0.0;
@@ -152,7 +154,6 @@ void touchingPairs(const KernelIn& in, const std::uint32_t* ci, const std::uint3
     }
     double* __restrict FX = out.FX, * __restrict FY = out.FY, * __restrict FZ = out.FZ;
     double* __restrict TX = out.TX, * __restrict TY = out.TY, * __restrict TZ = out.TZ;
-    std::uint32_t hi = out.hi;
     ContactSet& next = *h.next;
     std::size_t nn = next.n;
     std::uint32_t* __restrict NK = next.k.data();
@@ -205,14 +206,17 @@ void touchingPairs(const KernelIn& in, const std::uint32_t* ci, const std::uint3
         FX[j] -= b[kFx][q], FY[j] -= b[kFy][q], FZ[j] -= b[kFz][q];
         TX[j] += b[kJx][q], TY[j] += b[kJy][q], TZ[j] += b[kJz][q];
       } else {
-        hi = std::max(hi, j);
-        written[j / kParticlesPerLine] = 1;
-        BFX[j] -= b[kFx][q], BFY[j] -= b[kFy][q], BFZ[j] -= b[kFz][q];
-        BTX[j] += b[kJx][q], BTY[j] += b[kJy][q], BTZ[j] += b[kJz][q];
+        const std::uint32_t q_j = j - own_end;        // (the buffer starts at the partition's end)
+        if (written[q_j / kParticlesPerLine] == 0) {  // a line first written: noted for its owner's integration
+          written[q_j / kParticlesPerLine] = 1;
+          const std::uint32_t line = j / kParticlesPerLine;
+          out.lines_for[out.line_partition[line]].push_back(line);
+        }
+        BFX[q_j] -= b[kFx][q], BFY[q_j] -= b[kFy][q], BFZ[q_j] -= b[kFz][q];
+        BTX[q_j] += b[kJx][q], BTY[q_j] += b[kJy][q], BTZ[q_j] += b[kJz][q];
       }
     }
     next.n = nn;
-    out.hi = hi;
     out.contacts += static_cast<std::size_t>(active_n);
     if (bad > 0.0 && !out.failed) {  // rare: name the pair of the chunk that overlaps most
       // (the largest ratio, not a re-test of the limit: a scalar re-evaluation
@@ -251,12 +255,10 @@ TouchingPairsFn touchingPairsFor(bool measure, const MaterialLaws& laws) {
 
 void contactPartition(Particles& p, const NeighbourList& list, const MaterialLaws& laws, double dt,
                       double max_overlap_ratio, std::uint32_t r0, std::uint32_t r1, int hcur, bool measure,
-                      WorkerScratch& s) {
+                      const std::vector<std::uint32_t>& line_partition, WorkerScratch& s) {
   s.energy = ContactEnergy{};
   s.contacts = 0;
   s.failed = false;
-  s.lo = static_cast<std::uint32_t>(p.size());
-  s.hi = 0;
   for (auto* v : {&p.fx, &p.fy, &p.fz, &p.tx, &p.ty, &p.tz}) std::fill(v->begin() + r0, v->begin() + r1, 0.0);
   const double* __restrict const X = p.x.data();
   const double* __restrict const Y = p.y.data();
@@ -274,6 +276,8 @@ void contactPartition(Particles& p, const NeighbourList& list, const MaterialLaw
   out.BFX = s.fx.data(), out.BFY = s.fy.data(), out.BFZ = s.fz.data();
   out.BTX = s.tx.data(), out.BTY = s.ty.data(), out.BTZ = s.tz.data();
   out.written = s.written.data();
+  out.line_partition = line_partition.data();
+  out.lines_for = s.lines_for.data();
   out.own_end = r1;
   out.energy = &s.energy;
   ContactSet& next = s.sets[hcur ^ 1];
@@ -360,7 +364,6 @@ void contactPartition(Particles& p, const NeighbourList& list, const MaterialLaw
   if (m > 0) flush(m);
   s.contacts += out.contacts;
   if (out.failed) s.failed = true, s.fail_i = out.fail_i, s.fail_j = out.fail_j, s.fail_ratio = out.fail_ratio;
-  if (out.hi >= r1) s.lo = r1, s.hi = out.hi;  // the band of its buffer that the partition wrote
 }
 
 }  // namespace gabion::micro

@@ -31,6 +31,21 @@ std::uint32_t lineStart(std::size_t k, std::uint32_t previous) {
   return std::max(previous, static_cast<std::uint32_t>(k / kParticlesPerLine * kParticlesPerLine));
 }
 
+// With several threads, the rows are cut into this many partitions per
+// thread; a thread runs its own share, then takes over partitions left in
+// the others' (micro/worker_pool.hpp). On virtual CPUs whose speeds differ
+// (one sharing its host core with other work) a fixed half each waits for
+// the slower: on the settling benchmark at N = 20,000 on two such CPUs, one
+// thread was busy 377 us a step in the contact stage and the other 292 us;
+// with four partitions each, both about 300 us. Each boundary sends its
+// pairs through a buffer. Against one partition per thread
+// (bench/settle/compare.sh -t 2, paired by round), four: N = 5,000 1.03x,
+// mixed scene 0.99x, N = 20,000 1.15x; two: N = 5,000 0.87x (a thread's
+// last partition is too large a share to hand over).
+// The partitions depend on the state only, never on who runs them: the
+// arrays are the same for a given thread count.
+constexpr int kPartitionsPerThread = 4;
+
 // Blocks of the same shape and density (a wall of copies of one cell, each
 // block a copy of its cell's) share one computation: the key is the exact
 // bytes of the shape, so each block gets what it would get alone.
@@ -227,15 +242,10 @@ Engine::Engine(const Scene& scene, int threads) {
   dt_link_critical_ = criticalLinkStep(scene);
   link_dt_safety_ = linkDtSafety(scene.run);
 
-  pool_ = std::make_unique<WorkerPool>(threads);
+  const int T = std::max(1, threads);
+  pool_ = std::make_unique<WorkerPool>(T, T == 1 ? 1 : kPartitionsPerThread * T);
   scratch_.resize(static_cast<std::size_t>(pool_->size()));
-  profile_.partition_busy_s.resize(scratch_.size());
-  for (std::size_t t = 0; t + 1 < scratch_.size(); ++t) {  // partners beyond partition t's particles
-    for (auto* v :
-         {&scratch_[t].fx, &scratch_[t].fy, &scratch_[t].fz, &scratch_[t].tx, &scratch_[t].ty, &scratch_[t].tz})
-      v->assign(p_.size(), 0.0);
-    scratch_[t].written.assign(p_.size() / kParticlesPerLine + 1, 0);
-  }
+  thread_ticks_.resize(static_cast<std::size_t>(T));
 }
 
 Engine::~Engine() = default;
@@ -285,33 +295,35 @@ void Engine::lap(StageProfile::Stage stage) {
 }
 
 StageProfile Engine::profile() const {
-  StageProfile p = profile_;
+  StageProfile p;
   const double s = clock_.secondsPerTick();
-  for (int k = 0; k < StageProfile::kStageCount; ++k) {
-    p.wall_s[k] = s * static_cast<double>(ticks_[k]);
-    // One worker: its partition was busy for the whole stage (no clock reads of its own).
-    if (scratch_.size() == 1) p.partition_busy_s[0][k] = p.wall_s[k];
-  }
-  // Several: the particle-wall part of each partition's contact job goes under walls.
-  for (std::size_t t = 0; t < scratch_.size() && scratch_.size() > 1; ++t) {
-    const double walls = s * static_cast<double>(scratch_[t].wall_ticks_total);
-    p.partition_busy_s[t][StageProfile::kWalls] += walls;
-    p.partition_busy_s[t][StageProfile::kContacts] -= walls;
+  for (int k = 0; k < StageProfile::kStageCount; ++k) p.wall_s[k] = s * static_cast<double>(ticks_[k]);
+  // One thread: busy for the whole stage (no clock reads of its own).
+  // Several: the particle-wall part of each thread's contact jobs goes under walls.
+  p.thread_busy_s.resize(thread_ticks_.size());
+  for (std::size_t t = 0; t < thread_ticks_.size(); ++t) {
+    const ThreadTicks& c = thread_ticks_[t];
+    for (int k = 0; k < StageProfile::kStageCount; ++k)
+      p.thread_busy_s[t][k] = pool_->threads() == 1 ? p.wall_s[k] : s * static_cast<double>(c.busy[k]);
+    if (pool_->threads() == 1) continue;
+    p.thread_busy_s[t][StageProfile::kWalls] += s * static_cast<double>(c.walls);
+    p.thread_busy_s[t][StageProfile::kContacts] -= s * static_cast<double>(c.walls);
   }
   return p;
 }
 
 template <class Job>
 void Engine::parallel(StageProfile::Stage stage, const Job& job) {
-  if (scratch_.size() == 1) {
-    job(0);
+  if (pool_->threads() == 1) {
+    for (int t = 0; t < pool_->size(); ++t) job(t);
     return;
   }
-  pool_->run([&](int t) {
-    const auto start = std::chrono::steady_clock::now();
+  pool_->run([&](int t, int thread) {
+    const std::uint64_t start = TickClock::now();
+    scratch_[static_cast<std::size_t>(t)].thread = thread;
     job(t);
-    profile_.partition_busy_s[static_cast<std::size_t>(t)][stage] +=
-        std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+    const std::uint64_t end = TickClock::now();
+    thread_ticks_[static_cast<std::size_t>(thread)].busy[stage] += end > start ? end - start : 0;
   });
 }
 
@@ -332,7 +344,8 @@ ForBlocks Engine::neighbourBlocks() {
 }
 
 std::size_t Engine::rebuildBlocks() const {
-  return scratch_.size() == 1 ? 1 : std::min<std::size_t>(16 * scratch_.size(), p_.size() / 256 + 1);
+  const auto threads = static_cast<std::size_t>(pool_->threads());
+  return threads == 1 ? 1 : std::min<std::size_t>(16 * threads, p_.size() / 256 + 1);
 }
 
 // ---------------------------------------------------------------------------
@@ -468,9 +481,11 @@ void Engine::restoreContacts(const SavedContacts& saved) {
     }
   }
   partitionRows(from);
+  line_partition_.resize(p_.size() / kParticlesPerLine + 1);
   const int next = hcur_ ^ 1;
   parallel(StageProfile::kNeighbours, [&](int task) {
     const auto t = static_cast<std::size_t>(task);
+    sizeForceBuffer(t);
     ContactSet& out = scratch_[t].sets[next];
     const std::uint32_t k0 = list_.row_begin[part_begin_[t]], k1 = list_.row_begin[part_begin_[t + 1]];
     std::size_t count = 0;
@@ -491,14 +506,39 @@ void Engine::restoreContacts(const SavedContacts& saved) {
   hcur_ = next;
 }
 
-// Row partitions with equal estimated work for the workers. A worker takes
-// its rows' contacts, the wall candidates among its particles and, after the
-// join, the integration of its particles (their lines stay in its cache). The
+// Partition t's buffer for the forces on partners beyond its rows: from its
+// end to the line of the largest partner of its rows (each row's partners
+// increase, so the last of each row), at least that long. Zero when unused: the
+// integration clears what it adds, so a buffer that only grows, or whose
+// first particle moves, needs no clearing.
+void Engine::sizeForceBuffer(std::size_t t) {
+  WorkerScratch& s = scratch_[t];
+  const std::uint32_t r0 = part_begin_[t], r1 = part_begin_[t + 1];
+  std::uint32_t reach = 0;
+  for (std::uint32_t i = r0; i < r1; ++i)
+    if (list_.row_begin[i + 1] > list_.row_begin[i]) reach = std::max(reach, list_.nbr[list_.row_begin[i + 1] - 1]);
+  s.base = r1;
+  s.lines_for.resize(scratch_.size());
+  for (std::uint32_t g = r0 / kParticlesPerLine; g * kParticlesPerLine < r1; ++g)  // (boundaries start lines)
+    line_partition_[g] = static_cast<std::uint32_t>(t);
+  // (whole lines: the integration adds them whole)
+  constexpr std::size_t kLine = kParticlesPerLine;
+  const std::size_t span = reach >= r1 ? (std::size_t{reach} - r1 + kLine) / kLine * kLine : 0;
+  if (span <= s.fx.size()) return;
+  for (auto* v : {&s.fx, &s.fy, &s.fz, &s.tx, &s.ty, &s.tz}) v->resize(span, 0.0);
+  s.written.resize(span / kParticlesPerLine + 1, 0);
+}
+
+// Row partitions with equal estimated work, several per thread
+// (kPartitionsPerThread). A partition holds its rows' contacts, the wall
+// candidates among its particles and, after the join, the integration of its
+// particles (their lines stay in the cache of the core that ran it). The
 // work per row (scan and integration), per list entry (touch scan), per pair
 // that touched at the last step (contact law) and per wall candidate is in the
 // ratio 2 : 2 : 13 : 9 of their costs (per-step partition times of the
 // settling benchmark, fitted: 2.5, 2.6-2.9, 17-18 and 12 ns). They depend
-// only on the state, so runs stay deterministic for a given thread count.
+// only on the state, so runs stay deterministic for a given thread count:
+// which thread runs a partition changes nothing in its arithmetic.
 void Engine::partitionRows(const std::vector<std::uint32_t>& from) {
   constexpr std::uint32_t kNone = std::numeric_limits<std::uint32_t>::max();
   const std::size_t n = p_.size(), T = scratch_.size(), nblocks = rebuildBlocks();
@@ -552,20 +592,20 @@ void Engine::computeContactForces(bool measure) {
     const auto t = static_cast<std::size_t>(task);
     const std::uint32_t r0 = part_begin_[t], r1 = part_begin_[t + 1];
     WorkerScratch& s = scratch_[t];
-    contactPartition(p_, list_, laws_, dt_, max_overlap_ratio_, r0, r1, hcur_, measure, s);
+    contactPartition(p_, list_, laws_, dt_, max_overlap_ratio_, r0, r1, hcur_, measure, line_partition_, s);
     const std::uint64_t walls_from = TickClock::now();
     wallPartition(p_, walls_, laws_, dt_, max_overlap_ratio_, step_, r0, r1, measure, s);
     const std::uint64_t walls_to = TickClock::now();
     s.wall_ticks = walls_to > walls_from ? walls_to - walls_from : 0;  // (0 if moved to a core whose count lags)
-    s.wall_ticks_total += s.wall_ticks;
   });
   // The profile keeps the walls apart: their partitions' part of the job,
   // and the mean of those of the stage (the step's next lap counts from it:
   // no partition is then busier in either stage than the stage lasted).
   std::uint64_t walls = 0;
-  for (const WorkerScratch& s : scratch_) walls += s.wall_ticks;
+  for (const WorkerScratch& s : scratch_)
+    walls += s.wall_ticks, thread_ticks_[static_cast<std::size_t>(s.thread)].walls += s.wall_ticks;
   const std::uint64_t now = TickClock::now();
-  walls = std::min(walls / scratch_.size(), now > lap_ ? now - lap_ : 0);
+  walls = std::min(walls / thread_ticks_.size(), now > lap_ ? now - lap_ : 0);
   ticks_[StageProfile::kWalls] += walls;
   lap_ += walls;
   hcur_ ^= 1;  // this step's contact sets become the last step's
@@ -740,25 +780,26 @@ void Engine::driveWalls() {
 // thread count). Also checks for non-finite states and whether the list must
 // be rebuilt.
 
-// The contact kernel's partition t left the forces on particles beyond its
-// rows in its buffer (the band [lo, hi], in the groups of eight particles it
-// marked written); they are added here, for each particle in partition
-// order, and the buffers and marks cleared. [b, e) starts on a whole group.
-void Engine::addForceBuffers(std::size_t b, std::size_t e) {
-  for (std::size_t t = 0; t + 1 < scratch_.size(); ++t) {
+// The contact kernel's partitions before u left the forces on particles of
+// u in their buffers (particle i at i - base), and listed the lines they
+// wrote for u; they are added here, for each particle in partition order,
+// and the buffers, marks and lists cleared.
+void Engine::addForceBuffers(std::size_t u) {
+  constexpr std::size_t kLine = kParticlesPerLine;
+  const std::size_t e = part_begin_[u + 1];
+  for (std::size_t t = 0; t < u; ++t) {
     WorkerScratch& s = scratch_[t];
-    if (s.lo > s.hi) continue;
-    const std::size_t lo = std::max<std::size_t>(b, s.lo), hi = std::min<std::size_t>(e, s.hi + std::size_t{1});
-    constexpr std::size_t kLine = kParticlesPerLine;
-    for (std::size_t g = lo / kLine; g * kLine < hi; ++g) {
-      if (s.written[g] == 0) continue;
-      s.written[g] = 0;
-      for (std::size_t i = std::max(lo, g * kLine); i < std::min(hi, g * kLine + kLine); ++i) {
-        p_.fx[i] += s.fx[i], p_.fy[i] += s.fy[i], p_.fz[i] += s.fz[i];
-        p_.tx[i] += s.tx[i], p_.ty[i] += s.ty[i], p_.tz[i] += s.tz[i];
-        s.fx[i] = s.fy[i] = s.fz[i] = s.tx[i] = s.ty[i] = s.tz[i] = 0.0;
+    std::vector<std::uint32_t>& lines = s.lines_for[u];
+    for (const std::uint32_t g : lines) {
+      s.written[(g * kLine - s.base) / kLine] = 0;
+      for (std::size_t i = g * kLine; i < std::min(e, g * kLine + kLine); ++i) {
+        const std::size_t q = i - s.base;
+        p_.fx[i] += s.fx[q], p_.fy[i] += s.fy[q], p_.fz[i] += s.fz[q];
+        p_.tx[i] += s.tx[q], p_.ty[i] += s.ty[q], p_.tz[i] += s.tz[q];
+        s.fx[q] = s.fy[q] = s.fz[q] = s.tx[q] = s.ty[q] = s.tz[q] = 0.0;
       }
     }
+    lines.clear();
   }
 }
 
@@ -767,7 +808,7 @@ void Engine::integrate(bool measure) {
   parallel(StageProfile::kIntegrate, [&](int task) {
     const auto t = static_cast<std::size_t>(task);
     const std::size_t b = part_begin_[t], e = part_begin_[t + 1];  // (the partition's own particles)
-    addForceBuffers(b, e);
+    addForceBuffers(t);
     if (all_loose_) {
       scratch_[t].spheres = integrateSpheres(p_, b, e, dt_, gravity_, measure, any_local_damping_, one_body_);
       return;
@@ -1005,7 +1046,11 @@ void Engine::archive(bridge::StateArchive& a) {
   p_.forEachStateField([&](const char*, const auto& v) { sizes_ok = sizes_ok && v.size() == n; });
   p_.forEachScratchField([&](const char*, const auto& v) { sizes_ok = sizes_ok && v.size() == n; });
   if (!sizes_ok) throw std::invalid_argument("checkpoint: a state of another scene or number of threads");
-  if (listed) list_.indexOwners(), sizeTouchBuffers();
+  if (listed) {
+    list_.indexOwners(), sizeTouchBuffers();
+    line_partition_.resize(n / kParticlesPerLine + 1);
+    for (std::size_t t = 0; t < scratch_.size(); ++t) sizeForceBuffer(t);
+  }
   if (listed && laws_.any_viscous) wallDamping(p_, walls_, laws_);
 }
 

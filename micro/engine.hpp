@@ -42,15 +42,15 @@ struct BodyState {
 };
 
 /// Where the stepping time went (docs/micro.md, Speed): wall-clock seconds
-/// of each stage of step() since the engine was built, and for each
-/// partition of the parallel stages the seconds it was busy. A stage's wall
-/// time above its partitions' busiest shows the waiting and the serial parts;
-/// busy times that differ show imbalance. Costs a few clock reads per step.
+/// of each stage of step() since the engine was built, and for each thread
+/// the seconds it was busy in the stage's partitions. A stage's wall time
+/// above its threads' busy times shows the waiting and the serial parts.
+/// Costs a few clock reads per partition and step.
 struct StageProfile {
   enum Stage { kNeighbours, kContacts, kLinks, kWalls, kIntegrate, kEnergy, kStageCount };
   static const char* name(int stage);
   std::array<double, kStageCount> wall_s{};
-  std::vector<std::array<double, kStageCount>> partition_busy_s;  // per partition
+  std::vector<std::array<double, kStageCount>> thread_busy_s;  // per thread
 };
 
 /// Critical time step of a scene (s), as Engine::criticalDt() gives it,
@@ -187,8 +187,9 @@ class Engine {
   void restoreContacts(const SavedContacts& saved);
   void partitionRows(const std::vector<std::uint32_t>& from);
   void sizeTouchBuffers();
+  void sizeForceBuffer(std::size_t t);
 
-  void addForceBuffers(std::size_t b, std::size_t e);
+  void addForceBuffers(std::size_t u);
   std::string bodyName(std::uint32_t id) const;
   StepStatus fail(StepStatus status, const std::string& what);
   /// Runs job(t) for every partition t on the pool, adding each partition's
@@ -255,14 +256,22 @@ class Engine {
 
   std::unique_ptr<WorkerPool> pool_;
   std::vector<WorkerScratch> scratch_;
-  std::vector<std::uint32_t> part_begin_;  // row partitions per worker
+  std::vector<std::uint32_t> part_begin_;      // row partitions (kPartitionsPerThread per thread)
+  std::vector<std::uint32_t> line_partition_;  // per line of particles (kParticlesPerLine): its partition
   std::string failure_;
   StepStatus status_ = StepStatus::Ok;
   std::vector<SphereSums> block_sums_;  // integrate(): each block's sums, added in block order
   std::vector<SphereSums> node_sums_;   // advanceLinkedNodes(): each range of nodes' sums, added in order
-  StageProfile profile_;                // (wall_s, and one worker's busy time, are in ticks_ until profile())
   TickClock clock_;
-  std::array<std::uint64_t, StageProfile::kStageCount> ticks_{};
+  std::array<std::uint64_t, StageProfile::kStageCount> ticks_{};  // per stage (StageProfile::wall_s)
+  // Per thread, one cache line each (each thread adds to its own at the end
+  // of every partition): the counts it was busy in each stage, and in the
+  // wall part of the contact jobs (StageProfile::thread_busy_s).
+  struct alignas(64) ThreadTicks {
+    std::array<std::uint64_t, StageProfile::kStageCount> busy{};
+    std::uint64_t walls = 0;
+  };
+  std::vector<ThreadTicks> thread_ticks_;
   std::uint64_t lap_ = 0;
 };
 

@@ -28,9 +28,9 @@ struct Series {
 };
 
 // Where the step loop's time went, as a small table (printed after a run):
-// each stage's wall time and share, with several threads the busiest
-// partition over the mean (1.00: balanced), and the rest of the loop
-// (series, snapshots, progress) as "other".
+// each stage's wall time and share, with several threads the share of the
+// stage its threads were busy on average (below 100 %: waiting, or serial
+// parts), and the rest of the loop (series, snapshots, progress) as "other".
 std::string timingReport(const Engine& engine, long long steps_run, double loop_s, double body_steps_per_s,
                          int threads) {
   const StageProfile& prof = engine.profile();
@@ -39,7 +39,7 @@ std::string timingReport(const Engine& engine, long long steps_run, double loop_
   r.precision(2);
   r << "step loop: " << steps_run << " steps in " << loop_s << " s, " << body_steps_per_s / 1e6 << " M body-steps/s, "
     << threads << (threads == 1 ? " thread, " : " threads, ") << engine.neighbourRebuilds() << " neighbour rebuilds\n";
-  r << "  stage          wall s   share" << (threads > 1 ? "   busiest/mean partition" : "") << "\n";
+  r << "  stage          wall s   share" << (threads > 1 ? "   threads busy" : "") << "\n";
   double staged = 0.0;
   const auto row = [&](const std::string& name, double s) {
     r << "  " << name << std::string(name.size() < 12 ? 12 - name.size() : 1, ' ');
@@ -55,14 +55,14 @@ std::string timingReport(const Engine& engine, long long steps_run, double loop_
     const double s = prof.wall_s[static_cast<std::size_t>(k)];
     staged += s;
     row(StageProfile::name(k), s);
-    if (threads > 1 && k != StageProfile::kEnergy) {
-      double sum = 0.0, most = 0.0;
-      for (const auto& p : prof.partition_busy_s) {
-        sum += p[static_cast<std::size_t>(k)];
-        most = std::max(most, p[static_cast<std::size_t>(k)]);
-      }
-      const double mean = sum / static_cast<double>(prof.partition_busy_s.size());
-      if (mean > 0.0) r << "   " << most / mean;
+    if (threads > 1 && k != StageProfile::kEnergy && s > 0.0) {
+      double sum = 0.0;
+      for (const auto& p : prof.thread_busy_s) sum += p[static_cast<std::size_t>(k)];
+      const double mean = sum / static_cast<double>(prof.thread_busy_s.size());
+      r.width(11);
+      r.precision(0);
+      r << 100.0 * mean / s << " %";
+      r.precision(2);
     }
     r << "\n";
   }
@@ -389,16 +389,16 @@ bridge::RunOutcome runScene(Scene scene, const std::string& file, const bridge::
   const double body_steps_per_s =
       loop_s > 0.0 ? static_cast<double>(nb) * static_cast<double>(engine.steps() - first) / loop_s : 0.0;
   out.results["body_steps_per_s"] = body_steps_per_s;
-  // Where the time went (docs/micro.md, Output): per stage, and per partition.
+  // Where the time went (docs/micro.md, Output): per stage, and per thread.
   const StageProfile& prof = engine.profile();
   nlohmann::json stage_wall = nlohmann::json::object(), busy = nlohmann::json::object();
   for (int k = 0; k < StageProfile::kStageCount; ++k) {
     stage_wall[StageProfile::name(k)] = prof.wall_s[static_cast<std::size_t>(k)];
     nlohmann::json per = nlohmann::json::array();
-    for (const auto& p : prof.partition_busy_s) per.push_back(p[static_cast<std::size_t>(k)]);
+    for (const auto& p : prof.thread_busy_s) per.push_back(p[static_cast<std::size_t>(k)]);
     if (k != StageProfile::kEnergy) busy[StageProfile::name(k)] = per;
   }
-  out.results["profile"] = {{"stage_wall_time_s", stage_wall}, {"partition_busy_time_s", busy}};
+  out.results["profile"] = {{"stage_wall_time_s", stage_wall}, {"thread_busy_time_s", busy}};
   out.report = timingReport(engine, engine.steps() - first, loop_s, body_steps_per_s, ctx.threads);
   if (scene.save_cell && ok) {
     // The packed state, for later runs (`from_cell`), with what this run measured.

@@ -1,5 +1,6 @@
 #include "micro/worker_pool.hpp"
 
+#include <algorithm>
 #include <chrono>
 #if defined(__x86_64__) || defined(__i386__)
 #include <immintrin.h>
@@ -45,10 +46,10 @@ bool spinFor(Done done) {
 }
 }  // namespace
 
-WorkerPool::WorkerPool(int threads)
+WorkerPool::WorkerPool(int threads, int partitions)
     : threads_(threads < 1 ? 1 : threads),
-      claimed_(new std::atomic<std::uint64_t>[static_cast<std::size_t>(threads_)]) {
-  for (int t = 0; t < threads_; ++t) claimed_[static_cast<std::size_t>(t)].store(0, std::memory_order_relaxed);
+      partitions_(std::min(std::max(partitions, threads_), 0xffff)),  // (a share's ends are 16 bits)
+      shares_(new Share[static_cast<std::size_t>(threads_)]) {
   for (int t = 1; t < threads_; ++t) workers_.emplace_back([this, t] { workerLoop(t); });
 }
 
@@ -65,28 +66,46 @@ WorkerPool::~WorkerPool() {
 bool WorkerPool::drain(int self, std::uint64_t generation) {
   // The caller publishes job_ and pending_ before it bumps generation_
   // (release); a worker reads generation_ (acquire) before it comes here. A
-  // worker still here from an earlier job finds every partition claimed by
-  // that job or a later one, and claims nothing.
-  bool finished_last = false;
-  for (int k = 0; k < threads_; ++k) {
-    const int t = (self + k) % threads_;
-    std::atomic<std::uint64_t>& c = claimed_[static_cast<std::size_t>(t)];
-    std::uint64_t seen = c.load(std::memory_order_relaxed);
-    if (seen >= generation || !c.compare_exchange_strong(seen, generation, std::memory_order_acq_rel)) continue;
-    (*job_.load(std::memory_order_acquire))(t);
-    finished_last = pending_.fetch_sub(1, std::memory_order_acq_rel) == 1;
+  // worker still here from an earlier job finds every share stamped with a
+  // later job, and claims nothing.
+  // Thread self runs its own share from the front, then takes what is left
+  // of the others' from their ends (a faster core takes over the tail of a
+  // slower one's share), going round from the thread before it. The
+  // partitions it ran are counted off pending_ at once at the end: one
+  // exchange of that shared line per thread and job.
+  const auto gen = static_cast<std::uint32_t>(generation);
+  const auto P = static_cast<std::uint32_t>(partitions_), T = static_cast<std::uint32_t>(threads_);
+  int ran = 0;
+  for (std::uint32_t k = 0; k < T; ++k) {
+    const std::uint32_t u = (static_cast<std::uint32_t>(self) + T - k) % T;
+    std::atomic<std::uint64_t>& state = shares_[u].state;
+    std::uint64_t s = state.load(std::memory_order_acquire);
+    for (;;) {
+      const auto d = static_cast<std::int32_t>(static_cast<std::uint32_t>(s >> 32) - gen);
+      if (d > 0) break;  // a later job's
+      // (d < 0: not opened in this job yet, the whole share)
+      std::uint32_t first = d < 0 ? P * u / T : static_cast<std::uint32_t>(s >> 16) & 0xffffu;
+      std::uint32_t end = d < 0 ? P * (u + 1) / T : static_cast<std::uint32_t>(s) & 0xffffu;
+      if (first >= end) break;
+      const std::uint32_t t = k == 0 ? first++ : --end;
+      const std::uint64_t next = std::uint64_t{gen} << 32 | std::uint64_t{first} << 16 | end;
+      if (!state.compare_exchange_weak(s, next, std::memory_order_acq_rel, std::memory_order_acquire)) continue;
+      (*job_.load(std::memory_order_acquire))(static_cast<int>(t), self);
+      ++ran;
+      s = next;  // (a failed exchange below reloads it)
+    }
   }
-  return finished_last;
+  return ran > 0 && pending_.fetch_sub(ran, std::memory_order_acq_rel) == ran;
 }
 
-void WorkerPool::run(const std::function<void(int)>& job) {
+void WorkerPool::run(const std::function<void(int, int)>& job) {
   if (threads_ == 1) {
-    job(0);
+    for (int t = 0; t < partitions_; ++t) job(t, 0);
     return;
   }
   // Order matters: job_ and pending_ are published by the release of the
-  // generation bump; partitions are claimable only with the new generation.
-  pending_.store(threads_, std::memory_order_relaxed);
+  // generation bump; shares open only with the new generation.
+  pending_.store(partitions_, std::memory_order_relaxed);
   job_.store(&job, std::memory_order_relaxed);
   std::uint64_t generation = 0;
   {

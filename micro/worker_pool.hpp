@@ -1,14 +1,17 @@
 #pragma once
 /// \file
 /// A tiny fork-join pool for the engine's parallel stages. Work is split
-/// into fixed partitions 0 .. size()-1; the result of partition t may depend
-/// on t but never on which thread runs it, and results reduced in partition
-/// order are identical from run to run for the same thread count.
-/// Thread t (the caller is 0) first claims partition t, so that a partition
-/// stays on one core from stage to stage and step to step (its particles stay
-/// in that core's cache); then it claims any partition still unclaimed, so a
-/// worker that the OS has not scheduled yet (another job on the cores) does
-/// not hold the caller up: the caller runs its partition too.
+/// into fixed partitions 0 .. size()-1, several per thread; the result of
+/// partition t may depend on t but never on which thread runs it, and
+/// results reduced in partition order are identical from run to run for the
+/// same partition count.
+/// Thread t (the caller is 0) owns a contiguous share of the partitions and
+/// claims them first, in order, so that a partition stays on one core from
+/// stage to stage and step to step (its particles stay in that core's
+/// cache); then it claims the others' still unclaimed, from the end of
+/// their shares. A core that runs slower (a virtual CPU whose host core is
+/// busy elsewhere) thus hands the tail of its share to a faster one, and a
+/// worker that the OS has not scheduled yet does not hold the caller up.
 /// Waiting threads spin for a few tens of microseconds, poll with yields for
 /// a few milliseconds, then block on a condition variable, so an idle or
 /// oversubscribed pool burns no CPU (micro/worker_pool.cpp).
@@ -25,29 +28,40 @@ namespace gabion::micro {
 
 class WorkerPool {
  public:
-  /// `threads` >= 1 threads in all, the calling thread included.
-  explicit WorkerPool(int threads);
+  /// `threads` >= 1 threads in all, the calling thread included, running
+  /// `partitions` partitions per job (at least one per thread).
+  explicit WorkerPool(int threads, int partitions = 1);
   ~WorkerPool();
   WorkerPool(const WorkerPool&) = delete;
   WorkerPool& operator=(const WorkerPool&) = delete;
 
-  int size() const { return threads_; }
-  /// Runs job(t) once for each partition t = 0 .. size()-1, on whichever
-  /// threads claim them first (the calling thread takes part), and returns
-  /// when all are done.
-  void run(const std::function<void(int)>& job);
+  /// Partitions per job.
+  int size() const { return partitions_; }
+  /// Threads, the caller included.
+  int threads() const { return threads_; }
+  /// Runs job(t, thread) once for each partition t = 0 .. size()-1, on
+  /// whichever threads claim them first (the calling thread takes part,
+  /// as thread 0), and returns when all are done.
+  void run(const std::function<void(int, int)>& job);
 
  private:
   void workerLoop(int self);
   /// Claims and runs the partitions of job `generation` still unclaimed,
-  /// partition `self` first; returns true if this call finished the last one.
+  /// thread `self`'s own first; returns true if this call finished the last one.
   bool drain(int self, std::uint64_t generation);
-  int threads_;
+  int threads_, partitions_;
   std::vector<std::thread> workers_;
-  std::atomic<const std::function<void(int)>*> job_{nullptr};
-  // claimed_[t]: the last job (generation) whose partition t was claimed;
-  // claiming is a compare-exchange from an older generation.
-  std::unique_ptr<std::atomic<std::uint64_t>[]> claimed_;
+  std::atomic<const std::function<void(int, int)>*> job_{nullptr};
+  // shares_[u]: what is left of thread u's share in the current job, one
+  // word: (job generation mod 2^32) << 32 | first << 16 | end. Its owner
+  // claims from the front, the others from the end, each by a
+  // compare-exchange; whoever comes first in a job opens it to the whole
+  // share (a word of an earlier job). One cache line each: a thread claiming
+  // its own pulls no other thread's line.
+  struct alignas(64) Share {
+    std::atomic<std::uint64_t> state{0};
+  };
+  std::unique_ptr<Share[]> shares_;
   std::atomic<int> pending_{0};               // partitions not finished yet
   std::atomic<std::uint64_t> generation_{0};  // bumped (under mutex_) for each job
   std::atomic<bool> stop_{false};

@@ -1,9 +1,9 @@
 #pragma once
 /// \file
-/// What each worker of the engine's parallel stages keeps for itself
-/// between and within steps: its partition's contact sets and force buffer,
+/// What each partition of the engine's parallel stages keeps for itself
+/// between and within steps: its contact sets and force buffer,
 /// its share of the wall contacts, link forces and integration sums, and the
-/// first failure it saw. Partial results are reduced in worker order, so a
+/// first failure it saw. Partial results are reduced in partition order, so a
 /// run repeats bit for bit for a given thread count.
 #include <algorithm>
 #include <cstdint>
@@ -85,16 +85,20 @@ struct PermuteScratch {
 struct WorkerScratch {
   PermuteScratch permute;  ///< re-sorting the store's fields (rebuilds)
 
+  int thread = 0;  ///< the thread that ran the partition's last job
+
   // contact kernel: the force buffer for partners beyond the particles of
-  // its partition (none for the last partition), the band [lo, hi] of it
-  // written and, per cache line of particles (kParticlesPerLine), whether it
-  // was written (a
-  // partition's partners beyond its rows can be few and far apart: large
-  // spheres at the end of the order); the contact sets (the last step's and
-  // this step's); a chunk of touching pairs
+  // its partition (particle i at i - base, base its end; sized at each list
+  // build to its rows' farthest partner, empty for the last partition), per
+  // cache line of particles (kParticlesPerLine) whether it was written, and
+  // the lines written, listed per partition that owns them (a partition's
+  // partners beyond its rows can be few and far apart: large spheres at the
+  // end of the order); the contact sets (the last step's and this step's);
+  // a chunk of touching pairs
   std::vector<double> fx, fy, fz, tx, ty, tz;
-  std::uint32_t lo = 0, hi = 0;
+  std::uint32_t base = 0;
   std::vector<std::uint8_t> written;
+  std::vector<std::vector<std::uint32_t>> lines_for;
   ContactSet sets[2];
   std::vector<std::uint32_t> touch_i, touch_k;
   std::vector<double> touch_ex, touch_ey, touch_ez;  // x_j - x_i of the collected pairs
@@ -103,18 +107,17 @@ struct WorkerScratch {
   bool failed = false;
   std::uint32_t fail_i = 0, fail_j = 0;
   double fail_ratio = 0.0;
-  // walls: the contacts of this worker's particle range
+  // walls: the contacts of this partition's particles
   std::vector<Vec3> wall_force;  // per wall, force exerted on it (N)
   ContactEnergy wall_energy;
   double wall_work = 0.0;
   std::size_t wall_contacts = 0;
-  std::uint64_t wall_ticks = 0;  // the wall part of the contact job, this step and in all (stage profile)
-  std::uint64_t wall_ticks_total = 0;
-  bool wall_failed = false;  // the candidate that overlaps most: particle, wall, overlap / radius
+  std::uint64_t wall_ticks = 0;  // the wall part of the contact job, this step (stage profile)
+  bool wall_failed = false;      // the candidate that overlaps most: particle, wall, overlap / radius
   std::uint32_t wall_fail_i = 0;
   std::size_t wall_fail_wall = 0;
   double wall_fail_ratio = 0.0;
-  // links of this worker's range
+  // links of this partition's range
   double link_elastic = 0.0, link_rupture = 0.0, link_plastic = 0.0;
   double link_pull_work = 0.0;  // the work of pulling wires tight over this sub-step (J)
   std::vector<LinkEvent> link_events;

@@ -26,11 +26,11 @@ int main() {
   for (int rep = 0; rep < 3; ++rep) {
     constexpr int kEmpty = 100000, kBusy = 20000;
     auto t0 = std::chrono::steady_clock::now();
-    for (int i = 0; i < kEmpty; ++i) pool.run([&](int t) { sink += t; });
+    for (int i = 0; i < kEmpty; ++i) pool.run([&](int t, int) { sink += t; });
     auto t1 = std::chrono::steady_clock::now();
     std::printf("empty run: %.2f us\n", seconds(t0, t1) / kEmpty * 1e6);
     t0 = std::chrono::steady_clock::now();
-    for (int i = 0; i < kBusy; ++i) pool.run([&](int t) { arithmetic(), sink += t; });
+    for (int i = 0; i < kBusy; ++i) pool.run([&](int t, int) { arithmetic(), sink += t; });
     t1 = std::chrono::steady_clock::now();
     for (int i = 0; i < kBusy; ++i) arithmetic();
     const auto t2 = std::chrono::steady_clock::now();

@@ -491,7 +491,7 @@ def stage_line(rows, prefix):
         if r["engine"] != "gabion" or not prof:
             continue
         wall = prof.get("stage_wall_time_s", {})
-        busy = prof.get("partition_busy_time_s", {})
+        busy = prof.get("thread_busy_time_s") or prof.get("partition_busy_time_s", {})
         parts = []
         for name in ("neighbours", "contacts", "walls", "integrate"):
             if name not in wall:
@@ -506,7 +506,7 @@ def stage_line(rows, prefix):
         stages.append(f"{prefix}N={r['n']} {r['threads']}t: " + ", ".join(parts))
     if not stages:
         return None
-    return ("Gabion stages, s (summary.json `profile` of the runs above; with threads, each partition's "
+    return ("Gabion stages, s (summary.json `profile` of the runs above; with threads, each thread's "
             "busy time in brackets): " + "; ".join(stages) + ".")
 
 
@@ -518,10 +518,16 @@ def settle_row(rows, engine, n, threads):
 
 
 def balance_words(r):
-    """A two-thread Gabion run's contact partitions, busiest over mean: the row partitions hold equal
-    estimated work, so a value well above 1 points at a CPU that ran slower (docs/performance.md,
-    settling Results)."""
-    busy = ((r or {}).get("profile") or {}).get("partition_busy_time_s", {}).get("contacts") or []
+    """A two-thread Gabion run's contact stage: the share of it its threads were busy on average (below
+    100 %: waiting for the other thread). From results of an engine with one fixed partition per thread
+    (`partition_busy_time_s`): the partitions' busiest over mean; they held equal estimated work, so a
+    value well above 1 pointed at a CPU that ran slower (docs/performance.md, settling Results)."""
+    prof = (r or {}).get("profile") or {}
+    busy = (prof.get("thread_busy_time_s") or {}).get("contacts") or []
+    wall = (prof.get("stage_wall_time_s") or {}).get("contacts") or 0.0
+    if len(busy) >= 2 and wall > 0:
+        return f"; contact stage threads busy {100.0 * sum(busy) / len(busy) / wall:.0f} %"
+    busy = (prof.get("partition_busy_time_s") or {}).get("contacts") or []
     if len(busy) < 2 or sum(busy) <= 0:
         return ""
     return f"; contact partitions busiest / mean {max(busy) / (sum(busy) / len(busy)):.2f}"

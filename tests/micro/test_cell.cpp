@@ -95,20 +95,20 @@ TEST(MicroCell, SmallCellIsFilledVibratedClosedAndStoodWithItsLedgerClosed) {
   EXPECT_EQ(r["threads"], 1);
   const auto b = runGabion("run -q --threads 2 " + (dir / "cell.json").string() + " -o " + (dir / "b").string());
   ASSERT_EQ(b.exit_code, 0) << b.output;
-  // (the engines' partitions, one per thread, in each stage's profile)
-  const auto partitions = [&](const char* run) {
+  // (the engines' threads in each stage's profile)
+  const auto threads = [&](const char* run) {
     std::vector<std::size_t> n;
     const nlohmann::json summary = summaryOf(dir / run);
     for (const auto& [stage, st] : summary["stages"].items())
-      n.push_back(st["profile"]["partition_busy_time_s"]["contacts"].size());
+      n.push_back(st["profile"]["thread_busy_time_s"]["contacts"].size());
     return n;
   };
   EXPECT_EQ(summaryOf(dir / "b")["threads"], 1);
-  EXPECT_EQ(partitions("b"), std::vector<std::size_t>(4, 1));
+  EXPECT_EQ(threads("b"), std::vector<std::size_t>(4, 1));
   const auto c = runGabion("run -q " + (dir / "cell.json").string() + " --set threads=2 -o " + (dir / "c").string());
   ASSERT_EQ(c.exit_code, 0) << c.output;
   EXPECT_EQ(summaryOf(dir / "c")["threads"], 2);
-  EXPECT_EQ(partitions("c"), std::vector<std::size_t>(4, 2));
+  EXPECT_EQ(threads("c"), std::vector<std::size_t>(4, 2));
   const gabion::bridge::H5Reader ha(dir / "a" / "cell.h5"), hb(dir / "b" / "cell.h5");
   for (const char* d : {"/blocks/position_m", "/blocks/orientation", "/spheres/center_m", "/links/plastic_strain"})
     EXPECT_EQ(ha.read(d), hb.read(d)) << d;

@@ -302,9 +302,9 @@ TEST(MicroEngine, DepositionEnergyBalanceWithFrictionAndDamping) {
 }
 
 // Several workers: the neighbour list is built in blocks claimed by whichever
-// worker comes free, the contact kernel in fixed row partitions. The same
-// case with the same thread count must give bit-identical states, and the
-// stage profile must account for the time.
+// worker comes free, the contact kernel in fixed row partitions claimed
+// likewise. The same case with the same thread count must give
+// bit-identical states, and the stage profile must account for the time.
 TEST(MicroEngine, ParallelDepositionIsRepeatableAndProfiled) {
   const DepositionResult a = deposition(0.5, 0.0, 0.0, 3, 0.2);
   const DepositionResult b = deposition(0.5, 0.0, 0.0, 3, 0.2);
@@ -314,15 +314,15 @@ TEST(MicroEngine, ParallelDepositionIsRepeatableAndProfiled) {
   EXPECT_GT(a.contacts, 100u);
   EXPECT_LT(a.worst, 0.01);
   using gabion::micro::StageProfile;
-  ASSERT_EQ(a.profile.partition_busy_s.size(), 3u);
+  ASSERT_EQ(a.profile.thread_busy_s.size(), 3u);
   for (const int stage :
        {StageProfile::kNeighbours, StageProfile::kContacts, StageProfile::kWalls, StageProfile::kIntegrate}) {
     const auto k = static_cast<std::size_t>(stage);
     double busy = 0.0;
-    for (const auto& p : a.profile.partition_busy_s) busy += p[k];
+    for (const auto& p : a.profile.thread_busy_s) busy += p[k];
     EXPECT_GT(a.profile.wall_s[k], 0.0) << StageProfile::name(stage);
     EXPECT_GT(busy, 0.0) << StageProfile::name(stage);
-    // three partitions cannot be busy longer than three times the stage
+    // three threads cannot be busy longer than three times the stage
     EXPECT_LE(busy, 3.0 * a.profile.wall_s[k] * 1.001) << StageProfile::name(stage);
   }
 }

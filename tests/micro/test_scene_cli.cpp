@@ -83,13 +83,13 @@ TEST(MicroSceneCli, RunReportsWhereTheTimeWentUnlessQuiet) {
   const auto r = runGabion("run " + (dir / "case.json").string() + " --threads 2 -o " + (dir / "out").string());
   ASSERT_EQ(r.exit_code, 0) << r.output;
   EXPECT_NE(r.output.find("step loop: "), std::string::npos) << r.output;
-  EXPECT_NE(r.output.find("busiest/mean partition"), std::string::npos) << r.output;
+  EXPECT_NE(r.output.find("threads busy"), std::string::npos) << r.output;
   for (const char* stage : {"neighbours", "contacts", "walls", "integrate", "energy", "other"})
     EXPECT_NE(r.output.find(std::string("  ") + stage + " "), std::string::npos) << stage << "\n" << r.output;
   std::ifstream in(dir / "out" / "summary.json");
   const auto summary = nlohmann::json::parse(in);
   ASSERT_TRUE(summary.contains("profile"));
-  EXPECT_EQ(summary["profile"]["partition_busy_time_s"]["contacts"].size(), 2u);
+  EXPECT_EQ(summary["profile"]["thread_busy_time_s"]["contacts"].size(), 2u);
   EXPECT_GT(summary["profile"]["stage_wall_time_s"]["contacts"].get<double>(), 0.0);
   const auto q = runGabion("run " + (dir / "case.json").string() + " -q -o " + (dir / "out2").string());
   ASSERT_EQ(q.exit_code, 0) << q.output;
