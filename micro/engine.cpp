@@ -302,10 +302,12 @@ StageProfile Engine::profile() const {
   // Several: the particle-wall part of each thread's contact jobs goes under walls.
   p.thread_busy_s.resize(thread_ticks_.size());
   for (std::size_t t = 0; t < thread_ticks_.size(); ++t) {
+    if (pool_->threads() == 1) {
+      p.thread_busy_s[t] = p.wall_s;
+      continue;
+    }
     const ThreadTicks& c = thread_ticks_[t];
-    for (int k = 0; k < StageProfile::kStageCount; ++k)
-      p.thread_busy_s[t][k] = pool_->threads() == 1 ? p.wall_s[k] : s * static_cast<double>(c.busy[k]);
-    if (pool_->threads() == 1) continue;
+    for (int k = 0; k < StageProfile::kStageCount; ++k) p.thread_busy_s[t][k] = s * static_cast<double>(c.busy[k]);
     p.thread_busy_s[t][StageProfile::kWalls] += s * static_cast<double>(c.walls);
     p.thread_busy_s[t][StageProfile::kContacts] -= s * static_cast<double>(c.walls);
   }
@@ -517,7 +519,6 @@ void Engine::sizeForceBuffer(std::size_t t) {
   std::uint32_t reach = 0;
   for (std::uint32_t i = r0; i < r1; ++i)
     if (list_.row_begin[i + 1] > list_.row_begin[i]) reach = std::max(reach, list_.nbr[list_.row_begin[i + 1] - 1]);
-  s.base = r1;
   s.lines_for.resize(scratch_.size());
   for (std::uint32_t g = r0 / kParticlesPerLine; g * kParticlesPerLine < r1; ++g)  // (boundaries start lines)
     line_partition_[g] = static_cast<std::uint32_t>(t);
@@ -780,8 +781,8 @@ void Engine::driveWalls() {
 // thread count). Also checks for non-finite states and whether the list must
 // be rebuilt.
 
-// The contact kernel's partitions before u left the forces on particles of
-// u in their buffers (particle i at i - base), and listed the lines they
+// The contact kernel's partitions t before u left the forces on particles of
+// u in their buffers (particle i at i - part_begin_[t + 1]), and listed the lines they
 // wrote for u; they are added here, for each particle in partition order,
 // and the buffers, marks and lists cleared.
 void Engine::addForceBuffers(std::size_t u) {
@@ -789,11 +790,12 @@ void Engine::addForceBuffers(std::size_t u) {
   const std::size_t e = part_begin_[u + 1];
   for (std::size_t t = 0; t < u; ++t) {
     WorkerScratch& s = scratch_[t];
+    const std::size_t base = part_begin_[t + 1];  // (the buffer starts at the partition's end)
     std::vector<std::uint32_t>& lines = s.lines_for[u];
     for (const std::uint32_t g : lines) {
-      s.written[(g * kLine - s.base) / kLine] = 0;
+      s.written[(g * kLine - base) / kLine] = 0;
       for (std::size_t i = g * kLine; i < std::min(e, g * kLine + kLine); ++i) {
-        const std::size_t q = i - s.base;
+        const std::size_t q = i - base;
         p_.fx[i] += s.fx[q], p_.fy[i] += s.fy[q], p_.fz[i] += s.fz[q];
         p_.tx[i] += s.tx[q], p_.ty[i] += s.ty[q], p_.tz[i] += s.tz[q];
         s.fx[q] = s.fy[q] = s.fz[q] = s.tx[q] = s.ty[q] = s.tz[q] = 0.0;

@@ -88,7 +88,7 @@ struct WorkerScratch {
   int thread = 0;  ///< the thread that ran the partition's last job
 
   // contact kernel: the force buffer for partners beyond the particles of
-  // its partition (particle i at i - base, base its end; sized at each list
+  // its partition (particle i at i - its end; sized at each list
   // build to its rows' farthest partner, empty for the last partition), per
   // cache line of particles (kParticlesPerLine) whether it was written, and
   // the lines written, listed per partition that owns them (a partition's
@@ -96,7 +96,6 @@ struct WorkerScratch {
   // end of the order); the contact sets (the last step's and this step's);
   // a chunk of touching pairs
   std::vector<double> fx, fy, fz, tx, ty, tz;
-  std::uint32_t base = 0;
   std::vector<std::uint8_t> written;
   std::vector<std::vector<std::uint32_t>> lines_for;
   ContactSet sets[2];
