@@ -246,6 +246,7 @@ Engine::Engine(const Scene& scene, int threads) {
   pool_ = std::make_unique<WorkerPool>(T, T == 1 ? 1 : kPartitionsPerThread * T);
   scratch_.resize(static_cast<std::size_t>(pool_->size()));
   thread_ticks_.resize(static_cast<std::size_t>(T));
+  shares_from_.resize(static_cast<std::size_t>(T));
 }
 
 Engine::~Engine() = default;
@@ -276,6 +277,7 @@ StepStatus Engine::step(bool measure) {
   lap(S::kLinks);
   checkStep(measure);
   if (status_ != StepStatus::Ok) return status_;
+  balanceShares();  // the threads' shares of the next steps' partitions
   if (measure) measureEnergy();
   lap(S::kEnergy);
   ++step_;
@@ -314,19 +316,58 @@ StageProfile Engine::profile() const {
   return p;
 }
 
+// A job on every partition, each on whichever thread claims it. In the
+// integration a thread takes over another's partitions only if that thread
+// has not started its share (a worker not scheduled yet): a partition whose
+// contacts its owner has just computed is integrated by that owner, in
+// whose cache its particles are (taking over its tail, as the other stages
+// do, moved one partition a step from one core to the other and back: it
+// cost a third of the integration's time on two threads at N = 5,000).
 template <class Job>
 void Engine::parallel(StageProfile::Stage stage, const Job& job) {
   if (pool_->threads() == 1) {
     for (int t = 0; t < pool_->size(); ++t) job(t);
     return;
   }
-  pool_->run([&](int t, int thread) {
-    const std::uint64_t start = TickClock::now();
-    scratch_[static_cast<std::size_t>(t)].thread = thread;
-    job(t);
-    const std::uint64_t end = TickClock::now();
-    thread_ticks_[static_cast<std::size_t>(thread)].busy[stage] += end > start ? end - start : 0;
-  });
+  const bool take_tails = stage != StageProfile::kIntegrate;
+  pool_->run(
+      [&](int t, int thread) {
+        const std::uint64_t start = TickClock::now();
+        scratch_[static_cast<std::size_t>(t)].thread = thread;
+        job(t);
+        const std::uint64_t end = TickClock::now();
+        ThreadTicks& c = thread_ticks_[static_cast<std::size_t>(thread)];
+        c.busy[stage] += end > start ? end - start : 0;
+        if (stage == StageProfile::kContacts) ++c.contact_jobs;
+      },
+      take_tails);
+}
+
+// The threads' shares of the partitions, from their speeds in the contact
+// stage (partitions run per busy tick) over the last 32 steps or more: a
+// thread on a slower core (a virtual CPU whose host core is busy elsewhere;
+// its speed changes over seconds) gets fewer partitions, so that the threads
+// end the stage together instead of the faster one taking over the slower
+// one's tail at every step, which moves that partition's particles from one
+// core's cache to the other's and back. Which thread runs a partition
+// changes nothing in its arithmetic: the results do not depend on the shares.
+void Engine::balanceShares() {
+  const std::size_t T = thread_ticks_.size();
+  if (T == 1) return;
+  std::uint64_t jobs = 0;
+  for (std::size_t t = 0; t < T; ++t) jobs += thread_ticks_[t].contact_jobs - shares_from_[t].contact_jobs;
+  if (jobs < 32 * scratch_.size()) return;
+  std::vector<double> speed(T);
+  for (std::size_t t = 0; t < T; ++t) {
+    const ThreadTicks &now = thread_ticks_[t], &from = shares_from_[t];
+    const std::uint64_t busy = now.busy[StageProfile::kContacts] - from.busy[StageProfile::kContacts];
+    speed[t] = busy > 0 ? static_cast<double>(now.contact_jobs - from.contact_jobs) / static_cast<double>(busy) : 0.0;
+  }
+  shares_from_ = thread_ticks_;
+  std::vector<int> current(T + 1);
+  for (std::size_t u = 0; u <= T; ++u) current[u] = pool_->shareBegin(static_cast<int>(u));
+  const std::vector<int> next = sharesForSpeeds(speed, current, pool_->size());
+  if (next != current) pool_->setShares(next);
 }
 
 template <class Fn>

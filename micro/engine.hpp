@@ -186,6 +186,7 @@ class Engine {
   void reorderParticles(const std::vector<std::uint32_t>& order);
   void restoreContacts(const SavedContacts& saved);
   void partitionRows(const std::vector<std::uint32_t>& from);
+  void balanceShares();
   void sizeTouchBuffers();
   void sizeForceBuffer(std::size_t t);
 
@@ -270,8 +271,10 @@ class Engine {
   struct alignas(64) ThreadTicks {
     std::array<std::uint64_t, StageProfile::kStageCount> busy{};
     std::uint64_t walls = 0;
+    std::uint64_t contact_jobs = 0;  // contact partitions it ran (balanceShares)
   };
   std::vector<ThreadTicks> thread_ticks_;
+  std::vector<ThreadTicks> shares_from_;  // thread_ticks_ at the last balanceShares()
   std::uint64_t lap_ = 0;
 };
 

@@ -2,6 +2,8 @@
 
 #include <algorithm>
 #include <chrono>
+#include <cmath>
+#include <stdexcept>
 #if defined(__x86_64__) || defined(__i386__)
 #include <immintrin.h>
 #endif
@@ -50,7 +52,19 @@ WorkerPool::WorkerPool(int threads, int partitions)
     : threads_(threads < 1 ? 1 : threads),
       partitions_(std::min(std::max(partitions, threads_), 0xffff)),  // (a share's ends are 16 bits)
       shares_(new Share[static_cast<std::size_t>(threads_)]) {
+  share_begin_.resize(static_cast<std::size_t>(threads_) + 1);
+  for (int u = 0; u <= threads_; ++u)
+    share_begin_[static_cast<std::size_t>(u)] = static_cast<std::uint32_t>(partitions_ * u / threads_);
   for (int t = 1; t < threads_; ++t) workers_.emplace_back([this, t] { workerLoop(t); });
+}
+
+void WorkerPool::setShares(const std::vector<int>& begin) {
+  if (begin.size() != share_begin_.size() || begin.front() != 0 || begin.back() != partitions_)
+    throw std::invalid_argument("WorkerPool::setShares: threads + 1 boundaries from 0 to the partitions");
+  for (std::size_t u = 0; u + 1 < begin.size(); ++u)
+    if (begin[u + 1] <= begin[u]) throw std::invalid_argument("WorkerPool::setShares: an empty share");
+  // (no job runs: the next one's generation bump publishes them)
+  for (std::size_t u = 0; u < begin.size(); ++u) share_begin_[u] = static_cast<std::uint32_t>(begin[u]);
 }
 
 WorkerPool::~WorkerPool() {
@@ -74,22 +88,26 @@ bool WorkerPool::drain(int self, std::uint64_t generation) {
   // partitions it ran are counted off pending_ at once at the end: one
   // exchange of that shared line per thread and job.
   const auto gen = static_cast<std::uint32_t>(generation);
-  const auto P = static_cast<std::uint32_t>(partitions_), T = static_cast<std::uint32_t>(threads_);
+  const auto T = static_cast<std::uint32_t>(threads_);
   int ran = 0;
+  const bool tails = take_tails_.load(std::memory_order_relaxed);
   for (std::uint32_t k = 0; k < T; ++k) {
     const std::uint32_t u = (static_cast<std::uint32_t>(self) + T - k) % T;
     std::atomic<std::uint64_t>& state = shares_[u].state;
     std::uint64_t s = state.load(std::memory_order_acquire);
+    bool mine = k == 0;  // its own share, or one it opened in this job
     for (;;) {
       const auto d = static_cast<std::int32_t>(static_cast<std::uint32_t>(s >> 32) - gen);
-      if (d > 0) break;  // a later job's
+      if (d > 0) break;                      // a later job's
+      if (d == 0 && !mine && !tails) break;  // its owner has started it and runs it to the end
       // (d < 0: not opened in this job yet, the whole share)
-      std::uint32_t first = d < 0 ? P * u / T : static_cast<std::uint32_t>(s >> 16) & 0xffffu;
-      std::uint32_t end = d < 0 ? P * (u + 1) / T : static_cast<std::uint32_t>(s) & 0xffffu;
+      std::uint32_t first = d < 0 ? share_begin_[u] : static_cast<std::uint32_t>(s >> 16) & 0xffffu;
+      std::uint32_t end = d < 0 ? share_begin_[u + 1] : static_cast<std::uint32_t>(s) & 0xffffu;
       if (first >= end) break;
       const std::uint32_t t = k == 0 ? first++ : --end;
       const std::uint64_t next = std::uint64_t{gen} << 32 | std::uint64_t{first} << 16 | end;
       if (!state.compare_exchange_weak(s, next, std::memory_order_acq_rel, std::memory_order_acquire)) continue;
+      mine = mine || d < 0;
       (*job_.load(std::memory_order_acquire))(static_cast<int>(t), self);
       ++ran;
       s = next;  // (a failed exchange below reloads it)
@@ -98,7 +116,7 @@ bool WorkerPool::drain(int self, std::uint64_t generation) {
   return ran > 0 && pending_.fetch_sub(ran, std::memory_order_acq_rel) == ran;
 }
 
-void WorkerPool::run(const std::function<void(int, int)>& job) {
+void WorkerPool::run(const std::function<void(int, int)>& job, bool take_tails) {
   if (threads_ == 1) {
     for (int t = 0; t < partitions_; ++t) job(t, 0);
     return;
@@ -107,6 +125,7 @@ void WorkerPool::run(const std::function<void(int, int)>& job) {
   // generation bump; shares open only with the new generation.
   pending_.store(partitions_, std::memory_order_relaxed);
   job_.store(&job, std::memory_order_relaxed);
+  take_tails_.store(take_tails, std::memory_order_relaxed);
   std::uint64_t generation = 0;
   {
     std::lock_guard<std::mutex> lock(mutex_);
@@ -118,6 +137,33 @@ void WorkerPool::run(const std::function<void(int, int)>& job) {
   if (spinFor(done)) return;
   std::unique_lock<std::mutex> lock(mutex_);
   done_.wait(lock, done);
+}
+
+std::vector<int> sharesForSpeeds(const std::vector<double>& speed, const std::vector<int>& current, int partitions,
+                                 double gain) {
+  const int T = static_cast<int>(speed.size());
+  double total = 0.0;
+  for (const double v : speed) total += v;
+  if (T < 2 || partitions < T || !(total > 0.0) || !std::isfinite(total)) return current;
+  for (const double v : speed)
+    if (!(v > 0.0)) return current;
+  std::vector<int> begin(static_cast<std::size_t>(T) + 1, 0);
+  begin.back() = partitions;
+  double acc = 0.0;
+  for (int u = 1; u < T; ++u) {
+    acc += speed[static_cast<std::size_t>(u) - 1];
+    const auto b = static_cast<int>(std::lround(partitions * acc / total));
+    begin[static_cast<std::size_t>(u)] =
+        std::clamp(b, begin[static_cast<std::size_t>(u) - 1] + 1, partitions - (T - u));
+  }
+  // the job ends with its slowest share
+  const auto span = [&](const std::vector<int>& b) {
+    double worst = 0.0;
+    for (std::size_t u = 0; u + 1 < b.size(); ++u) worst = std::max(worst, (b[u + 1] - b[u]) / speed[u]);
+    return worst;
+  };
+  if (current.size() != begin.size()) return begin;
+  return span(begin) < (1.0 - gain) * span(current) ? begin : current;
 }
 
 void WorkerPool::workerLoop(int self) {

@@ -12,6 +12,9 @@
 /// their shares. A core that runs slower (a virtual CPU whose host core is
 /// busy elsewhere) thus hands the tail of its share to a faster one, and a
 /// worker that the OS has not scheduled yet does not hold the caller up.
+/// The shares start even; the caller may resize them between jobs
+/// (setShares) to the threads' measured speeds, so that a slower core's
+/// tail is not taken over, and its data moved between caches, at every job.
 /// Waiting threads spin for a few tens of microseconds, poll with yields for
 /// a few milliseconds, then block on a condition variable, so an idle or
 /// oversubscribed pool burns no CPU (micro/worker_pool.cpp).
@@ -39,10 +42,16 @@ class WorkerPool {
   int size() const { return partitions_; }
   /// Threads, the caller included.
   int threads() const { return threads_; }
+  /// First partition of thread u's share (u = 0 .. threads()); share u is
+  /// shareBegin(u) .. shareBegin(u + 1) - 1.
+  int shareBegin(int u) const { return static_cast<int>(share_begin_[static_cast<std::size_t>(u)]); }
+  /// Sets the shares (between jobs): `begin` has threads() + 1 entries, 0
+  /// first, size() last, each share at least one partition.
+  void setShares(const std::vector<int>& begin);
   /// Runs job(t, thread) once for each partition t = 0 .. size()-1, on
   /// whichever threads claim them first (the calling thread takes part,
   /// as thread 0), and returns when all are done.
-  void run(const std::function<void(int, int)>& job);
+  void run(const std::function<void(int, int)>& job, bool take_tails = true);
 
  private:
   void workerLoop(int self);
@@ -62,12 +71,24 @@ class WorkerPool {
     std::atomic<std::uint64_t> state{0};
   };
   std::unique_ptr<Share[]> shares_;
+  std::vector<std::uint32_t> share_begin_;    // thread u's share: share_begin_[u] .. share_begin_[u + 1] - 1
   std::atomic<int> pending_{0};               // partitions not finished yet
   std::atomic<std::uint64_t> generation_{0};  // bumped (under mutex_) for each job
   std::atomic<bool> stop_{false};
+  std::atomic<bool> take_tails_{true};
   std::mutex mutex_;
   std::condition_variable wake_;  // workers: a new generation
   std::condition_variable done_;  // caller: pending_ reached 0
 };
+
+/// Shares of `partitions` partitions among threads of the given speeds
+/// (partitions per unit time, all > 0) that end a job together: share
+/// boundaries at the speeds' cumulative sums, rounded, each share at least
+/// one partition. Returns `current` (threads + 1 boundaries) unless the new
+/// shares' slowest one ends at least `gain` sooner than the current's (a
+/// margin against the noise of the measured speeds: a share that moves
+/// moves its partitions' data between the cores' caches).
+std::vector<int> sharesForSpeeds(const std::vector<double>& speed, const std::vector<int>& current, int partitions,
+                                 double gain = 0.05);
 
 }  // namespace gabion::micro

@@ -4,6 +4,8 @@
 
 #include <atomic>
 #include <chrono>
+#include <cmath>
+#include <stdexcept>
 #include <thread>
 #include <vector>
 
@@ -15,32 +17,41 @@ using gabion::micro::WorkerPool;
 
 TEST(WorkerPool, EveryPartitionOfEveryJobRunsOnce) {
   for (const int threads : {1, 2, 3, 4})
-    for (const int per_thread : {1, 4}) {
-      const int parts = threads * per_thread;
-      WorkerPool pool(threads, parts);
-      ASSERT_EQ(pool.size(), parts);
-      ASSERT_EQ(pool.threads(), threads);
-      std::vector<std::atomic<long>> runs(static_cast<std::size_t>(parts));
-      for (auto& r : runs) r.store(0);
-      constexpr long kJobs = 10000;
-      for (long j = 0; j < kJobs; ++j) {
-        std::atomic<int> seen{0};
-        pool.run([&](int t, int thread) {
-          ASSERT_GE(t, 0);
-          ASSERT_LT(t, parts);
-          ASSERT_GE(thread, 0);
-          ASSERT_LT(thread, threads);
-          // uneven work, so that threads finish in varying order
-          volatile double x = 1.0;
-          for (long k = 0; k < (j + t) % 7 * 50; ++k) x = x * 1.000001;
-          seen.fetch_or(1 << t);
-          runs[static_cast<std::size_t>(t)].fetch_add(1);
-        });
-        // run() returns only when all partitions are done
-        ASSERT_EQ(seen.load(), (1 << parts) - 1) << "job " << j << ", " << threads << " threads";
+    for (const int per_thread : {1, 4})
+      for (const bool take_tails : {true, false}) {
+        const int parts = threads * per_thread;
+        WorkerPool pool(threads, parts);
+        if (per_thread > 1 && threads > 1) {  // uneven shares: thread 0 one partition, the last thread the rest
+          std::vector<int> begin(static_cast<std::size_t>(threads) + 1);
+          for (int u = 1; u < threads; ++u) begin[static_cast<std::size_t>(u)] = u;
+          begin.back() = parts;
+          pool.setShares(begin);
+        }
+        ASSERT_EQ(pool.size(), parts);
+        ASSERT_EQ(pool.threads(), threads);
+        std::vector<std::atomic<long>> runs(static_cast<std::size_t>(parts));
+        for (auto& r : runs) r.store(0);
+        constexpr long kJobs = 10000;
+        for (long j = 0; j < kJobs; ++j) {
+          std::atomic<int> seen{0};
+          pool.run(
+              [&](int t, int thread) {
+                ASSERT_GE(t, 0);
+                ASSERT_LT(t, parts);
+                ASSERT_GE(thread, 0);
+                ASSERT_LT(thread, threads);
+                // uneven work, so that threads finish in varying order
+                volatile double x = 1.0;
+                for (long k = 0; k < (j + t) % 7 * 50; ++k) x = x * 1.000001;
+                seen.fetch_or(1 << t);
+                runs[static_cast<std::size_t>(t)].fetch_add(1);
+              },
+              take_tails);
+          // run() returns only when all partitions are done
+          ASSERT_EQ(seen.load(), (1 << parts) - 1) << "job " << j << ", " << threads << " threads";
+        }
+        for (int t = 0; t < parts; ++t) EXPECT_EQ(runs[static_cast<std::size_t>(t)].load(), kJobs) << "partition " << t;
       }
-      for (int t = 0; t < parts; ++t) EXPECT_EQ(runs[static_cast<std::size_t>(t)].load(), kJobs) << "partition " << t;
-    }
 }
 
 // A thread held up (a slower core) hands its partitions over: the other
@@ -60,6 +71,77 @@ TEST(WorkerPool, AHeldUpThreadsPartitionsAreTakenOver) {
   if (!started.load()) GTEST_SKIP() << "the worker thread did not start within 5 s";
   // thread 1 owns 4..7 and is held in 4; thread 0 runs its own 0..3, then 7, 6, 5
   EXPECT_EQ(by, (std::vector<int>{0, 0, 0, 0, 1, 0, 0, 0}));
+}
+
+// Without taking over tails, a share its owner has started is left to it,
+// however long it takes.
+TEST(WorkerPool, AStartedShareIsLeftToItsOwner) {
+  WorkerPool pool(2, 8);
+  std::vector<int> by(8, -1);
+  std::atomic<bool> started{false};
+  pool.run(
+      [&](int t, int thread) {
+        if (thread == 1 && !started.exchange(true)) std::this_thread::sleep_for(std::chrono::milliseconds(100));
+        // thread 0 waits (5 s at most) until thread 1 is held up in its first partition
+        const auto until = std::chrono::steady_clock::now() + std::chrono::seconds(5);
+        while (thread == 0 && t == 0 && !started.load() && std::chrono::steady_clock::now() < until)
+          std::this_thread::yield();
+        by[static_cast<std::size_t>(t)] = thread;
+      },
+      false);
+  if (!started.load()) GTEST_SKIP() << "the worker thread did not start within 5 s";
+  EXPECT_EQ(by, (std::vector<int>{0, 0, 0, 0, 1, 1, 1, 1}));
+}
+
+// The shares follow setShares: thread 1 owns 6 and 7, held up in 6; thread 0
+// runs 0 .. 5, then takes 7 (tails) or leaves it (no tails).
+TEST(WorkerPool, SharesFollowSetShares) {
+  for (const bool take_tails : {true, false}) {
+    WorkerPool pool(2, 8);
+    pool.setShares({0, 6, 8});
+    EXPECT_EQ(pool.shareBegin(1), 6);
+    std::vector<int> by(8, -1);
+    std::atomic<bool> started{false};
+    pool.run(
+        [&](int t, int thread) {
+          if (thread == 1 && !started.exchange(true)) std::this_thread::sleep_for(std::chrono::milliseconds(100));
+          const auto until = std::chrono::steady_clock::now() + std::chrono::seconds(5);
+          while (thread == 0 && t == 0 && !started.load() && std::chrono::steady_clock::now() < until)
+            std::this_thread::yield();
+          by[static_cast<std::size_t>(t)] = thread;
+        },
+        take_tails);
+    if (!started.load()) GTEST_SKIP() << "the worker thread did not start within 5 s";
+    EXPECT_EQ(by, (std::vector<int>{0, 0, 0, 0, 0, 0, 1, take_tails ? 0 : 1})) << "take_tails " << take_tails;
+  }
+  WorkerPool pool(2, 8);
+  EXPECT_THROW(pool.setShares({0, 8, 8}), std::invalid_argument);  // an empty share
+  EXPECT_THROW(pool.setShares({0, 4}), std::invalid_argument);     // not threads + 1 boundaries
+  EXPECT_THROW(pool.setShares({1, 4, 8}), std::invalid_argument);
+}
+
+// Shares from the threads' speeds: boundaries at the speeds' cumulative
+// sums, at least one partition each, kept unless the slowest share ends at
+// least 5 % sooner.
+TEST(WorkerPool, SharesForSpeeds) {
+  using gabion::micro::sharesForSpeeds;
+  const std::vector<int> even{0, 4, 8};
+  EXPECT_EQ(sharesForSpeeds({1.0, 1.0}, even, 8), even);
+  EXPECT_EQ(sharesForSpeeds({2.0, 1.0}, even, 8), (std::vector<int>{0, 5, 8}));  // 5.33 rounded
+  EXPECT_EQ(sharesForSpeeds({1.0, 3.0}, even, 8), (std::vector<int>{0, 2, 8}));
+  EXPECT_EQ(sharesForSpeeds({1000.0, 1.0}, even, 8), (std::vector<int>{0, 7, 8}));  // one partition at least
+  // 1.1 : 1 gives 4.19 -> 4: no change; 1.3 : 1 gives 4.52 -> 5, whose slowest share (5 / 1.3 = 3.85)
+  // ends 3.8 % sooner than 4 / 1: under the 5 % margin, kept
+  EXPECT_EQ(sharesForSpeeds({1.1, 1.0}, even, 8), even);
+  EXPECT_EQ(sharesForSpeeds({1.3, 1.0}, even, 8), even);
+  EXPECT_EQ(sharesForSpeeds({1.3, 1.0}, even, 8, 0.03), (std::vector<int>{0, 5, 8}));
+  // back from an uneven split when the speeds even out
+  EXPECT_EQ(sharesForSpeeds({1.0, 1.0}, {0, 6, 8}, 8), even);
+  // three threads, the middle one half as fast: 12 partitions at 4.8, 7.2 -> 5, 7
+  EXPECT_EQ(sharesForSpeeds({1.0, 0.5, 1.0}, {0, 4, 8, 12}, 12), (std::vector<int>{0, 5, 7, 12}));
+  // unmeasured (a thread that ran nothing) or non-finite speeds: kept
+  EXPECT_EQ(sharesForSpeeds({1.0, 0.0}, even, 8), even);
+  EXPECT_EQ(sharesForSpeeds({1.0, std::nan("")}, even, 8), even);
 }
 
 // Jobs far apart in time (the workers have blocked in between) still run
