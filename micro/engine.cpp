@@ -247,6 +247,7 @@ Engine::Engine(const Scene& scene, int threads) {
   scratch_.resize(static_cast<std::size_t>(pool_->size()));
   thread_ticks_.resize(static_cast<std::size_t>(T));
   shares_from_.resize(static_cast<std::size_t>(T));
+  block_next_ = std::make_unique<BlockNext[]>(scratch_.size());
 }
 
 Engine::~Engine() = default;
@@ -370,13 +371,26 @@ void Engine::balanceShares() {
   if (next != current) pool_->setShares(next);
 }
 
+// fn(b) for blocks b = 0 .. blocks-1 of the neighbour stage's passes (ranges
+// of particles, pairs or rows, in order). Partition t's job runs the blocks
+// of its own range first, claiming them from its own counter (one cache line
+// each, so uncontended), then helps the others' (in the mixed-size scene the
+// last blocks, which hold the large spheres, cost most). A job thus mostly
+// reads the particles its thread has in its cache from the last steps; one
+// counter shared by all blocks, handed out in turn, spread them over both
+// cores and made every claim a transfer of that line between them.
 template <class Fn>
 void Engine::forBlocks(StageProfile::Stage stage, std::size_t blocks, const Fn& fn) {
-  std::atomic<std::size_t> next{0};
-  parallel(stage, [&](int) {
-    for (std::size_t b = next.fetch_add(1, std::memory_order_relaxed); b < blocks;
-         b = next.fetch_add(1, std::memory_order_relaxed))
-      fn(b);
+  const std::size_t P = scratch_.size();
+  for (std::size_t t = 0; t < P; ++t) block_next_[t].b.store(blocks * t / P, std::memory_order_relaxed);
+  parallel(stage, [&](int task) {
+    for (std::size_t k = 0; k < P; ++k) {
+      const std::size_t u = (static_cast<std::size_t>(task) + k) % P, end = blocks * (u + 1) / P;
+      std::atomic<std::size_t>& next = block_next_[u].b;
+      for (std::size_t b = next.fetch_add(1, std::memory_order_relaxed); b < end;
+           b = next.fetch_add(1, std::memory_order_relaxed))
+        fn(b);
+    }
   });
 }
 
@@ -386,9 +400,12 @@ ForBlocks Engine::neighbourBlocks() {
   };
 }
 
+// A whole number of blocks per partition (up to four: fewer particles than
+// 256 a block do not pay for their claims).
 std::size_t Engine::rebuildBlocks() const {
   const auto threads = static_cast<std::size_t>(pool_->threads());
-  return threads == 1 ? 1 : std::min<std::size_t>(16 * threads, p_.size() / 256 + 1);
+  const std::size_t P = scratch_.size();
+  return threads == 1 ? 1 : P * std::clamp<std::size_t>(p_.size() / (256 * P), 1, 4);
 }
 
 // ---------------------------------------------------------------------------

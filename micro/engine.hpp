@@ -13,6 +13,7 @@
 #include <Eigen/Core>
 #include <Eigen/Geometry>
 #include <array>
+#include <atomic>
 #include <chrono>
 #include <cstdint>
 #include <functional>
@@ -275,6 +276,10 @@ class Engine {
   };
   std::vector<ThreadTicks> thread_ticks_;
   std::vector<ThreadTicks> shares_from_;  // thread_ticks_ at the last balanceShares()
+  struct alignas(64) BlockNext {
+    std::atomic<std::size_t> b{0};
+  };
+  std::unique_ptr<BlockNext[]> block_next_;  // forBlocks(): per partition, its next block
   std::uint64_t lap_ = 0;
 };
 
