@@ -850,13 +850,22 @@ void Engine::addForceBuffers(std::size_t u) {
     WorkerScratch& s = scratch_[t];
     const std::size_t base = part_begin_[t + 1];  // (the buffer starts at the partition's end)
     std::vector<std::uint32_t>& lines = s.lines_for[u];
+    double* const to[6] = {p_.fx.data(), p_.fy.data(), p_.fz.data(), p_.tx.data(), p_.ty.data(), p_.tz.data()};
+    double* const from[6] = {s.fx.data(), s.fy.data(), s.fz.data(), s.tx.data(), s.ty.data(), s.tz.data()};
     for (const std::uint32_t g : lines) {
-      s.written[(g * kLine - base) / kLine] = 0;
-      for (std::size_t i = g * kLine; i < std::min(e, g * kLine + kLine); ++i) {
-        const std::size_t q = i - base;
-        p_.fx[i] += s.fx[q], p_.fy[i] += s.fy[q], p_.fz[i] += s.fz[q];
-        p_.tx[i] += s.tx[q], p_.ty[i] += s.ty[q], p_.tz[i] += s.tz[q];
-        s.fx[q] = s.fy[q] = s.fz[q] = s.tx[q] = s.ty[q] = s.tz[q] = 0.0;
+      const std::size_t i0 = g * kLine, q0 = i0 - base, m = std::min(e, i0 + kLine) - i0;
+      s.written[q0 / kLine] = 0;
+      // (a whole line in one vector per field but at the store's end; the
+      // same additions, element by element)
+      for (int f = 0; f < 6; ++f) {
+        double* __restrict const a = to[f] + i0;
+        double* __restrict const b = from[f] + q0;
+        if (m == kLine) {
+#pragma omp simd
+          for (std::size_t k = 0; k < kLine; ++k) a[k] += b[k], b[k] = 0.0;
+        } else {
+          for (std::size_t k = 0; k < m; ++k) a[k] += b[k], b[k] = 0.0;
+        }
       }
     }
     lines.clear();
