@@ -54,21 +54,32 @@ TEST(WorkerPool, EveryPartitionOfEveryJobRunsOnce) {
       }
 }
 
+// Runs one job on a pool of two threads in which thread 1 is held up
+// (100 ms) in the first partition it runs, and thread 0 starts only once
+// thread 1 is held (5 s at most); returns which thread ran each partition,
+// or nothing if the worker did not start within those 5 s.
+std::vector<int> runWithThreadOneHeldUp(WorkerPool& pool, bool take_tails) {
+  std::vector<int> by(static_cast<std::size_t>(pool.size()), -1);
+  std::atomic<bool> started{false};
+  pool.run(
+      [&](int t, int thread) {
+        if (thread == 1 && !started.exchange(true)) std::this_thread::sleep_for(std::chrono::milliseconds(100));
+        const auto until = std::chrono::steady_clock::now() + std::chrono::seconds(5);
+        while (thread == 0 && t == 0 && !started.load() && std::chrono::steady_clock::now() < until)
+          std::this_thread::yield();
+        by[static_cast<std::size_t>(t)] = thread;
+      },
+      take_tails);
+  if (!started.load()) return {};
+  return by;
+}
+
 // A thread held up (a slower core) hands its partitions over: the other
 // thread takes the tail of its share, from the end.
 TEST(WorkerPool, AHeldUpThreadsPartitionsAreTakenOver) {
   WorkerPool pool(2, 8);
-  std::vector<int> by(8, -1);
-  std::atomic<bool> started{false};
-  pool.run([&](int t, int thread) {
-    if (thread == 1 && !started.exchange(true)) std::this_thread::sleep_for(std::chrono::milliseconds(100));
-    // thread 0 waits (5 s at most) until thread 1 is held up in its first partition
-    const auto until = std::chrono::steady_clock::now() + std::chrono::seconds(5);
-    while (thread == 0 && t == 0 && !started.load() && std::chrono::steady_clock::now() < until)
-      std::this_thread::yield();
-    by[static_cast<std::size_t>(t)] = thread;
-  });
-  if (!started.load()) GTEST_SKIP() << "the worker thread did not start within 5 s";
+  const std::vector<int> by = runWithThreadOneHeldUp(pool, true);
+  if (by.empty()) GTEST_SKIP() << "the worker thread did not start within 5 s";
   // thread 1 owns 4..7 and is held in 4; thread 0 runs its own 0..3, then 7, 6, 5
   EXPECT_EQ(by, (std::vector<int>{0, 0, 0, 0, 1, 0, 0, 0}));
 }
@@ -77,19 +88,8 @@ TEST(WorkerPool, AHeldUpThreadsPartitionsAreTakenOver) {
 // however long it takes.
 TEST(WorkerPool, AStartedShareIsLeftToItsOwner) {
   WorkerPool pool(2, 8);
-  std::vector<int> by(8, -1);
-  std::atomic<bool> started{false};
-  pool.run(
-      [&](int t, int thread) {
-        if (thread == 1 && !started.exchange(true)) std::this_thread::sleep_for(std::chrono::milliseconds(100));
-        // thread 0 waits (5 s at most) until thread 1 is held up in its first partition
-        const auto until = std::chrono::steady_clock::now() + std::chrono::seconds(5);
-        while (thread == 0 && t == 0 && !started.load() && std::chrono::steady_clock::now() < until)
-          std::this_thread::yield();
-        by[static_cast<std::size_t>(t)] = thread;
-      },
-      false);
-  if (!started.load()) GTEST_SKIP() << "the worker thread did not start within 5 s";
+  const std::vector<int> by = runWithThreadOneHeldUp(pool, false);
+  if (by.empty()) GTEST_SKIP() << "the worker thread did not start within 5 s";
   EXPECT_EQ(by, (std::vector<int>{0, 0, 0, 0, 1, 1, 1, 1}));
 }
 
@@ -100,18 +100,8 @@ TEST(WorkerPool, SharesFollowSetShares) {
     WorkerPool pool(2, 8);
     pool.setShares({0, 6, 8});
     EXPECT_EQ(pool.shareBegin(1), 6);
-    std::vector<int> by(8, -1);
-    std::atomic<bool> started{false};
-    pool.run(
-        [&](int t, int thread) {
-          if (thread == 1 && !started.exchange(true)) std::this_thread::sleep_for(std::chrono::milliseconds(100));
-          const auto until = std::chrono::steady_clock::now() + std::chrono::seconds(5);
-          while (thread == 0 && t == 0 && !started.load() && std::chrono::steady_clock::now() < until)
-            std::this_thread::yield();
-          by[static_cast<std::size_t>(t)] = thread;
-        },
-        take_tails);
-    if (!started.load()) GTEST_SKIP() << "the worker thread did not start within 5 s";
+    const std::vector<int> by = runWithThreadOneHeldUp(pool, take_tails);
+    if (by.empty()) GTEST_SKIP() << "the worker thread did not start within 5 s";
     EXPECT_EQ(by, (std::vector<int>{0, 0, 0, 0, 0, 0, 1, take_tails ? 0 : 1})) << "take_tails " << take_tails;
   }
   WorkerPool pool(2, 8);
