@@ -345,7 +345,7 @@ void Engine::parallel(StageProfile::Stage stage, const Job& job) {
 }
 
 // The threads' shares of the partitions, from their speeds in the contact
-// stage (partitions run per busy tick) over the last 32 steps or more: a
+// stage (partitions run per busy tick) over the last 32 steps: a
 // thread on a slower core (a virtual CPU whose host core is busy elsewhere;
 // its speed changes over seconds) gets fewer partitions, so that the threads
 // end the stage together instead of the faster one taking over the slower
@@ -354,10 +354,9 @@ void Engine::parallel(StageProfile::Stage stage, const Job& job) {
 // changes nothing in its arithmetic: the results do not depend on the shares.
 void Engine::balanceShares() {
   const std::size_t T = thread_ticks_.size();
-  if (T == 1) return;
-  std::uint64_t jobs = 0;
-  for (std::size_t t = 0; t < T; ++t) jobs += thread_ticks_[t].contact_jobs - shares_from_[t].contact_jobs;
-  if (jobs < 32 * scratch_.size()) return;
+  // (a count of its own: the threads' lines are read only when it is due)
+  if (T == 1 || ++steps_since_balance_ < 32) return;
+  steps_since_balance_ = 0;
   std::vector<double> speed(T);
   for (std::size_t t = 0; t < T; ++t) {
     const ThreadTicks &now = thread_ticks_[t], &from = shares_from_[t];

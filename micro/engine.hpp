@@ -276,6 +276,7 @@ class Engine {
   };
   std::vector<ThreadTicks> thread_ticks_;
   std::vector<ThreadTicks> shares_from_;  // thread_ticks_ at the last balanceShares()
+  int steps_since_balance_ = 0;
   struct alignas(64) BlockNext {
     std::atomic<std::size_t> b{0};
   };
