@@ -50,7 +50,9 @@ class WorkerPool {
   void setShares(const std::vector<int>& begin);
   /// Runs job(t, thread) once for each partition t = 0 .. size()-1, on
   /// whichever threads claim them first (the calling thread takes part,
-  /// as thread 0), and returns when all are done.
+  /// as thread 0), and returns when all are done. With take_tails, a
+  /// thread done with its own share takes what is left of another's, from
+  /// its end; without, only a share whose owner has not started it, whole.
   void run(const std::function<void(int, int)>& job, bool take_tails = true);
 
  private:
