@@ -86,15 +86,23 @@ def cpu_model():
     return name
 
 
-def core_round_trip(gabion):
+# A round trip below this is two CPUs that share a cache; at or above, two
+# CPUs apart (on the virtual machines measured, 90-120 ns and 450-560 ns,
+# the same machine passing from one to the other within minutes).
+TRIP_NEAR_NS = 250
+
+
+def core_round_trip(gabion, quick=False):
     """The cache-line round trip between CPUs 0 and 1, from bench_core_round_trip built beside gabion
     (build/bench/): what every fork and join of a two-thread step pays, several times a step. None
-    where it is not built or the machine has one CPU."""
-    exe = os.path.join(os.path.dirname(os.path.abspath(gabion)), "bench", "bench_core_round_trip")
+    where it is not built or the machine has one CPU. quick: fewer trips (a fifth of a second at most),
+    around each run with threads."""
+    exe = os.path.join(os.path.dirname(os.path.abspath(gabion or "")), "bench", "bench_core_round_trip")
     if (os.cpu_count() or 1) < 2 or not os.access(exe, os.X_OK):
         return None
     try:
-        out = subprocess.run([exe], capture_output=True, text=True, timeout=60).stdout
+        args = ["--trips", "50000", "--batches", "3"] if quick else []
+        out = subprocess.run([exe] + args, capture_output=True, text=True, timeout=60).stdout
     except (OSError, subprocess.SubprocessError):
         return None
     m = re.search(r": (\d+) ns", out)
@@ -654,10 +662,13 @@ def render_settle(info, rows):
             items.append(paired_words("x LIGGGHTS", v, ">= 3", lambda x: x >= 3))
         v = paired(g1, g2)
         if v:
-            items.append(paired_words("2 threads / 1", v, ">= 1.6", lambda x: x >= 1.6))
-        v = paired(c1, settle_row(rows, "ceiling", n, 2))
+            items.append(paired_words("2 threads / 1", v, ">= 1.6", lambda x: x >= 1.6,
+                                      trip_words(paired_by_trip(g1, g2, g2))))
+        c2 = settle_row(rows, "ceiling", n, 2)
+        v = paired(c1, c2)
         if v:
-            items.append(f"the kernel's 2 threads / 1 {v[0]:.2f} ({v[1]:.2f}-{v[2]:.2f})")
+            items.append(f"the kernel's 2 threads / 1 {v[0]:.2f} ({v[1]:.2f}-{v[2]:.2f}"
+                         + trip_words(paired_by_trip(c1, c2, c2)) + ")")
         if items:
             targ.append(f"N={n}: " + ", ".join(items))
     if targ:
@@ -679,10 +690,37 @@ def paired(num, den):
     return statistics.median(x), x[0], x[-1], len(x)
 
 
-def paired_words(name, value, target, met):
+def paired_by_trip(num, den, threaded):
+    """paired(num, den) split by the cache-line round trip measured just before and just after each
+    round's run of `threaded` (the row with threads): {"near": (median, lowest, highest, rounds) over
+    the rounds whose two trips were both below TRIP_NEAR_NS, "far": over those whose two were both at
+    or above it}; a class without rounds is left out, as are the rounds whose CPUs moved during the
+    run."""
+    a, b = (num or {}).get("round_loop_s") or [], (den or {}).get("round_loop_s") or []
+    trips = (threaded or {}).get("round_trip_ns") or []
+    split = {"near": [], "far": []}
+    for p, q, t in zip(a, b, trips):
+        if not (p and q and t and None not in t):
+            continue
+        if max(t) < TRIP_NEAR_NS:
+            split["near"].append(p / q)
+        elif min(t) >= TRIP_NEAR_NS:
+            split["far"].append(p / q)
+    return {k: (statistics.median(x), min(x), max(x), len(x)) for k, x in split.items() if x}
+
+
+def trip_words(split):
+    """' (by the round trip ...: under 250 ns 1.66 (1.62-1.70, 3 rounds), ...)', or '' without trips."""
+    words = {"near": f"under {TRIP_NEAR_NS} ns", "far": f"{TRIP_NEAR_NS} ns or more"}
+    parts = [f"{words[k]} {m:.2f} ({lo:.2f}-{hi:.2f}, {n} round{'s' if n > 1 else ''})"
+             for k, (m, lo, hi, n) in split.items()]
+    return ("; by the cache-line round trip around the two-thread run: " + ", ".join(parts)) if parts else ""
+
+
+def paired_words(name, value, target, met, extra=""):
     med, lo, hi, k = value
     return (f"{name} {med:.2f} ({lo:.2f}-{hi:.2f} over {k} rounds; target {target}: "
-            f"{'met' if met(med) else 'not met'})")
+            f"{'met' if met(med) else 'not met'}{extra})")
 
 
 def liggghts_zeta(m_a, m_b=None, gamma_n=1883.0, kn=1.0e5):
@@ -1045,6 +1083,7 @@ def main():
         jobs = jobs_for(name)
         bests = {j: None for j in jobs}
         rounds = {j: [] for j in jobs}  # each round's loop s (None: failed), for ratios paired by round
+        trips = {j: [] for j in jobs}  # runs with threads: each round's round trip before and after, ns
         for r in range(a.repeat):
             for job in jobs:
                 e, t, v = job
@@ -1056,7 +1095,11 @@ def main():
                 what = job_label(job) + (f" [{neigh_words(v)}]" if e == "liggghts" and v else "")
                 log(f"[{k}/{total}] {name} {what} N={scene['n']} threads={t} steps={scene['steps']} "
                     f"(load {la[0]:.2f}) ...")
+                # (where the two CPUs lie can change within minutes: measured around the run itself)
+                trip_before = core_round_trip(a.gabion, quick=True) if t > 1 else None
                 res = run_job(available, scene, job, rundir, a.timeout)
+                if t > 1:
+                    trips[job].append([trip_before, core_round_trip(a.gabion, quick=True)])
                 res["load1"] = la[0]
                 if "error" not in res and res["steps"] != scene["steps"]:
                     res["error"] = f"ran {res['steps']} steps, expected {scene['steps']}"
@@ -1071,6 +1114,8 @@ def main():
                     extra = f", contacts {res['contacts']}"
                     if res.get("contacts_geom") is not None:
                         extra += f" (geometric {res['contacts_geom']})"
+                if t > 1 and None not in trips[job][-1]:
+                    extra += ", round trip {} / {} ns before / after".format(*trips[job][-1])
                 log(f"    loop {res['loop_s']:.2f} s ({bsps / 1e6:.2f} M body-steps/s), whole run "
                     f"{res['elapsed_s']:.1f} s, max RSS {fmt(res['rss_kB'], '.0f')} kB{extra}")
                 if bests[job] is None or res["loop_s"] < bests[job]["loop_s"]:
@@ -1095,6 +1140,8 @@ def main():
                         f"loop CPU {best['loop_cpu_s']:.2f} s")
             if best is not None:
                 best["round_loop_s"] = rounds[job]
+                if t > 1:
+                    best["round_trip_ns"] = trips[job]
                 best.update({"engine": e, "n": scene["n"], "threads": t, "scene": name, "variant": v,
                              "label": job_label(job)})
                 rows.append(best)
