@@ -86,27 +86,50 @@ def cpu_model():
     return name
 
 
-# A round trip below this is two CPUs that share a cache; at or above, two
-# CPUs apart (on the virtual machines measured, 90-120 ns and 450-560 ns,
-# the same machine passing from one to the other within minutes).
+# Where the two CPUs of a two-thread run lie (on a virtual machine this can
+# change within minutes): two hardware threads of one core, which share its
+# arithmetic units (computing together each runs well below its speed
+# alone), two cores that share a cache (a short cache-line round trip) or
+# two cores apart. On the Zen 5 machine measured the round trips were 70-90,
+# 90-120 and 400-560 ns, and computing together 1.0 of alone but for one
+# core's two threads.
 TRIP_NEAR_NS = 250
+TOGETHER_ONE_CORE = 0.8
+PLACES = {"core": "on one core's two hardware threads", "cache": "on two cores sharing a cache",
+          "apart": "on two cores apart"}
 
 
-def core_round_trip(gabion, quick=False):
-    """The cache-line round trip between CPUs 0 and 1, from bench_core_round_trip built beside gabion
-    (build/bench/): what every fork and join of a two-thread step pays, several times a step. None
-    where it is not built or the machine has one CPU. quick: fewer trips (a fifth of a second at most),
-    around each run with threads."""
+def core_pair(gabion, quick=False):
+    """CPUs 0 and 1 as bench_core_round_trip (built beside gabion, build/bench/) measures them:
+    {"trip_ns": the cache-line round trip (what every fork and join of a two-thread step pays, several
+    times a step), "together": their speed computing at once over one alone}, each None where not
+    measured (not built, one CPU). quick: fewer trips (a quarter of a second in all), around each run
+    with threads."""
+    out = {"trip_ns": None, "together": None}
     exe = os.path.join(os.path.dirname(os.path.abspath(gabion or "")), "bench", "bench_core_round_trip")
     if (os.cpu_count() or 1) < 2 or not os.access(exe, os.X_OK):
-        return None
+        return out
     try:
         args = ["--trips", "50000", "--batches", "3"] if quick else []
-        out = subprocess.run([exe] + args, capture_output=True, text=True, timeout=60).stdout
+        text = subprocess.run([exe] + args, capture_output=True, text=True, timeout=60).stdout
     except (OSError, subprocess.SubprocessError):
+        return out
+    m = re.search(r"round trip .*?: (\d+) ns", text)
+    out["trip_ns"] = int(m.group(1)) if m else None
+    m = re.search(r"computing together: ([0-9.]+)", text)
+    out["together"] = float(m.group(1)) if m else None
+    return out
+
+
+def placement(pair):
+    """"core", "cache" or "apart" (PLACES) for a core_pair() measurement; None where not measured."""
+    if not pair or pair.get("trip_ns") is None:
         return None
-    m = re.search(r": (\d+) ns", out)
-    return int(m.group(1)) if m else None
+    if pair["trip_ns"] >= TRIP_NEAR_NS:
+        return "apart"
+    # (one core's two threads share its caches too: a short trip; a long one
+    # with a slow co-run is another job on the machine)
+    return "core" if pair.get("together") is not None and pair["together"] < TOGETHER_ONE_CORE else "cache"
 
 
 def run_measured(cmd, cwd, env, stdout_path, stderr_path, timeout_s):
@@ -663,12 +686,12 @@ def render_settle(info, rows):
         v = paired(g1, g2)
         if v:
             items.append(paired_words("2 threads / 1", v, ">= 1.6", lambda x: x >= 1.6,
-                                      trip_words(paired_by_trip(g1, g2, g2))))
+                                      place_words(paired_by_place(g1, g2, g2))))
         c2 = settle_row(rows, "ceiling", n, 2)
         v = paired(c1, c2)
         if v:
             items.append(f"the kernel's 2 threads / 1 {v[0]:.2f} ({v[1]:.2f}-{v[2]:.2f}"
-                         + trip_words(paired_by_trip(c1, c2, c2)) + ")")
+                         + place_words(paired_by_place(c1, c2, c2)) + ")")
         if items:
             targ.append(f"N={n}: " + ", ".join(items))
     if targ:
@@ -690,31 +713,25 @@ def paired(num, den):
     return statistics.median(x), x[0], x[-1], len(x)
 
 
-def paired_by_trip(num, den, threaded):
-    """paired(num, den) split by the cache-line round trip measured just before and just after each
-    round's run of `threaded` (the row with threads): {"near": (median, lowest, highest, rounds) over
-    the rounds whose two trips were both below TRIP_NEAR_NS, "far": over those whose two were both at
-    or above it}; a class without rounds is left out, as are the rounds whose CPUs moved during the
-    run."""
+def paired_by_place(num, den, threaded):
+    """paired(num, den) split by where the CPUs of each round's run of `threaded` (the row with
+    threads) lay, measured just before and just after it: {place: (median, lowest, highest, rounds)}
+    for the places of PLACES with rounds; a round whose CPUs moved during the run is left out."""
     a, b = (num or {}).get("round_loop_s") or [], (den or {}).get("round_loop_s") or []
-    trips = (threaded or {}).get("round_trip_ns") or []
-    split = {"near": [], "far": []}
-    for p, q, t in zip(a, b, trips):
-        if not (p and q and t and None not in t):
-            continue
-        if max(t) < TRIP_NEAR_NS:
-            split["near"].append(p / q)
-        elif min(t) >= TRIP_NEAR_NS:
-            split["far"].append(p / q)
-    return {k: (statistics.median(x), min(x), max(x), len(x)) for k, x in split.items() if x}
+    pairs = (threaded or {}).get("round_cpus") or []
+    split = {}
+    for p, q, around in zip(a, b, pairs):
+        places = {placement(m) for m in (around or [])}
+        if p and q and len(places) == 1 and None not in places:
+            split.setdefault(places.pop(), []).append(p / q)
+    return {k: (statistics.median(x), min(x), max(x), len(x)) for k, x in split.items()}
 
 
-def trip_words(split):
-    """' (by the round trip ...: under 250 ns 1.66 (1.62-1.70, 3 rounds), ...)', or '' without trips."""
-    words = {"near": f"under {TRIP_NEAR_NS} ns", "far": f"{TRIP_NEAR_NS} ns or more"}
-    parts = [f"{words[k]} {m:.2f} ({lo:.2f}-{hi:.2f}, {n} round{'s' if n > 1 else ''})"
-             for k, (m, lo, hi, n) in split.items()]
-    return ("; by the cache-line round trip around the two-thread run: " + ", ".join(parts)) if parts else ""
+def place_words(split):
+    """'; by where its CPUs lay: on two cores apart 1.30 (1.23-1.33, 5 rounds), ...', or ''."""
+    parts = [f"{PLACES[k]} {split[k][0]:.2f} ({split[k][1]:.2f}-{split[k][2]:.2f}, {split[k][3]} round"
+             f"{'s' if split[k][3] > 1 else ''})" for k in PLACES if k in split]
+    return ("; by where the two-thread run's CPUs lay: " + ", ".join(parts)) if parts else ""
 
 
 def paired_words(name, value, target, met, extra=""):
@@ -998,9 +1015,12 @@ def main():
     stamp = datetime.datetime.now(datetime.timezone.utc).strftime("%Y-%m-%d %H:%M UTC")
     log(f"settling benchmark, {stamp}")
     machine = f"{cpu_model()}, {os.cpu_count()} logical CPUs"
-    trip_ns = core_round_trip(a.gabion)
-    if trip_ns is not None:
-        machine += f", cache-line round trip between CPUs 0 and 1 {trip_ns} ns (bench_core_round_trip)"
+    pair = core_pair(a.gabion)
+    if pair["trip_ns"] is not None:
+        machine += f", cache-line round trip between CPUs 0 and 1 {pair['trip_ns']} ns"
+        if pair["together"] is not None:
+            machine += f", computing together at {pair['together']:.2f} of one alone"
+        machine += " (bench_core_round_trip)"
     log(f"machine: {machine}; load average {loadavg()}")
     log(f"scene {a.scene}: settle N = {a.n if do_settle else '-'}, steps = {settle_steps if do_settle else '-'}; "
         f"mixed steps = {mixed_steps if do_mixed else '-'}; seed = {a.seed}, repeat = {a.repeat}")
@@ -1083,7 +1103,7 @@ def main():
         jobs = jobs_for(name)
         bests = {j: None for j in jobs}
         rounds = {j: [] for j in jobs}  # each round's loop s (None: failed), for ratios paired by round
-        trips = {j: [] for j in jobs}  # runs with threads: each round's round trip before and after, ns
+        cpus = {j: [] for j in jobs}  # runs with threads: each round's core_pair() before and after
         for r in range(a.repeat):
             for job in jobs:
                 e, t, v = job
@@ -1096,10 +1116,10 @@ def main():
                 log(f"[{k}/{total}] {name} {what} N={scene['n']} threads={t} steps={scene['steps']} "
                     f"(load {la[0]:.2f}) ...")
                 # (where the two CPUs lie can change within minutes: measured around the run itself)
-                trip_before = core_round_trip(a.gabion, quick=True) if t > 1 else None
+                before = core_pair(a.gabion, quick=True) if t > 1 else None
                 res = run_job(available, scene, job, rundir, a.timeout)
                 if t > 1:
-                    trips[job].append([trip_before, core_round_trip(a.gabion, quick=True)])
+                    cpus[job].append([before, core_pair(a.gabion, quick=True)])
                 res["load1"] = la[0]
                 if "error" not in res and res["steps"] != scene["steps"]:
                     res["error"] = f"ran {res['steps']} steps, expected {scene['steps']}"
@@ -1114,8 +1134,11 @@ def main():
                     extra = f", contacts {res['contacts']}"
                     if res.get("contacts_geom") is not None:
                         extra += f" (geometric {res['contacts_geom']})"
-                if t > 1 and None not in trips[job][-1]:
-                    extra += ", round trip {} / {} ns before / after".format(*trips[job][-1])
+                if t > 1 and cpus[job][-1][0]["trip_ns"] is not None:
+                    b_, a_ = cpus[job][-1]
+                    extra += (f", CPUs before / after: round trip {b_['trip_ns']} / {a_['trip_ns']} ns, "
+                              f"together {fmt(b_['together'], '.2f')} / {fmt(a_['together'], '.2f')} "
+                              f"({placement(b_)} / {placement(a_)})")
                 log(f"    loop {res['loop_s']:.2f} s ({bsps / 1e6:.2f} M body-steps/s), whole run "
                     f"{res['elapsed_s']:.1f} s, max RSS {fmt(res['rss_kB'], '.0f')} kB{extra}")
                 if bests[job] is None or res["loop_s"] < bests[job]["loop_s"]:
@@ -1141,7 +1164,7 @@ def main():
             if best is not None:
                 best["round_loop_s"] = rounds[job]
                 if t > 1:
-                    best["round_trip_ns"] = trips[job]
+                    best["round_cpus"] = cpus[job]
                 best.update({"engine": e, "n": scene["n"], "threads": t, "scene": name, "variant": v,
                              "label": job_label(job)})
                 rows.append(best)
