@@ -87,16 +87,15 @@ def cpu_model():
 
 
 # Where the two CPUs of a two-thread run lie (on a virtual machine this can
-# change within minutes): two hardware threads of one core, which share its
-# arithmetic units (computing together each runs well below its speed
-# alone), two cores that share a cache (a short cache-line round trip) or
-# two cores apart. On the Zen 5 machine measured the round trips were 70-90,
-# 90-120 and 400-560 ns, and computing together 1.0 of alone but for one
-# core's two threads.
+# change within minutes), from two measures of bench_core_round_trip: near
+# (a cache-line round trip under TRIP_NEAR_NS: cores that share a cache) or
+# apart, and, near, whether the two compute together each at its speed
+# alone or markedly slower (the two hardware threads of one core share its
+# arithmetic units; another job on the host's cores slows them too). On the
+# Zen 5 machine measured the trips were 70-120 ns near and 400-560 ns apart.
 TRIP_NEAR_NS = 250
-TOGETHER_ONE_CORE = 0.8
-PLACES = {"core": "on one core's two hardware threads", "cache": "on two cores sharing a cache",
-          "apart": "on two cores apart"}
+TOGETHER_FULL = 0.8
+PLACES = {"near": "near, at full speed together", "near_slow": "near, slower together", "apart": "apart"}
 
 
 def core_pair(gabion, quick=False):
@@ -122,14 +121,12 @@ def core_pair(gabion, quick=False):
 
 
 def placement(pair):
-    """"core", "cache" or "apart" (PLACES) for a core_pair() measurement; None where not measured."""
+    """A key of PLACES for a core_pair() measurement; None where not measured."""
     if not pair or pair.get("trip_ns") is None:
         return None
     if pair["trip_ns"] >= TRIP_NEAR_NS:
         return "apart"
-    # (one core's two threads share its caches too: a short trip; a long one
-    # with a slow co-run is another job on the machine)
-    return "core" if pair.get("together") is not None and pair["together"] < TOGETHER_ONE_CORE else "cache"
+    return "near_slow" if pair.get("together") is not None and pair["together"] < TOGETHER_FULL else "near"
 
 
 def run_measured(cmd, cwd, env, stdout_path, stderr_path, timeout_s):
@@ -728,7 +725,7 @@ def paired_by_place(num, den, threaded):
 
 
 def place_words(split):
-    """'; by where its CPUs lay: on two cores apart 1.30 (1.23-1.33, 5 rounds), ...', or ''."""
+    """'; by where the two-thread run's CPUs lay: apart 1.30 (1.23-1.33, 5 rounds), ...', or ''."""
     parts = [f"{PLACES[k]} {split[k][0]:.2f} ({split[k][1]:.2f}-{split[k][2]:.2f}, {split[k][3]} round"
              f"{'s' if split[k][3] > 1 else ''})" for k in PLACES if k in split]
     return ("; by where the two-thread run's CPUs lay: " + ", ".join(parts)) if parts else ""
