@@ -18,7 +18,9 @@ installed in turn (round-robin with --repeat) and prints one table per scene:
   the run, the share of its cores the process got, body-steps per CPU-second
   of the loop (from a second, 1-step run that measures the start-up), and the
   mean height, translational kinetic energy and contact count at the end
-  (physics sanity).
+  (physics sanity). Around every run with threads it measures where the two
+  CPUs lie (bench_core_round_trip: the cache-line round trip and how fast
+  they compute together), and splits the paired two-thread gains by it.
 
 The loop time of each engine covers the time steps only:
   Gabion   summary.json results.step_loop_wall_time_s (timed inside the run)
