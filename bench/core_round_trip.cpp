@@ -11,11 +11,12 @@
 // virtual machine whose two CPUs lie on separate dies, in hundreds, and
 // every step of a two-thread run pays it several times.
 // Then how fast the two CPUs compute together against one alone
-// (independent multiply-adds, no memory): about 1 for two cores; for two
-// hardware threads of one core, which share its arithmetic units, well
-// below (a virtual machine's two CPUs can be either, and a two-thread run
-// then gains little). One line each; the second starts "CPUs A and B
-// computing together".
+// (independent multiply-adds, no memory): about 1 for two idle cores; well
+// below for the two hardware threads of one core, which share its
+// arithmetic units, or for cores that other work on the host slows (a
+// virtual machine's two CPUs can be any of these, and a two-thread run then
+// gains little). One line each; the second starts "CPUs A and B computing
+// together".
 #include <pthread.h>
 #include <sched.h>
 

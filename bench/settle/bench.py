@@ -107,7 +107,7 @@ def core_pair(gabion, quick=False):
     measured (not built, one CPU). quick: fewer trips (a quarter of a second in all), around each run
     with threads."""
     out = {"trip_ns": None, "together": None}
-    exe = os.path.join(os.path.dirname(os.path.abspath(gabion or "")), "bench", "bench_core_round_trip")
+    exe = os.path.join(os.path.dirname(os.path.abspath(gabion)), "bench", "bench_core_round_trip")
     if (os.cpu_count() or 1) < 2 or not os.access(exe, os.X_OK):
         return out
     try:
