@@ -8,6 +8,7 @@
 #include <map>
 #include <numeric>
 #include <sstream>
+#include <thread>
 
 #include "micro/contact_kernel.hpp"
 #include "micro/rigid_body.hpp"
@@ -248,6 +249,10 @@ Engine::Engine(const Scene& scene, int threads) {
   thread_ticks_.resize(static_cast<std::size_t>(T));
   shares_from_.resize(static_cast<std::size_t>(T));
   block_next_ = std::make_unique<BlockNext[]>(scratch_.size());
+  finished_ = std::make_unique<Finished[]>(scratch_.size());
+  waiting_ = std::make_unique<Waiting[]>(static_cast<std::size_t>(T));
+  reach_.assign(scratch_.size(), 0);
+  reached_from_.assign(scratch_.size(), 0);
 }
 
 Engine::~Engine() = default;
@@ -267,12 +272,15 @@ StepStatus Engine::step(bool measure) {
   lap_ = TickClock::now();
   updateNeighbours();
   lap(S::kNeighbours);
-  computeContactForces(measure);
+  // Loose spheres only: each partition's spheres move in the contact job,
+  // as soon as the forces on them are complete (no join between the stages).
+  const bool move_spheres = all_loose_;
+  computeContactForces(measure, move_spheres);
   lap(S::kContacts);
   applyWallsAndLoads(measure);
   lap(S::kWalls);
   if (status_ != StepStatus::Ok) return status_;
-  integrate(measure);
+  integrate(measure, move_spheres);
   lap(S::kIntegrate);
   advanceLinkedNodes(measure);
   lap(S::kLinks);
@@ -326,8 +334,14 @@ StageProfile Engine::profile() const {
 // cost a third of the integration's time on two threads at N = 5,000).
 template <class Job>
 void Engine::parallel(StageProfile::Stage stage, const Job& job) {
+  static const WorkerPool::Then none;
+  parallel(stage, job, none);
+}
+
+template <class Job>
+void Engine::parallel(StageProfile::Stage stage, const Job& job, const WorkerPool::Then& then) {
   if (pool_->threads() == 1) {
-    for (int t = 0; t < pool_->size(); ++t) job(t);
+    pool_->run([&](int t, int) { job(t); }, true, then);
     return;
   }
   const bool take_tails = stage != StageProfile::kIntegrate;
@@ -341,7 +355,7 @@ void Engine::parallel(StageProfile::Stage stage, const Job& job) {
         c.busy[stage] += end > start ? end - start : 0;
         if (stage == StageProfile::kContacts) ++c.contact_jobs;
       },
-      take_tails);
+      take_tails, then);
 }
 
 // The threads' shares of the partitions, from their speeds in the contact
@@ -576,6 +590,7 @@ void Engine::sizeForceBuffer(std::size_t t) {
   std::uint32_t reach = 0;
   for (std::uint32_t i = r0; i < r1; ++i)
     if (list_.row_begin[i + 1] > list_.row_begin[i]) reach = std::max(reach, list_.nbr[list_.row_begin[i + 1] - 1]);
+  reach_[t] = reach;
   s.lines_for.resize(scratch_.size());
   for (std::uint32_t g = r0 / kParticlesPerLine; g * kParticlesPerLine < r1; ++g)  // (boundaries start lines)
     line_partition_[g] = static_cast<std::uint32_t>(t);
@@ -643,29 +658,63 @@ void Engine::partitionRows(const std::vector<std::uint32_t>& from) {
 // the start of integrate(), in the same pass over the particles. (One join
 // a step fewer than walls on ranges of their own, and the walls' particles
 // are in the cache of the worker that just wrote their forces.)
+//
+// With move_spheres (every particle a loose sphere), each thread then moves
+// the spheres of the partitions it ran (integratePartition), each as soon as
+// the partitions whose rows reach into it are done: no join between the two
+// stages, so the thread that the contacts with another's particles slowed
+// does not wait at it for the one that the moves of the shared particles
+// slow. The arithmetic is that of the two stages apart (the same buffers
+// added in the same order), and every partition moves whatever its
+// contacts found: a step that fails (an overlap beyond the limit) still
+// moves the loose spheres, the same way for any thread count.
 
-void Engine::computeContactForces(bool measure) {
+void Engine::computeContactForces(bool measure, bool move_spheres) {
   for (Wall& w : walls_) w.plan(time_, dt_);
-  parallel(StageProfile::kContacts, [this, measure](int task) {
-    const auto t = static_cast<std::size_t>(task);
-    const std::uint32_t r0 = part_begin_[t], r1 = part_begin_[t + 1];
-    WorkerScratch& s = scratch_[t];
-    contactPartition(p_, list_, laws_, dt_, max_overlap_ratio_, r0, r1, hcur_, measure, line_partition_, s);
-    const std::uint64_t walls_from = TickClock::now();
-    wallPartition(p_, walls_, laws_, dt_, max_overlap_ratio_, step_, r0, r1, measure, s);
-    const std::uint64_t walls_to = TickClock::now();
-    s.wall_ticks = walls_to > walls_from ? walls_to - walls_from : 0;  // (0 if moved to a core whose count lags)
-  });
-  // The profile keeps the walls apart: their partitions' part of the job,
-  // and the mean of those of the stage (the step's next lap counts from it:
-  // no partition is then busier in either stage than the stage lasted).
-  std::uint64_t walls = 0;
+  const std::uint64_t job = ++contact_job_;
+  if (move_spheres) {
+    const std::size_t P = scratch_.size();
+    for (std::size_t u = 0; u < P; ++u) {
+      std::size_t t = 0;
+      while (t < u && reach_[t] < part_begin_[u]) ++t;
+      reached_from_[u] = static_cast<std::uint32_t>(t);
+    }
+    for (ThreadTicks& c : thread_ticks_) c.moved = 0;
+  }
+  static const WorkerPool::Then none;
+  const WorkerPool::Then then = [this, measure](int thread, const std::vector<int>& ran) {
+    integrateWhenReady(thread, ran, measure);
+  };
+  parallel(
+      StageProfile::kContacts,
+      [this, measure, move_spheres, job](int task) {
+        const auto t = static_cast<std::size_t>(task);
+        const std::uint32_t r0 = part_begin_[t], r1 = part_begin_[t + 1];
+        WorkerScratch& s = scratch_[t];
+        contactPartition(p_, list_, laws_, dt_, max_overlap_ratio_, r0, r1, hcur_, measure, line_partition_, s);
+        const std::uint64_t walls_from = TickClock::now();
+        wallPartition(p_, walls_, laws_, dt_, max_overlap_ratio_, step_, r0, r1, measure, s);
+        const std::uint64_t walls_to = TickClock::now();
+        s.wall_ticks = walls_to > walls_from ? walls_to - walls_from : 0;  // (0 if moved to a core whose count lags)
+        if (move_spheres) finished_[t].job.store(job, std::memory_order_release);
+      },
+      move_spheres ? then : none);
+  // The profile keeps the walls and the moves apart: their partitions' part
+  // of the job, and the mean of those of the stage (the step's next lap
+  // counts from it: no partition is then busier in any stage than the stage
+  // lasted).
+  std::uint64_t walls = 0, moved = 0;
   for (const WorkerScratch& s : scratch_)
     walls += s.wall_ticks, thread_ticks_[static_cast<std::size_t>(s.thread)].walls += s.wall_ticks;
-  const std::uint64_t now = TickClock::now();
+  if (move_spheres)
+    for (const ThreadTicks& c : thread_ticks_) moved += c.moved;
+  std::uint64_t now = TickClock::now();
   walls = std::min(walls / thread_ticks_.size(), now > lap_ ? now - lap_ : 0);
   ticks_[StageProfile::kWalls] += walls;
   lap_ += walls;
+  moved = std::min(moved / thread_ticks_.size(), now > lap_ ? now - lap_ : 0);
+  ticks_[StageProfile::kIntegrate] += moved;
+  lap_ += moved;
   hcur_ ^= 1;  // this step's contact sets become the last step's
   contacts_ = 0;
   for (const WorkerScratch& s : scratch_) {
@@ -833,10 +882,11 @@ void Engine::driveWalls() {
 
 // ---------------------------------------------------------------------------
 // integrate (micro/integrator.cpp): free spheres per worker (its row
-// partition, in the same pass as the force buffers), blocks in parallel,
-// walls moved; partial sums in a fixed order (deterministic for a given
-// thread count). Also checks for non-finite states and whether the list must
-// be rebuilt.
+// partition, in the same pass as the force buffers; when every particle is
+// a loose sphere, already in the contact job: computeContactForces), blocks
+// in parallel, walls moved; partial sums in a fixed order (deterministic for
+// a given thread count). Also checks for non-finite states and whether the
+// list must be rebuilt.
 
 // The contact kernel's partitions t before u left the forces on particles of
 // u in their buffers (particle i at i - part_begin_[t + 1]), and listed the lines they
@@ -871,27 +921,73 @@ void Engine::addForceBuffers(std::size_t u) {
   }
 }
 
-void Engine::integrate(bool measure) {
+// Partition t's loose spheres, once every force on them is in: the
+// buffers of the partitions before it, then its own range (vectorised when
+// every particle is a loose sphere).
+void Engine::integratePartition(std::size_t t, bool measure) {
+  const std::size_t b = part_begin_[t], e = part_begin_[t + 1];  // (the partition's own particles)
+  addForceBuffers(t);
+  if (all_loose_) {
+    scratch_[t].spheres = integrateSpheres(p_, b, e, dt_, gravity_, measure, any_local_damping_, one_body_);
+    return;
+  }
+  // Blocks and link nodes move in their own passes: only the loose spheres
+  // here (none in a cell of blocks in a netting), each worker those in its
+  // range, whose forces it has just completed.
+  SphereSums& sum = scratch_[t].spheres;
+  sum = SphereSums{};
+  for (const std::uint32_t id : loose_) {
+    const std::size_t i = p_.slot[id];
+    if (i < b || i >= e) continue;
+    sum.add(integrateSpheres(p_, i, i + 1, dt_, gravity_, measure, any_local_damping_));
+  }
+}
+
+// In the contact job, on the thread that ran the partitions `ran`: each
+// moves once its contacts and those of the partitions whose rows reach into
+// it are done (their buffers hold the rest of its forces, and they read its
+// positions). Its own come first; one that waits for another thread's goes
+// after the others (the first of a share, past the boundary with the share
+// before).
+void Engine::integrateWhenReady(int thread, const std::vector<int>& ran, bool measure) {
+  const std::uint64_t start = TickClock::now(), job = contact_job_;
+  const auto ready = [&](int u) {
+    for (std::size_t t = reached_from_[static_cast<std::size_t>(u)]; t <= static_cast<std::size_t>(u); ++t)
+      if (finished_[t].job.load(std::memory_order_acquire) != job) return false;
+    return true;
+  };
+  std::vector<int>& waiting = waiting_[static_cast<std::size_t>(thread)].list;
+  waiting.clear();
+  for (const int u : ran) {
+    if (ready(u))
+      integratePartition(static_cast<std::size_t>(u), measure);
+    else
+      waiting.push_back(u);
+  }
+  for (unsigned spins = 0; !waiting.empty();) {
+    const auto it = std::find_if(waiting.begin(), waiting.end(), ready);
+    if (it == waiting.end()) {
+      // (the partitions waited for are running: a few microseconds, unless
+      // their thread has lost its core)
+      if (++spins % 1024 == 0)
+        std::this_thread::yield();
+      else
+        cpuRelax();
+      continue;
+    }
+    integratePartition(static_cast<std::size_t>(*it), measure);
+    waiting.erase(it);
+  }
+  const std::uint64_t end = TickClock::now();
+  ThreadTicks& c = thread_ticks_[static_cast<std::size_t>(thread)];
+  c.moved = end > start ? end - start : 0;
+  c.busy[StageProfile::kIntegrate] += c.moved;
+}
+
+void Engine::integrate(bool measure, bool spheres_moved) {
   const std::size_t workers = scratch_.size();
-  parallel(StageProfile::kIntegrate, [&](int task) {
-    const auto t = static_cast<std::size_t>(task);
-    const std::size_t b = part_begin_[t], e = part_begin_[t + 1];  // (the partition's own particles)
-    addForceBuffers(t);
-    if (all_loose_) {
-      scratch_[t].spheres = integrateSpheres(p_, b, e, dt_, gravity_, measure, any_local_damping_, one_body_);
-      return;
-    }
-    // Blocks and link nodes move in their own passes: only the loose spheres
-    // here (none in a cell of blocks in a netting), each worker those in its
-    // range, whose forces it has just completed.
-    SphereSums& sum = scratch_[t].spheres;
-    sum = SphereSums{};
-    for (const std::uint32_t id : loose_) {
-      const std::size_t i = p_.slot[id];
-      if (i < b || i >= e) continue;
-      sum.add(integrateSpheres(p_, i, i + 1, dt_, gravity_, measure, any_local_damping_));
-    }
-  });
+  if (!spheres_moved)
+    parallel(StageProfile::kIntegrate, [&](int task) { integratePartition(static_cast<std::size_t>(task), measure); });
   SphereSums& sum = sums_;
   sum = SphereSums{};
   for (const WorkerScratch& w : scratch_) sum.add(w.spheres);

@@ -6,7 +6,9 @@
 /// damping, O(N) neighbour search for any mix of sizes (a grid per size class
 /// + Verlet list), full energy bookkeeping.
 /// One step() = updateNeighbours -> computeContactForces -> applyWallsAndLoads
-/// -> integrate -> advanceLinkedNodes -> checkStep -> (measureEnergy);
+/// -> integrate -> advanceLinkedNodes -> checkStep -> (measureEnergy)
+/// (with loose spheres only, each partition's spheres move inside the
+/// contact job, once the forces on them are complete);
 /// docs/architecture.md says what each stage reads and writes. Each stage
 /// lives in its own file: neighbour_grid, contact_kernel, walls, integrator,
 /// linked_nodes and links, energy.
@@ -173,10 +175,12 @@ class Engine {
  private:
   // The stages of step().
   void updateNeighbours();
-  void computeContactForces(bool measure);
+  void computeContactForces(bool measure, bool move_spheres);
   void applyWallsAndLoads(bool measure);
   void driveWalls();
-  void integrate(bool measure);
+  void integrate(bool measure, bool spheres_moved);
+  void integratePartition(std::size_t t, bool measure);
+  void integrateWhenReady(int thread, const std::vector<int>& ran, bool measure);
   void advanceLinkedNodes(bool measure);
   void checkStep(bool measure);
   void measureEnergy();
@@ -198,6 +202,9 @@ class Engine {
   /// busy time to the profile of `stage`.
   template <class Job>
   void parallel(StageProfile::Stage stage, const Job& job);
+  /// parallel(), then on each thread then(thread, the partitions it ran) (WorkerPool::run).
+  template <class Job>
+  void parallel(StageProfile::Stage stage, const Job& job, const WorkerPool::Then& then);
   /// Runs fn(b) for the blocks b = 0 .. blocks-1, each claimed by whichever
   /// worker comes free first (a core slowed by other work takes fewer).
   /// fn(b) must write only what block b owns, so that the result does not
@@ -273,6 +280,7 @@ class Engine {
     std::array<std::uint64_t, StageProfile::kStageCount> busy{};
     std::uint64_t walls = 0;
     std::uint64_t contact_jobs = 0;  // contact partitions it ran (balanceShares)
+    std::uint64_t moved = 0;         // its integration in this step's contact job (computeContactForces)
   };
   std::vector<ThreadTicks> thread_ticks_;
   std::vector<ThreadTicks> shares_from_;  // thread_ticks_ at the last balanceShares()
@@ -281,6 +289,22 @@ class Engine {
     std::atomic<std::size_t> b{0};
   };
   std::unique_ptr<BlockNext[]> block_next_;  // forBlocks(): per partition, its next block
+  // The contact job that also moves the loose spheres (computeContactForces):
+  // per partition, the job whose contacts it has finished (one line each);
+  // the first partition whose rows reach into it (its particles are then
+  // complete and free to move once the partitions from that one to itself
+  // are done); per thread, the partitions it ran and has not moved yet.
+  struct alignas(64) Finished {
+    std::atomic<std::uint64_t> job{0};
+  };
+  std::unique_ptr<Finished[]> finished_;
+  std::uint64_t contact_job_ = 0;
+  std::vector<std::uint32_t> reach_;         // per partition: the last particle its rows reach
+  std::vector<std::uint32_t> reached_from_;  // per partition: the first partition that reaches into it
+  struct alignas(64) Waiting {
+    std::vector<int> list;
+  };
+  std::unique_ptr<Waiting[]> waiting_;
   std::uint64_t lap_ = 0;
 };
 

@@ -4,9 +4,6 @@
 #include <chrono>
 #include <cmath>
 #include <stdexcept>
-#if defined(__x86_64__) || defined(__i386__)
-#include <immintrin.h>
-#endif
 
 namespace gabion::micro {
 
@@ -20,14 +17,6 @@ namespace {
 // core useful to the other jobs on it.
 constexpr std::chrono::microseconds kSpin{50};
 constexpr std::chrono::microseconds kPoll{2000};
-
-inline void cpuRelax() {
-#if defined(__x86_64__) || defined(__i386__)
-  _mm_pause();
-#else
-  std::this_thread::yield();
-#endif
-}
 
 // Spins, then polls with yields, until done() or kSpin + kPoll has passed;
 // returns done().
@@ -51,7 +40,10 @@ bool spinFor(Done done) {
 WorkerPool::WorkerPool(int threads, int partitions)
     : threads_(threads < 1 ? 1 : threads),
       partitions_(std::min(std::max(partitions, threads_), 0xffff)),  // (a share's ends are 16 bits)
-      shares_(new Share[static_cast<std::size_t>(threads_)]) {
+      shares_(new Share[static_cast<std::size_t>(threads_)]),
+      ran_(new Ran[static_cast<std::size_t>(threads_)]) {
+  for (int u = 0; u < threads_; ++u)
+    ran_[static_cast<std::size_t>(u)].list.reserve(static_cast<std::size_t>(partitions_));
   share_begin_.resize(static_cast<std::size_t>(threads_) + 1);
   for (int u = 0; u <= threads_; ++u)
     share_begin_[static_cast<std::size_t>(u)] = static_cast<std::uint32_t>(partitions_ * u / threads_);
@@ -89,7 +81,8 @@ bool WorkerPool::drain(int self, std::uint64_t generation) {
   // exchange of that shared line per thread and job.
   const auto gen = static_cast<std::uint32_t>(generation);
   const auto T = static_cast<std::uint32_t>(threads_);
-  int ran = 0;
+  std::vector<int>& ran = ran_[static_cast<std::size_t>(self)].list;
+  ran.clear();
   const bool tails = take_tails_.load(std::memory_order_relaxed);
   for (std::uint32_t k = 0; k < T; ++k) {
     const std::uint32_t u = (static_cast<std::uint32_t>(self) + T - k) % T;
@@ -109,21 +102,33 @@ bool WorkerPool::drain(int self, std::uint64_t generation) {
       if (!state.compare_exchange_weak(s, next, std::memory_order_acq_rel, std::memory_order_acquire)) continue;
       mine = mine || d < 0;
       (*job_.load(std::memory_order_acquire))(static_cast<int>(t), self);
-      ++ran;
+      ran.push_back(static_cast<int>(t));
       s = next;  // (a failed exchange below reloads it)
     }
   }
-  return ran > 0 && pending_.fetch_sub(ran, std::memory_order_acq_rel) == ran;
+  if (ran.empty()) return false;
+  if (then_ != nullptr) (*then_)(self, ran);
+  const auto n = static_cast<int>(ran.size());
+  return pending_.fetch_sub(n, std::memory_order_acq_rel) == n;
 }
 
 void WorkerPool::run(const std::function<void(int, int)>& job, bool take_tails) {
+  static const Then none;
+  run(job, take_tails, none);
+}
+
+void WorkerPool::run(const std::function<void(int, int)>& job, bool take_tails, const Then& then) {
   if (threads_ == 1) {
-    for (int t = 0; t < partitions_; ++t) job(t, 0);
+    std::vector<int>& ran = ran_[0].list;
+    ran.clear();
+    for (int t = 0; t < partitions_; ++t) job(t, 0), ran.push_back(t);
+    if (then) then(0, ran);
     return;
   }
-  // Order matters: job_ and pending_ are published by the release of the
-  // generation bump; shares open only with the new generation.
+  // Order matters: job_, then_ and pending_ are published by the release of
+  // the generation bump; shares open only with the new generation.
   pending_.store(partitions_, std::memory_order_relaxed);
+  then_ = then ? &then : nullptr;
   job_.store(&job, std::memory_order_relaxed);
   take_tails_.store(take_tails, std::memory_order_relaxed);
   std::uint64_t generation = 0;

@@ -26,6 +26,9 @@
 #include <mutex>
 #include <thread>
 #include <vector>
+#if defined(__x86_64__) || defined(__i386__)
+#include <immintrin.h>
+#endif
 
 namespace gabion::micro {
 
@@ -54,6 +57,14 @@ class WorkerPool {
   /// thread done with its own share takes what is left of another's, from
   /// its end; without, only a share whose owner has not started it, whole.
   void run(const std::function<void(int, int)>& job, bool take_tails = true);
+  /// As run(job, take_tails), and then each thread that ran partitions of
+  /// the job calls then(thread, ran) with them, in the order it ran them,
+  /// once it finds none left to claim (every partition is then claimed, if
+  /// not finished); returns when every such call has returned. A `then`
+  /// may wait for other partitions of the job to finish: they all run
+  /// without waiting for anything.
+  using Then = std::function<void(int, const std::vector<int>&)>;
+  void run(const std::function<void(int, int)>& job, bool take_tails, const Then& then);
 
  private:
   void workerLoop(int self);
@@ -63,6 +74,7 @@ class WorkerPool {
   int threads_, partitions_;
   std::vector<std::thread> workers_;
   std::atomic<const std::function<void(int, int)>*> job_{nullptr};
+  const Then* then_ = nullptr;  // published with job_
   // shares_[u]: what is left of thread u's share in the current job, one
   // word: (job generation mod 2^32) << 32 | first << 16 | end. Its owner
   // claims from the front, the others from the end, each by a
@@ -73,6 +85,11 @@ class WorkerPool {
     std::atomic<std::uint64_t> state{0};
   };
   std::unique_ptr<Share[]> shares_;
+  // Per thread (one cache line each): the partitions it ran in this job.
+  struct alignas(64) Ran {
+    std::vector<int> list;
+  };
+  std::unique_ptr<Ran[]> ran_;
   std::vector<std::uint32_t> share_begin_;    // thread u's share: share_begin_[u] .. share_begin_[u + 1] - 1
   std::atomic<int> pending_{0};               // partitions not finished yet
   std::atomic<std::uint64_t> generation_{0};  // bumped (under mutex_) for each job
@@ -82,6 +99,15 @@ class WorkerPool {
   std::condition_variable wake_;  // workers: a new generation
   std::condition_variable done_;  // caller: pending_ reached 0
 };
+
+/// A pause in a spin-wait loop (lets the core's other hardware thread run).
+inline void cpuRelax() {
+#if defined(__x86_64__) || defined(__i386__)
+  _mm_pause();
+#else
+  std::this_thread::yield();
+#endif
+}
 
 /// Shares of `partitions` partitions among threads of the given speeds
 /// (partitions per unit time, all > 0) that end a job together: share

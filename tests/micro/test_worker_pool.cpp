@@ -54,6 +54,50 @@ TEST(WorkerPool, EveryPartitionOfEveryJobRunsOnce) {
       }
 }
 
+// With a follow-up, each thread that ran partitions is handed them after
+// the last one it claimed: together the lists hold
+// every partition once, and run() returns only when every follow-up has.
+// A follow-up may wait for partitions other threads still run (here: each
+// waits until its partitions and the one before each are done), as the
+// engine's moves wait for the contacts of the partitions that reach into
+// theirs; no wait can hang, since every partition is claimed by then.
+TEST(WorkerPool, FollowUpsGetEachThreadsPartitionsAndMayWaitForOthers) {
+  for (const int threads : {1, 2, 3})
+    for (const bool take_tails : {true, false}) {
+      const int parts = 4 * threads;
+      WorkerPool pool(threads, parts);
+      std::vector<std::atomic<long>> done(static_cast<std::size_t>(parts));
+      for (auto& d : done) d.store(0);
+      for (long j = 1; j <= 3000; ++j) {
+        std::vector<std::atomic<int>> ran_by(static_cast<std::size_t>(parts)), handed(static_cast<std::size_t>(parts));
+        for (int t = 0; t < parts; ++t)
+          ran_by[static_cast<std::size_t>(t)].store(-1), handed[static_cast<std::size_t>(t)].store(0);
+        std::atomic<int> followed{0};
+        const WorkerPool::Then then = [&](int thread, const std::vector<int>& ran) {
+          for (const int t : ran) {
+            ASSERT_EQ(ran_by[static_cast<std::size_t>(t)].load(), thread) << "partition " << t;
+            handed[static_cast<std::size_t>(t)].fetch_add(1);
+            for (const int u : {t - 1, t})
+              if (u >= 0)
+                while (done[static_cast<std::size_t>(u)].load(std::memory_order_acquire) != j)
+                  gabion::micro::cpuRelax();
+          }
+          followed.fetch_add(static_cast<int>(ran.size()));
+        };
+        pool.run(
+            [&](int t, int thread) {
+              volatile double x = 1.0;
+              for (long k = 0; k < (j * 7 + t) % 5 * 40; ++k) x = x * 1.000001;
+              ran_by[static_cast<std::size_t>(t)].store(thread);
+              done[static_cast<std::size_t>(t)].store(j, std::memory_order_release);
+            },
+            take_tails, then);
+        ASSERT_EQ(followed.load(), parts) << "job " << j << ", " << threads << " threads";
+        for (int t = 0; t < parts; ++t) ASSERT_EQ(handed[static_cast<std::size_t>(t)].load(), 1) << "partition " << t;
+      }
+    }
+}
+
 // Runs one job on a pool of two threads in which thread 1 is held up
 // (100 ms) in the first partition it runs, and thread 0 starts only once
 // thread 1 is held (5 s at most); returns which thread ran each partition,
