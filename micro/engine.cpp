@@ -950,7 +950,7 @@ void Engine::integratePartition(std::size_t t, bool measure) {
 // after the others (the first of a share, past the boundary with the share
 // before).
 void Engine::integrateWhenReady(int thread, const std::vector<int>& ran, bool measure) {
-  const std::uint64_t start = TickClock::now(), job = contact_job_;
+  const std::uint64_t job = contact_job_;
   const auto ready = [&](int u) {
     for (std::size_t t = reached_from_[static_cast<std::size_t>(u)]; t <= static_cast<std::size_t>(u); ++t)
       if (finished_[t].job.load(std::memory_order_acquire) != job) return false;
@@ -958,9 +958,16 @@ void Engine::integrateWhenReady(int thread, const std::vector<int>& ran, bool me
   };
   std::vector<int>& waiting = waiting_[static_cast<std::size_t>(thread)].list;
   waiting.clear();
+  std::uint64_t work = 0;  // (the moves alone, without the waits)
+  const auto move = [&](int u) {
+    const std::uint64_t from = TickClock::now();
+    integratePartition(static_cast<std::size_t>(u), measure);
+    const std::uint64_t to = TickClock::now();
+    work += to > from ? to - from : 0;
+  };
   for (const int u : ran) {
     if (ready(u))
-      integratePartition(static_cast<std::size_t>(u), measure);
+      move(u);
     else
       waiting.push_back(u);
   }
@@ -975,13 +982,12 @@ void Engine::integrateWhenReady(int thread, const std::vector<int>& ran, bool me
         cpuRelax();
       continue;
     }
-    integratePartition(static_cast<std::size_t>(*it), measure);
+    move(*it);
     waiting.erase(it);
   }
-  const std::uint64_t end = TickClock::now();
   ThreadTicks& c = thread_ticks_[static_cast<std::size_t>(thread)];
-  c.moved = end > start ? end - start : 0;
-  c.busy[StageProfile::kIntegrate] += c.moved;
+  c.moved = work;
+  c.busy[StageProfile::kIntegrate] += work;
 }
 
 void Engine::integrate(bool measure, bool spheres_moved) {

@@ -280,7 +280,7 @@ class Engine {
     std::array<std::uint64_t, StageProfile::kStageCount> busy{};
     std::uint64_t walls = 0;
     std::uint64_t contact_jobs = 0;  // contact partitions it ran (balanceShares)
-    std::uint64_t moved = 0;         // its integration in this step's contact job (computeContactForces)
+    std::uint64_t moved = 0;         // its moves in this step's contact job, without waits (computeContactForces)
   };
   std::vector<ThreadTicks> thread_ticks_;
   std::vector<ThreadTicks> shares_from_;  // thread_ticks_ at the last balanceShares()
