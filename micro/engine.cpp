@@ -333,12 +333,6 @@ StageProfile Engine::profile() const {
 // do, moved one partition a step from one core to the other and back: it
 // cost a third of the integration's time on two threads at N = 5,000).
 template <class Job>
-void Engine::parallel(StageProfile::Stage stage, const Job& job) {
-  static const WorkerPool::Then none;
-  parallel(stage, job, none);
-}
-
-template <class Job>
 void Engine::parallel(StageProfile::Stage stage, const Job& job, const WorkerPool::Then& then) {
   if (pool_->threads() == 1) {
     pool_->run([&](int t, int) { job(t); }, true, then);
@@ -576,6 +570,7 @@ void Engine::restoreContacts(const SavedContacts& saved) {
       ++out.n;
     }
   });
+  findReachedFrom();
   hcur_ = next;
 }
 
@@ -590,7 +585,7 @@ void Engine::sizeForceBuffer(std::size_t t) {
   std::uint32_t reach = 0;
   for (std::uint32_t i = r0; i < r1; ++i)
     if (list_.row_begin[i + 1] > list_.row_begin[i]) reach = std::max(reach, list_.nbr[list_.row_begin[i + 1] - 1]);
-  reach_[t] = reach;
+  reach_[t] = reach;  // (findReachedFrom)
   s.lines_for.resize(scratch_.size());
   for (std::uint32_t g = r0 / kParticlesPerLine; g * kParticlesPerLine < r1; ++g)  // (boundaries start lines)
     line_partition_[g] = static_cast<std::uint32_t>(t);
@@ -600,6 +595,17 @@ void Engine::sizeForceBuffer(std::size_t t) {
   if (span <= s.fx.size()) return;
   for (auto* v : {&s.fx, &s.fy, &s.fz, &s.tx, &s.ty, &s.tz}) v->resize(span, 0.0);
   s.written.resize(span / kParticlesPerLine + 1, 0);
+}
+
+// Per partition u, the first partition whose rows reach into it (every one
+// from there to u then may have: computeContactForces moves u's spheres
+// once those are done), from the partitions' reaches (sizeForceBuffer).
+void Engine::findReachedFrom() {
+  for (std::size_t u = 0; u < scratch_.size(); ++u) {
+    std::size_t t = 0;
+    while (t < u && reach_[t] < part_begin_[u]) ++t;
+    reached_from_[u] = static_cast<std::uint32_t>(t);
+  }
 }
 
 // Row partitions with equal estimated work, several per thread
@@ -672,19 +678,11 @@ void Engine::partitionRows(const std::vector<std::uint32_t>& from) {
 void Engine::computeContactForces(bool measure, bool move_spheres) {
   for (Wall& w : walls_) w.plan(time_, dt_);
   const std::uint64_t job = ++contact_job_;
-  if (move_spheres) {
-    const std::size_t P = scratch_.size();
-    for (std::size_t u = 0; u < P; ++u) {
-      std::size_t t = 0;
-      while (t < u && reach_[t] < part_begin_[u]) ++t;
-      reached_from_[u] = static_cast<std::uint32_t>(t);
-    }
+  if (move_spheres)
     for (ThreadTicks& c : thread_ticks_) c.moved = 0;
-  }
-  static const WorkerPool::Then none;
-  const WorkerPool::Then then = [this, measure](int thread, const std::vector<int>& ran) {
-    integrateWhenReady(thread, ran, measure);
-  };
+  WorkerPool::Then then;
+  if (move_spheres)
+    then = [this, measure](int thread, const std::vector<int>& ran) { integrateWhenReady(thread, ran, measure); };
   parallel(
       StageProfile::kContacts,
       [this, measure, move_spheres, job](int task) {
@@ -698,7 +696,7 @@ void Engine::computeContactForces(bool measure, bool move_spheres) {
         s.wall_ticks = walls_to > walls_from ? walls_to - walls_from : 0;  // (0 if moved to a core whose count lags)
         if (move_spheres) finished_[t].job.store(job, std::memory_order_release);
       },
-      move_spheres ? then : none);
+      then);
   // The profile keeps the walls and the moves apart: their partitions' part
   // of the job, and the mean of those of the stage (the step's next lap
   // counts from it: no partition is then busier in any stage than the stage
@@ -1220,6 +1218,7 @@ void Engine::archive(bridge::StateArchive& a) {
     list_.indexOwners(), sizeTouchBuffers();
     line_partition_.resize(n / kParticlesPerLine + 1);
     for (std::size_t t = 0; t < scratch_.size(); ++t) sizeForceBuffer(t);
+    findReachedFrom();
   }
   if (listed && laws_.any_viscous) wallDamping(p_, walls_, laws_);
 }

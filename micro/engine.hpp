@@ -194,17 +194,16 @@ class Engine {
   void balanceShares();
   void sizeTouchBuffers();
   void sizeForceBuffer(std::size_t t);
+  void findReachedFrom();
 
   void addForceBuffers(std::size_t u);
   std::string bodyName(std::uint32_t id) const;
   StepStatus fail(StepStatus status, const std::string& what);
   /// Runs job(t) for every partition t on the pool, adding each partition's
-  /// busy time to the profile of `stage`.
+  /// busy time to the profile of `stage`; then, if given, then(thread, the
+  /// partitions it ran) on each thread (WorkerPool::run).
   template <class Job>
-  void parallel(StageProfile::Stage stage, const Job& job);
-  /// parallel(), then on each thread then(thread, the partitions it ran) (WorkerPool::run).
-  template <class Job>
-  void parallel(StageProfile::Stage stage, const Job& job, const WorkerPool::Then& then);
+  void parallel(StageProfile::Stage stage, const Job& job, const WorkerPool::Then& then = {});
   /// Runs fn(b) for the blocks b = 0 .. blocks-1, each claimed by whichever
   /// worker comes free first (a core slowed by other work takes fewer).
   /// fn(b) must write only what block b owns, so that the result does not

@@ -112,11 +112,6 @@ bool WorkerPool::drain(int self, std::uint64_t generation) {
   return pending_.fetch_sub(n, std::memory_order_acq_rel) == n;
 }
 
-void WorkerPool::run(const std::function<void(int, int)>& job, bool take_tails) {
-  static const Then none;
-  run(job, take_tails, none);
-}
-
 void WorkerPool::run(const std::function<void(int, int)>& job, bool take_tails, const Then& then) {
   if (threads_ == 1) {
     std::vector<int>& ran = ran_[0].list;

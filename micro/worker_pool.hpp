@@ -56,15 +56,14 @@ class WorkerPool {
   /// as thread 0), and returns when all are done. With take_tails, a
   /// thread done with its own share takes what is left of another's, from
   /// its end; without, only a share whose owner has not started it, whole.
-  void run(const std::function<void(int, int)>& job, bool take_tails = true);
-  /// As run(job, take_tails), and then each thread that ran partitions of
-  /// the job calls then(thread, ran) with them, in the order it ran them,
-  /// once it finds none left to claim (every partition is then claimed, if
-  /// not finished); returns when every such call has returned. A `then`
-  /// may wait for other partitions of the job to finish: they all run
-  /// without waiting for anything.
+  /// With a `then`, each thread that ran partitions of the job then calls
+  /// then(thread, ran) with them, in the order it ran them, once it finds
+  /// none left to claim (every partition is then claimed, if not
+  /// finished), and run() returns when every such call has returned. A
+  /// `then` may wait for other partitions of the job to finish: they all
+  /// run without waiting for anything.
   using Then = std::function<void(int, const std::vector<int>&)>;
-  void run(const std::function<void(int, int)>& job, bool take_tails, const Then& then);
+  void run(const std::function<void(int, int)>& job, bool take_tails = true, const Then& then = {});
 
  private:
   void workerLoop(int self);
