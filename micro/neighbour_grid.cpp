@@ -4,6 +4,10 @@
 #include <cmath>
 #include <limits>
 
+#if defined(__AVX512F__) && defined(__AVX512VL__) && defined(__AVX512BW__)
+#include <immintrin.h>
+#endif
+
 namespace gabion::micro {
 
 int NeighbourGrid::assignClasses(Particles& p) {
@@ -213,14 +217,46 @@ void NeighbourGrid::buildList(const Particles& p, double skin, const ExcludedPai
     // branch-free (the test decides whether the write is kept).
     const auto scan = [&](std::size_t i, std::uint32_t jb, std::uint32_t je) {
       if (jb >= je) return;
-      if (list.size() < len + (je - jb))  // grows by a quarter (the list is the largest array)
-        list.resize(std::max<std::size_t>(len + (je - jb), list.size() + list.size() / 4 + 1024));
+      // (room for eight more: the vector scan stores eight entries whole)
+      if (list.size() < len + (je - jb) + 8)  // grows by a quarter (the list is the largest array)
+        list.resize(std::max<std::size_t>(len + (je - jb) + 8, list.size() + list.size() / 4 + 1024));
       const double xi = X[i], yi = Y[i], zi = Z[i], ri = R[i] + skin;
       const std::int32_t bi = BODY[i];
       const bool free_i = IMB[i] > 0.0;
       const std::uint32_t mask_i = p.group_mask[GRP[i]];
       std::uint32_t* __restrict o = list.data() + len;
       std::size_t cnt = 0;
+#if defined(__AVX512F__) && defined(__AVX512VL__) && defined(__AVX512BW__)
+      // Eight candidates at a time, the run's tail masked: the kept ones
+      // compressed in a register and stored whole (the next group
+      // overwrites the rest). A run holds three cells, a handful of
+      // candidates: one group each, where the scalar loop's exit, after a
+      // varying count, was mispredicted at most runs. The test is the
+      // scalar one, operation for operation (the same list).
+      const __m512d vxi = _mm512_set1_pd(xi), vyi = _mm512_set1_pd(yi), vzi = _mm512_set1_pd(zi),
+                    vri = _mm512_set1_pd(ri), zero = _mm512_setzero_pd();
+      const __m256i lanes = _mm256_setr_epi32(0, 1, 2, 3, 4, 5, 6, 7), vbi = _mm256_set1_epi32(bi),
+                    vmask = _mm256_set1_epi32(static_cast<int>(mask_i)), one = _mm256_set1_epi32(1);
+      for (std::uint32_t j = jb; j < je; j += 8) {
+        const __mmask8 valid = je - j >= 8 ? __mmask8{0xFF} : static_cast<__mmask8>((1u << (je - j)) - 1u);
+        const __m512d ex = _mm512_sub_pd(_mm512_maskz_loadu_pd(valid, X + j), vxi);
+        const __m512d ey = _mm512_sub_pd(_mm512_maskz_loadu_pd(valid, Y + j), vyi);
+        const __m512d ez = _mm512_sub_pd(_mm512_maskz_loadu_pd(valid, Z + j), vzi);
+        const __m512d reach = _mm512_add_pd(vri, _mm512_maskz_loadu_pd(valid, R + j));
+        const __m512d d2 = _mm512_fmadd_pd(ez, ez, _mm512_fmadd_pd(ey, ey, _mm512_mul_pd(ex, ex)));
+        __mmask8 keep = _mm512_mask_cmp_pd_mask(valid, d2, _mm512_mul_pd(reach, reach), _CMP_LT_OQ);
+        if (bi >= 0) keep = _mm256_mask_cmpneq_epi32_mask(keep, _mm256_maskz_loadu_epi32(valid, BODY + j), vbi);
+        if (!free_i) keep = _mm512_mask_cmp_pd_mask(keep, _mm512_maskz_loadu_pd(valid, IMB + j), zero, _CMP_GT_OQ);
+        if (groups) {
+          const __m256i gj = _mm256_cvtepu8_epi32(_mm_maskz_loadu_epi8(valid, GRP + j));
+          keep = _mm256_mask_test_epi32_mask(keep, _mm256_srlv_epi32(vmask, gj), one);
+        }
+        const __m256i js = _mm256_add_epi32(_mm256_set1_epi32(static_cast<int>(j)), lanes);
+        _mm256_storeu_si256(reinterpret_cast<__m256i*>(o + cnt), _mm256_maskz_compress_epi32(keep, js));
+        cnt += static_cast<std::size_t>(__builtin_popcount(keep));
+      }
+      len += cnt;
+#else
       if (groups) {
         for (std::uint32_t j = jb; j < je; ++j) {
           const double ex = X[j] - xi, ey = Y[j] - yi, ez = Z[j] - zi, reach = ri + R[j];
@@ -239,6 +275,7 @@ void NeighbourGrid::buildList(const Particles& p, double skin, const ExcludedPai
         }
       }
       len += cnt;
+#endif
     };
     for (std::size_t i = blockBegin(blk); i < blockBegin(blk + 1); ++i) {
       out.row_begin[i] = static_cast<std::uint32_t>(len);  // local offset, made global below
