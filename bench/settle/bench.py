@@ -103,10 +103,12 @@ PLACES = {"near": "near, at full speed together", "near_slow": "near, slower tog
 def core_pair(gabion, quick=False):
     """CPUs 0 and 1 as bench_core_round_trip (built beside gabion, build/bench/) measures them:
     {"trip_ns": the cache-line round trip (what every fork and join of a two-thread step pays, several
-    times a step), "together": their speed computing at once over one alone}, each None where not
+    times a step), "together": their speed computing at once over one alone, "memory": CPU 1's speed
+    reading memory alone over CPU 0's (the host's other work can slow one CPU's memory side: a
+    one-thread run then depends on which CPU it lands on)}, each None where not
     measured (not built, one CPU). quick: fewer trips (a quarter of a second in all), around each run
     with threads."""
-    out = {"trip_ns": None, "together": None}
+    out = {"trip_ns": None, "together": None, "memory": None}
     exe = os.path.join(os.path.dirname(os.path.abspath(gabion)), "bench", "bench_core_round_trip")
     if (os.cpu_count() or 1) < 2 or not os.access(exe, os.X_OK):
         return out
@@ -119,6 +121,8 @@ def core_pair(gabion, quick=False):
     out["trip_ns"] = int(m.group(1)) if m else None
     m = re.search(r"computing together: ([0-9.]+)", text)
     out["together"] = float(m.group(1)) if m else None
+    m = re.search(r"reading memory: CPU \d+ at ([0-9.]+)", text)
+    out["memory"] = float(m.group(1)) if m else None
     return out
 
 
@@ -1019,6 +1023,8 @@ def main():
         machine += f", cache-line round trip between CPUs 0 and 1 {pair['trip_ns']} ns"
         if pair["together"] is not None:
             machine += f", computing together at {pair['together']:.2f} of one alone"
+        if pair["memory"] is not None:
+            machine += f", CPU 1 reading memory at {pair['memory']:.2f} of CPU 0's speed"
         machine += " (bench_core_round_trip)"
     log(f"machine: {machine}; load average {loadavg()}")
     log(f"scene {a.scene}: settle N = {a.n if do_settle else '-'}, steps = {settle_steps if do_settle else '-'}; "
@@ -1136,8 +1142,9 @@ def main():
                 if t > 1 and cpus[job][-1][0]["trip_ns"] is not None:
                     b_, a_ = cpus[job][-1]
                     extra += (f", CPUs before / after: round trip {b_['trip_ns']} / {a_['trip_ns']} ns, "
-                              f"together {fmt(b_['together'], '.2f')} / {fmt(a_['together'], '.2f')} "
-                              f"({placement(b_)} / {placement(a_)})")
+                              f"together {fmt(b_['together'], '.2f')} / {fmt(a_['together'], '.2f')}, "
+                              f"CPU 1 reading memory at {fmt(b_['memory'], '.2f')} / {fmt(a_['memory'], '.2f')} "
+                              f"of CPU 0's speed ({placement(b_)} / {placement(a_)})")
                 log(f"    loop {res['loop_s']:.2f} s ({bsps / 1e6:.2f} M body-steps/s), whole run "
                     f"{res['elapsed_s']:.1f} s, max RSS {fmt(res['rss_kB'], '.0f')} kB{extra}")
                 if bests[job] is None or res["loop_s"] < bests[job]["loop_s"]:
