@@ -5,6 +5,10 @@
 #include <limits>
 #include <memory>
 
+#if defined(__AVX512F__) && defined(__AVX512VL__) && defined(__AVX512BW__)
+#include <immintrin.h>
+#endif
+
 namespace gabion::micro {
 
 void StampedHistory::resize(std::size_t m) {
@@ -134,7 +138,7 @@ void wallCandidates(const Particles& p, std::vector<Wall>& walls, double skin, s
   std::vector<std::vector<std::uint32_t>> lists(nblocks * nwalls);
   for_blocks(nblocks, [&](std::size_t b) {
     const std::size_t i0 = blockBegin(b), i1 = blockBegin(b + 1);
-    const std::unique_ptr<std::uint32_t[]> buffer(new std::uint32_t[i1 - i0 + 1]);
+    const std::unique_ptr<std::uint32_t[]> buffer(new std::uint32_t[i1 - i0 + 8]);
     std::uint32_t* __restrict const o = buffer.get();
     const double *__restrict X = p.x.data(), *__restrict Y = p.y.data(), *__restrict Z = p.z.data(),
                  *__restrict R = p.r.data(), *__restrict IMB = p.inv_body_mass.data();
@@ -152,8 +156,49 @@ void wallCandidates(const Particles& p, std::vector<Wall>& walls, double skin, s
       // Branch-free (the test decides whether the write is kept): the
       // particles are in cell order, so a wall's candidates come in short
       // runs, and a branch on each mispredicted at every run's ends.
-      std::size_t cnt = 0;
-      for (std::size_t i = i0; i < i1; ++i) {
+      std::size_t cnt = 0, i = i0;
+#if defined(__AVX512F__) && defined(__AVX512VL__) && defined(__AVX512BW__)
+      // Eight particles at a time, the block's tail masked, the kept ones
+      // compressed in a register and stored whole (the buffer holds eight
+      // more): the same test, operation for operation.
+      {
+        const __m512d vpx = _mm512_set1_pd(px), vpy = _mm512_set1_pd(py), vpz = _mm512_set1_pd(pz);
+        const __m512d vnx = _mm512_set1_pd(nx), vny = _mm512_set1_pd(ny), vnz = _mm512_set1_pd(nz);
+        const __m512d vux = _mm512_set1_pd(ux), vuy = _mm512_set1_pd(uy), vuz = _mm512_set1_pd(uz);
+        const __m512d vvx = _mm512_set1_pd(vx), vvy = _mm512_set1_pd(vy), vvz = _mm512_set1_pd(vz);
+        const __m512d vskin = _mm512_set1_pd(skin), vnskin = _mm512_set1_pd(-skin), zero = _mm512_setzero_pd();
+        const __m512d vlim_u = _mm512_set1_pd(lim_u), vlim_v = _mm512_set1_pd(lim_v);
+        const __m256i lanes = _mm256_setr_epi32(0, 1, 2, 3, 4, 5, 6, 7),
+                      vskip = _mm256_set1_epi32(static_cast<int>(skip));
+        for (; i < i1; i += 8) {
+          const __mmask8 valid = i1 - i >= 8 ? __mmask8{0xFF} : static_cast<__mmask8>((1u << (i1 - i)) - 1u);
+          const __m512d dx = _mm512_sub_pd(_mm512_maskz_loadu_pd(valid, X + i), vpx);
+          const __m512d dy = _mm512_sub_pd(_mm512_maskz_loadu_pd(valid, Y + i), vpy);
+          const __m512d dz = _mm512_sub_pd(_mm512_maskz_loadu_pd(valid, Z + i), vpz);
+          const __m512d r = _mm512_maskz_loadu_pd(valid, R + i);
+          const __m512d dist = _mm512_fmadd_pd(dz, vnz, _mm512_fmadd_pd(dy, vny, _mm512_mul_pd(dx, vnx)));
+          __mmask8 keep = _mm512_mask_cmp_pd_mask(valid, _mm512_maskz_loadu_pd(valid, IMB + i), zero, _CMP_NEQ_UQ);
+          const __m256i g = _mm256_cvtepu8_epi32(_mm_maskz_loadu_epi8(valid, GRP + i));
+          keep = _mm256_mask_testn_epi32_mask(keep, _mm256_srlv_epi32(vskip, g), _mm256_set1_epi32(1));
+          keep = _mm512_mask_cmp_pd_mask(keep, dist, _mm512_add_pd(r, vskin), _CMP_LT_OQ);
+          if (rounded)
+            keep = _mm512_mask_cmp_pd_mask(keep, dist, _mm512_sub_pd(_mm512_sub_pd(zero, r), vskin), _CMP_GT_OQ);
+          else if (bounded)
+            keep = _mm512_mask_cmp_pd_mask(keep, dist, vnskin, _CMP_GE_OQ);
+          if (bounded) {
+            const __m512d edge = rounded ? r : zero;
+            const __m512d du = _mm512_fmadd_pd(dz, vuz, _mm512_fmadd_pd(dy, vuy, _mm512_mul_pd(dx, vux)));
+            const __m512d dv = _mm512_fmadd_pd(dz, vvz, _mm512_fmadd_pd(dy, vvy, _mm512_mul_pd(dx, vvx)));
+            keep = _mm512_mask_cmp_pd_mask(keep, _mm512_abs_pd(du), _mm512_add_pd(vlim_u, edge), _CMP_LE_OQ);
+            keep = _mm512_mask_cmp_pd_mask(keep, _mm512_abs_pd(dv), _mm512_add_pd(vlim_v, edge), _CMP_LE_OQ);
+          }
+          const __m256i is = _mm256_add_epi32(_mm256_set1_epi32(static_cast<int>(i)), lanes);
+          _mm256_storeu_si256(reinterpret_cast<__m256i*>(o + cnt), _mm256_maskz_compress_epi32(keep, is));
+          cnt += static_cast<std::size_t>(__builtin_popcount(keep));
+        }
+      }
+#endif
+      for (; i < i1; ++i) {
         const double dx = X[i] - px, dy = Y[i] - py, dz = Z[i] - pz, r = R[i];
         const double dist = dx * nx + dy * ny + dz * nz;
         const bool loose = IMB[i] != 0.0, grouped = ((skip >> GRP[i]) & 1u) == 0;

@@ -3,7 +3,10 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <functional>
 #include <limits>
+#include <random>
+#include <vector>
 
 #include "bridge/errors.hpp"
 #include "micro/engine.hpp"
@@ -161,8 +164,6 @@ TEST(MicroWalls, WallsAreFoundByName) {
   EXPECT_THROW(Engine(s, 1), gabion::bridge::InputError);
 }
 
-}  // namespace
-
 // A driven plate (program Driven) is the face of a model the engine does
 // not know: here a 1-degree-of-freedom mass on a spring under the floor
 // plate, stepped by the wall driver with the force the sphere exerts. A
@@ -260,3 +261,66 @@ TEST(MicroWalls, RoundedPlateEdgesMeetASphereWithoutAStep) {
   EXPECT_LT(run(true), 1e-3);
   EXPECT_GT(run(false), 0.1);
 }
+
+// Each wall's candidates against their definition (micro/walls.hpp): the
+// particles that move, of a group the wall touches, within radius + skin of
+// the plane on its side (of either face, for a rounded plate; at most a
+// skin behind a plain plate) and, for a bounded wall, over its rectangle
+// with a skin's margin (and a radius more for a rounded one), in index
+// order. A random cloud about four walls (an infinite plane, a tilted
+// plate, a rounded plate, a plane that skips a group), 2,003 particles in
+// one block and in three (block ends off the eight-particle groups of the
+// vector test): every criterion keeps some particles and drops others.
+TEST(MicroWalls, CandidatesAreTheirDefinitionForEveryKindOfWall) {
+  std::mt19937_64 rng(20261201);
+  std::uniform_real_distribution<double> u(0.0, 1.0);
+  gabion::micro::Particles p;
+  const std::size_t n = 2003;
+  p.resize(n);
+  for (std::size_t i = 0; i < n; ++i) {
+    p.x[i] = 0.2 * u(rng) - 0.1, p.y[i] = 0.2 * u(rng) - 0.1, p.z[i] = 0.2 * u(rng) - 0.1;
+    p.r[i] = 0.002 + 0.008 * u(rng);
+    p.inv_body_mass[i] = u(rng) < 0.1 ? 0.0 : 1.0;
+    p.group[i] = static_cast<std::uint8_t>(i % 3);
+  }
+  const double skin = 0.002;
+  std::vector<WallSpec> specs(4);
+  specs[0].name = "plane";
+  specs[1].name = "tilted_plate", specs[1].normal = Vec3(0.3, -0.2, 1.0).normalized();
+  specs[1].point_m = Vec3(0.01, 0.0, -0.02), specs[1].bounded = true;
+  specs[1].axis_u = specs[1].normal.cross(Vec3::UnitY()).normalized();
+  specs[1].half_u_m = 0.08, specs[1].half_v_m = 0.06;
+  specs[2] = specs[1], specs[2].name = "rounded_plate", specs[2].rounded_edges = true;
+  specs[2].point_m = Vec3(0.0, 0.02, 0.03);
+  specs[3].name = "skips_group_1", specs[3].normal = -Vec3::UnitX(), specs[3].skip_groups = 1u << 1;
+  const gabion::micro::ForBlocks serial = [](std::size_t nb, const std::function<void(std::size_t)>& fn) {
+    for (std::size_t b = 0; b < nb; ++b) fn(b);
+  };
+  for (const std::size_t blocks : {std::size_t{1}, std::size_t{3}}) {
+    std::vector<gabion::micro::Wall> walls;
+    for (const WallSpec& s : specs) walls.emplace_back(s);
+    gabion::micro::wallCandidates(p, walls, skin, blocks, serial);
+    for (const gabion::micro::Wall& w : walls) {
+      std::vector<std::uint32_t> want;
+      std::size_t beyond_plane = 0, off_rectangle = 0;
+      for (std::uint32_t i = 0; i < n; ++i) {
+        const Vec3 d = Vec3(p.x[i], p.y[i], p.z[i]) - w.position;
+        const double r = p.r[i], dist = d.dot(w.n), edge = w.rounded ? r : 0.0;
+        const bool near = dist < r + skin && (w.rounded ? dist > -r - skin : !w.bounded || dist >= -skin);
+        const bool over = !w.bounded || (std::fabs(d.dot(w.u)) <= w.half_u + skin + edge &&
+                                         std::fabs(d.dot(w.v)) <= w.half_v + skin + edge);
+        const bool touches = p.inv_body_mass[i] != 0.0 && ((w.skip_groups >> p.group[i]) & 1u) == 0;
+        beyond_plane += !near, off_rectangle += near && !over;
+        if (near && over && touches) want.push_back(i);
+      }
+      EXPECT_EQ(w.cand, want) << w.name << ", " << blocks << " blocks";
+      EXPECT_GT(want.size(), 20u) << w.name;
+      EXPECT_GT(beyond_plane, 20u) << w.name;
+      if (w.bounded) {
+        EXPECT_GT(off_rectangle, 20u) << w.name;
+      }
+    }
+  }
+}
+
+}  // namespace
