@@ -387,6 +387,7 @@ void wallPartition(Particles& p, std::vector<Wall>& walls, const MaterialLaws& l
     // candidates are in particle order
     const auto k0 = static_cast<std::size_t>(std::lower_bound(w.cand.begin(), w.cand.end(), b) - w.cand.begin());
     const auto k1 = static_cast<std::size_t>(std::lower_bound(w.cand.begin(), w.cand.end(), e) - w.cand.begin());
+    if (k0 == k1) continue;  // (its force stays zero: no contact of this range)
     const WallSums sum = (w.rounded ? rounded : w.bounded ? bounded : infinite)(in, w, k0, k1, step, w.hist);
     s.wall_force[wi] = Vec3(sum.fx, sum.fy, sum.fz);
     s.wall_work += sum.work;
