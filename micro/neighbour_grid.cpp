@@ -69,11 +69,24 @@ std::vector<std::uint32_t> NeighbourGrid::sortOrder(const Particles& p, double s
   std::vector<Box> boxes(nblocks * nclass, empty);
   for_blocks(nblocks, [&](std::size_t b) {
     Box* const mine = boxes.data() + b * nclass;
-    for (std::size_t i = blockBegin(b); i < blockBegin(b + 1); ++i) {
-      Box& box = mine[p.size_class[i]];
-      const double q[3] = {p.x[i], p.y[i], p.z[i]};
-      for (int a = 0; a < 3; ++a) box.lo[a] = std::min(box.lo[a], q[a]), box.hi[a] = std::max(box.hi[a], q[a]);
-      ++box.count;
+    const double* __restrict X = p.x.data(), * __restrict Y = p.y.data(), * __restrict Z = p.z.data();
+    const std::uint8_t* __restrict C = p.size_class.data();
+    // A run of one class at a time into locals (the particles are in class
+    // order since the last sort): kept in registers, where the array's
+    // entries, which may alias the coordinates, went to memory at every
+    // particle.
+    for (std::size_t i = blockBegin(b), end = blockBegin(b + 1); i < end;) {
+      const std::uint8_t c = C[i];
+      double lx = inf, ly = inf, lz = inf, hx = -inf, hy = -inf, hz = -inf;
+      const std::size_t first = i;
+      for (; i < end && C[i] == c; ++i) {
+        lx = std::min(lx, X[i]), ly = std::min(ly, Y[i]), lz = std::min(lz, Z[i]);
+        hx = std::max(hx, X[i]), hy = std::max(hy, Y[i]), hz = std::max(hz, Z[i]);
+      }
+      Box& box = mine[c];
+      box.lo[0] = std::min(box.lo[0], lx), box.lo[1] = std::min(box.lo[1], ly), box.lo[2] = std::min(box.lo[2], lz);
+      box.hi[0] = std::max(box.hi[0], hx), box.hi[1] = std::max(box.hi[1], hy), box.hi[2] = std::max(box.hi[2], hz);
+      box.count += i - first;
     }
   });
   // Grid c covers classes 0 .. c (they all search it).
@@ -120,15 +133,16 @@ std::vector<std::uint32_t> NeighbourGrid::sortOrder(const Particles& p, double s
     for (std::size_t i = blockBegin(b); i < blockBegin(b + 1); ++i)
       cell[i] = grids_[p.size_class[i]].cellOf(p.x[i], p.y[i], p.z[i]);
   });
-  // Counting sort by global cell (classes in order, then cells).
+  // Counting sort by global cell (classes in order, then cells): cell c's
+  // count at c + 2, so that after the prefix sum c + 1 holds its start; the
+  // placement advances that to its end, the start of c + 1 (no copy of the
+  // starts to fill from).
   cell_start_.assign(cells + 2, 0);
-  for (std::size_t i = 0; i < n; ++i) ++cell_start_[cell[i] + 1];
-  for (std::size_t c = 0; c + 1 < cell_start_.size(); ++c) cell_start_[c + 1] += cell_start_[c];
+  std::uint32_t* const start = cell_start_.data();
+  for (std::size_t i = 0; i < n; ++i) ++start[cell[i] + 2];
+  for (std::size_t c = 2; c < cells + 2; ++c) start[c] += start[c - 1];
   std::vector<std::uint32_t> order(n);
-  {
-    std::vector<std::uint32_t> fill(cell_start_.begin(), cell_start_.end() - 1);
-    for (std::size_t i = 0; i < n; ++i) order[fill[cell[i]]++] = static_cast<std::uint32_t>(i);
-  }
+  for (std::size_t i = 0; i < n; ++i) order[start[cell[i] + 1]++] = static_cast<std::uint32_t>(i);
   cell_.resize(n);
   for (std::size_t k = 0; k < n; ++k) cell_[k] = cell[order[k]];
   return order;
