@@ -637,9 +637,19 @@ void Engine::partitionRows(const std::vector<std::uint32_t>& from) {
   const auto blockBegin = [&](std::size_t b) { return n * b / nblocks; };
   // Block sums in parallel; the boundaries are then found row by row only
   // inside the blocks that hold them (the same boundaries as a serial scan).
+  // A block's sum is that of its rows' weights, taken as flat counts over
+  // its rows and over its list entries (loops without a branch on each
+  // row's length, which a row-by-row sum mispredicted at most rows).
   std::vector<std::size_t> block_weight(nblocks, 0);
   forBlocks(StageProfile::kNeighbours, nblocks, [&](std::size_t b) {
-    for (std::size_t i = blockBegin(b); i < blockBegin(b + 1); ++i) block_weight[b] += rowWeight(i);
+    const std::size_t i0 = blockBegin(b), i1 = blockBegin(b + 1);
+    const std::uint32_t* __restrict const C = cand.data();
+    const std::uint32_t* __restrict const F = from.data();
+    std::size_t walls = 0, touching = 0;
+    for (std::size_t i = i0; i < i1; ++i) walls += C[i];
+    const std::size_t k0 = list_.row_begin[i0], k1 = list_.row_begin[i1];
+    for (std::size_t k = k0; k < k1; ++k) touching += F[k] != kNone ? 1 : 0;
+    block_weight[b] = kRowWeight * (i1 - i0) + kWallWeight * walls + kEntryWeight * (k1 - k0) + kTouchWeight * touching;
   });
   const std::size_t total = std::accumulate(block_weight.begin(), block_weight.end(), std::size_t{0});
   std::size_t t = 1, acc = 0;
