@@ -9,6 +9,9 @@
 #include <numeric>
 #include <sstream>
 #include <thread>
+#include <tuple>
+#include <type_traits>
+#include <utility>
 
 #include "micro/contact_kernel.hpp"
 #include "micro/rigid_body.hpp"
@@ -491,32 +494,66 @@ Engine::SavedContacts Engine::saveContacts() {
   return saved;
 }
 
-namespace {
-// Permutes a field in place through a worker's scratch of its type: the
-// field keeps its (line-aligned) buffer. (A new buffer for each field at
-// every rebuild, swapped in, would fragment the heap under aligned
-// allocations: the settling run at N = 20,000 would grow by 6 MB over its
-// rebuilds.)
-template <class T, class A>
-void permute(std::vector<T, A>& v, const std::vector<std::uint32_t>& order, std::vector<T>& tmp) {
-  tmp.resize(order.size());
-  for (std::size_t k = 0; k < order.size(); ++k) tmp[k] = v[order[k]];
-  std::copy(tmp.begin(), tmp.end(), v.begin());
-}
-}  // namespace
-
+// The store's state fields are gathered in the new order into spare buffers
+// of their type and swapped with them, each worker a range of the new order:
+// the range its partitions will hold, so that it writes the lines it reads
+// at the next steps (one field to a worker, half of every field's lines went
+// from one core to the other at each rebuild, and back at the next step).
+// The spares: the scratch fields (forces, torques, the positions at the
+// last build: each rewritten after a rebuild before it is read) for the
+// doubles, and kept buffers for the other types; a field swapped out is the
+// spare of a later one. Two rounds (a job each): nine doubles, then the
+// rest. No buffer is allocated (a new one per field and rebuild fragmented
+// the heap under aligned allocations: the settling run at N = 20,000 grew
+// by 6 MB over its rebuilds).
 void Engine::reorderParticles(const std::vector<std::uint32_t>& order) {
-  // One field per task (the store's one list of fields), tasks dealt to the workers in turn.
-  std::vector<std::function<void(WorkerScratch&)>> tasks;
+  const std::size_t n = p_.size(), P = scratch_.size();
+  reorder_spares_.resize(n);
+  using I32 = std::vector<std::int32_t>;
+  using U32 = std::vector<std::uint32_t>;
+  using U8 = std::vector<std::uint8_t>;
+  std::tuple<std::vector<Field<double>*>, std::vector<I32*>, std::vector<U32*>, std::vector<U8*>> spares;
+  p_.forEachScratchField([&](const char*, Field<double>& f) { std::get<0>(spares).push_back(&f); });
+  std::get<1>(spares) = {&reorder_spares_.i32};
+  std::get<2>(spares) = {&reorder_spares_.u32[0], &reorder_spares_.u32[1]};
+  std::get<3>(spares) = {&reorder_spares_.u8[0], &reorder_spares_.u8[1]};
+  // A round: fields paired with their spares.
+  std::tuple<std::vector<std::pair<Field<double>*, Field<double>*>>, std::vector<std::pair<I32*, I32*>>,
+             std::vector<std::pair<U32*, U32*>>, std::vector<std::pair<U8*, U8*>>>
+      round;
+  const auto eachType = [&](auto&& fn) { std::apply([&](auto&... pairs) { (fn(pairs), ...); }, round); };
+  const auto runRound = [&] {
+    parallel(StageProfile::kNeighbours, [&](int task) {
+      const auto t = static_cast<std::size_t>(task);
+      const std::size_t k0 = n * t / P, k1 = n * (t + 1) / P;
+      const std::uint32_t* __restrict const from = order.data();
+      eachType([&](auto& pairs) {
+        for (auto& [field, spare] : pairs) {
+          const auto* __restrict const v = field->data();
+          auto* __restrict const w = spare->data();
+          for (std::size_t k = k0; k < k1; ++k) w[k] = v[from[k]];
+        }
+      });
+    });
+    eachType([&](auto& pairs) {
+      for (auto& [field, spare] : pairs) {
+        std::swap(*field, *spare);
+        std::get<std::vector<std::remove_pointer_t<decltype(spare)>*>>(spares).push_back(spare);
+      }
+      pairs.clear();
+    });
+  };
   p_.forEachStateField([&](const char*, auto& field) {
-    tasks.emplace_back([&field, &order](WorkerScratch& s) { permute(field, order, s.permute.of(field)); });
+    using V = std::remove_reference_t<decltype(field)>;
+    auto& free = std::get<std::vector<V*>>(spares);
+    if (free.empty()) runRound();
+    V* const spare = free.back();
+    free.pop_back();
+    spare->resize(n);
+    std::get<std::vector<std::pair<V*, V*>>>(round).emplace_back(&field, spare);
   });
-  const std::size_t workers = scratch_.size();
-  parallel(StageProfile::kNeighbours, [&](int t) {
-    for (std::size_t a = static_cast<std::size_t>(t); a < tasks.size(); a += workers)
-      tasks[a](scratch_[static_cast<std::size_t>(t)]);
-  });
-  for (std::size_t k = 0; k < p_.size(); ++k) p_.slot[p_.id[k]] = static_cast<std::uint32_t>(k);
+  runRound();
+  for (std::size_t k = 0; k < n; ++k) p_.slot[p_.id[k]] = static_cast<std::uint32_t>(k);
 }
 
 // Carries the history of touching contacts over to the new list: a pair that

@@ -304,6 +304,19 @@ class Engine {
     std::vector<int> list;
   };
   std::unique_ptr<Waiting[]> waiting_;
+  /// reorderParticles(): kept spare buffers of the state's fields that are
+  /// not doubles (the doubles use the scratch fields).
+  struct ReorderSpares {
+    std::vector<std::int32_t> i32;
+    std::vector<std::uint32_t> u32[2];
+    std::vector<std::uint8_t> u8[2];
+    void resize(std::size_t n) {
+      i32.resize(n);
+      for (auto& v : u32) v.resize(n);
+      for (auto& v : u8) v.resize(n);
+    }
+  };
+  ReorderSpares reorder_spares_;
   std::uint64_t lap_ = 0;
 };
 

@@ -4,7 +4,7 @@
 /// contact detection (free spheres and the member spheres of rigid blocks),
 /// as structure-of-arrays. The fields are declared once, in
 /// forEachStateField() and forEachScratchField(); that list drives growth
-/// (resize), the re-sort into cell order (permute) and checkpoints (archive). Every particle has a
+/// (resize), the re-sort into cell order (Engine::reorderParticles) and checkpoints (archive). Every particle has a
 /// stable id (its input order: free spheres, then block members) that
 /// survives the re-sort: `slot[id]` is its current index.
 #include <cstddef>
@@ -72,7 +72,7 @@ struct Particles {
   Field<double> tx, ty, tz;  ///< torque about the centre (N m)
   Field<double> x0, y0, z0;  ///< centre at the last neighbour-list build (m)
 
-  /// id -> current index (not permuted: rewritten by permute()).
+  /// id -> current index (not re-sorted: rewritten after each re-sort).
   std::vector<std::uint32_t> slot;
   /// Group g touches group h iff bit h of group_mask[g] is set (symmetric).
   std::uint32_t group_mask[kGroupCount];

@@ -8,7 +8,6 @@
 #include <algorithm>
 #include <cstdint>
 #include <string>
-#include <type_traits>
 #include <vector>
 
 #include "micro/contact.hpp"
@@ -58,33 +57,7 @@ struct LinkEvent {
   Vec3 position_m = Vec3::Zero();  ///< midpoint of its two particles
 };
 
-/// A worker's scratch for re-sorting the store's fields in place, one vector
-/// per field type (Engine::reorderParticles).
-struct PermuteScratch {
-  std::vector<double> d;
-  std::vector<std::int32_t> i32;
-  std::vector<std::uint32_t> u32;
-  std::vector<std::uint8_t> u8;
-  /// The scratch of the type of `field`'s values.
-  template <class V>
-  auto& of(const V&) {
-    using T = typename V::value_type;
-    if constexpr (std::is_same_v<T, double>)
-      return d;
-    else if constexpr (std::is_same_v<T, std::int32_t>)
-      return i32;
-    else if constexpr (std::is_same_v<T, std::uint32_t>)
-      return u32;
-    else {
-      static_assert(std::is_same_v<T, std::uint8_t>, "a field type without a permute scratch");
-      return u8;
-    }
-  }
-};
-
 struct WorkerScratch {
-  PermuteScratch permute;  ///< re-sorting the store's fields (rebuilds)
-
   int thread = 0;  ///< the thread that ran the partition's last job
 
   // contact kernel: the force buffer for partners beyond the particles of
