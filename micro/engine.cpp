@@ -549,7 +549,6 @@ void Engine::reorderParticles(const std::vector<std::uint32_t>& order) {
     if (free.empty()) runRound();
     V* const spare = free.back();
     free.pop_back();
-    spare->resize(n);
     std::get<std::vector<std::pair<V*, V*>>>(round).emplace_back(&field, spare);
   });
   runRound();
@@ -665,29 +664,24 @@ void Engine::partitionRows(const std::vector<std::uint32_t>& from) {
   std::vector<std::uint32_t> cand(n, 0);  // per particle: of how many walls a candidate
   for (const Wall& w : walls_)
     for (const std::uint32_t i : w.cand) ++cand[i];
-  const auto rowWeight = [&](std::size_t i) {
-    std::size_t w = kRowWeight + kWallWeight * cand[i];
-    for (std::uint32_t k = list_.row_begin[i]; k < list_.row_begin[i + 1]; ++k)
-      w += kEntryWeight + (from[k] != kNone ? kTouchWeight : 0);
-    return w;
-  };
-  const auto blockBegin = [&](std::size_t b) { return n * b / nblocks; };
-  // Block sums in parallel; the boundaries are then found row by row only
-  // inside the blocks that hold them (the same boundaries as a serial scan).
-  // A block's sum is that of its rows' weights, taken as flat counts over
-  // its rows and over its list entries (loops without a branch on each
-  // row's length, which a row-by-row sum mispredicted at most rows).
-  std::vector<std::size_t> block_weight(nblocks, 0);
-  forBlocks(StageProfile::kNeighbours, nblocks, [&](std::size_t b) {
-    const std::size_t i0 = blockBegin(b), i1 = blockBegin(b + 1);
+  // The weight of the rows [i0, i1), as flat counts over the rows and over
+  // their list entries (loops without a branch on each row's length, which
+  // a row-by-row sum mispredicted at most rows).
+  const auto weightOf = [&](std::size_t i0, std::size_t i1) {
     const std::uint32_t* __restrict const C = cand.data();
     const std::uint32_t* __restrict const F = from.data();
     std::size_t walls = 0, touching = 0;
     for (std::size_t i = i0; i < i1; ++i) walls += C[i];
     const std::size_t k0 = list_.row_begin[i0], k1 = list_.row_begin[i1];
     for (std::size_t k = k0; k < k1; ++k) touching += F[k] != kNone ? 1 : 0;
-    block_weight[b] = kRowWeight * (i1 - i0) + kWallWeight * walls + kEntryWeight * (k1 - k0) + kTouchWeight * touching;
-  });
+    return kRowWeight * (i1 - i0) + kWallWeight * walls + kEntryWeight * (k1 - k0) + kTouchWeight * touching;
+  };
+  const auto blockBegin = [&](std::size_t b) { return n * b / nblocks; };
+  // Block sums in parallel; the boundaries are then found row by row only
+  // inside the blocks that hold them (the same boundaries as a serial scan).
+  std::vector<std::size_t> block_weight(nblocks, 0);
+  forBlocks(StageProfile::kNeighbours, nblocks,
+            [&](std::size_t b) { block_weight[b] = weightOf(blockBegin(b), blockBegin(b + 1)); });
   const std::size_t total = std::accumulate(block_weight.begin(), block_weight.end(), std::size_t{0});
   std::size_t t = 1, acc = 0;
   for (std::size_t b = 0; b < nblocks && t < T; ++b) {
@@ -697,7 +691,7 @@ void Engine::partitionRows(const std::vector<std::uint32_t>& from) {
     }
     for (std::size_t i = blockBegin(b); i < blockBegin(b + 1) && t < T; ++i) {
       while (t < T && acc >= total * t / T) part_begin_[t] = lineStart(i, part_begin_[t - 1]), ++t;
-      acc += rowWeight(i);
+      acc += weightOf(i, i + 1);
     }
   }
 }
